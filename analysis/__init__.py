@@ -1,0 +1,7 @@
+"""analysis: spectra, order analysis and parametric-instability tools for run-ups.
+
+Works on any :class:`xarray.Dataset` with a ``time`` coordinate (seconds) and a speed or angle
+reference, simulated or measured. This package never imports :mod:`gearvib`.
+"""
+
+__all__: list[str] = []

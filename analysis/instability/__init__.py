@@ -1,0 +1,1 @@
+"""Parametric-instability tools: Floquet analysis, Mathieu-type theory candidates, peak labels."""

@@ -1,0 +1,1 @@
+"""Readers that turn measured files into the common CF-annotated Dataset layout."""

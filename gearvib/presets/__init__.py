@@ -1,0 +1,1 @@
+"""Built-in gear-set presets (TOML files shipped as package data)."""

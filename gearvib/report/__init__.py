@@ -1,0 +1,1 @@
+"""Order-analysis reports (HTML and PDF) built from run-up Datasets."""
