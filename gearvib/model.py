@@ -1,0 +1,186 @@
+"""The assembled, flat description of a gear set that the modal analysis and the kernels use.
+
+:class:`AssembledModel` is the contract between the model layer (``structure``, ``assembly``)
+and everything numerical downstream (``modal``, ``kernels``, ``simulate``, stability charts).
+It holds only numpy arrays and plain tuples, so the same numba kernel serves every gear-set
+topology and a sweep can ship it to worker processes.
+
+Coordinates
+-----------
+The generalised coordinates ``q`` follow Lin & Parker (1999), extended to large rotations:
+
+* central members (suns, rings) and carriers: translations ``x``, ``y`` [m] in the frame that
+  co-rotates with the carrier, optional axial ``z`` [m] (helical meshes), and the absolute
+  rotation angle ``theta`` [rad];
+* planets: radial ``zeta`` and tangential ``eta`` [m] displacement of the planet centre
+  (``eta`` is absolute, so a rigid carrier rotation by ``theta_c`` moves it by ``a theta_c``),
+  optional axial ``z`` [m], and the absolute rotation ``theta`` [rad].
+
+A rigid bearing or a fixed member removes its DOF. Arrays that act on ``q`` have the
+``(n_dof,)`` or ``(n_dof, n_dof)`` layout; time histories have the layout ``(n_time, n_dof)``.
+
+Mesh conventions
+----------------
+For mesh ``m`` the normal deflection is ``delta_m = mesh_vectors[m] @ q`` [m]. Its flank
+``left`` is loaded when ``delta_m > j_m / 2`` and carries ``F = k_left(s) (delta - j/2)``;
+flank ``right`` is loaded when ``delta_m < -j_m / 2`` and carries ``F = k_right(s)
+(delta + j/2)`` (negative). A negative backlash loads both flanks at once. The generalised
+force of the mesh on ``q`` is ``-(F_left + F_right + damping) * mesh_vectors[m]``. The left
+flank is the one that carries the load when the central gear drives the planet forward.
+
+The mesh position ``s_m`` in mesh cycles is ``mesh_position_vectors[m] @ q +
+mesh_position_offsets[m]``; ``s = 0`` (mod 1) is the instant a new tooth pair enters contact.
+Stiffness tables hold ``k(s)`` at ``s = i / n_table`` and are interpolated linearly and
+periodically.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class AssembledModel:
+    """Flat arrays of one gear set (see the module docstring for conventions).
+
+    Attributes
+    ----------
+    dof_names : tuple of str
+        One name per coordinate, ``"<body>.<x|y|z|theta|zeta|eta>"``.
+    dof_units : tuple of str
+        ``"m"`` or ``"rad"`` per coordinate.
+    mass : ndarray, shape (n, n)
+        Mass matrix ``M`` [kg, kg m^2].
+    stiffness : ndarray, shape (n, n)
+        Constant stiffness: bearings, supports and shaft couplings, meshes excluded.
+    damping : ndarray, shape (n, n)
+        Constant damping of bearings, supports and couplings, meshes excluded.
+    gyroscopic : ndarray, shape (n, n)
+        ``G``; the carrier-rotation force is ``-Omega_c G qdot`` [Omega_c in rad/s].
+    centripetal : ndarray, shape (n, n)
+        ``K_Omega``; the centripetal force is ``+Omega_c**2 K_Omega q``.
+    mesh_names : tuple of str
+        E.g. ``"sun-planet1"``, ``"ring-planet1"``.
+    mesh_vectors : ndarray, shape (n_mesh, n)
+        Normal mesh deflection per unit coordinate.
+    mesh_position_vectors : ndarray, shape (n_mesh, n)
+        Mesh cycles per unit coordinate (only rotations contribute).
+    mesh_position_offsets : ndarray, shape (n_mesh,)
+        Mesh position at ``q = 0`` [cycles]; carries the phase of every contact.
+    mesh_stiffness_tables : ndarray, shape (n_mesh, n_table)
+        Left (drive) flank stiffness [N/m] over one mesh cycle.
+    mesh_back_tables : ndarray, shape (n_mesh, n_table)
+        Right (back) flank stiffness [N/m] over one mesh cycle.
+    mesh_backlash : ndarray, shape (n_mesh,)
+        Total normal backlash ``j`` [m]; negative means both flanks in contact.
+    mesh_damping : ndarray, shape (n_mesh,)
+        Viscous mesh damping [N s/m], acting only while a flank is in contact.
+    bearing_names : tuple of str
+        One per elastic bearing direction, e.g. ``"planet1.radial"``, ``"sun.x"``.
+    bearing_vectors : ndarray, shape (n_bearing, n)
+        Bearing deflection per unit coordinate.
+    bearing_stiffness, bearing_damping : ndarray, shape (n_bearing,)
+        Per bearing direction [N/m or N m/rad; N s/m or N m s/rad].
+    rotation_dofs : dict of str to int
+        Rotation-coordinate index of every member (``-1`` for a fixed member).
+    carrier_dof : int
+        Index of the carrier rotation used for the gyroscopic terms (``-1`` if fixed/none).
+    input_member, output_member, fixed_members : str, str, tuple of str
+        Operating roles from the gear-set description.
+    kinematic_ratios : dict of str to float
+        Speed of every member per unit input speed (rigid-body kinematics).
+    mesh_frequency_per_rpm : float
+        Mesh frequency [Hz] per input speed [min^-1] (paper eq. 5 for a simple set).
+    meta : dict
+        Free-form description (gear-set name, configuration) for provenance.
+    """
+
+    dof_names: tuple[str, ...]
+    dof_units: tuple[str, ...]
+    mass: np.ndarray
+    stiffness: np.ndarray
+    damping: np.ndarray
+    gyroscopic: np.ndarray
+    centripetal: np.ndarray
+    mesh_names: tuple[str, ...]
+    mesh_vectors: np.ndarray
+    mesh_position_vectors: np.ndarray
+    mesh_position_offsets: np.ndarray
+    mesh_stiffness_tables: np.ndarray
+    mesh_back_tables: np.ndarray
+    mesh_backlash: np.ndarray
+    mesh_damping: np.ndarray
+    bearing_names: tuple[str, ...]
+    bearing_vectors: np.ndarray
+    bearing_stiffness: np.ndarray
+    bearing_damping: np.ndarray
+    rotation_dofs: dict[str, int]
+    carrier_dof: int
+    input_member: str
+    output_member: str
+    fixed_members: tuple[str, ...]
+    kinematic_ratios: dict[str, float]
+    mesh_frequency_per_rpm: float
+    meta: dict = field(default_factory=dict)
+
+    @property
+    def n_dof(self) -> int:
+        """Number of coordinates."""
+        return len(self.dof_names)
+
+    @property
+    def n_mesh(self) -> int:
+        """Number of tooth contacts (meshes)."""
+        return len(self.mesh_names)
+
+    def mean_mesh_stiffness(self) -> np.ndarray:
+        """Mean left-flank stiffness of every mesh over one cycle [N/m]."""
+        return self.mesh_stiffness_tables.mean(axis=1)
+
+    def mesh_stiffness_matrix(self, k: np.ndarray | None = None) -> np.ndarray:
+        """Stiffness matrix of the meshes, ``sum_m k_m v_m v_m^T``.
+
+        Parameters
+        ----------
+        k : ndarray, shape (n_mesh,), optional
+            Mesh stiffness values [N/m]; the cycle means by default.
+        """
+        kk = self.mean_mesh_stiffness() if k is None else np.asarray(k, dtype=float)
+        v = self.mesh_vectors
+        return (v.T * kk) @ v
+
+    def mean_stiffness_matrix(self) -> np.ndarray:
+        """Mean-system stiffness: constant part plus the mean mesh stiffness."""
+        return self.stiffness + self.mesh_stiffness_matrix()
+
+    def mesh_damping_matrix(self) -> np.ndarray:
+        """Damping matrix of the meshes with every flank in contact."""
+        v = self.mesh_vectors
+        return (v.T * self.mesh_damping) @ v
+
+    def mesh_stiffness_at(self, positions: np.ndarray, back: bool = False) -> np.ndarray:
+        """Interpolate the stiffness tables at mesh positions.
+
+        Parameters
+        ----------
+        positions : ndarray, shape (..., n_mesh)
+            Mesh positions [cycles].
+        back : bool
+            Use the back-flank tables.
+
+        Returns
+        -------
+        ndarray, shape (..., n_mesh)
+            Stiffness [N/m], periodic linear interpolation.
+        """
+        tables = self.mesh_back_tables if back else self.mesh_stiffness_tables
+        n_table = tables.shape[1]
+        s = np.asarray(positions, dtype=float)
+        u = (s - np.floor(s)) * n_table
+        i0 = np.floor(u).astype(np.int64) % n_table
+        i1 = (i0 + 1) % n_table
+        w = u - np.floor(u)
+        m = np.arange(tables.shape[0])
+        return (1.0 - w) * tables[m, i0] + w * tables[m, i1]
