@@ -1,0 +1,101 @@
+"""Read and write the common layout as CF-1.11 netCDF-4 (the project's own file format)."""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from pathlib import Path
+
+import xarray as xr
+
+from analysis.readers.layout import ReaderError, clean_attrs, validate_dataset
+
+__all__ = ["read_netcdf", "write_netcdf"]
+
+
+def read_netcdf(path: str | os.PathLike[str]) -> xr.Dataset:
+    """Read a netCDF file written in the common layout.
+
+    Parameters
+    ----------
+    path : path-like
+        netCDF-3 or netCDF-4 file.
+
+    Returns
+    -------
+    xarray.Dataset
+        Fully loaded into memory (the file is closed again, so it can be overwritten).
+
+    Raises
+    ------
+    FileNotFoundError
+        The file does not exist.
+    ReaderError
+        The file is not readable netCDF (truncated/corrupt) or does not follow the layout.
+    """
+    p = Path(path)
+    if not p.is_file():
+        raise FileNotFoundError(f"netCDF file not found: {p}")
+    try:
+        with xr.open_dataset(p, engine="netcdf4", decode_timedelta=False) as ds:
+            ds = ds.load()
+    except (OSError, ValueError, RuntimeError) as exc:
+        raise ReaderError(
+            f"{p}: not a readable netCDF file (truncated or corrupt?): {exc}"
+        ) from None
+    ds.attrs.setdefault("source_file", str(p))
+    return validate_dataset(ds, name=str(p))
+
+
+def write_netcdf(
+    ds: xr.Dataset, path: str | os.PathLike[str], *, compress: bool = True
+) -> Path:
+    """Write a Dataset in the common layout to netCDF-4, atomically.
+
+    The file is first written to a temporary file in the target directory and then moved into
+    place with :func:`os.replace`; on any error nothing is left at ``path`` (an existing file is
+    kept unchanged).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        Dataset following the layout (checked by :func:`validate_dataset`).
+    path : path-like
+        Target file.
+    compress : bool, optional
+        zlib level 4 with shuffle on the data variables (default True).
+
+    Returns
+    -------
+    pathlib.Path
+        The written path.
+
+    Notes
+    -----
+    Always uses ``engine="netcdf4"`` and ``_FillValue=None`` on the coordinates and on the
+    data variables (the layout forbids NaN), see engineering notes A1, pitfalls 1 and 4.
+    Attributes are cleaned first (bool -> int8, dict -> JSON, None dropped).
+    """
+    target = Path(path)
+    out = ds.copy()
+    out.attrs = clean_attrs(ds.attrs)
+    for v in out.variables:
+        out[v].attrs = clean_attrs(ds[v].attrs)
+    validate_dataset(out, name="write_netcdf(ds)")
+    encoding: dict[str, dict[str, object]] = {}
+    for v in out.variables:
+        enc: dict[str, object] = {"_FillValue": None}
+        if compress and v in out.data_vars and out[v].dtype.kind in "iuf":
+            enc.update(zlib=True, complevel=4, shuffle=True)
+        encoding[str(v)] = enc
+    directory = target.parent if str(target.parent) else Path(".")
+    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=directory)
+    os.close(fd)
+    try:
+        out.to_netcdf(tmp, engine="netcdf4", format="NETCDF4", encoding=encoding)
+        os.replace(tmp, target)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.remove(tmp)
+        raise
+    return target
