@@ -47,9 +47,7 @@ def read_netcdf(path: str | os.PathLike[str]) -> xr.Dataset:
     return validate_dataset(ds, name=str(p))
 
 
-def write_netcdf(
-    ds: xr.Dataset, path: str | os.PathLike[str], *, compress: bool = True
-) -> Path:
+def write_netcdf(ds: xr.Dataset, path: str | os.PathLike[str], *, compress: bool = True) -> Path:
     """Write a Dataset in the common layout to netCDF-4, atomically.
 
     The file is first written to a temporary file in the target directory and then moved into

@@ -36,7 +36,10 @@ def _bits_per_sample(path: Path) -> int | None:
                 body = f.read(size)
                 if len(body) < 16:
                     return None
-                fmt_tag, bits = struct.unpack("<H", body[:2])[0], struct.unpack("<H", body[14:16])[0]
+                fmt_tag, bits = (
+                    struct.unpack("<H", body[:2])[0],
+                    struct.unpack("<H", body[14:16])[0],
+                )
                 if fmt_tag == 0xFFFE and len(body) >= 20:
                     valid = struct.unpack("<H", body[18:20])[0]
                     return valid or bits
@@ -101,7 +104,9 @@ def read_wav(
         raise ReaderError(f"{p}: not a readable WAV file (truncated or corrupt?): {exc}") from None
     data = data.reshape(data.shape[0], -1) if data.ndim else data.reshape(0, 1)
     n_ch = data.shape[1]
-    names = list(channel_names) if channel_names is not None else [f"ch{i + 1}" for i in range(n_ch)]
+    names = (
+        list(channel_names) if channel_names is not None else [f"ch{i + 1}" for i in range(n_ch)]
+    )
     if len(names) != n_ch:
         raise ReaderError(f"{p}: file has {n_ch} channel(s) but {len(names)} channel_names given")
     cals = _per_channel(calibration, n_ch, "calibration")
@@ -114,7 +119,9 @@ def read_wav(
     for i in range(n_ch):
         cal = float(cals[i])
         if not np.isfinite(cal) or cal == 0.0:
-            raise ValueError(f"calibration = {cals[i]!r} for channel {names[i]!r}: must be finite, != 0")
+            raise ValueError(
+                f"calibration = {cals[i]!r} for channel {names[i]!r}: must be finite, != 0"
+            )
         raw = data[:, i]
         if kind == "u":  # 8-bit WAV is unsigned with offset 128
             counts = raw.astype(np.float64) - 2.0 ** (container - 1)
@@ -182,5 +189,5 @@ def write_wav(
     if np.max(np.abs(scaled)) > full[dtype] * (1 + 1e-12):
         raise ValueError(f"calibration {calibration} clips the signal in dtype {dtype}")
     out = scaled.astype(np.float32) if dtype == "float32" else np.round(scaled).astype(dtype)
-    wavfile.write(Path(path), int(round(fs)), out)
+    wavfile.write(Path(path), round(fs), out)
     return float(calibration)
