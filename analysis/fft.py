@@ -161,9 +161,7 @@ def _as_complex(x: Any) -> np.ndarray:
     return a.astype(np.complex128, copy=False)
 
 
-def _check_axis_n(
-    a: np.ndarray, n: int | None, axis: int, name: str
-) -> tuple[int, int | None]:
+def _check_axis_n(a: np.ndarray, n: int | None, axis: int, name: str) -> tuple[int, int | None]:
     if a.ndim == 0:
         raise ValueError(f"{name} must have at least one dimension; got a scalar")
     if not -a.ndim <= axis < a.ndim:
@@ -183,8 +181,12 @@ def _builder(kind: str, a: np.ndarray, n: int | None, axis: int, threads: int) -
     key = (kind, a.shape, a.dtype.str, n, axis, threads, threading.get_ident(), _planner_effort)
     if a.size > _CACHE_MAX_ELEMENTS:
         return make(
-            np.empty(a.shape, a.dtype), n=n, axis=axis, threads=threads,
-            planner_effort=_planner_effort, overwrite_input=False,
+            np.empty(a.shape, a.dtype),
+            n=n,
+            axis=axis,
+            threads=threads,
+            planner_effort=_planner_effort,
+            overwrite_input=False,
         )
     with _cache_lock:
         obj = _cache.get(key)
@@ -192,8 +194,12 @@ def _builder(kind: str, a: np.ndarray, n: int | None, axis: int, threads: int) -
             _cache.move_to_end(key)
             return obj
     obj = make(
-        np.empty(a.shape, a.dtype), n=n, axis=axis, threads=threads,
-        planner_effort=_planner_effort, overwrite_input=False,
+        np.empty(a.shape, a.dtype),
+        n=n,
+        axis=axis,
+        threads=threads,
+        planner_effort=_planner_effort,
+        overwrite_input=False,
     )
     with _cache_lock:
         _cache[key] = obj

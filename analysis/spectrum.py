@@ -1,0 +1,731 @@
+"""Windowed, averaged single-sided spectra with calibrated amplitude conventions, and peaks.
+
+Conventions (Brandt 2011, ch. 9-10; Heinzel, Rüdiger & Schilling 2002, sections 9-11). With
+``w`` the window of length ``L``, ``S1 = sum(w)``, ``S2 = sum(w**2)``, ``X_k`` the DFT of one
+windowed segment and ``<.>`` the average over segments, the single-sided spectra are
+
+=========  ==========================================  ==========================
+scaling    value at an interior bin                    a sine ``A sin(2 pi f t)``
+=========  ==========================================  ==========================
+"power"    ``2 <|X_k|^2> / S1^2``                      ``A^2 / 2`` (on bin)
+"rms"      ``sqrt(power)``                             ``A / sqrt(2)`` (on bin)
+"peak"     ``sqrt(2) * rms``                           ``A`` (on bin)
+"psd"      ``2 <|X_k|^2> / (fs * S2)``                 white noise: ``s^2 / (fs/2)``
+=========  ==========================================  ==========================
+
+The DC bin (and the Nyquist bin for even ``nfft``) is not doubled, so a constant ``c`` reads
+``c`` in every amplitude scaling. Off bin, the amplitude scalings read low by the window's
+scalloping loss; :func:`find_peaks` corrects that by fitting the window's own transform.
+Averaging is over power (``<|X|^2>``), never over complex spectra or magnitudes, so the
+``"max"`` average is a peak hold of the power.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Hashable
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, Literal
+
+import numpy as np
+import scipy.optimize
+import scipy.signal
+
+from analysis.fft import rfft
+
+if TYPE_CHECKING:
+    import matplotlib.figure
+    import xarray as xr
+
+__all__ = [
+    "SCALINGS",
+    "WINDOWS",
+    "Peaks",
+    "Spectrum",
+    "WindowInfo",
+    "find_peaks",
+    "get_window",
+    "spectrum",
+    "to_db",
+    "window_info",
+]
+
+#: Admissible window names (``"boxcar"`` is an alias of ``"rectangular"``).
+WINDOWS = ("rectangular", "boxcar", "hann", "hamming", "blackmanharris", "flattop", "kaiser")
+#: Admissible spectrum scalings.
+SCALINGS = ("peak", "rms", "power", "psd")
+
+# Cosine-sum coefficients a_k of w[n] = sum_k (-1)^k a_k cos(2 pi k n / L), periodic form.
+_COSINE_SUMS: dict[str, tuple[float, ...]] = {
+    "rectangular": (1.0,),
+    "hann": (0.5, 0.5),
+    "hamming": (0.54, 0.46),
+    # 4-term Blackman-Harris, -92 dB sidelobes (Harris 1978, table 1)
+    "blackmanharris": (0.35875, 0.48829, 0.14128, 0.01168),
+    # 5-term flat-top of ISO 18431-2 / D'Antona & Ferrero 2006 (same as MATLAB flattopwin);
+    # scalloping loss < 0.01 dB, ENBW 3.77 bins (Heinzel et al. 2002, appendix D)
+    "flattop": (0.21557895, 0.41663158, 0.277263158, 0.083578947, 0.006947368),
+}
+_KAISER_DEFAULT_BETA = 0.5  # MATLAB kaiser() / rpmfreqmap default
+_BLOCK_ELEMENTS = 1 << 20  # windowed samples per block in the segment loop
+
+WindowSpec = str | tuple[str, float]
+
+
+@dataclass(frozen=True)
+class WindowInfo:
+    """Name, parameter and figures of merit of a window of a given length.
+
+    Attributes
+    ----------
+    name : str
+        Canonical window name.
+    beta : float or None
+        Kaiser shape parameter (``None`` for the other windows).
+    length : int
+        Number of samples.
+    coherent_gain : float
+        ``sum(w) / L`` (amplitude gain for a sine on bin).
+    enbw_bins : float
+        Equivalent noise bandwidth in bins, ``L * sum(w**2) / sum(w)**2``.
+    """
+
+    name: str
+    beta: float | None
+    length: int
+    coherent_gain: float
+    enbw_bins: float
+
+    def enbw_hz(self, fs: float) -> float:
+        """Equivalent noise bandwidth [Hz] at sample rate ``fs`` (independent of zero padding)."""
+        return self.enbw_bins * fs / self.length
+
+    @property
+    def label(self) -> str:
+        """``"kaiser(beta=..)"`` or the plain name."""
+        return self.name if self.beta is None else f"{self.name}(beta={self.beta:g})"
+
+
+def _parse_window(window: WindowSpec) -> tuple[str, float | None]:
+    beta: float | None = None
+    if isinstance(window, tuple):
+        if len(window) != 2 or not isinstance(window[0], str):
+            raise ValueError(
+                f"window = {window!r} is not admissible: use a name from {WINDOWS} or "
+                "('kaiser', beta)"
+            )
+        name, beta = window[0].lower(), float(window[1])
+        if name != "kaiser":
+            raise ValueError(f"window = {window!r}: only 'kaiser' takes a parameter (beta)")
+    elif isinstance(window, str):
+        name = window.lower()
+    else:
+        raise ValueError(f"window = {window!r} is not admissible: must be one of {WINDOWS}")
+    if name not in WINDOWS:
+        raise ValueError(f"window = {window!r} is not admissible: must be one of {WINDOWS}")
+    if name == "boxcar":
+        name = "rectangular"
+    if name == "kaiser":
+        beta = _KAISER_DEFAULT_BETA if beta is None else beta
+        if not np.isfinite(beta) or beta < 0:
+            raise ValueError(f"window kaiser beta = {beta!r} is not admissible: must be >= 0")
+    return name, beta
+
+
+def get_window(window: WindowSpec, n: int) -> np.ndarray:
+    """Periodic ("DFT-even") window of length ``n`` for spectral analysis.
+
+    Parameters
+    ----------
+    window : str or ("kaiser", beta)
+        One of :data:`WINDOWS`; ``"kaiser"`` alone uses beta = 0.5 (MATLAB's default).
+    n : int
+        Length (>= 1).
+
+    Returns
+    -------
+    numpy.ndarray
+        Window samples; the cosine-sum windows have their maximum at index ``n // 2``.
+    """
+    name, beta = _parse_window(window)
+    if isinstance(n, bool) or not isinstance(n, int | np.integer) or n < 1:
+        raise ValueError(f"window length n = {n!r} is not admissible: must be an integer >= 1")
+    k = np.arange(n, dtype=float)
+    if name == "kaiser":
+        assert beta is not None
+        r = 2.0 * k / n - 1.0  # periodic: symmetric window of n + 1 points without the last
+        return np.i0(beta * np.sqrt(np.clip(1.0 - r * r, 0.0, None))) / np.i0(beta)
+    coeffs = _COSINE_SUMS[name]
+    w = np.full(n, coeffs[0])
+    for j, a in enumerate(coeffs[1:], start=1):
+        w += (-1) ** j * a * np.cos(2.0 * np.pi * j * k / n)
+    return w
+
+
+def window_info(window: WindowSpec, n: int) -> WindowInfo:
+    """Coherent gain and ENBW of a window of length ``n`` (see :class:`WindowInfo`)."""
+    name, beta = _parse_window(window)
+    w = get_window(window, n)
+    s1, s2 = float(w.sum()), float(np.dot(w, w))
+    return WindowInfo(name, beta, int(n), s1 / n, n * s2 / (s1 * s1))
+
+
+def to_db(values: np.ndarray, scaling: str, ref: float = 1.0) -> np.ndarray:
+    """Level in dB: ``20 log10`` for amplitude scalings, ``10 log10`` for power and PSD.
+
+    Zero values map to -400 dB (no ``-inf``).
+    """
+    _check_choice(scaling, (*SCALINGS, "linear"), "scaling")
+    factor = 20.0 if scaling in ("peak", "rms") else 10.0
+    v = np.maximum(np.abs(np.asarray(values, dtype=float)) / ref, 1e-20)
+    return factor * np.log10(v)
+
+
+def _check_choice(value: Any, allowed: tuple[str, ...], name: str) -> str:
+    if value not in allowed:
+        raise ValueError(f"{name} = {value!r} is not admissible: must be one of {allowed}")
+    return value
+
+
+def _uniform_rate(time: Any, name: str = "time", rtol: float = 1e-6) -> float:
+    """Sample rate of a uniform time axis, checked block-wise (bounded memory)."""
+    t = np.asarray(time)
+    if t.ndim != 1 or t.size < 2:
+        raise ValueError(f"{name}: needs a 1-D axis with at least two samples")
+    if not np.issubdtype(t.dtype, np.number):
+        raise ValueError(f"{name}: must be numeric seconds (units 's'), got dtype {t.dtype}")
+    n = t.size
+    dt = (float(t[-1]) - float(t[0])) / (n - 1)
+    if not np.isfinite(dt) or dt <= 0:
+        raise ValueError(f"{name} must be finite and strictly increasing")
+    tol = rtol * dt + 1e-12 * abs(float(t[-1]))
+    block = 1 << 18
+    for start in range(0, n - 1, block):
+        seg = np.asarray(t[start : min(n, start + block + 1)], dtype=float)
+        if not np.all(np.isfinite(seg)):
+            raise ValueError(f"{name}: non-finite value near sample {start}")
+        d = np.diff(seg)
+        if np.any(d <= 0):
+            i = start + int(np.flatnonzero(d <= 0)[0])
+            raise ValueError(
+                f"{name} must be strictly increasing; it is not between samples {i} and {i + 1}"
+            )
+        dev = float(np.max(np.abs(d - dt)))
+        if dev > tol:
+            raise ValueError(
+                f"{name} is not uniformly sampled: step deviates by {dev:.3g} s from the mean "
+                f"{dt:.6g} s (allowed {rtol:g} relative); resample the channel first"
+            )
+    return 1.0 / dt
+
+
+def _check_finite_blocks(x: np.ndarray, name: str) -> None:
+    """Raise if ``x`` is empty or holds NaN/inf; works block-wise along the last axis."""
+    if x.size == 0:
+        raise ValueError(f"{name}: channel is empty (needs at least one sample)")
+    n = x.shape[-1]
+    step = max(1, (1 << 20) // max(1, x.size // max(n, 1)))
+    for start in range(0, n, step):
+        blk = x[..., start : start + step]
+        if not np.all(np.isfinite(blk)):
+            idx = start + int(np.argwhere(~np.isfinite(blk))[0][-1])
+            raise ValueError(
+                f"{name}: non-finite value (NaN or inf) at time sample {idx}; only finite "
+                "values are admissible (gap-fill or trim the channel first)"
+            )
+
+
+def _int_param(value: Any, name: str, minimum: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < minimum:
+        raise ValueError(f"{name} = {value!r} is not admissible: must be an integer >= {minimum}")
+    return int(value)
+
+
+@dataclass
+class Spectrum:
+    """Single-sided spectrum (see the module docstring for the scalings).
+
+    Attributes
+    ----------
+    frequency : numpy.ndarray
+        Bin frequencies [Hz], ``k * fs / nfft``.
+    values : numpy.ndarray
+        Spectrum, shape ``(*leading, frequency)``.
+    window : str
+        Window label.
+    scaling : str
+        ``"peak"``, ``"rms"``, ``"power"`` or ``"psd"``.
+    enbw_hz : float
+        Equivalent noise bandwidth [Hz] (``enbw_bins * fs / segment_length``).
+    resolution_hz : float
+        Bin spacing actually used, ``fs / nfft`` [Hz].
+    n_averages : int
+        Number of averaged segments.
+    units : str
+        Units of ``values`` (UDUNITS string).
+    fs : float
+        Sample rate [Hz].
+    segment_length, nfft : int
+        Samples per segment and transform length (``nfft > segment_length`` zero-pads).
+    overlap : float
+        Segment overlap fraction.
+    average : str
+        ``"mean"`` or ``"max"`` (peak hold) of the segment powers.
+    beta : float or None
+        Kaiser parameter, if any.
+    dims : tuple of str
+        Names of the leading dimensions of ``values``.
+    coords : dict
+        Coordinate arrays of the leading dimensions (may be empty).
+    name : str
+        Name of the analysed channel.
+    """
+
+    frequency: np.ndarray
+    values: np.ndarray
+    window: str
+    scaling: str
+    enbw_hz: float
+    resolution_hz: float
+    n_averages: int
+    units: str
+    fs: float
+    segment_length: int
+    nfft: int
+    overlap: float = 0.0
+    average: str = "mean"
+    beta: float | None = None
+    dims: tuple[str, ...] = ()
+    coords: dict[str, np.ndarray] = field(default_factory=dict)
+    name: str = "x"
+
+    @property
+    def window_spec(self) -> WindowSpec:
+        """Window specification accepted by :func:`get_window`."""
+        base = self.window.split("(")[0]
+        return (base, self.beta) if self.beta is not None else base
+
+    def to_dataset(self) -> xr.Dataset:
+        """CF-annotated :class:`xarray.Dataset` with variable ``spectrum(..., frequency)``."""
+        import xarray as xr
+
+        long = {
+            "peak": "peak amplitude spectrum",
+            "rms": "rms amplitude spectrum",
+            "power": "power spectrum",
+            "psd": "power spectral density",
+        }[self.scaling]
+        dims = (*self.dims, "frequency")
+        coords: dict[Hashable, Any] = {
+            "frequency": ("frequency", self.frequency, {"units": "Hz", "long_name": "frequency"})
+        }
+        for d in self.dims:
+            if d in self.coords:
+                coords[d] = (d, np.asarray(self.coords[d]), {"long_name": str(d)})
+        ds = xr.Dataset(
+            {
+                "spectrum": (
+                    dims,
+                    self.values,
+                    {"units": self.units, "long_name": f"{long} of {self.name}"},
+                )
+            },
+            coords=coords,
+        )
+        ds.attrs.update(
+            window=self.window,
+            scaling=self.scaling,
+            enbw_hz=float(self.enbw_hz),
+            resolution_hz=float(self.resolution_hz),
+            n_averages=int(self.n_averages),
+            segment_length=int(self.segment_length),
+            nfft=int(self.nfft),
+            overlap=float(self.overlap),
+            average=self.average,
+            sample_rate_hz=float(self.fs),
+        )
+        return ds
+
+    def peaks(self, **kwargs: Any) -> Peaks:
+        """Shortcut for :func:`find_peaks` ``(self, **kwargs)``."""
+        return find_peaks(self, **kwargs)
+
+    def plot(self, **kwargs: Any) -> matplotlib.figure.Figure:
+        """Figure of the spectrum (see :func:`analysis.plots.spectrum_figure`)."""
+        from analysis.plots import spectrum_figure
+
+        return spectrum_figure(self, **kwargs)
+
+
+def _units_of(units: str, scaling: str) -> str:
+    if scaling in ("peak", "rms"):
+        return units
+    if scaling == "power":
+        return "1" if units == "1" else f"({units})^2"
+    return "Hz-1" if units == "1" else f"({units})^2 Hz-1"
+
+
+def _segment_power(
+    x: np.ndarray, w: np.ndarray, nfft: int, step: int, average: str
+) -> tuple[np.ndarray, int]:
+    """Mean (or max) over segments of ``|rfft(w * segment)|^2`` along the last axis."""
+    seg = w.size
+    frames = np.lib.stride_tricks.sliding_window_view(x, seg, axis=-1)[..., ::step, :]
+    n_seg = frames.shape[-2]
+    lead = frames.shape[:-2]
+    acc = np.zeros((*lead, nfft // 2 + 1))
+    per_frame = max(1, int(np.prod(lead, dtype=np.int64)) * seg)
+    block = max(1, _BLOCK_ELEMENTS // per_frame)
+    for start in range(0, n_seg, block):
+        chunk = frames[..., start : start + block, :] * w
+        spec = rfft(chunk, n=nfft, axis=-1)
+        p = spec.real**2 + spec.imag**2
+        if average == "mean":
+            acc += p.sum(axis=-2)
+        else:
+            np.maximum(acc, p.max(axis=-2), out=acc)
+    if average == "mean":
+        acc /= n_seg
+    return acc, n_seg
+
+
+def spectrum(
+    x: Any,
+    fs: float | None = None,
+    *,
+    window: WindowSpec = "hann",
+    scaling: Literal["peak", "rms", "power", "psd"] = "peak",
+    nfft: int | None = None,
+    segment_length: int | None = None,
+    overlap: float = 0.5,
+    average: Literal["mean", "max"] = "mean",
+    units: str | None = None,
+    name: str | None = None,
+) -> Spectrum:
+    """Single-sided windowed spectrum, Welch-averaged when ``segment_length`` is given.
+
+    Parameters
+    ----------
+    x : array_like or xarray.DataArray
+        Signal; the last axis is time. A DataArray must have a ``time`` dimension with a
+        uniform ``time`` coordinate in seconds, from which ``fs`` is taken; its ``units``
+        attribute is used for the output units.
+    fs : float, optional
+        Sample rate [Hz]; required for plain arrays. For a DataArray it must match the
+        coordinate (within 1e-6 relative) if given.
+    window : str or ("kaiser", beta), default "hann"
+        See :data:`WINDOWS`.
+    scaling : {"peak", "rms", "power", "psd"}, default "peak"
+        Amplitude convention (module docstring).
+    nfft : int, optional
+        Transform length >= ``segment_length`` (zero padding); default ``segment_length``.
+    segment_length : int, optional
+        Samples per averaged segment; default the whole record (one segment).
+    overlap : float, default 0.5
+        Overlap fraction between segments, in ``[0, 1)``.
+    average : {"mean", "max"}, default "mean"
+        Mean or peak hold of the segment powers.
+    units : str, optional
+        Units of ``x`` (default from the DataArray, else ``"1"``).
+    name : str, optional
+        Channel name used in ``long_name``.
+
+    Returns
+    -------
+    Spectrum
+        The spectrum with its window, ENBW, bin spacing and number of averages.
+    """
+    dims: tuple[str, ...] = ()
+    coords: dict[str, np.ndarray] = {}
+    try:
+        import xarray as xr
+    except ImportError:  # pragma: no cover - xarray is a hard dependency
+        xr = None  # type: ignore[assignment]
+    if xr is not None and isinstance(x, xr.DataArray):
+        if "time" not in x.dims:
+            raise ValueError(f"x: DataArray needs a 'time' dimension; it has dims {x.dims}")
+        if "time" not in x.coords:
+            raise ValueError("x: DataArray needs a 'time' coordinate in seconds")
+        fs_coord = _uniform_rate(x["time"].values, "x.time")
+        if fs is not None and abs(float(fs) - fs_coord) > 1e-6 * fs_coord:
+            raise ValueError(
+                f"sample-rate mismatch: fs = {fs!r} Hz but the time coordinate of x gives "
+                f"{fs_coord:.9g} Hz; omit fs or make them agree"
+            )
+        fs = fs_coord
+        x = x.transpose(..., "time")
+        dims = tuple(str(d) for d in x.dims[:-1])
+        coords = {d: np.asarray(x[d].values) for d in dims if d in x.coords}
+        units = units if units is not None else str(x.attrs.get("units", "1"))
+        name = name if name is not None else (str(x.name) if x.name is not None else "x")
+        arr = np.asarray(x.values)
+    else:
+        arr = np.asarray(x)
+    name = name if name is not None else "x"
+    units = units if units is not None else "1"
+    if fs is None:
+        raise ValueError("fs is required (sample rate in Hz, > 0) for a plain array")
+    fs = float(fs)
+    if not np.isfinite(fs) or fs <= 0:
+        raise ValueError(f"fs = {fs!r} is not admissible: must be finite and > 0 Hz")
+    if np.iscomplexobj(arr) or not np.issubdtype(arr.dtype, np.number):
+        raise ValueError(f"x must be a real numeric array; got dtype {arr.dtype}")
+    if arr.ndim == 0:
+        raise ValueError("x must have at least one dimension (time last)")
+    _check_finite_blocks(arr, name)
+    if not dims:
+        dims = tuple(f"dim_{i}" for i in range(arr.ndim - 1))
+    _check_choice(scaling, SCALINGS, "scaling")
+    _check_choice(average, ("mean", "max"), "average")
+    n = arr.shape[-1]
+    seg = n if segment_length is None else _int_param(segment_length, "segment_length", 2)
+    if seg > n:
+        raise ValueError(f"segment_length = {seg} is not admissible: must be <= {n} (x length)")
+    nfft = seg if nfft is None else _int_param(nfft, "nfft", 1)
+    if nfft < seg:
+        raise ValueError(f"nfft = {nfft} is not admissible: must be >= segment_length = {seg}")
+    overlap = float(overlap)
+    if not 0.0 <= overlap < 1.0:
+        raise ValueError(f"overlap = {overlap!r} is not admissible: must be in [0, 1)")
+    step = max(1, round(seg * (1.0 - overlap)))
+    info = window_info(window, seg)
+    w = get_window(window, seg)
+    s1, s2 = float(w.sum()), float(np.dot(w, w))
+    power, n_avg = _segment_power(arr, w, nfft, step, average)
+    one_sided = np.full(nfft // 2 + 1, 2.0)
+    one_sided[0] = 1.0
+    if nfft % 2 == 0:
+        one_sided[-1] = 1.0
+    if scaling == "psd":
+        values = power * (one_sided / (fs * s2))
+    else:
+        values = power * (one_sided / (s1 * s1))
+        if scaling in ("rms", "peak"):
+            np.sqrt(values, out=values)
+        if scaling == "peak":
+            values *= np.sqrt(one_sided)
+    return Spectrum(
+        frequency=np.arange(nfft // 2 + 1) * (fs / nfft),
+        values=values,
+        window=info.label,
+        scaling=scaling,
+        enbw_hz=info.enbw_hz(fs),
+        resolution_hz=fs / nfft,
+        n_averages=n_avg,
+        units=_units_of(units, scaling),
+        fs=fs,
+        segment_length=seg,
+        nfft=nfft,
+        overlap=overlap if segment_length is not None else 0.0,
+        average=average,
+        beta=info.beta,
+        dims=dims,
+        coords=coords,
+        name=name,
+    )
+
+
+# --------------------------------------------------------------------------------- peaks
+
+
+@dataclass
+class Peaks:
+    """Spectral peaks with window-corrected frequency and amplitude.
+
+    Attributes
+    ----------
+    frequency : numpy.ndarray
+        Interpolated peak frequencies [Hz] (ascending).
+    amplitude : numpy.ndarray
+        Peak heights corrected for scalloping, in the spectrum's scaling and ``units``: a
+        sinusoid of amplitude ``A`` gives ``A`` ("peak"), ``A/sqrt(2)`` ("rms"), ``A^2/2``
+        ("power"); for "psd" the corrected PSD height (the sine's power is
+        ``amplitude * enbw_hz``).
+    bin_frequency, bin_value : numpy.ndarray
+        Frequency and raw value of the local-maximum bins.
+    scaling, units, window : str
+        Copied from the spectrum.
+    """
+
+    frequency: np.ndarray
+    amplitude: np.ndarray
+    bin_frequency: np.ndarray
+    bin_value: np.ndarray
+    scaling: str
+    units: str
+    window: str
+
+    def __len__(self) -> int:
+        return int(self.frequency.size)
+
+    def labels(self, fmt: str = "{frequency:.1f} Hz") -> list[str]:
+        """Text labels, ``fmt`` formatted with ``frequency`` and ``amplitude``."""
+        return [
+            fmt.format(frequency=f, amplitude=a)
+            for f, a in zip(self.frequency, self.amplitude, strict=True)
+        ]
+
+    def to_dataset(self) -> xr.Dataset:
+        """:class:`xarray.Dataset` with dimension ``peak``."""
+        import xarray as xr
+
+        return xr.Dataset(
+            {
+                "frequency": (
+                    "peak",
+                    self.frequency,
+                    {"units": "Hz", "long_name": "interpolated peak frequency"},
+                ),
+                "amplitude": (
+                    "peak",
+                    self.amplitude,
+                    {"units": self.units, "long_name": f"corrected peak {self.scaling} value"},
+                ),
+                "bin_frequency": (
+                    "peak",
+                    self.bin_frequency,
+                    {"units": "Hz", "long_name": "frequency of the maximum bin"},
+                ),
+                "bin_value": (
+                    "peak",
+                    self.bin_value,
+                    {"units": self.units, "long_name": f"{self.scaling} value of the maximum bin"},
+                ),
+            },
+            coords={
+                "peak": (
+                    "peak",
+                    np.arange(self.frequency.size),
+                    {"long_name": "peak index", "units": "1"},
+                )
+            },
+            attrs={"scaling": self.scaling, "window": self.window},
+        )
+
+
+class _Kernel:
+    """Magnitude of the window's DTFT, ``|W(delta)|`` for an offset ``delta`` in bins."""
+
+    def __init__(self, w: np.ndarray, nfft: int) -> None:
+        self._w = w
+        self._phase = -2j * np.pi * np.arange(w.size) / nfft
+
+    def __call__(self, delta: float) -> float:
+        return float(abs(np.dot(self._w, np.exp(self._phase * delta))))
+
+
+def _interpolate(kernel: _Kernel, a: float, b: float, c: float) -> tuple[float, float]:
+    """Offset ``delta`` (bins, in [-0.5, 0.5]) and gain ``W(0)/W(delta)`` from 3 magnitudes.
+
+    Solves ``(c - a) / b = (W(1 - d) - W(1 + d)) / W(d)`` for ``d``: the magnitudes of the bins
+    ``k-1, k, k+1`` of a sinusoid at ``k + d`` are proportional to ``W(-1-d), W(-d), W(1-d)``.
+    For the Hann window this is equivalent to Grandke's 3-point formula (1983); for any window
+    it fits the known kernel, so it is exact for one sinusoid up to the leakage of others.
+    """
+    w0 = kernel(0.0)
+    if b <= 0:
+        return 0.0, 1.0
+    r = (c - a) / b
+
+    def f(d: float) -> float:
+        return (kernel(1.0 - d) - kernel(1.0 + d)) / kernel(d) - r
+
+    lo, hi = f(-0.5), f(0.5)
+    if lo >= 0:
+        d = -0.5
+    elif hi <= 0:
+        d = 0.5
+    else:
+        d = float(scipy.optimize.brentq(f, -0.5, 0.5, xtol=1e-10))
+    return d, w0 / kernel(d)
+
+
+def find_peaks(
+    spectrum: Spectrum,
+    *,
+    threshold: float | None = None,
+    prominence_db: float | None = None,
+    max_peaks: int | None = None,
+    min_distance_hz: float | None = None,
+    channel: int | tuple[int, ...] | None = None,
+) -> Peaks:
+    """Local maxima of a spectrum with interpolated frequency and amplitude.
+
+    Parameters
+    ----------
+    spectrum : Spectrum
+        Result of :func:`spectrum`.
+    threshold : float, optional
+        Absolute minimum bin value, in the spectrum's units.
+    prominence_db : float, optional
+        Minimum prominence of the peak above its surroundings, in dB.
+    max_peaks : int, optional
+        Keep only the strongest ``max_peaks`` (result sorted by frequency).
+    min_distance_hz : float, optional
+        Minimum distance between peaks [Hz]; the stronger one is kept.
+    channel : int or tuple of int, optional
+        Index into the leading dimensions for multi-channel spectra (required then).
+
+    Returns
+    -------
+    Peaks
+        Peaks; DC and the last bin are never interpolated.
+    """
+    if not isinstance(spectrum, Spectrum):
+        raise ValueError("spectrum must be a Spectrum (result of analysis.spectrum.spectrum)")
+    vals = spectrum.values
+    if vals.ndim > 1:
+        if channel is None:
+            raise ValueError(
+                f"spectrum has leading dims {spectrum.dims}; pass channel=<index> to choose one"
+            )
+        vals = vals[channel]
+        if vals.ndim != 1:
+            raise ValueError(f"channel = {channel!r} does not select a single spectrum")
+    kwargs: dict[str, Any] = {}
+    if prominence_db is not None:
+        if not prominence_db >= 0:
+            raise ValueError(f"prominence_db = {prominence_db!r} is not admissible: must be >= 0")
+        kwargs["prominence"] = float(prominence_db)
+    if min_distance_hz is not None:
+        if not min_distance_hz > 0:
+            raise ValueError(
+                f"min_distance_hz = {min_distance_hz!r} is not admissible: must be > 0 Hz"
+            )
+        kwargs["distance"] = max(1, round(min_distance_hz / spectrum.resolution_hz))
+    if max_peaks is not None:
+        _int_param(max_peaks, "max_peaks", 1)
+    levels = to_db(vals, spectrum.scaling)
+    idx, _ = scipy.signal.find_peaks(np.concatenate(([-np.inf], levels, [-np.inf])), **kwargs)
+    idx = idx - 1
+    if threshold is not None:  # absolute threshold on the linear values
+        idx = idx[vals[idx] >= float(threshold)]
+    if max_peaks is not None and idx.size > max_peaks:
+        idx = np.sort(idx[np.argsort(vals[idx])[::-1][:max_peaks]])
+    # bin magnitudes proportional to |X_k| (undo the one-sided factors and the square root)
+    power_like = spectrum.scaling in ("power", "psd")
+    mag = np.sqrt(vals) if power_like else vals.copy()
+    one_sided = np.full(mag.size, 0.5 if spectrum.scaling == "peak" else np.sqrt(0.5))
+    one_sided[0] = 1.0
+    if spectrum.nfft % 2 == 0:
+        one_sided[-1] = 1.0
+    mag *= one_sided
+    w = get_window(spectrum.window_spec, spectrum.segment_length)
+    kernel = _Kernel(w, spectrum.nfft)
+    freq = np.empty(idx.size)
+    amp = np.empty(idx.size)
+    for j, k in enumerate(idx):
+        if 0 < k < vals.size - 1:
+            d, gain = _interpolate(kernel, mag[k - 1], mag[k], mag[k + 1])
+        else:
+            d, gain = 0.0, 1.0
+        freq[j] = (k + d) * spectrum.resolution_hz
+        amp[j] = vals[k] * (gain * gain if power_like else gain)
+    return Peaks(
+        frequency=freq,
+        amplitude=amp,
+        bin_frequency=spectrum.frequency[idx],
+        bin_value=vals[idx].copy(),
+        scaling=spectrum.scaling,
+        units=spectrum.units,
+        window=spectrum.window,
+    )
