@@ -103,8 +103,8 @@ def read_csv(
     lines = [(no, ln) for no, ln in enumerate(text.splitlines(), 1) if ln.strip() and ln[0] != "#"]
     if not lines:
         raise ReaderError(f"{p}: no data lines found")
-    delim = delimiter if delimiter is not None else _detect_delimiter(lines[-1][1])
-    decimal_comma = delim == ";" and "," in lines[-1][1]
+    delim = delimiter if delimiter is not None else _detect_delimiter(lines[0][1])
+    decimal_comma = delim == ";" and "," in lines[min(1, len(lines) - 1)][1]
     header: list[str] | None = None
     first = _split(lines[0][1], delim)
     try:

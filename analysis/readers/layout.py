@@ -196,7 +196,8 @@ def _clean_value(value: Any) -> Any:
     if isinstance(value, _dt.datetime | _dt.date):
         return value.isoformat()
     if isinstance(value, np.datetime64):
-        return str(np.datetime_as_string(value, unit="auto"))
+        text = str(np.datetime_as_string(value.astype("datetime64[us]")))
+        return text.removesuffix(".000000")
     if isinstance(value, str | int | float | np.integer | np.floating):
         return value
     if isinstance(value, bytes):
