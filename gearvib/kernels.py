@@ -1,0 +1,579 @@
+"""Numba kernels of the run-up simulator: contact law, right-hand side, RK4 loop, decimation.
+
+Everything here works on flat float64 / int64 arrays and preallocated buffers; no Python objects
+enter the compiled code, so the same compiled kernel serves every gear-set topology.
+
+Equations of motion
+-------------------
+With the state ``y = [q, qdot]`` (``n`` coordinates each)::
+
+    M qddot = f_const + f_drive(t, q, qdot) - K q - C qdot
+              - g (Omega_c G qdot - Omega_c**2 K_Omega q) - sum_m (F_left,m + F_right,m) v_m
+
+``Omega_c = qdot[carrier]`` is the current carrier speed and ``g`` switches the gyroscopic and
+centripetal terms on (1) or off (0). For every mesh ``m`` (see :mod:`gearvib.model`):
+``delta = v_m . q``, ``s = w_m . q + s0_m``, ``k_L = table_L(s)``, ``k_R = table_R(s)`` and
+:func:`flank_forces` gives the flank forces (paper eq. 2, superposed). The mesh position uses the
+actual rotation angles, so vibration feeds back into the mesh phase.
+
+Drive (``ipar[IP_MODE]``):
+
+* ``DRIVE_NONE``: no drive; only ``f_const`` and the load act.
+* ``DRIVE_SPEED``: torsional spring-damper between the prescribed input angle ``phi(t)`` and the
+  input coordinate, ``k_c (phi - q_in) + c_c (omega - qdot_in)``; ``phi`` is the exact integral of
+  the piecewise-linear speed table.
+* ``DRIVE_TORQUE``: input torque from a piecewise-linear table of time (constant outside).
+
+Load at the output coordinate, in every mode: ``-e (T0 + c1 w + c2 w |w|)`` with
+``w = e qdot_out`` and ``e = +-1`` the forward sense of the output member.
+
+Layouts
+-------
+``system`` is the tuple built by :meth:`KernelSystem.astuple`. A recorded sample row holds
+``[q (n), qdot (n), F_left (n_mesh), -F_right (n_mesh), k_eff (n_mesh)]``: both flank forces as
+compressive magnitudes (>= 0) and the effective mesh stiffness (0 in the backlash, ``k_L + k_R``
+in double contact). Row ``i`` of a chunk is the state at the start of step ``i``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, fields
+
+import numpy as np
+from numba import njit
+
+__all__ = [
+    "DRIVE_NONE",
+    "DRIVE_SPEED",
+    "DRIVE_TORQUE",
+    "STATUS_DEFLECTION",
+    "STATUS_NONFINITE",
+    "STATUS_OK",
+    "STATUS_SPEED",
+    "KernelSystem",
+    "evaluate_rhs",
+    "fir_decimate",
+    "flank_forces",
+    "integrate",
+    "integrate_chunk",
+    "n_signals",
+    "periodic_interp",
+    "speed_profile",
+]
+
+STATUS_OK = 0
+STATUS_NONFINITE = 1
+STATUS_DEFLECTION = 2
+STATUS_SPEED = 3
+
+DRIVE_NONE = 0
+DRIVE_SPEED = 1
+DRIVE_TORQUE = 2
+
+# integer parameters
+IP_MODE = 0
+IP_INPUT = 1
+IP_OUTPUT = 2
+IP_CARRIER = 3
+IP_GYRO = 4
+N_IPAR = 5
+# float parameters
+FP_KC = 0
+FP_CC = 1
+FP_OUTDIR = 2
+FP_T0 = 3
+FP_C1 = 4
+FP_C2 = 5
+FP_SPEED_LIMIT = 6
+N_FPAR = 7
+
+
+@dataclass
+class KernelSystem:
+    """All arrays the kernels need, as plain contiguous float64/int64 arrays.
+
+    Attributes
+    ----------
+    minv : ndarray, shape (n, n)
+        Inverse mass matrix (load inertia included).
+    stiffness, damping : ndarray, shape (n, n)
+        Constant stiffness and damping (bearings, couplings; meshes excluded).
+    gyroscopic, centripetal : ndarray, shape (n, n)
+        ``G`` and ``K_Omega`` of the model.
+    mesh_vectors, mesh_position_vectors : ndarray, shape (n_mesh, n)
+        ``v_m`` and ``w_m``.
+    mesh_position_offsets : ndarray, shape (n_mesh,)
+        ``s0_m`` [cycles].
+    left_tables, right_tables : ndarray, shape (n_mesh, n_table)
+        Flank stiffness over one mesh cycle [N/m].
+    backlash, mesh_damping : ndarray, shape (n_mesh,)
+        ``j_m`` [m] and the viscous mesh damping [N s/m].
+    f_const : ndarray, shape (n,)
+        Constant generalised force.
+    ipar : ndarray of int64, shape (5,)
+        ``[mode, input_dof, output_dof, carrier_dof, gyroscopic_on]`` (``-1`` = none).
+    fpar : ndarray, shape (7,)
+        ``[k_c, c_c, output_sense, T0, c1, c2, speed_limit]``.
+    speed_table : ndarray, shape (3, n_speed)
+        Rows: time [s], input speed [rad/s], input angle [rad] at the nodes.
+    torque_table : ndarray, shape (2, n_torque)
+        Rows: time [s], input torque [N m].
+    deflection_limit : ndarray, shape (n_mesh,)
+        Blow-up threshold on ``|delta_m|`` [m].
+    """
+
+    minv: np.ndarray
+    stiffness: np.ndarray
+    damping: np.ndarray
+    gyroscopic: np.ndarray
+    centripetal: np.ndarray
+    mesh_vectors: np.ndarray
+    mesh_position_vectors: np.ndarray
+    mesh_position_offsets: np.ndarray
+    left_tables: np.ndarray
+    right_tables: np.ndarray
+    backlash: np.ndarray
+    mesh_damping: np.ndarray
+    f_const: np.ndarray
+    ipar: np.ndarray
+    fpar: np.ndarray
+    speed_table: np.ndarray
+    torque_table: np.ndarray
+    deflection_limit: np.ndarray
+
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            a = getattr(self, f.name)
+            dtype = np.int64 if f.name == "ipar" else np.float64
+            setattr(self, f.name, np.ascontiguousarray(a, dtype=dtype))
+        n = self.minv.shape[0]
+        n_mesh = self.mesh_vectors.shape[0]
+        if self.mesh_vectors.shape != (n_mesh, n) or self.stiffness.shape != (n, n):
+            raise ValueError("inconsistent array shapes in KernelSystem")
+        if self.ipar.shape != (N_IPAR,) or self.fpar.shape != (N_FPAR,):
+            raise ValueError("ipar must have 5 and fpar 7 entries")
+
+    @property
+    def n_dof(self) -> int:
+        """Number of coordinates."""
+        return int(self.minv.shape[0])
+
+    @property
+    def n_mesh(self) -> int:
+        """Number of meshes."""
+        return int(self.mesh_vectors.shape[0])
+
+    def astuple(self) -> tuple:
+        """Arrays in field order: the ``system`` argument of the kernels."""
+        return tuple(getattr(self, f.name) for f in fields(self))
+
+
+def n_signals(n_dof: int, n_mesh: int) -> int:
+    """Number of columns of a recorded sample row: ``2 n_dof + 3 n_mesh``."""
+    return 2 * n_dof + 3 * n_mesh
+
+
+@njit(cache=True)
+def periodic_interp(table: np.ndarray, row: int, s: float) -> float:
+    """Periodic linear interpolation of ``table[row]`` (samples at ``s = i / n_table``)."""
+    n = table.shape[1]
+    frac = s - np.floor(s)
+    u = frac * n
+    i0 = int(u)
+    w = u - i0
+    if i0 >= n:  # frac rounded up to exactly 1
+        i0 = 0
+        w = 0.0
+    i1 = i0 + 1
+    if i1 == n:
+        i1 = 0
+    return (1.0 - w) * table[row, i0] + w * table[row, i1]
+
+
+@njit(cache=True)
+def flank_forces(
+    delta: float, ddelta: float, k_left: float, k_right: float, backlash: float, damping: float
+) -> tuple[float, float, float, int]:
+    """Contact law of one mesh (paper eq. 2, both flanks checked and superposed).
+
+    Parameters
+    ----------
+    delta, ddelta : float
+        Normal mesh deflection [m] and its rate [m/s].
+    k_left, k_right : float
+        Flank stiffness at the current mesh position [N/m].
+    backlash : float
+        Total normal backlash ``j`` [m]; negative loads both flanks.
+    damping : float
+        Viscous mesh damping [N s/m], acting only on a flank in contact.
+
+    Returns
+    -------
+    f_left : float
+        ``k_L (delta - j/2) + c ddelta`` if ``delta > j/2``, floored at 0 (no tension), else 0.
+    f_right : float
+        ``k_R (delta + j/2) + c ddelta`` if ``delta < -j/2``, capped at 0, else 0.
+    k_eff : float
+        Sum of the stiffness of the flanks in contact.
+    state : int
+        Bit 0: left flank in contact; bit 1: right flank in contact.
+    """
+    half = 0.5 * backlash
+    f_left = 0.0
+    f_right = 0.0
+    k_eff = 0.0
+    state = 0
+    if delta > half:
+        f_left = k_left * (delta - half) + damping * ddelta
+        if f_left < 0.0:
+            f_left = 0.0
+        k_eff += k_left
+        state += 1
+    if delta < -half:
+        f_right = k_right * (delta + half) + damping * ddelta
+        if f_right > 0.0:
+            f_right = 0.0
+        k_eff += k_right
+        state += 2
+    return f_left, f_right, k_eff, state
+
+
+@njit(cache=True)
+def _speed_at(tab: np.ndarray, t: float) -> tuple[float, float]:
+    """Prescribed input angle and speed at ``t`` (piecewise-linear speed, exact integral)."""
+    tt = tab[0]
+    w = tab[1]
+    phi = tab[2]
+    n = tt.shape[0]
+    if n == 1 or t <= tt[0]:
+        return phi[0] + w[0] * (t - tt[0]), w[0]
+    if t >= tt[n - 1]:
+        return phi[n - 1] + w[n - 1] * (t - tt[n - 1]), w[n - 1]
+    i = np.searchsorted(tt, t, side="right") - 1
+    tau = t - tt[i]
+    slope = (w[i + 1] - w[i]) / (tt[i + 1] - tt[i])
+    return phi[i] + w[i] * tau + 0.5 * slope * tau * tau, w[i] + slope * tau
+
+
+@njit(cache=True)
+def speed_profile(tab: np.ndarray, times: np.ndarray, angle: np.ndarray, speed: np.ndarray) -> None:
+    """Evaluate the prescribed input angle [rad] and speed [rad/s] at ``times`` (in place)."""
+    for i in range(times.shape[0]):
+        a, w = _speed_at(tab, times[i])
+        angle[i] = a
+        speed[i] = w
+
+
+@njit(cache=True)
+def _table_at(tab: np.ndarray, t: float) -> float:
+    """Piecewise-linear table of time, held constant outside its range."""
+    tt = tab[0]
+    v = tab[1]
+    n = tt.shape[0]
+    if n == 1 or t <= tt[0]:
+        return v[0]
+    if t >= tt[n - 1]:
+        return v[n - 1]
+    i = np.searchsorted(tt, t, side="right") - 1
+    return v[i] + (v[i + 1] - v[i]) * (t - tt[i]) / (tt[i + 1] - tt[i])
+
+
+@njit(cache=True)
+def _rhs(t, y, dy, system, force, mesh_out):
+    """Right-hand side ``dy = f(t, y)``; ``mesh_out[m] = (F_L, -F_R, k_eff, state, delta)``."""
+    (
+        minv,
+        kmat,
+        cmat,
+        gmat,
+        komega,
+        mv,
+        mp,
+        s0,
+        tab_l,
+        tab_r,
+        backlash,
+        mc,
+        f_const,
+        ipar,
+        fpar,
+        speed_tab,
+        torque_tab,
+        _limit,
+    ) = system
+    n = minv.shape[0]
+    n_mesh = mv.shape[0]
+    for i in range(n):
+        dy[i] = y[n + i]
+        acc = f_const[i]
+        for j in range(n):
+            acc -= kmat[i, j] * y[j] + cmat[i, j] * y[n + j]
+        force[i] = acc
+    carrier = ipar[IP_CARRIER]
+    if ipar[IP_GYRO] != 0 and carrier >= 0:
+        om = y[n + carrier]
+        om2 = om * om
+        for i in range(n):
+            acc = 0.0
+            for j in range(n):
+                acc += om2 * komega[i, j] * y[j] - om * gmat[i, j] * y[n + j]
+            force[i] += acc
+    mode = ipar[IP_MODE]
+    k_in = ipar[IP_INPUT]
+    if mode == DRIVE_SPEED:
+        phi, w = _speed_at(speed_tab, t)
+        force[k_in] += fpar[FP_KC] * (phi - y[k_in]) + fpar[FP_CC] * (w - y[n + k_in])
+    elif mode == DRIVE_TORQUE:
+        force[k_in] += _table_at(torque_tab, t)
+    k_out = ipar[IP_OUTPUT]
+    if k_out >= 0:
+        e = fpar[FP_OUTDIR]
+        wo = e * y[n + k_out]
+        force[k_out] -= e * (fpar[FP_T0] + fpar[FP_C1] * wo + fpar[FP_C2] * wo * abs(wo))
+    for m in range(n_mesh):
+        d = 0.0
+        dd = 0.0
+        s = s0[m]
+        for i in range(n):
+            d += mv[m, i] * y[i]
+            dd += mv[m, i] * y[n + i]
+            s += mp[m, i] * y[i]
+        kl = periodic_interp(tab_l, m, s)
+        kr = periodic_interp(tab_r, m, s)
+        fl, fr, ke, st = flank_forces(d, dd, kl, kr, backlash[m], mc[m])
+        f = fl + fr
+        if f != 0.0:
+            for i in range(n):
+                force[i] -= f * mv[m, i]
+        mesh_out[m, 0] = fl
+        mesh_out[m, 1] = -fr
+        mesh_out[m, 2] = ke
+        mesh_out[m, 3] = st
+        mesh_out[m, 4] = d
+    for i in range(n):
+        acc = 0.0
+        for j in range(n):
+            acc += minv[i, j] * force[j]
+        dy[n + i] = acc
+
+
+@njit(cache=True)
+def evaluate_rhs(t: float, y: np.ndarray, system: tuple) -> tuple[np.ndarray, np.ndarray]:
+    """Right-hand side at one state (allocating; for tests and cross-checks, not for loops).
+
+    Returns
+    -------
+    dy : ndarray, shape (2 n,)
+        ``[qdot, qddot]``.
+    mesh_out : ndarray, shape (n_mesh, 5)
+        Per mesh ``F_left, -F_right, k_eff, contact state, delta``.
+    """
+    n = system[0].shape[0]
+    dy = np.empty(2 * n)
+    force = np.empty(n)
+    mesh_out = np.empty((system[5].shape[0], 5))
+    _rhs(t, y, dy, system, force, mesh_out)
+    return dy, mesh_out
+
+
+@njit(cache=True)
+def integrate_chunk(
+    y: np.ndarray,
+    first_step: int,
+    n_steps: int,
+    dt: float,
+    system: tuple,
+    record: np.ndarray,
+    record_offset: int,
+    flank_state: np.ndarray,
+    contact_changes: np.ndarray,
+    count_until: int,
+    work: np.ndarray,
+    mesh_out: np.ndarray,
+    status: np.ndarray,
+) -> None:
+    """Advance ``y`` by ``n_steps`` classical RK4 steps, recording the state before every step.
+
+    Parameters
+    ----------
+    y : ndarray, shape (2 n,)
+        State ``[q, qdot]`` at step ``first_step`` (time ``first_step * dt``); updated in place.
+    first_step, n_steps : int
+        Global index of the first step and number of steps.
+    dt : float
+        Step [s].
+    system : tuple
+        :meth:`KernelSystem.astuple`.
+    record : ndarray, shape (>= record_offset + n_steps, 2 n + 3 n_mesh)
+        Sample ``first_step + i`` goes to row ``record_offset + i`` (layout in the module doc).
+    flank_state : ndarray of int64, shape (n_mesh,)
+        Contact state of the previous sample (-1: unknown); updated.
+    contact_changes : ndarray of int64, shape (n_mesh,)
+        Incremented at every change of the contact state up to global step ``count_until``.
+    work : ndarray, shape (6, 2 n)
+        Stage buffers.
+    mesh_out : ndarray, shape (n_mesh, 5)
+        Scratch for the mesh quantities.
+    status : ndarray of int64, shape (2,)
+        Set to ``(STATUS_*, global step)``; ``STATUS_OK`` when all steps were done.
+    """
+    n = system[0].shape[0]
+    n_mesh = system[5].shape[0]
+    limit = system[17]
+    speed_limit = system[14][FP_SPEED_LIMIT]
+    k_in = system[13][IP_INPUT]
+    k1 = work[0]
+    k2 = work[1]
+    k3 = work[2]
+    k4 = work[3]
+    tmp = work[4]
+    force = work[5]
+    n2 = 2 * n
+    h2 = 0.5 * dt
+    h6 = dt / 6.0
+    status[0] = STATUS_OK
+    status[1] = first_step + n_steps
+    for step in range(n_steps):
+        g = first_step + step
+        t = g * dt
+        _rhs(t, y, k1, system, force, mesh_out)
+        row = record_offset + step
+        bad = STATUS_OK
+        for i in range(n2):
+            v = y[i]
+            record[row, i] = v
+            if not np.isfinite(v):
+                bad = STATUS_NONFINITE
+        for m in range(n_mesh):
+            record[row, n2 + m] = mesh_out[m, 0]
+            record[row, n2 + n_mesh + m] = mesh_out[m, 1]
+            record[row, n2 + 2 * n_mesh + m] = mesh_out[m, 2]
+            st = int(mesh_out[m, 3])
+            if flank_state[m] >= 0 and st != flank_state[m] and g <= count_until:
+                contact_changes[m] += 1
+            flank_state[m] = st
+            if bad == STATUS_OK and not abs(mesh_out[m, 4]) <= limit[m]:
+                bad = STATUS_DEFLECTION
+        if bad == STATUS_OK and k_in >= 0 and not abs(y[n + k_in]) <= speed_limit:
+            bad = STATUS_SPEED
+        if bad != STATUS_OK:
+            status[0] = bad
+            status[1] = g
+            return
+        for i in range(n2):
+            tmp[i] = y[i] + h2 * k1[i]
+        _rhs(t + h2, tmp, k2, system, force, mesh_out)
+        for i in range(n2):
+            tmp[i] = y[i] + h2 * k2[i]
+        _rhs(t + h2, tmp, k3, system, force, mesh_out)
+        for i in range(n2):
+            tmp[i] = y[i] + dt * k3[i]
+        _rhs(t + dt, tmp, k4, system, force, mesh_out)
+        for i in range(n2):
+            y[i] += h6 * (k1[i] + 2.0 * (k2[i] + k3[i]) + k4[i])
+
+
+@njit(cache=True)
+def fir_decimate(
+    buf: np.ndarray,
+    buf_first: int,
+    taps: np.ndarray,
+    factor: int,
+    first_out: int,
+    n_out: int,
+    out: np.ndarray,
+    out_offset: int,
+) -> None:
+    """Zero-delay FIR decimation of buffered samples.
+
+    Output sample ``k`` (global index, time ``k * factor * dt``) is
+    ``sum_i taps[i] * x[k * factor - L + i]`` with ``L = (len(taps) - 1) // 2``: the symmetric
+    filter is centred on the output instant, so no delay remains.
+
+    Parameters
+    ----------
+    buf : ndarray, shape (rows, n_signal)
+        Samples; row ``r`` holds global internal sample ``buf_first + r``.
+    buf_first : int
+        Global index of row 0.
+    taps : ndarray, shape (2 L + 1,)
+        Symmetric FIR taps.
+    factor : int
+        Decimation factor ``D``.
+    first_out, n_out : int
+        Global index of the first output sample and count.
+    out : ndarray, shape (>= out_offset + n_out, n_signal)
+        Output rows ``out_offset ...``.
+    out_offset : int
+        First row of ``out`` to write.
+    """
+    n_taps = taps.shape[0]
+    half = (n_taps - 1) // 2
+    n_sig = buf.shape[1]
+    for k in range(n_out):
+        r0 = (first_out + k) * factor - half - buf_first
+        o = out_offset + k
+        for c in range(n_sig):
+            out[o, c] = 0.0
+        for i in range(n_taps):
+            tap = taps[i]
+            r = r0 + i
+            for c in range(n_sig):
+                out[o, c] += tap * buf[r, c]
+
+
+def integrate(
+    system: KernelSystem, y0: np.ndarray, dt: float, n_steps: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Integrate ``n_steps`` RK4 steps from ``y0`` and return every internal sample (allocating).
+
+    A convenience for tests, cross-checks and small studies; :func:`gearvib.simulate.simulate`
+    is the production driver (chunks, decimation, blow-up diagnostics).
+
+    Parameters
+    ----------
+    system : KernelSystem
+        Arrays of the system.
+    y0 : ndarray, shape (2 n,)
+        Initial state ``[q, qdot]`` at ``t = 0``.
+    dt : float
+        Step [s].
+    n_steps : int
+        Number of steps; samples ``0 .. n_steps`` are returned.
+
+    Returns
+    -------
+    record : ndarray, shape (n_steps + 1, 2 n + 3 n_mesh)
+        Samples at ``t = i dt`` (layout in the module docstring).
+    contact_changes : ndarray of int64, shape (n_mesh,)
+        Changes of the flank-contact state per mesh.
+    status : ndarray of int64, shape (2,)
+        ``(STATUS_*, step)``.
+    y : ndarray, shape (2 n,)
+        State after the last step.
+    """
+    n = system.n_dof
+    nm = system.n_mesh
+    y = np.array(y0, dtype=np.float64)
+    record = np.empty((n_steps + 1, n_signals(n, nm)))
+    flank_state = np.full(nm, -1, dtype=np.int64)
+    changes = np.zeros(nm, dtype=np.int64)
+    work = np.empty((6, 2 * n))
+    mesh_out = np.empty((nm, 5))
+    status = np.zeros(2, dtype=np.int64)
+    integrate_chunk(
+        y,
+        0,
+        n_steps + 1,
+        float(dt),
+        system.astuple(),
+        record,
+        0,
+        flank_state,
+        changes,
+        n_steps,
+        work,
+        mesh_out,
+        status,
+    )
+    return record, changes, status, y
