@@ -1,0 +1,161 @@
+"""netCDF output of gearvib runs: attribute sanitising, atomic write, checked read.
+
+The files are NETCDF4 written with the netCDF4 engine (xarray's default engine has changed
+between releases), zlib-compressed and chunked along ``time``. Coordinates and data that hold no
+NaN get ``_FillValue = None`` (CF forbids missing values in coordinate variables). The write is
+atomic: a temporary file in the destination directory is written, flushed to disk and renamed
+over the destination, so a crash or Ctrl-C never leaves a partial file.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import os
+import uuid
+from collections.abc import Mapping
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+
+__all__ = ["GearvibFileError", "read_run", "sanitize_attrs", "write_netcdf"]
+
+_TIME_CHUNK = 65536
+
+
+class GearvibFileError(OSError):
+    """A file is missing, unreadable or not a gearvib run."""
+
+
+def _sanitize_value(value: object) -> object:
+    if isinstance(value, bool | np.bool_):
+        return np.int8(bool(value))
+    if isinstance(value, Mapping):
+        return json.dumps(value, sort_keys=True, default=str)
+    if value is None:
+        return ""
+    if isinstance(value, str | bytes | int | float | np.integer | np.floating):
+        return value
+    if isinstance(value, list | tuple | np.ndarray):
+        arr = np.asarray(value)
+        if arr.dtype.kind in "biuf" and arr.ndim == 1:
+            return arr.astype(np.int8) if arr.dtype.kind == "b" else arr
+        return json.dumps(np.asarray(value).tolist(), default=str)
+    return str(value)
+
+
+def sanitize_attrs(attrs: Mapping) -> dict:
+    """Attributes that netCDF can store.
+
+    ``bool`` becomes ``int8`` (0/1), a mapping becomes a JSON string, ``None`` an empty string,
+    nested or non-numeric sequences JSON and anything else ``str``; numbers, strings and 1-D
+    numeric arrays are kept.
+    """
+    return {str(k): _sanitize_value(v) for k, v in attrs.items()}
+
+
+def _encoding(ds: xr.Dataset) -> dict:
+    enc: dict[str, dict] = {}
+    for name, var in ds.variables.items():
+        e: dict = {}
+        kind = var.dtype.kind
+        if kind in "fc":
+            if name in ds.coords or not bool(np.isnan(var.values).any()):
+                e["_FillValue"] = None
+        elif kind in "iub":
+            e["_FillValue"] = None
+        if kind in "fiub" and var.ndim >= 1 and var.size > 0:
+            e["zlib"] = True
+            e["complevel"] = 4
+            e["shuffle"] = True
+            e["chunksizes"] = tuple(
+                min(n, _TIME_CHUNK) if d == "time" else (n if var.ndim == 1 else 1)
+                for d, n in zip(var.dims, var.shape, strict=True)
+            )
+        enc[str(name)] = e
+    return enc
+
+
+def write_netcdf(ds: xr.Dataset, path: str | os.PathLike) -> Path:
+    """Write a dataset to netCDF4 atomically.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        Dataset to write (e.g. :meth:`gearvib.simulate.RunUpResult.to_dataset`). Attributes of
+        the dataset and its variables are sanitised (:func:`sanitize_attrs`) on a shallow copy.
+    path : path-like
+        Destination; its directory must exist. An existing file is replaced only once the new
+        one is complete.
+
+    Returns
+    -------
+    pathlib.Path
+        The destination.
+
+    Notes
+    -----
+    The temporary file lives in the destination directory (so ``os.replace`` is an atomic
+    rename on the same file system), is fsync-ed before the rename and is removed on any error,
+    including ``KeyboardInterrupt``.
+    """
+    dest = Path(path)
+    directory = dest.parent if str(dest.parent) else Path(".")
+    if not directory.is_dir():
+        raise FileNotFoundError(f"directory of {dest} does not exist")
+    out = ds.copy(deep=False)
+    out.attrs = sanitize_attrs(ds.attrs)
+    for name in out.variables:
+        out[name].attrs = sanitize_attrs(ds[name].attrs)
+    tmp = directory / f".{dest.name}.{uuid.uuid4().hex}.tmp"
+    # O_EXCL: never clobber; mode 0o666 so the process umask applies as for a plain open()
+    os.close(os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666))
+    try:
+        out.to_netcdf(tmp, engine="netcdf4", format="NETCDF4", encoding=_encoding(out))
+        with open(tmp, "rb+") as fh:
+            os.fsync(fh.fileno())
+        os.replace(tmp, dest)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            tmp.unlink()
+        raise
+    with contextlib.suppress(OSError):  # persist the rename (POSIX); not possible everywhere
+        dir_fd = os.open(directory, os.O_RDONLY)
+        try:
+            os.fsync(dir_fd)
+        finally:
+            os.close(dir_fd)
+    return dest
+
+
+def read_run(path: str | os.PathLike) -> xr.Dataset:
+    """Read a gearvib netCDF file into memory.
+
+    Parameters
+    ----------
+    path : path-like
+        File written by :func:`write_netcdf`.
+
+    Returns
+    -------
+    xarray.Dataset
+        Loaded dataset (the file is closed).
+
+    Raises
+    ------
+    GearvibFileError
+        If the file is missing, is not readable netCDF, or was not written by gearvib (no
+        ``source`` attribute starting with ``"gearvib"``). The message names the path.
+    """
+    p = Path(path)
+    if not p.is_file():
+        raise GearvibFileError(f"gearvib run file not found: {p}")
+    try:
+        with xr.open_dataset(p, engine="netcdf4") as ds:
+            loaded = ds.load()
+    except Exception as exc:
+        raise GearvibFileError(f"cannot read {p} as netCDF: {exc}") from exc
+    if not str(loaded.attrs.get("source", "")).startswith("gearvib"):
+        raise GearvibFileError(f"{p} is not a gearvib file (no 'source = gearvib ...' attribute)")
+    return loaded
