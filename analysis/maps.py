@@ -1,0 +1,856 @@
+"""Rpm-frequency and rpm-order maps (sonograms of run-ups), overall level and Campbell data.
+
+Both maps are short-time spectra; each frame is one line of the map, reported at its centre
+(time, and the speed interpolated there), as MATLAB ``rpmfreqmap``/``rpmordermap`` do.
+
+**Resolution** follows MATLAB's definition: ``resolution`` is the *resolution bandwidth*
+(the window's equivalent noise bandwidth), so the window length is
+``L = round(ENBW_bins * fs / resolution)`` and the value actually used,
+``ENBW_bins * fs / L``, is reported as ``resolution_hz``/``resolution_orders`` together with
+the line spacing ``fs / L``. Defaults: ``fs / 128`` Hz with a Hann window for the frequency
+map; ``samples_per_rev / 256`` orders with a flat-top window for the order map; 50 % overlap;
+rms amplitude; linear scale.
+
+**Memory.** Frames are windowed and transformed block-wise straight into the preallocated
+output (a few MB of temporaries), so a 10-minute, 51.2 kHz channel needs little more than
+the map itself. The input may be float32; it is promoted per block.
+
+**Amplitude** of a line: ``"power"`` ``2|X|^2/S1^2`` (a sine on a line reads ``A^2/2``),
+``"rms"`` its square root, ``"peak"`` ``sqrt(2)`` times that (DC and Nyquist not doubled).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, Literal
+
+import numpy as np
+
+from analysis.checks import require_finite
+from analysis.fft import rfft
+from analysis.orders import _default_samples_per_rev, angle_from_speed, resample_to_angle
+from analysis.spectrum import (
+    WindowSpec,
+    _check_choice,
+    _check_finite_blocks,
+    _parse_window,
+    _uniform_rate,
+    get_window,
+    to_db,
+    window_info,
+)
+
+if TYPE_CHECKING:
+    import matplotlib.figure
+    import xarray as xr
+
+__all__ = [
+    "Campbell",
+    "OverallLevel",
+    "RpmFrequencyMap",
+    "RpmOrderMap",
+    "campbell",
+    "overall_level",
+    "rpm_frequency_map",
+    "rpm_frequency_map_ds",
+    "rpm_order_map",
+    "rpm_order_map_ds",
+]
+
+_BLOCK_ELEMENTS = 1 << 19  # windowed samples per block (4 MB of float64)
+_AMPLITUDES = ("rms", "peak", "power")
+_SCALES = ("linear", "dB")
+
+
+def _main_lobe_half_width(window: WindowSpec) -> float:
+    """Half width of the main lobe in bins (first null for the cosine sums)."""
+    name, beta = _parse_window(window)
+    table = {"rectangular": 1.0, "hann": 2.0, "hamming": 2.0, "blackmanharris": 4.0, "flattop": 5.0}
+    if name == "kaiser":
+        assert beta is not None
+        return float(np.sqrt(1.0 + (beta / np.pi) ** 2))
+    return table[name]
+
+
+def _line_factors(n_lines: int, nfft: int) -> np.ndarray:
+    f = np.full(n_lines, 2.0)
+    f[0] = 1.0
+    if nfft % 2 == 0:
+        f[-1] = 1.0
+    return f
+
+
+def _stft_into(
+    x: np.ndarray,
+    w: np.ndarray,
+    step: int,
+    out: np.ndarray,
+    amplitude: str,
+    scale: str,
+) -> None:
+    """Fill ``out[frame, line]`` with the scaled short-time spectrum of 1-D ``x``, block-wise."""
+    seg = w.size
+    frames = np.lib.stride_tricks.sliding_window_view(x, seg)[::step]
+    n_frames = out.shape[0]
+    s1 = float(w.sum())
+    factor = _line_factors(out.shape[1], seg) / (s1 * s1)
+    peak_gain = np.sqrt(_line_factors(out.shape[1], seg))
+    block = max(1, _BLOCK_ELEMENTS // seg)
+    for start in range(0, n_frames, block):
+        stop = min(n_frames, start + block)
+        spec = rfft(frames[start:stop] * w, axis=-1)
+        dst = out[start:stop]
+        np.multiply(spec.real, spec.real, out=dst)
+        dst += spec.imag * spec.imag
+        dst *= factor
+        if amplitude != "power":
+            np.sqrt(dst, out=dst)
+            if amplitude == "peak":
+                dst *= peak_gain
+        if scale == "dB":
+            np.maximum(dst, 1e-40, out=dst)
+            np.log10(dst, out=dst)
+            dst *= 10.0 if amplitude == "power" else 20.0
+
+
+def _frame_layout(n: int, seg: int, overlap: float) -> tuple[int, int]:
+    if not 0.0 <= float(overlap) < 1.0:
+        raise ValueError(f"overlap = {overlap!r} is not admissible: must be in [0, 1)")
+    step = max(1, round(seg * (1.0 - float(overlap))))
+    return step, (n - seg) // step + 1
+
+
+def _window_length(window: WindowSpec, rate: float, resolution: float, n: int, name: str) -> int:
+    if not np.isfinite(resolution) or resolution <= 0:
+        raise ValueError(f"{name} = {resolution!r} is not admissible: must be finite and > 0")
+    enbw = window_info(window, 4096).enbw_bins
+    seg = round(enbw * rate / resolution)
+    if seg < 4:
+        raise ValueError(
+            f"{name} = {resolution:g} is too coarse: the window would have {seg} < 4 samples "
+            f"(admissible: <= {enbw * rate / 4:.6g})"
+        )
+    return min(seg, n)  # record too short: one estimate over the whole record (MATLAB)
+
+
+@dataclass
+class _MapBase:
+    time: np.ndarray
+    rpm: np.ndarray
+    values: np.ndarray
+    window: str
+    window_spec: WindowSpec
+    amplitude: str
+    scale: str
+    enbw_bins: float
+    overlap: float
+    segment_length: int
+    signal_units: str
+    name: str
+
+    _axis_name = "axis"
+
+    @property
+    def units(self) -> str:
+        """Units of ``values`` (``"1"`` for dB levels)."""
+        if self.scale == "dB":
+            return "1"
+        if self.amplitude == "power":
+            return "1" if self.signal_units == "1" else f"({self.signal_units})^2"
+        return self.signal_units
+
+    @property
+    def level_reference(self) -> str:
+        """Reference of the dB levels (e.g. ``"1 m s-2"``)."""
+        u = (
+            self.signal_units
+            if self.amplitude != "power"
+            else ("1" if self.signal_units == "1" else f"({self.signal_units})^2")
+        )
+        return f"1 {u}"
+
+    def power(self) -> np.ndarray:
+        """Map converted back to power per line (``A^2/2`` for a sine on a line)."""
+        v = self.values
+        if self.scale == "dB":
+            v = 10.0 ** (v / (10.0 if self.amplitude == "power" else 20.0))
+        if self.amplitude == "power":
+            return np.array(v, dtype=float, copy=True)
+        p = np.asarray(v, dtype=float) ** 2
+        if self.amplitude == "peak":
+            p = p * (1.0 / _line_factors(p.shape[1], self.segment_length))
+        return p
+
+    def _axis(self) -> tuple[str, np.ndarray, dict[str, str]]:
+        raise NotImplementedError
+
+    def _attrs(self) -> dict[str, Any]:
+        raise NotImplementedError
+
+    def to_dataset(self) -> xr.Dataset:
+        """Dataset with ``amplitude(time, <axis>)`` and auxiliary coordinate ``rpm(time)``."""
+        import xarray as xr
+
+        name, axis, axis_attrs = self._axis()
+        long = f"{self.amplitude} amplitude of {self.name}"
+        if self.amplitude == "power":
+            long = f"power per line of {self.name}"
+        if self.scale == "dB":
+            long += f" (dB re {self.level_reference})"
+        ds = xr.Dataset(
+            {
+                "amplitude": (
+                    ("time", name),
+                    self.values,
+                    {"units": self.units, "long_name": long},
+                )
+            },
+            coords={
+                "time": ("time", self.time, {"units": "s", "long_name": "frame centre time"}),
+                name: (name, axis, axis_attrs),
+                "rpm": (
+                    "time",
+                    self.rpm,
+                    {
+                        "units": "min-1",
+                        "long_name": "shaft speed at frame centre (revolutions per minute)",
+                    },
+                ),
+            },
+        )
+        ds.attrs.update(
+            window=self.window,
+            amplitude=self.amplitude,
+            scale=self.scale,
+            overlap=float(self.overlap),
+            segment_length=int(self.segment_length),
+            **self._attrs(),
+        )
+        return ds
+
+
+@dataclass
+class RpmFrequencyMap(_MapBase):
+    """Short-time spectra of a run-up vs frequency, with the speed of each frame.
+
+    Attributes
+    ----------
+    time, rpm : numpy.ndarray
+        Frame centres [s] and speed there [min-1].
+    frequency : numpy.ndarray
+        Line frequencies [Hz].
+    values : numpy.ndarray
+        Map, shape ``(time, frequency)``.
+    resolution_hz : float
+        Resolution bandwidth actually used (``ENBW_bins * fs / L``), as MATLAB's ``res``.
+    bin_spacing_hz : float
+        Line spacing ``fs / L``.
+    enbw_hz : float
+        Equivalent noise bandwidth [Hz] (equal to ``resolution_hz``).
+    fs : float
+        Sample rate [Hz].
+    """
+
+    frequency: np.ndarray = None  # type: ignore[assignment]
+    resolution_hz: float = 0.0
+    bin_spacing_hz: float = 0.0
+    enbw_hz: float = 0.0
+    fs: float = 0.0
+
+    def _axis(self) -> tuple[str, np.ndarray, dict[str, str]]:
+        return "frequency", self.frequency, {"units": "Hz", "long_name": "frequency"}
+
+    def _attrs(self) -> dict[str, Any]:
+        return {
+            "resolution_hz": float(self.resolution_hz),
+            "bin_spacing_hz": float(self.bin_spacing_hz),
+            "enbw_hz": float(self.enbw_hz),
+            "sample_rate_hz": float(self.fs),
+        }
+
+    def plot(self, **kwargs: Any) -> matplotlib.figure.Figure:
+        """Sonogram figure (see :func:`analysis.plots.rpm_frequency_map_figure`)."""
+        from analysis.plots import rpm_frequency_map_figure
+
+        return rpm_frequency_map_figure(self, **kwargs)
+
+
+@dataclass
+class RpmOrderMap(_MapBase):
+    """Short-time order spectra (angle domain) of a run-up, with the speed of each frame.
+
+    Attributes
+    ----------
+    order : numpy.ndarray
+        Line orders.
+    values : numpy.ndarray
+        Map, shape ``(time, order)``.
+    resolution_orders : float
+        Resolution bandwidth actually used [orders] (``ENBW_bins * spr / L``).
+    bin_spacing_orders : float
+        Line spacing ``spr / L`` [orders].
+    enbw_orders : float
+        Equivalent noise bandwidth [orders].
+    samples_per_rev : int
+        Angular sampling.
+    max_order : float
+        Highest alias-free order.
+    """
+
+    order: np.ndarray = None  # type: ignore[assignment]
+    resolution_orders: float = 0.0
+    bin_spacing_orders: float = 0.0
+    enbw_orders: float = 0.0
+    samples_per_rev: int = 0
+    max_order: float = 0.0
+
+    def _axis(self) -> tuple[str, np.ndarray, dict[str, str]]:
+        return "order", self.order, {"units": "1", "long_name": "order (cycles per revolution)"}
+
+    def _attrs(self) -> dict[str, Any]:
+        return {
+            "resolution_orders": float(self.resolution_orders),
+            "bin_spacing_orders": float(self.bin_spacing_orders),
+            "enbw_orders": float(self.enbw_orders),
+            "samples_per_rev": int(self.samples_per_rev),
+            "max_order": float(self.max_order),
+        }
+
+    def plot(self, **kwargs: Any) -> matplotlib.figure.Figure:
+        """Figure (see :func:`analysis.plots.rpm_order_map_figure`)."""
+        from analysis.plots import rpm_order_map_figure
+
+        return rpm_order_map_figure(self, **kwargs)
+
+
+def _signal_1d(x: Any, name: str) -> np.ndarray:
+    arr = np.asarray(x)
+    if np.iscomplexobj(arr) or not np.issubdtype(arr.dtype, np.number):
+        raise ValueError(f"{name} must be a real numeric array; got dtype {arr.dtype}")
+    if arr.ndim != 1:
+        raise ValueError(f"{name} must be 1-D (one channel); got shape {arr.shape}")
+    _check_finite_blocks(arr, name)
+    return arr
+
+
+def _speed(rpm: Any, n: int) -> np.ndarray:
+    r = np.asarray(rpm)
+    if r.ndim != 1 or r.size != n:
+        raise ValueError(
+            f"sample-count mismatch (x: {n}, rpm: {r.size}); rpm must be 1-D, one value per "
+            "sample of x"
+        )
+    _check_finite_blocks(r, "rpm")
+    return r
+
+
+def _fs(fs: float | None, time: Any, n: int) -> tuple[float, float]:
+    """Sample rate and start time from ``fs`` and/or ``time`` (checked against each other)."""
+    if time is None:
+        if fs is None:
+            raise ValueError("fs (Hz, > 0) or time (s) is required")
+        fs = float(fs)
+        if not np.isfinite(fs) or fs <= 0:
+            raise ValueError(f"fs = {fs!r} is not admissible: must be finite and > 0 Hz")
+        return fs, 0.0
+    t = np.asarray(time)
+    if t.ndim != 1 or t.size != n:
+        raise ValueError(f"sample-count mismatch (x: {n}, time: {t.size})")
+    fs_t = _uniform_rate(t, "time")
+    if fs is not None and abs(float(fs) - fs_t) > 1e-6 * fs_t:
+        raise ValueError(
+            f"sample-rate mismatch: fs = {fs!r} Hz but the time axis gives {fs_t:.9g} Hz"
+        )
+    return fs_t, float(t[0])
+
+
+def _values_at(frac_index: np.ndarray, v: np.ndarray) -> np.ndarray:
+    i = np.clip(np.floor(frac_index).astype(np.int64), 0, v.size - 2)
+    u = frac_index - i
+    return v[i] * (1.0 - u) + v[i + 1] * u
+
+
+def rpm_frequency_map(
+    x: Any,
+    fs: float | None,
+    rpm: Any,
+    *,
+    resolution: float | None = None,
+    window: WindowSpec = "hann",
+    overlap: float = 0.5,
+    amplitude: Literal["rms", "peak", "power"] = "rms",
+    scale: Literal["linear", "dB"] = "linear",
+    time: Any = None,
+    units: str = "1",
+    name: str = "x",
+) -> RpmFrequencyMap:
+    """Rpm-frequency map (sonogram) of one channel.
+
+    Parameters
+    ----------
+    x : array_like
+        One channel (1-D), float32 or float64.
+    fs : float or None
+        Sample rate [Hz]; may be ``None`` when ``time`` is given.
+    rpm : array_like
+        Speed [min-1], one value per sample.
+    resolution : float, optional
+        Resolution bandwidth [Hz] (= ENBW of the window), default ``fs / 128`` (MATLAB).
+    window : str or ("kaiser", beta), default "hann"
+        Window (MATLAB default).
+    overlap : float, default 0.5
+        Frame overlap fraction in ``[0, 1)``.
+    amplitude : {"rms", "peak", "power"}, default "rms"
+        Convention per line.
+    scale : {"linear", "dB"}, default "linear"
+        dB is re 1 unit (``20 log10`` for amplitudes, ``10 log10`` for power).
+    time : array_like, optional
+        Uniform time axis [s] (gives the frame times; must agree with ``fs``).
+    units, name : str
+        Metadata of ``x``.
+
+    Returns
+    -------
+    RpmFrequencyMap
+        Map ``(time, frequency)`` with speed per frame and the resolution actually used.
+    """
+    arr = _signal_1d(x, name)
+    n = arr.size
+    r = _speed(rpm, n)
+    rate, t0 = _fs(fs, time, n)
+    _check_choice(amplitude, _AMPLITUDES, "amplitude")
+    _check_choice(scale, _SCALES, "scale")
+    res = rate / 128.0 if resolution is None else float(resolution)
+    seg = _window_length(window, rate, res, n, "resolution")
+    step, n_frames = _frame_layout(n, seg, overlap)
+    info = window_info(window, seg)
+    w = get_window(window, seg)
+    out = np.empty((n_frames, seg // 2 + 1))
+    _stft_into(arr, w, step, out, amplitude, scale)
+    centre = np.arange(n_frames) * step + 0.5 * (seg - 1)
+    return RpmFrequencyMap(
+        time=t0 + centre / rate,
+        rpm=_values_at(centre, r),
+        values=out,
+        window=info.label,
+        window_spec=window,
+        amplitude=amplitude,
+        scale=scale,
+        enbw_bins=info.enbw_bins,
+        overlap=float(overlap),
+        segment_length=seg,
+        signal_units=units,
+        name=name,
+        frequency=np.arange(seg // 2 + 1) * (rate / seg),
+        resolution_hz=info.enbw_hz(rate),
+        bin_spacing_hz=rate / seg,
+        enbw_hz=info.enbw_hz(rate),
+        fs=rate,
+    )
+
+
+def rpm_order_map(
+    x: Any,
+    fs: float | None,
+    rpm: Any,
+    *,
+    resolution: float | None = None,
+    window: WindowSpec = "flattop",
+    overlap: float = 0.5,
+    amplitude: Literal["rms", "peak", "power"] = "rms",
+    scale: Literal["linear", "dB"] = "linear",
+    samples_per_rev: int | None = None,
+    max_order: float | None = None,
+    time: Any = None,
+    units: str = "1",
+    name: str = "x",
+) -> RpmOrderMap:
+    """Rpm-order map by computed order tracking (angular resampling, then short-time spectra).
+
+    Parameters
+    ----------
+    x : array_like
+        One channel (1-D).
+    fs : float or None
+        Sample rate [Hz] (or give ``time``).
+    rpm : array_like
+        Speed [min-1] per sample; must be > 0 everywhere.
+    resolution : float, optional
+        Resolution bandwidth [orders] (= window ENBW), default ``samples_per_rev / 256``.
+    window : str or ("kaiser", beta), default "flattop"
+        Window (MATLAB default).
+    overlap : float, default 0.5
+        Frame overlap in the angle domain.
+    amplitude, scale : str
+        As in :func:`rpm_frequency_map`.
+    samples_per_rev : int, optional
+        Angular sampling; default ``2 * ceil(fs / 2 / f_shaft,max)`` (about ``fs`` at the top
+        speed).
+    max_order : float, optional
+        Highest alias-free order (default ``samples_per_rev / 2.56``).
+    time : array_like, optional
+        Uniform time axis [s].
+    units, name : str
+        Metadata of ``x``.
+
+    Returns
+    -------
+    RpmOrderMap
+        Map ``(time, order)``; time and speed at the angle-frame centres.
+    """
+    arr = _signal_1d(x, name)
+    n = arr.size
+    r = require_finite(_speed(rpm, n), "rpm")
+    if np.any(r <= 0):
+        i = int(np.flatnonzero(r <= 0)[0])
+        raise ValueError(
+            f"rpm must be > 0 for order tracking (angle strictly increasing); rpm[{i}] = {r[i]}"
+        )
+    rate, t0 = _fs(fs, time, n)
+    _check_choice(amplitude, _AMPLITUDES, "amplitude")
+    _check_choice(scale, _SCALES, "scale")
+    t = t0 + np.arange(n) / rate
+    if samples_per_rev is None:
+        spr, mo = _default_samples_per_rev(rate, float(r.max()))
+        mo = mo if max_order is None else max_order
+    else:
+        spr, mo = samples_per_rev, max_order
+    sig = resample_to_angle(arr, t, angle_from_speed(t, r), spr, mo, units=units, name=name)
+    spr = sig.samples_per_rev
+    res = spr / 256.0 if resolution is None else float(resolution)
+    m = sig.values.size
+    seg = _window_length(window, float(spr), res, m, "resolution")
+    step, n_frames = _frame_layout(m, seg, overlap)
+    info = window_info(window, seg)
+    w = get_window(window, seg)
+    out = np.empty((n_frames, seg // 2 + 1))
+    _stft_into(sig.values, w, step, out, amplitude, scale)
+    centre = np.arange(n_frames) * step + 0.5 * (seg - 1)
+    tc = _values_at(centre, sig.time)
+    return RpmOrderMap(
+        time=tc,
+        rpm=np.interp(tc, t, r),
+        values=out,
+        window=info.label,
+        window_spec=window,
+        amplitude=amplitude,
+        scale=scale,
+        enbw_bins=info.enbw_bins,
+        overlap=float(overlap),
+        segment_length=seg,
+        signal_units=units,
+        name=name,
+        order=np.arange(seg // 2 + 1) * (spr / seg),
+        resolution_orders=info.enbw_hz(spr),
+        bin_spacing_orders=spr / seg,
+        enbw_orders=info.enbw_hz(spr),
+        samples_per_rev=spr,
+        max_order=sig.max_order,
+    )
+
+
+_SPEED_FACTORS = {
+    "min-1": 1.0,
+    "rpm": 1.0,
+    "1/min": 1.0,
+    "min^-1": 1.0,
+    "r/min": 1.0,
+    "rad s-1": 60.0 / (2 * np.pi),
+    "rad/s": 60.0 / (2 * np.pi),
+    "hz": 60.0,
+    "s-1": 60.0,
+    "1/s": 60.0,
+}
+
+
+def _from_dataset(ds: Any, variable: str, speed: str) -> tuple[Any, Any, Any, str]:
+    if variable not in ds.variables:
+        raise ValueError(f"variable = {variable!r} is not in the dataset ({list(ds.data_vars)})")
+    if speed not in ds.variables:
+        raise ValueError(f"speed = {speed!r} is not a variable or coordinate of the dataset")
+    da, sp = ds[variable], ds[speed]
+    if da.dims != ("time",):
+        raise ValueError(
+            f"{variable} has dims {da.dims}; select one channel so that it depends on 'time' "
+            "only, e.g. ds.sel(channel='ring_x')"
+        )
+    if sp.dims != ("time",):
+        raise ValueError(f"speed {speed!r} must be along 'time' only; it has dims {sp.dims}")
+    if "time" not in ds.coords:
+        raise ValueError("the dataset needs a 'time' coordinate in seconds")
+    su = str(sp.attrs.get("units", "min-1")).strip()
+    factor = _SPEED_FACTORS.get(su.lower() if su.lower() == "hz" else su)
+    if factor is None:
+        raise ValueError(f"speed {speed!r} has units {su!r}; admissible: {sorted(_SPEED_FACTORS)}")
+    rpm = sp.values if factor == 1.0 else sp.values * factor
+    return da.values, rpm, ds["time"].values, str(da.attrs.get("units", "1"))
+
+
+def rpm_frequency_map_ds(
+    ds: Any, variable: str, speed: str = "shaft_speed", **kwargs: Any
+) -> RpmFrequencyMap:
+    """:func:`rpm_frequency_map` of ``ds[variable]`` against the speed ``ds[speed]``.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        Recording with a uniform ``time`` coordinate [s].
+    variable : str
+        Data variable along ``time`` only (select a channel first).
+    speed : str, default "shaft_speed"
+        Variable or auxiliary coordinate along ``time``, in ``min-1`` (``rad s-1`` and ``Hz``
+        are converted).
+    **kwargs
+        Passed on (``resolution``, ``window``, ``overlap``, ``amplitude``, ``scale``).
+    """
+    x, rpm, t, units = _from_dataset(ds, variable, speed)
+    return rpm_frequency_map(x, None, rpm, time=t, units=units, name=variable, **kwargs)
+
+
+def rpm_order_map_ds(
+    ds: Any, variable: str, speed: str = "shaft_speed", **kwargs: Any
+) -> RpmOrderMap:
+    """:func:`rpm_order_map` of ``ds[variable]`` against ``ds[speed]`` (see
+    :func:`rpm_frequency_map_ds`)."""
+    x, rpm, t, units = _from_dataset(ds, variable, speed)
+    return rpm_order_map(x, None, rpm, time=t, units=units, name=variable, **kwargs)
+
+
+# ----------------------------------------------------------------------------- overall level
+
+
+@dataclass
+class OverallLevel:
+    """Overall level vs time and speed (sum of the lines of an rpm-frequency map).
+
+    Attributes
+    ----------
+    time, rpm : numpy.ndarray
+        Frame centres [s] and speed [min-1].
+    values : numpy.ndarray
+        rms level in ``frequency_range`` (linear, or dB re 1 unit).
+    frequency_range : tuple of float
+        Band summed [Hz].
+    """
+
+    time: np.ndarray
+    rpm: np.ndarray
+    values: np.ndarray
+    scale: str
+    units: str
+    frequency_range: tuple[float, float]
+    window: str
+    resolution_hz: float
+    level_reference: str = ""
+    name: str = "x"
+
+    def to_dataset(self) -> xr.Dataset:
+        """Dataset with ``overall_level(time)`` and auxiliary coordinate ``rpm(time)``."""
+        import xarray as xr
+
+        long = f"overall rms level of {self.name}"
+        if self.scale == "dB":
+            long += f" (dB re {self.level_reference})"
+        return xr.Dataset(
+            {"overall_level": ("time", self.values, {"units": self.units, "long_name": long})},
+            coords={
+                "time": ("time", self.time, {"units": "s", "long_name": "frame centre time"}),
+                "rpm": (
+                    "time",
+                    self.rpm,
+                    {"units": "min-1", "long_name": "shaft speed (revolutions per minute)"},
+                ),
+            },
+            attrs={
+                "f_min_hz": float(self.frequency_range[0]),
+                "f_max_hz": float(self.frequency_range[1]),
+                "window": self.window,
+                "resolution_hz": float(self.resolution_hz),
+                "scale": self.scale,
+            },
+        )
+
+    def plot(self, **kwargs: Any) -> matplotlib.figure.Figure:
+        """Figure (see :func:`analysis.plots.overall_level_figure`)."""
+        from analysis.plots import overall_level_figure
+
+        return overall_level_figure(self, **kwargs)
+
+
+def overall_level(
+    x: Any,
+    fs: float | None,
+    rpm: Any,
+    *,
+    frequency_range: tuple[float, float] | None = None,
+    resolution: float | None = None,
+    window: WindowSpec = "hann",
+    overlap: float = 0.5,
+    scale: Literal["linear", "dB"] = "linear",
+    time: Any = None,
+    units: str = "1",
+    name: str = "x",
+) -> OverallLevel:
+    """Overall rms level vs rpm from the sum of the lines of the rpm-frequency map.
+
+    ``level = sqrt(sum_k G_k / ENBW_bins)`` over the lines in ``frequency_range`` (default all
+    lines, DC included), which for the full band equals the rms of the windowed frame
+    (Parseval) and is the quantity NVH suites call "overall level from FFT lines".
+
+    Parameters
+    ----------
+    x, fs, rpm, resolution, window, overlap, time, units, name
+        As in :func:`rpm_frequency_map`.
+    frequency_range : (float, float), optional
+        Band [Hz] whose lines are summed.
+    scale : {"linear", "dB"}, default "linear"
+        dB re 1 unit.
+
+    Returns
+    -------
+    OverallLevel
+        Level per frame with the speed.
+    """
+    _check_choice(scale, _SCALES, "scale")
+    m = rpm_frequency_map(
+        x,
+        fs,
+        rpm,
+        resolution=resolution,
+        window=window,
+        overlap=overlap,
+        amplitude="power",
+        time=time,
+        units=units,
+        name=name,
+    )
+    lo, hi = (0.0, m.frequency[-1]) if frequency_range is None else map(float, frequency_range)
+    if not 0 <= lo < hi:
+        raise ValueError(f"frequency_range = {frequency_range!r} must satisfy 0 <= low < high")
+    sel = (m.frequency >= lo) & (m.frequency <= hi)
+    if not sel.any():
+        raise ValueError(f"frequency_range = {frequency_range!r} holds no line of the map")
+    vals = np.sqrt(m.values[:, sel].sum(axis=1) / m.enbw_bins)
+    ref = ""
+    out_units = units
+    if scale == "dB":
+        vals, ref, out_units = to_db(vals, "rms"), f"1 {units}", "1"
+    return OverallLevel(
+        m.time, m.rpm, vals, scale, out_units, (lo, hi), m.window, m.resolution_hz, ref, name
+    )
+
+
+# ---------------------------------------------------------------------------------- Campbell
+
+
+@dataclass
+class Campbell:
+    """Campbell-diagram data: order rays, natural-frequency lines and critical speeds.
+
+    Attributes
+    ----------
+    rpm : numpy.ndarray
+        Speed grid [min-1].
+    orders : numpy.ndarray
+        Orders of the rays.
+    natural_frequencies_hz : numpy.ndarray
+        Natural frequencies [Hz] (horizontal lines).
+    order_frequency : numpy.ndarray
+        Ray frequencies ``order * rpm / 60`` [Hz], shape ``(order, rpm)``.
+    critical_rpm : numpy.ndarray
+        ``60 f_n / order`` [min-1], shape ``(order, mode)``; NaN outside the speed range.
+    """
+
+    rpm: np.ndarray
+    orders: np.ndarray
+    natural_frequencies_hz: np.ndarray
+    order_frequency: np.ndarray
+    critical_rpm: np.ndarray
+
+    def to_dataset(self) -> xr.Dataset:
+        """Dataset with ``order_frequency(order, rpm)`` and ``critical_rpm(order, mode)``."""
+        import xarray as xr
+
+        return xr.Dataset(
+            {
+                "order_frequency": (
+                    ("order", "rpm"),
+                    self.order_frequency,
+                    {"units": "Hz", "long_name": "frequency of the order ray"},
+                ),
+                "critical_rpm": (
+                    ("order", "mode"),
+                    self.critical_rpm,
+                    {
+                        "units": "min-1",
+                        "long_name": "speed where the order ray crosses the natural frequency",
+                    },
+                ),
+                "natural_frequency": (
+                    "mode",
+                    self.natural_frequencies_hz,
+                    {"units": "Hz", "long_name": "natural frequency"},
+                ),
+            },
+            coords={
+                "order": ("order", self.orders, {"units": "1", "long_name": "order"}),
+                "rpm": (
+                    "rpm",
+                    self.rpm,
+                    {"units": "min-1", "long_name": "shaft speed (revolutions per minute)"},
+                ),
+                "mode": (
+                    "mode",
+                    np.arange(self.natural_frequencies_hz.size),
+                    {"units": "1", "long_name": "mode index"},
+                ),
+            },
+        )
+
+    def plot(self, **kwargs: Any) -> matplotlib.figure.Figure:
+        """Figure (see :func:`analysis.plots.campbell_figure`)."""
+        from analysis.plots import campbell_figure
+
+        return campbell_figure(self, **kwargs)
+
+
+def campbell(
+    natural_frequencies_hz: Any,
+    orders: Any,
+    rpm_range: tuple[float, float],
+    *,
+    n_points: int = 101,
+) -> Campbell:
+    """Campbell-diagram data for order rays and natural-frequency lines.
+
+    Parameters
+    ----------
+    natural_frequencies_hz : array_like
+        Natural frequencies [Hz] (> 0); may be empty.
+    orders : array_like
+        Orders (> 0), e.g. mesh orders ``z * k``.
+    rpm_range : (float, float)
+        Speed range [min-1], ``0 <= low < high``.
+    n_points : int, default 101
+        Points of the speed grid.
+
+    Returns
+    -------
+    Campbell
+        Rays, lines and critical speeds ``60 f_n / order`` inside the range.
+    """
+    fn = np.atleast_1d(np.asarray(natural_frequencies_hz, dtype=float))
+    if fn.size and (not np.all(np.isfinite(fn)) or np.any(fn <= 0)):
+        raise ValueError("natural_frequencies_hz must be finite and > 0 Hz")
+    ords = np.atleast_1d(require_finite(orders, "orders"))
+    if np.any(ords <= 0):
+        raise ValueError("orders must be > 0")
+    lo, hi = (float(v) for v in rpm_range)
+    if not (np.isfinite(lo) and np.isfinite(hi) and 0 <= lo < hi):
+        raise ValueError(f"rpm_range = {rpm_range!r} must satisfy 0 <= low < high (min-1)")
+    if isinstance(n_points, bool) or not isinstance(n_points, int) or n_points < 2:
+        raise ValueError(f"n_points = {n_points!r} must be an integer >= 2")
+    grid = np.linspace(lo, hi, n_points)
+    crit = 60.0 * fn[None, :] / ords[:, None]
+    crit = np.where((crit >= lo) & (crit <= hi), crit, np.nan)
+    return Campbell(grid, ords, fn, ords[:, None] * grid[None, :] / 60.0, crit)
