@@ -423,6 +423,38 @@ def decimation_filter(decimation: int, attenuation_db: float = 80.0) -> np.ndarr
     return taps / taps.sum()
 
 
+def _contact_solve(a0, f, mr, v, j, kl, kr, k_in, free_rigid, max_iter):
+    """Active-set (Newton) solution of the piecewise-linear static problem at fixed stiffness."""
+    n = a0.shape[0]
+    state = np.ones(v.shape[0], dtype=np.int64)
+    acc = 0.0
+    for _ in range(max_iter):
+        a = a0.copy()
+        b = f.copy()
+        left = (state & 1).astype(bool)
+        right = (state & 2).astype(bool)
+        a += (v[left].T * kl[left]) @ v[left] + (v[right].T * kr[right]) @ v[right]
+        b += v[left].T @ (kl[left] * j[left] / 2) - v[right].T @ (kr[right] * j[right] / 2)
+        if free_rigid:
+            aug = np.zeros((n + 1, n + 1))
+            aug[:n, :n] = a
+            aug[:n, n] = mr
+            aug[n, k_in] = 1.0
+            rhs = np.append(b, 0.0)
+            sol = np.linalg.lstsq(aug, rhs, rcond=None)[0]
+            q, acc = sol[:n], float(sol[n])
+            resid = aug @ sol - rhs
+        else:
+            q = np.linalg.lstsq(a, b, rcond=None)[0]
+            resid = a @ q - b
+        d = v @ q
+        new = (d > j / 2).astype(np.int64) + 2 * (d < -j / 2).astype(np.int64)
+        if np.array_equal(new, state):
+            return q, acc, a, b, resid
+        state = new
+    raise SimulationError("static equilibrium: the flank-contact sets do not converge")
+
+
 def static_equilibrium(
     system: kn.KernelSystem,
     mass: np.ndarray,
@@ -436,10 +468,11 @@ def static_equilibrium(
     """Static (quasi-static) equilibrium at ``t = 0`` with the piecewise-linear contact law.
 
     Solves ``K q + sum_m F_m(q) v_m + M r a = f(0, q, qdot0)`` by Newton iterations on the
-    flank-contact sets (exact for the piecewise-linear law), with the flank stiffness taken at
-    the initial mesh positions ``s0``. The rigid-body acceleration ``a`` is prescribed
-    (speed-driven runs) or, with ``free_rigid``, an unknown fixed by the torque balance; then the
-    input rotation is pinned to 0.
+    flank-contact sets (exact for the piecewise-linear law). The flank stiffness is taken at the
+    mesh positions of the solution itself (fixed-point iteration: the static wind-up of the
+    drive coupling rotates the whole set and so shifts the mesh positions). The rigid-body
+    acceleration ``a`` is prescribed (speed-driven runs) or, with ``free_rigid``, an unknown
+    fixed by the torque balance; then the input rotation is pinned to 0.
 
     Parameters
     ----------
@@ -497,48 +530,22 @@ def static_equilibrium(
         f[k_out] -= e * (fpar[kn.FP_T0] + fpar[kn.FP_C1] * wo + fpar[kn.FP_C2] * wo * abs(wo))
     mr = mass @ rigid
     if not free_rigid:
-        f -= mr * rigid_acceleration
+        f = f - mr * rigid_acceleration
     v = system.mesh_vectors
     j = system.backlash
-    kl = np.array(
-        [
-            kn.periodic_interp(system.left_tables, m, s)
-            for m, s in enumerate(system.mesh_position_offsets)
-        ]
-    )
-    kr = np.array(
-        [
-            kn.periodic_interp(system.right_tables, m, s)
-            for m, s in enumerate(system.mesh_position_offsets)
-        ]
-    )
-    state = np.ones(system.n_mesh, dtype=np.int64)
-    for _ in range(max_iter):
-        a = a0.copy()
-        b = f.copy()
-        left = (state & 1).astype(bool)
-        right = (state & 2).astype(bool)
-        a += (v[left].T * kl[left]) @ v[left] + (v[right].T * kr[right]) @ v[right]
-        b += v[left].T @ (kl[left] * j[left] / 2) - v[right].T @ (kr[right] * j[right] / 2)
-        if free_rigid:
-            aug = np.zeros((n + 1, n + 1))
-            aug[:n, :n] = a
-            aug[:n, n] = mr
-            aug[n, k_in] = 1.0
-            sol = np.linalg.lstsq(aug, np.append(b, 0.0), rcond=None)[0]
-            q, acc = sol[:n], float(sol[n])
-            resid = aug @ sol - np.append(b, 0.0)
-        else:
-            q = np.linalg.lstsq(a, b, rcond=None)[0]
-            acc = float(rigid_acceleration)
-            resid = a @ q - b
-        d = v @ q
-        new = (d > j / 2).astype(np.int64) + 2 * (d < -j / 2).astype(np.int64)
-        if np.array_equal(new, state):
+    q = np.zeros(n)
+    k_prev = None
+    for _outer in range(20):  # flank stiffness at the mesh positions of the current solution
+        pos = system.mesh_position_offsets + system.mesh_position_vectors @ q
+        kl = np.array([kn.periodic_interp(system.left_tables, m, s) for m, s in enumerate(pos)])
+        kr = np.array([kn.periodic_interp(system.right_tables, m, s) for m, s in enumerate(pos)])
+        k_now = np.concatenate([kl, kr])
+        if k_prev is not None and np.allclose(k_now, k_prev, rtol=1e-12, atol=0.0):
             break
-        state = new
-    else:
-        raise SimulationError("static equilibrium: the flank-contact sets do not converge")
+        k_prev = k_now
+        q, acc, a, b, resid = _contact_solve(a0, f, mr, v, j, kl, kr, k_in, free_rigid, max_iter)
+        if not free_rigid:
+            acc = float(rigid_acceleration)
     scale = np.abs(b).max() + np.abs(a).max() * np.abs(q).max() + 1e-300
     if np.abs(resid).max() > 1e-8 * scale:
         raise SimulationError(
