@@ -1,0 +1,7 @@
+"""``python -m gearvib``: the command-line interface."""
+
+import sys
+
+from gearvib.cli import main
+
+sys.exit(main())

@@ -1,0 +1,481 @@
+"""Assemble a :class:`~gearvib.structure.GearSet` into the flat :class:`AssembledModel`.
+
+Steps: number the coordinates of every body, build the mass matrix, the mesh deflection and
+mesh position vectors with the phase of every contact, the bearing and support springs, apply
+the rigid supports and fixed members as linear constraints (``q_full = T q``), and solve the
+rigid-body kinematics (the speed of every member per unit input speed).
+
+Mesh deflection (Lin & Parker 1999, generalised with signed base radii)::
+
+    delta = cos(beta_b) [ sigma (r_b1 theta_1 + r_b2 theta_2) + (d_1 - d_2) . n ]
+            + sin(beta_b) h (z_1 - z_2)
+
+with ``sigma = -1`` for an internal pair, ``n = cos(alpha) t + sigma sin(alpha) e`` the line
+of action (``e`` the unit vector from gear 1 to gear 2, ``t`` = ``e`` turned by +90°), ``d`` the
+in-plane displacement of each gear centre and ``h`` the helix hand of gear 1.
+
+Mesh position (paper eq. (3), both gears' angles)::
+
+    s = [z_1 (theta_1 - theta_c) - z_2 (theta_2 - theta_c)] / (4 pi) + s_0,
+
+``s_0 = -z_1 psi / 2 pi`` (+ the sun-ring phase of the planet's tooth geometry for further
+central meshes of the same planet toothing).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg
+
+from gearvib.geometry import MeshGeometry, sun_ring_phase
+from gearvib.model import AssembledModel
+from gearvib.structure import RIGID, Body, GearSet, Mesh
+
+__all__ = ["N_TABLE", "ResolvedMesh", "assemble", "resolve_mesh"]
+
+N_TABLE = 2048
+"""Samples per mesh cycle of the stiffness tables handed to the kernels."""
+
+
+@dataclass(frozen=True)
+class ResolvedMesh:
+    """Mesh parameters after geometry and lumped values are merged."""
+
+    base_radius1: float
+    base_radius2: float
+    pressure_angle: float
+    base_helix_angle: float
+    helix_hand: float
+    z1: int | None
+    z2: int | None
+    centre_distance: float
+    contact_ratio: float | None
+    geometry: MeshGeometry | None
+
+    @property
+    def sigma(self) -> float:
+        """+1 for an external pair, -1 for an internal pair."""
+        return -1.0 if self.base_radius1 * self.base_radius2 < 0 else 1.0
+
+
+def resolve_mesh(mesh: Mesh) -> ResolvedMesh:
+    """Merge a mesh's tooth geometry with its lumped overrides."""
+    g = mesh.geometry
+    rb1 = mesh.base_radius1 if mesh.base_radius1 is not None else g.gear1.base_radius
+    rb2 = mesh.base_radius2 if mesh.base_radius2 is not None else g.gear2.base_radius
+    alpha = mesh.pressure_angle if mesh.pressure_angle is not None else g.working_pressure_angle
+    if g is not None and mesh.helix_angle == 0.0:
+        beta_b = g.base_helix_angle
+        hand = math.copysign(1.0, g.gear1.helix_angle) if g.gear1.helix_angle else 0.0
+    else:
+        beta_b = abs(mesh.helix_angle)
+        hand = math.copysign(1.0, mesh.helix_angle) if mesh.helix_angle else 0.0
+    z1 = mesh.z1 if mesh.z1 is not None else (g.gear1.z if g is not None else None)
+    z2 = mesh.z2 if mesh.z2 is not None else (g.gear2.z if g is not None else None)
+    if rb2 <= 0 and rb1 <= 0:
+        raise ValueError(f"mesh {mesh.name!r}: two internal gears cannot mesh")
+    sigma = -1.0 if rb1 * rb2 < 0 else 1.0
+    if g is not None and mesh.base_radius1 is None:
+        a = g.centre_distance
+    else:
+        a = abs(sigma * rb1 + rb2) / math.cos(alpha) if sigma > 0 else \
+            abs(abs(rb1) - abs(rb2)) / math.cos(alpha)
+    return ResolvedMesh(rb1, rb2, alpha, beta_b, hand, z1, z2, a,
+                        g.contact_ratio if g is not None else None, g)
+
+
+class _Coordinates:
+    """Full coordinate numbering before constraints."""
+
+    def __init__(self, bodies: tuple[Body, ...], axial: bool):
+        self.names: list[str] = []
+        self.index: dict[tuple[str, str], int] = {}
+        self.body_of: list[Body] = []
+        for b in bodies:
+            comps = ("zeta", "eta") if b.role == "planet" else ("x", "y")
+            comps = (*comps, "z", "theta") if axial else (*comps, "theta")
+            for c in comps:
+                self.index[(b.name, c)] = len(self.names)
+                self.names.append(f"{b.name}.{c}")
+                self.body_of.append(b)
+
+    def __len__(self) -> int:
+        return len(self.names)
+
+    def unit(self, body: str, comp: str) -> np.ndarray:
+        v = np.zeros(len(self))
+        v[self.index[(body, comp)]] = 1.0
+        return v
+
+    def get(self, body: str, comp: str) -> int:
+        return self.index[(body, comp)]
+
+
+def _planet_frame(psi: float) -> tuple[np.ndarray, np.ndarray]:
+    return np.array([math.cos(psi), math.sin(psi)]), np.array([-math.sin(psi), math.cos(psi)])
+
+
+def _add_displacement(v: np.ndarray, coords: _Coordinates, body: Body, direction: np.ndarray,
+                      factor: float) -> None:
+    """Add ``factor * (d_body . direction)`` to ``v`` (in-plane displacement of a centre)."""
+    if body.role == "planet":
+        e_r, e_t = _planet_frame(body.angle)
+        v[coords.get(body.name, "zeta")] += factor * float(e_r @ direction)
+        v[coords.get(body.name, "eta")] += factor * float(e_t @ direction)
+    else:
+        v[coords.get(body.name, "x")] += factor * direction[0]
+        v[coords.get(body.name, "y")] += factor * direction[1]
+
+
+def _planet_radius(gs: GearSet, body: Body, resolved: dict[str, ResolvedMesh]) -> float:
+    """Planet axis radius: given, or the centre distance of its central-gear meshes.
+
+    Every central-gear mesh of the planet must agree with it (a lumped description whose base
+    radii and pressure angles imply different centre distances would lock the gear set).
+    """
+    a = body.radius
+    first = None
+    for m in gs.meshes:
+        if m.gear2 != body.name or gs.body(m.gear1).role != "central":
+            continue
+        am = resolved[m.name].centre_distance
+        if a is None:
+            a, first = am, m.name
+        elif not math.isclose(a, am, rel_tol=1e-6):
+            source = f"mesh {first!r}" if first else "the given radius"
+            raise ValueError(
+                f"planet {body.name!r}: mesh {m.name!r} needs a planet radius of "
+                f"{am * 1e3:.4f} mm, {source} gives {a * 1e3:.4f} mm; make the base radii and "
+                "pressure angles consistent"
+            )
+    if a is None:
+        raise ValueError(f"planet {body.name!r}: give its radius (no central-gear mesh)")
+    return a
+
+
+def _constraint_matrix(n: int, rows: list[np.ndarray], dependents: list[int],
+                       names: list[str]) -> tuple[np.ndarray, list[int]]:
+    """``T`` with ``q_full = T q_reduced`` for constraints ``rows @ q_full = 0``."""
+    if len(set(dependents)) != len(dependents):
+        dup = sorted({names[d] for d in dependents if dependents.count(d) > 1})
+        raise ValueError(f"coordinate(s) {dup} are constrained twice (fixed and rigidly coupled?)")
+    independent = [i for i in range(n) if i not in set(dependents)]
+    t = np.zeros((n, len(independent)))
+    t[independent, range(len(independent))] = 1.0
+    if rows:
+        a = np.array(rows)
+        a_d = a[:, dependents]
+        a_i = a[:, independent]
+        t[dependents, :] = -np.linalg.solve(a_d, a_i)
+        t[np.abs(t) < 1e-14] = 0.0
+    return t, independent
+
+
+def assemble(gs: GearSet, *, n_table: int = N_TABLE) -> AssembledModel:
+    """Assemble a gear set into flat arrays.
+
+    Parameters
+    ----------
+    gs : GearSet
+        The gear-set description.
+    n_table : int
+        Samples per mesh cycle of the stiffness tables.
+
+    Returns
+    -------
+    AssembledModel
+
+    Raises
+    ------
+    ValueError
+        For inconsistent geometry (planet radius vs centre distance), a set that is locked or
+        has more than one rigid-body degree of freedom, or meshes without tooth numbers that
+        need a mesh position.
+    """
+    resolved = {m.name: resolve_mesh(m) for m in gs.meshes}
+    axial = any(r.base_helix_angle != 0.0 for r in resolved.values())
+    coords = _Coordinates(gs.bodies, axial)
+    n = len(coords)
+    bodies = {b.name: b for b in gs.bodies}
+
+    radius = {b.name: _planet_radius(gs, b, resolved) for b in gs.planets}
+    centre = {name: np.zeros(2) for name in bodies}
+    for b in gs.planets:
+        centre[b.name] = radius[b.name] * np.array([math.cos(b.angle), math.sin(b.angle)])
+
+    # ---- mass ---------------------------------------------------------------------------
+    mass = np.zeros(n)
+    for i, b in enumerate(coords.body_of):
+        mass[i] = b.inertia if coords.names[i].endswith(".theta") else b.mass
+    gyro = np.zeros((n, n))
+    centripetal = np.zeros((n, n))
+    for b in gs.bodies:
+        c1, c2 = ("zeta", "eta") if b.role == "planet" else ("x", "y")
+        i, j = coords.get(b.name, c1), coords.get(b.name, c2)
+        gyro[i, j], gyro[j, i] = -2 * b.mass, 2 * b.mass
+        centripetal[i, i] = centripetal[j, j] = b.mass
+
+    # ---- meshes ---------------------------------------------------------------------------
+    n_mesh = len(gs.meshes)
+    v_mesh = np.zeros((n_mesh, n))
+    w_mesh = np.zeros((n_mesh, n))
+    s0 = np.zeros(n_mesh)
+    first_central: dict[str, Mesh] = {}
+    mesh_meta = []
+    for k, m in enumerate(gs.meshes):
+        r = resolved[m.name]
+        b1, b2 = bodies[m.gear1], bodies[m.gear2]
+        carrier = b2.carrier
+        if b1.role == "planet" and b1.carrier != carrier:
+            raise ValueError(f"mesh {m.name!r}: planets on different carriers cannot mesh")
+        diff = centre[b2.name] - centre[b1.name]
+        dist = float(np.hypot(*diff))
+        if b1.role == "planet" and not math.isclose(dist, r.centre_distance, rel_tol=1e-6):
+            raise ValueError(
+                f"mesh {m.name!r}: planet centres are {dist * 1e3:.4f} mm apart, the mesh needs "
+                f"{r.centre_distance * 1e3:.4f} mm"
+            )
+        e = diff / dist
+        t = np.array([-e[1], e[0]])
+        sigma = r.sigma
+        nvec = math.cos(r.pressure_angle) * t + sigma * math.sin(r.pressure_angle) * e
+        cb = math.cos(r.base_helix_angle)
+        v = np.zeros(n)
+        v[coords.get(b1.name, "theta")] += cb * sigma * r.base_radius1
+        v[coords.get(b2.name, "theta")] += cb * sigma * r.base_radius2
+        _add_displacement(v, coords, b1, nvec, cb)
+        _add_displacement(v, coords, b2, nvec, -cb)
+        if axial and r.base_helix_angle:
+            sb = math.sin(r.base_helix_angle) * r.helix_hand
+            v[coords.get(b1.name, "z")] += sb
+            v[coords.get(b2.name, "z")] -= sb
+        v_mesh[k] = v
+
+        varying = not math.isclose(m.stiffness.min, m.stiffness.max, rel_tol=1e-12)
+        if r.z1 is None or r.z2 is None:
+            if varying:
+                raise ValueError(
+                    f"mesh {m.name!r}: a time-varying stiffness needs tooth numbers z1, z2 to "
+                    "place the mesh position"
+                )
+        else:
+            ic = coords.get(carrier, "theta")
+            w = np.zeros(n)
+            w[coords.get(b1.name, "theta")] += r.z1
+            w[coords.get(b2.name, "theta")] -= r.z2
+            w[ic] += -r.z1 + r.z2
+            w_mesh[k] = w / (4 * math.pi)
+        if m.phase is not None:
+            s0[k] = m.phase
+        elif b1.role == "central" and r.z1 is not None:
+            s0[k] = -r.z1 * b2.angle / (2 * math.pi)
+            ref = first_central.get(b2.name)
+            if ref is None:
+                first_central[b2.name] = m
+            else:
+                s0[k] += _relative_phase(ref, m, resolved)
+        s0[k] -= math.floor(s0[k])
+        if min(s0[k], 1.0 - s0[k]) < 1e-9:  # exact integers from the assembly condition
+            s0[k] = 0.0
+        mesh_meta.append({
+            "name": m.name, "gear1": m.gear1, "gear2": m.gear2,
+            "z1": r.z1, "z2": r.z2,
+            "base_radius1": r.base_radius1, "base_radius2": r.base_radius2,
+            "pressure_angle_deg": math.degrees(r.pressure_angle),
+            "base_helix_angle_deg": math.degrees(r.base_helix_angle),
+            "centre_distance": r.centre_distance,
+            "contact_ratio": r.contact_ratio,
+            "mesh_position_at_assembly": float(s0[k]),
+            "phase_lag": float((1.0 - s0[k]) % 1.0),
+            "backlash": m.backlash,
+            "stiffness": m.stiffness.to_dict(),
+        })
+
+    # ---- supports, bearings, couplings, constraints ------------------------------------------
+    k_full = np.zeros((n, n))
+    c_full = np.zeros((n, n))
+    rows: list[np.ndarray] = []
+    deps: list[int] = []
+    bearings: list[tuple[str, np.ndarray, float, float]] = []
+
+    def spring(u: np.ndarray, k: float, c: float) -> None:
+        k_full[:] += k * np.outer(u, u)
+        c_full[:] += c * np.outer(u, u)
+
+    def support(name: str, u: np.ndarray, dep: int, k: float, c: float, listed: bool) -> None:
+        if math.isinf(k):
+            rows.append(u)
+            deps.append(dep)
+        elif k > 0 or c > 0:
+            spring(u, k, c)
+            if listed:
+                bearings.append((name, u, k, c))
+
+    for b in gs.bodies:
+        s = b.support
+        if b.role == "planet":
+            car = b.carrier
+            e_r, e_t = _planet_frame(b.angle)
+            a = radius[b.name]
+            u_r = coords.unit(b.name, "zeta")
+            _add_displacement(u_r, coords, bodies[car], e_r, -1.0)
+            u_t = coords.unit(b.name, "eta")
+            _add_displacement(u_t, coords, bodies[car], e_t, -1.0)
+            u_t[coords.get(car, "theta")] -= a
+            support(f"{b.name}.radial", u_r, coords.get(b.name, "zeta"), s.radial,
+                    s.radial_damping, True)
+            support(f"{b.name}.tangential", u_t, coords.get(b.name, "eta"), s.tangential,
+                    s.tangential_damping, True)
+            if axial:
+                u_z = coords.unit(b.name, "z") - coords.unit(car, "z")
+                support(f"{b.name}.axial", u_z, coords.get(b.name, "z"), s.axial,
+                        s.axial_damping, True)
+        else:
+            for comp in ("x", "y"):
+                support(f"{b.name}.{comp}", coords.unit(b.name, comp), coords.get(b.name, comp),
+                        s.radial, s.radial_damping, True)
+            if axial:
+                support(f"{b.name}.axial", coords.unit(b.name, "z"), coords.get(b.name, "z"),
+                        s.axial, s.axial_damping, True)
+            # a fixed member is held rigidly unless it has an elastic torsional support,
+            # through which it is then held (Lin & Parker's k_ru)
+            k_t = s.torsional
+            if b.name in gs.fixed and not (0 < k_t < math.inf):
+                k_t = RIGID
+            support(f"{b.name}.torsion", coords.unit(b.name, "theta"),
+                    coords.get(b.name, "theta"), k_t, s.torsional_damping, False)
+    for cp in gs.couplings:
+        u = coords.unit(cp.body1, "theta") - coords.unit(cp.body2, "theta")
+        support(f"coupling.{cp.body1}-{cp.body2}", u, coords.get(cp.body2, "theta"),
+                cp.stiffness, cp.damping, False)
+
+    tmat, kept = _constraint_matrix(n, rows, deps, coords.names)
+
+    def reduce_matrix(a: np.ndarray) -> np.ndarray:
+        return tmat.T @ a @ tmat
+
+    m_red = reduce_matrix(np.diag(mass))
+    k_red = reduce_matrix(k_full)
+    c_red = reduce_matrix(c_full)
+    v_red = v_mesh @ tmat
+    w_red = w_mesh @ tmat
+    dof_names = tuple(coords.names[i] for i in kept)
+
+    rotation_dofs: dict[str, int] = {}
+    for b in gs.bodies:
+        row = tmat[coords.get(b.name, "theta")]
+        nz = np.flatnonzero(row)
+        rotation_dofs[b.name] = int(nz[0]) if nz.size == 1 and row[nz[0]] == 1.0 else -1
+
+    # ---- stiffness tables and damping ----------------------------------------------------------
+    tables = np.array([m.stiffness.table(n_table) for m in gs.meshes]).reshape(n_mesh, n_table)
+    back = np.array([(m.back_stiffness or m.stiffness).table(n_table)
+                     for m in gs.meshes]).reshape(n_mesh, n_table)
+    if (tables < 0).any() or (back < 0).any() or not np.isfinite(tables).all():
+        raise ValueError("mesh stiffness tables must be finite and >= 0")
+    damping = np.zeros(n_mesh)
+    for k, m in enumerate(gs.meshes):
+        if m.damping is not None:
+            damping[k] = m.damping
+        elif m.damping_ratio:
+            r = resolved[m.name]
+            inv = 0.0
+            for g, rb in ((m.gear1, r.base_radius1), (m.gear2, r.base_radius2)):
+                if g not in gs.fixed:
+                    inv += rb**2 / bodies[g].inertia
+            m_eq = 1.0 / inv if inv > 0 else math.inf
+            damping[k] = 2.0 * m.damping_ratio * math.sqrt(m.stiffness.mean * m_eq)
+
+    # ---- rigid-body kinematics -----------------------------------------------------------------
+    # undeformed meshes and bearings, fixed members at rest, shafts turning as one piece;
+    # torsional supports of the other members are drive/load stiffness and do not count
+    kin_rows = [v_mesh]
+    if bearings:
+        kin_rows.append(np.array([u for _, u, _, _ in bearings]))
+    for f in gs.fixed:
+        kin_rows.append(coords.unit(f, "theta")[None, :])
+    for cp in gs.couplings:
+        kin_rows.append((coords.unit(cp.body1, "theta") - coords.unit(cp.body2, "theta"))[None])
+    a_kin = np.vstack(kin_rows) @ tmat
+    scale = np.abs(a_kin).max(axis=1, keepdims=True)
+    scale[scale == 0] = 1.0
+    null = scipy.linalg.null_space(a_kin / scale, rcond=1e-9)
+    i_in = rotation_dofs[gs.input]
+    if i_in < 0:
+        raise ValueError(f"input member {gs.input!r} has no free rotation")
+    if null.shape[1] == 0:
+        raise ValueError(f"gear set {gs.name!r} is locked: no rigid-body motion is possible "
+                         f"with fixed members {list(gs.fixed)}")
+    if null.shape[1] > 1:
+        raise ValueError(
+            f"gear set {gs.name!r} has {null.shape[1]} rigid-body degrees of freedom; fix or "
+            f"support members so that one remains (fixed: {list(gs.fixed)})"
+        )
+    mode = null[:, 0] / null[i_in, 0]
+    ratios = {}
+    full_mode = tmat @ mode
+    for b in gs.bodies:
+        ratios[b.name] = float(full_mode[coords.get(b.name, "theta")])
+
+    f_per_rpm = math.nan
+    if n_mesh and resolved[gs.meshes[0].name].z1 is not None:
+        m0 = gs.meshes[0]
+        car = bodies[m0.gear2].carrier
+        f_per_rpm = abs(resolved[m0.name].z1 * (ratios[m0.gear1] - ratios[car])) / 60.0
+
+    bearing_vectors = (np.array([u for _, u, _, _ in bearings]) @ tmat if bearings
+                       else np.zeros((0, len(kept))))
+    carriers = [b.name for b in gs.bodies if b.role == "carrier"]
+    meta = {
+        "name": gs.name,
+        "meshes": mesh_meta,
+        "planets": [{"name": b.name, "carrier": b.carrier, "angle_deg": math.degrees(b.angle),
+                     "radius": radius[b.name]} for b in gs.planets],
+        "bodies": [{"name": b.name, "role": b.role} for b in gs.bodies],
+        "config": gs.config,
+    }
+    return AssembledModel(
+        dof_names=dof_names,
+        dof_units=tuple("rad" if d.endswith(".theta") else "m" for d in dof_names),
+        mass=m_red,
+        stiffness=k_red,
+        damping=c_red,
+        gyroscopic=reduce_matrix(gyro),
+        centripetal=reduce_matrix(centripetal),
+        mesh_names=tuple(m.name for m in gs.meshes),
+        mesh_vectors=np.ascontiguousarray(v_red),
+        mesh_position_vectors=np.ascontiguousarray(w_red),
+        mesh_position_offsets=s0,
+        mesh_stiffness_tables=np.ascontiguousarray(tables, dtype=float),
+        mesh_back_tables=np.ascontiguousarray(back, dtype=float),
+        mesh_backlash=np.array([m.backlash for m in gs.meshes], dtype=float),
+        mesh_damping=damping,
+        bearing_names=tuple(name for name, _, _, _ in bearings),
+        bearing_vectors=np.ascontiguousarray(bearing_vectors),
+        bearing_stiffness=np.array([k for _, _, k, _ in bearings], dtype=float),
+        bearing_damping=np.array([c for _, _, _, c in bearings], dtype=float),
+        rotation_dofs=rotation_dofs,
+        carrier_dof=rotation_dofs[carriers[0]] if carriers else -1,
+        input_member=gs.input,
+        output_member=gs.output,
+        fixed_members=tuple(gs.fixed),
+        kinematic_ratios=ratios,
+        mesh_frequency_per_rpm=f_per_rpm,
+        meta=meta,
+    )
+
+
+def _relative_phase(ref: Mesh, mesh: Mesh, resolved: dict[str, ResolvedMesh]) -> float:
+    """Mesh-position offset of ``mesh`` relative to ``ref`` at the same planet (geometry)."""
+    r_ref, r = resolved[ref.name], resolved[mesh.name]
+    g_ref, g = r_ref.geometry, r.geometry
+    if g_ref is None or g is None or g_ref.gear2 != g.gear2:
+        return 0.0  # different planet toothings (stepped planet) or lumped: no relation known
+    if g_ref.gear1.z > 0 > g.gear1.z:
+        return sun_ring_phase(g_ref, g)
+    if g.gear1.z > 0 > g_ref.gear1.z:
+        return -sun_ring_phase(g, g_ref)
+    return 0.0

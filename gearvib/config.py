@@ -1,0 +1,441 @@
+"""Gear-set descriptions in TOML, and the built-in presets.
+
+A description is a TOML file (or the equivalent dict) with a ``type`` that selects a builder:
+``simple``, ``wolfrom``, ``ravigneaux``, ``two-stage`` or ``general`` (bodies, meshes and
+couplings listed one by one; this is also how a literature model given directly by its lumped
+parameters is written). All values are SI (m, kg, kg m^2, N/m, N s/m), angles are in degrees
+in keys ending in ``_deg``. A support stiffness may be ``"rigid"`` (the DOF is removed) or
+``"free"`` (0). Every table is checked: an unknown key is an error that names the key and the
+admissible ones. See the README for a full example.
+"""
+
+from __future__ import annotations
+
+import copy
+import hashlib
+import json
+import math
+import tomllib
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+from gearvib.geometry import Toothing
+from gearvib.stiffness import stiffness_from_dict
+from gearvib.structure import (
+    RIGID,
+    Body,
+    Coupling,
+    GearSet,
+    Mesh,
+    Support,
+    ravigneaux,
+    simple_planetary,
+    two_stage,
+    wolfrom,
+)
+from gearvib.structure import MeshSpec as _MeshSpec
+
+__all__ = [
+    "ConfigError",
+    "config_hash",
+    "gearset_from_dict",
+    "list_presets",
+    "load_config",
+    "load_gearset",
+]
+
+
+class ConfigError(ValueError):
+    """An invalid gear-set description (names the key and what is admissible)."""
+
+
+_TOP = {"name", "title", "description", "type", "operation", "geometry", "bodies", "meshes",
+        "body", "mesh", "coupling", "stage1", "stage2", "shaft", "simulation", "references"}
+_OPERATION = {"fixed", "input", "output"}
+_SUPPORT = {"radial", "tangential", "axial", "torsional", "radial_damping",
+            "tangential_damping", "axial_damping", "torsional_damping"}
+_BODY = {"mass", "inertia", "support", "comment"}
+_BODY_GENERAL = _BODY | {"name", "role", "carrier", "angle_deg", "radius"}
+_MESH_SPEC = {"stiffness", "back_stiffness", "backlash", "damping", "damping_ratio", "comment"}
+_MESH_GENERAL = _MESH_SPEC | {"name", "gear1", "gear2", "toothing1", "toothing2",
+                              "base_radius1", "base_radius2", "pressure_angle_deg",
+                              "helix_angle_deg", "z1", "z2", "phase", "centre_distance"}
+_TOOTHING = {"z", "module", "pressure_angle_deg", "helix_angle_deg", "profile_shift",
+             "face_width", "addendum", "dedendum"}
+_COUPLING = {"body1", "body2", "stiffness", "damping"}
+_SIMULATION = {"speed_start_rpm", "speed_end_rpm", "duration", "input_torque", "load_torque",
+               "fs_out", "dt", "drive_stiffness", "drive_damping", "gyroscopic"}
+_GEOMETRY = {
+    "simple": {"module", "pressure_angle_deg", "helix_angle_deg", "face_width", "z_sun",
+               "z_ring", "z_planet", "profile_shift_sun", "profile_shift_ring",
+               "profile_shift_planet", "planet_angles_deg", "n_planets"},
+    "wolfrom": {"module", "module2", "pressure_angle_deg", "face_width", "z_sun", "z_ring1",
+                "z_ring2", "z_planet1", "z_planet2", "n_planets"},
+    "ravigneaux": {"module", "pressure_angle_deg", "face_width", "z_sun_small", "z_sun_large",
+                   "z_ring", "z_planet_short", "z_planet_long", "n_pairs"},
+}
+_BODIES = {
+    "simple": ("sun", "ring", "carrier", "planet"),
+    "wolfrom": ("sun", "ring1", "ring2", "carrier", "planet"),
+    "ravigneaux": ("sun_small", "sun_large", "ring", "carrier", "planet_short", "planet_long"),
+}
+_MESHES = {
+    "simple": ("sun", "ring"),
+    "wolfrom": ("sun", "ring"),
+    "ravigneaux": ("sun", "ring", "planet"),
+}
+
+
+def _check_keys(table: Any, allowed: set[str], where: str) -> dict:
+    if not isinstance(table, dict):
+        raise ConfigError(f"{where} must be a table, got {type(table).__name__}")
+    unknown = sorted(set(table) - allowed)
+    if unknown:
+        raise ConfigError(
+            f"unknown key {unknown[0]!r} in {where} (admissible: {', '.join(sorted(allowed))})"
+        )
+    return table
+
+
+def _require(table: dict, key: str, where: str) -> Any:
+    if key not in table:
+        raise ConfigError(f"missing key {key!r} in {where}")
+    return table[key]
+
+
+def _number(value: Any, where: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise ConfigError(f"{where} must be a number, got {value!r}")
+    v = float(value)
+    if math.isnan(v):
+        raise ConfigError(f"{where} is NaN; admissible: a finite number")
+    return v
+
+
+def _stiffness_value(value: Any, where: str) -> float:
+    if isinstance(value, str):
+        if value == "rigid":
+            return RIGID
+        if value == "free":
+            return 0.0
+        raise ConfigError(f"{where} = {value!r}: admissible are a number, 'rigid' or 'free'")
+    return _number(value, where)
+
+
+def _support(table: dict | None, where: str) -> Support:
+    if table is None:
+        return Support()
+    _check_keys(table, _SUPPORT, where)
+    kw = {}
+    for k, v in table.items():
+        kw[k] = _stiffness_value(v, f"{where}.{k}") if not k.endswith("_damping") else \
+            _number(v, f"{where}.{k}")
+    try:
+        return Support(**kw)
+    except ValueError as exc:
+        raise ConfigError(f"{where}: {exc}") from None
+
+
+def _body(name: str, table: dict, role: str, where: str) -> Body:
+    _check_keys(table, _BODY, where)
+    try:
+        # planet templates get their carrier and angle from the builder
+        return Body(name=name, role=role, carrier="carrier" if role == "planet" else None,
+                    mass=_number(_require(table, "mass", where),
+                                                       f"{where}.mass"),
+                    inertia=_number(_require(table, "inertia", where), f"{where}.inertia"),
+                    support=_support(table.get("support"), f"{where}.support"))
+    except ValueError as exc:
+        if isinstance(exc, ConfigError):
+            raise
+        raise ConfigError(f"{where}: {exc}") from None
+
+
+def _stiffness(table: Any, where: str, base: Path | None):
+    if not isinstance(table, dict):
+        raise ConfigError(f"{where} must be a table such as {{model = \"constant\", k = 1e8}}")
+    d = dict(table)
+    if "path" in d and base is not None and not Path(d["path"]).is_absolute():
+        d["path"] = str(base / d["path"])
+    try:
+        return stiffness_from_dict(d)
+    except (ValueError, TypeError, KeyError) as exc:
+        raise ConfigError(f"{where}: {exc}") from None
+
+
+def _stiffness_table(table: Any, where: str, base: Path | None, deferred: bool):
+    """A stiffness model, or its checked table when the builder supplies the geometry."""
+    if not deferred:
+        return _stiffness(table, where, base)
+    if not isinstance(table, dict):
+        raise ConfigError(f"{where} must be a table such as {{model = \"constant\", k = 1e8}}")
+    d = dict(table)
+    if "path" in d and base is not None and not Path(d["path"]).is_absolute():
+        d["path"] = str(base / d["path"])
+    return d
+
+
+def _mesh_spec(table: dict, where: str, base: Path | None,
+               deferred: bool = False) -> _MeshSpec:
+    _check_keys(table, _MESH_SPEC, where)
+    try:
+        return _MeshSpec(
+            stiffness=_stiffness_table(_require(table, "stiffness", where),
+                                       f"{where}.stiffness", base, deferred),
+            back_stiffness=_stiffness_table(table["back_stiffness"], f"{where}.back_stiffness",
+                                            base, deferred)
+            if "back_stiffness" in table else None,
+            backlash=_number(table.get("backlash", 0.0), f"{where}.backlash"),
+            damping=_number(table["damping"], f"{where}.damping") if "damping" in table else None,
+            damping_ratio=_number(table["damping_ratio"], f"{where}.damping_ratio")
+            if "damping_ratio" in table else None,
+        )
+    except ValueError as exc:
+        if isinstance(exc, ConfigError):
+            raise
+        raise ConfigError(f"{where}: {exc}") from None
+
+
+def _toothing(table: dict, where: str) -> Toothing:
+    _check_keys(table, _TOOTHING, where)
+    kw: dict[str, Any] = {"z": int(_require(table, "z", where)),
+                          "module": _number(_require(table, "module", where), f"{where}.module")}
+    if "pressure_angle_deg" in table:
+        kw["pressure_angle"] = math.radians(_number(table["pressure_angle_deg"], where))
+    if "helix_angle_deg" in table:
+        kw["helix_angle"] = math.radians(_number(table["helix_angle_deg"], where))
+    for k in ("profile_shift", "face_width", "addendum", "dedendum"):
+        if k in table:
+            kw[k] = _number(table[k], f"{where}.{k}")
+    try:
+        return Toothing(**kw)
+    except ValueError as exc:
+        raise ConfigError(f"{where}: {exc}") from None
+
+
+def _operation(cfg: dict) -> dict:
+    op = _check_keys(_require(cfg, "operation", "the description"), _OPERATION, "[operation]")
+    fixed = op.get("fixed", [])
+    fixed = [fixed] if isinstance(fixed, str) else list(fixed)
+    return {"fixed": fixed, "input": _require(op, "input", "[operation]"),
+            "output": _require(op, "output", "[operation]")}
+
+
+def _builder_set(kind: str, cfg: dict, base: Path | None) -> GearSet:
+    geo = _check_keys(_require(cfg, "geometry", "the description"), _GEOMETRY[kind],
+                      "[geometry]")
+    bodies_t = _check_keys(_require(cfg, "bodies", "the description"), set(_BODIES[kind]),
+                           "[bodies]")
+    meshes_t = _check_keys(_require(cfg, "meshes", "the description"), set(_MESHES[kind]),
+                           "[meshes]")
+    roles = {"carrier": "carrier"}
+    bodies = {}
+    for bname in _BODIES[kind]:
+        role = "planet" if bname.startswith("planet") else roles.get(bname, "central")
+        t = _require(bodies_t, bname, "[bodies]")
+        body = _body(bname, t, role, f"[bodies.{bname}]")
+        bodies[bname] = body
+    specs = {k: _mesh_spec(_require(meshes_t, k, "[meshes]"), f"[meshes.{k}]", base,
+                           deferred=True)
+             for k in _MESHES[kind]}
+    op = _operation(cfg)
+    g = {k: v for k, v in geo.items()}
+    common: dict[str, Any] = {}
+    if "module" in g:
+        common["module"] = _number(g.pop("module"), "[geometry].module")
+    if "pressure_angle_deg" in g:
+        common["pressure_angle"] = math.radians(_number(g.pop("pressure_angle_deg"),
+                                                        "[geometry].pressure_angle_deg"))
+    if "helix_angle_deg" in g:
+        common["helix_angle"] = math.radians(_number(g.pop("helix_angle_deg"),
+                                                     "[geometry].helix_angle_deg"))
+    if "face_width" in g:
+        common["face_width"] = _number(g.pop("face_width"), "[geometry].face_width")
+    name = str(cfg.get("name", kind))
+    try:
+        if kind == "simple":
+            angles = g.pop("planet_angles_deg", None)
+            return simple_planetary(
+                z_sun=int(_require(g, "z_sun", "[geometry]")),
+                z_ring=int(_require(g, "z_ring", "[geometry]")),
+                z_planet=int(g["z_planet"]) if "z_planet" in g else None,
+                n_planets=int(g["n_planets"]) if "n_planets" in g else None,
+                planet_angles=[math.radians(_number(a, "[geometry].planet_angles_deg"))
+                               for a in angles] if angles is not None else None,
+                profile_shift_sun=float(g.get("profile_shift_sun", 0.0)),
+                profile_shift_ring=float(g.get("profile_shift_ring", 0.0)),
+                profile_shift_planet=float(g["profile_shift_planet"])
+                if "profile_shift_planet" in g else None,
+                sun=bodies["sun"], ring=bodies["ring"], carrier=bodies["carrier"],
+                planet=bodies["planet"], sun_mesh=specs["sun"], ring_mesh=specs["ring"],
+                fixed=op["fixed"][0] if op["fixed"] else "", input=op["input"],
+                output=op["output"], name=name, config=cfg, **common)
+        if kind == "wolfrom":
+            return wolfrom(
+                z_sun=int(g["z_sun"]), z_ring1=int(g["z_ring1"]), z_ring2=int(g["z_ring2"]),
+                z_planet1=int(g["z_planet1"]), z_planet2=int(g["z_planet2"]),
+                module2=float(g["module2"]) if "module2" in g else None,
+                n_planets=int(g.get("n_planets", 3)), sun=bodies["sun"], ring1=bodies["ring1"],
+                ring2=bodies["ring2"], carrier=bodies["carrier"], planet=bodies["planet"],
+                sun_mesh=specs["sun"], ring_mesh=specs["ring"], fixed=op["fixed"][0],
+                input=op["input"], output=op["output"], name=name, config=cfg, **common)
+        return ravigneaux(
+            z_sun_small=int(g["z_sun_small"]), z_sun_large=int(g["z_sun_large"]),
+            z_ring=int(g["z_ring"]), z_planet_short=int(g["z_planet_short"]),
+            z_planet_long=int(g["z_planet_long"]), n_pairs=int(g.get("n_pairs", 3)),
+            sun_small=bodies["sun_small"], sun_large=bodies["sun_large"], ring=bodies["ring"],
+            carrier=bodies["carrier"], planet_short=bodies["planet_short"],
+            planet_long=bodies["planet_long"], sun_mesh=specs["sun"], ring_mesh=specs["ring"],
+            planet_mesh=specs["planet"], fixed=op["fixed"][0], input=op["input"],
+            output=op["output"], name=name, config=cfg, **common)
+    except KeyError as exc:
+        raise ConfigError(f"missing key {exc.args[0]!r} in [geometry]") from None
+    except ValueError as exc:
+        if isinstance(exc, ConfigError):
+            raise
+        raise ConfigError(str(exc)) from None
+
+
+def _general_set(cfg: dict, base: Path | None) -> GearSet:
+    bodies = []
+    for i, t in enumerate(_require(cfg, "body", "the description")):
+        where = f"[[body]] #{i + 1}"
+        _check_keys(t, _BODY_GENERAL, where)
+        try:
+            bodies.append(Body(
+                name=str(_require(t, "name", where)), role=_require(t, "role", where),
+                mass=_number(_require(t, "mass", where), f"{where}.mass"),
+                inertia=_number(_require(t, "inertia", where), f"{where}.inertia"),
+                support=_support(t.get("support"), f"{where}.support"),
+                carrier=t.get("carrier"),
+                angle=math.radians(_number(t.get("angle_deg", 0.0), f"{where}.angle_deg")),
+                radius=_number(t["radius"], f"{where}.radius") if "radius" in t else None))
+        except ValueError as exc:
+            if isinstance(exc, ConfigError):
+                raise
+            raise ConfigError(f"{where}: {exc}") from None
+    meshes = []
+    for i, t in enumerate(_require(cfg, "mesh", "the description")):
+        where = f"[[mesh]] #{i + 1}"
+        _check_keys(t, _MESH_GENERAL, where)
+        spec = _mesh_spec({k: v for k, v in t.items() if k in _MESH_SPEC}, where, base)
+        kw: dict[str, Any] = {}
+        for k in ("base_radius1", "base_radius2", "centre_distance", "phase"):
+            if k in t:
+                kw[k] = _number(t[k], f"{where}.{k}")
+        for k in ("z1", "z2"):
+            if k in t:
+                kw[k] = int(t[k])
+        if "pressure_angle_deg" in t:
+            kw["pressure_angle"] = math.radians(_number(t["pressure_angle_deg"], where))
+        if "helix_angle_deg" in t:
+            kw["helix_angle"] = math.radians(_number(t["helix_angle_deg"], where))
+        for k in ("toothing1", "toothing2"):
+            if k in t:
+                kw[k] = _toothing(t[k], f"{where}.{k}")
+        try:
+            meshes.append(Mesh(
+                name=str(_require(t, "name", where)), gear1=str(_require(t, "gear1", where)),
+                gear2=str(_require(t, "gear2", where)), stiffness=spec.stiffness,
+                back_stiffness=spec.back_stiffness, backlash=spec.backlash,
+                damping=spec.damping, damping_ratio=spec.damping_ratio, **kw))
+        except ValueError as exc:
+            raise ConfigError(f"{where}: {exc}") from None
+    couplings = []
+    for i, t in enumerate(cfg.get("coupling", [])):
+        where = f"[[coupling]] #{i + 1}"
+        _check_keys(t, _COUPLING, where)
+        couplings.append(Coupling(
+            str(_require(t, "body1", where)), str(_require(t, "body2", where)),
+            _stiffness_value(t.get("stiffness", "rigid"), f"{where}.stiffness"),
+            _number(t.get("damping", 0.0), f"{where}.damping")))
+    op = _operation(cfg)
+    try:
+        return GearSet(name=str(cfg.get("name", "general")), bodies=tuple(bodies),
+                       meshes=tuple(meshes), fixed=tuple(op["fixed"]), input=op["input"],
+                       output=op["output"], couplings=tuple(couplings), config=cfg)
+    except ValueError as exc:
+        raise ConfigError(str(exc)) from None
+
+
+def gearset_from_dict(cfg: dict, *, base: Path | None = None) -> GearSet:
+    """Build a :class:`GearSet` from a description dict (parsed TOML).
+
+    Parameters
+    ----------
+    cfg : dict
+        The description; see the module docstring and the README.
+    base : Path, optional
+        Directory against which relative file paths (CSV stiffness curves) are resolved.
+
+    Raises
+    ------
+    ConfigError
+        Unknown or missing keys, inadmissible values, or an inconsistent gear set.
+    """
+    cfg = copy.deepcopy(cfg)
+    _check_keys(cfg, _TOP, "the description (top level)")
+    if "simulation" in cfg:
+        _check_keys(cfg["simulation"], _SIMULATION, "[simulation]")
+    kind = cfg.get("type", "simple")
+    if kind in _GEOMETRY:
+        return _builder_set(kind, cfg, base)
+    if kind == "general":
+        return _general_set(cfg, base)
+    if kind == "two-stage":
+        s1 = gearset_from_dict({**_require(cfg, "stage1", "the description"),
+                                "name": "stage1"}, base=base)
+        s2 = gearset_from_dict({**_require(cfg, "stage2", "the description"),
+                                "name": "stage2"}, base=base)
+        shaft = _check_keys(cfg.get("shaft", {}), {"stiffness", "damping"}, "[shaft]")
+        return two_stage(s1, s2, shaft_stiffness=_stiffness_value(
+            shaft.get("stiffness", "rigid"), "[shaft].stiffness"),
+                         shaft_damping=_number(shaft.get("damping", 0.0), "[shaft].damping"),
+                         name=str(cfg.get("name", "two-stage")), config=cfg)
+    raise ConfigError(f"unknown type {kind!r} (admissible: simple, wolfrom, ravigneaux, "
+                      "two-stage, general)")
+
+
+def list_presets() -> list[str]:
+    """Names of the built-in presets."""
+    files = resources.files("gearvib.presets").iterdir()
+    return sorted(f.name[:-5] for f in files if f.name.endswith(".toml"))
+
+
+def load_config(name_or_path: str | Path) -> tuple[dict, Path | None]:
+    """Read a description from a TOML file or a preset name.
+
+    Returns
+    -------
+    (dict, Path or None)
+        The parsed description and the directory of the file (None for presets).
+    """
+    p = Path(name_or_path)
+    if p.suffix == ".toml" or p.exists():
+        if not p.is_file():
+            raise ConfigError(f"configuration file {str(p)!r} not found")
+        try:
+            return tomllib.loads(p.read_text(encoding="utf-8")), p.parent
+        except tomllib.TOMLDecodeError as exc:
+            raise ConfigError(f"{p}: invalid TOML: {exc}") from None
+    name = str(name_or_path)
+    if name not in list_presets():
+        raise ConfigError(
+            f"unknown preset {name!r} (available: {', '.join(list_presets())}; or give a "
+            "path to a .toml file)"
+        )
+    text = resources.files("gearvib.presets").joinpath(f"{name}.toml").read_text("utf-8")
+    return tomllib.loads(text), None
+
+
+def load_gearset(name_or_path: str | Path) -> GearSet:
+    """Load a gear set from a TOML file or a preset name (``paper-case1``, ...)."""
+    cfg, base = load_config(name_or_path)
+    return gearset_from_dict(cfg, base=base)
+
+
+def config_hash(cfg: dict) -> str:
+    """SHA-256 of the canonical JSON of a description (provenance)."""
+    text = json.dumps(cfg, sort_keys=True, separators=(",", ":"), default=str)
+    return hashlib.sha256(text.encode()).hexdigest()

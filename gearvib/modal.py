@@ -1,0 +1,247 @@
+"""Modal analysis of the mean-stiffness system: natural frequencies, classified mode shapes.
+
+Modes are classified as in Lin & Parker (1999) for planetary gears:
+
+* ``rigid-body``: zero frequency (a free member, e.g. the input without a drive);
+* ``rotational``: the central members only rotate (no translation);
+* ``translational``: the central members only translate (no rotation);
+* ``planet``: the central members and carriers are at rest, only planets move;
+* ``other``: anything else (e.g. unequally spaced planets, where the pure families mix).
+
+A mode's *multiplicity* is the number of modes sharing its frequency (relative tolerance
+``1e-7``): with N equally spaced planets the translational modes come in pairs and the planet
+modes N - 3 times (N - 1 in a purely torsional model).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg
+import xarray as xr
+
+from gearvib.model import AssembledModel
+
+__all__ = ["ModalResult", "modal_analysis"]
+
+_REL_ENERGY = 1e-6
+_REL_FREQ = 1e-7
+
+
+@dataclass(frozen=True)
+class ModalResult:
+    """Natural frequencies and mode shapes of the mean system.
+
+    Attributes
+    ----------
+    frequencies_hz : ndarray, shape (n_mode,)
+        Natural frequencies [Hz], ascending.
+    shapes : ndarray, shape (n_dof, n_mode)
+        Mass-normalised mode shapes (complex magnitudes for the gyroscopic case).
+    kinds : tuple of str
+        Classification of every mode (see module docstring).
+    multiplicity : tuple of int
+        Number of modes at the same frequency.
+    mesh_energy : ndarray, shape (n_mode, n_mesh)
+        Fraction of the modal strain energy in each mesh.
+    bearing_energy : ndarray, shape (n_mode, n_bearing)
+        Fraction of the modal strain energy in each elastic bearing direction.
+    dof_names, mesh_names, bearing_names : tuple of str
+        Labels of the axes.
+    carrier_speed_rpm : float
+        Carrier speed of the analysis [min^-1] (gyroscopic and centripetal terms if nonzero).
+    """
+
+    frequencies_hz: np.ndarray
+    shapes: np.ndarray
+    kinds: tuple[str, ...]
+    multiplicity: tuple[int, ...]
+    mesh_energy: np.ndarray
+    bearing_energy: np.ndarray
+    dof_names: tuple[str, ...]
+    mesh_names: tuple[str, ...]
+    bearing_names: tuple[str, ...]
+    carrier_speed_rpm: float = 0.0
+
+    @property
+    def n_modes(self) -> int:
+        """Number of modes."""
+        return len(self.frequencies_hz)
+
+    def elastic(self) -> np.ndarray:
+        """Frequencies of the modes that are not rigid-body modes [Hz]."""
+        keep = np.array([k != "rigid-body" for k in self.kinds], dtype=bool)
+        return self.frequencies_hz[keep]
+
+    def to_dict(self) -> dict:
+        """``{"modes": [{"frequency_hz", "kind", "multiplicity"}, ...]}``, one entry per mode."""
+        return {"modes": [
+            {"frequency_hz": float(f), "kind": k, "multiplicity": int(m)}
+            for f, k, m in zip(self.frequencies_hz, self.kinds, self.multiplicity, strict=True)
+        ]}
+
+    def to_json(self) -> str:
+        """JSON text of :meth:`to_dict`."""
+        return json.dumps(self.to_dict(), indent=2)
+
+    def table(self) -> str:
+        """A plain-text table of the modes."""
+        lines = [f"{'mode':>4}  {'f [Hz]':>10}  {'kind':<14} {'mult':>4}  dominant mesh"]
+        for i, (f, k, m) in enumerate(zip(self.frequencies_hz, self.kinds, self.multiplicity,
+                                          strict=True), start=1):
+            dom = ""
+            if self.mesh_energy.shape[1] and self.mesh_energy[i - 1].max() > 1e-6:
+                j = int(np.argmax(self.mesh_energy[i - 1]))
+                dom = f"{self.mesh_names[j]} ({100 * self.mesh_energy[i - 1, j]:.0f} %)"
+            lines.append(f"{i:>4}  {f:>10.2f}  {k:<14} {m:>4}  {dom}")
+        return "\n".join(lines)
+
+    def to_dataset(self) -> xr.Dataset:
+        """The modes as a CF-annotated Dataset."""
+        mode = np.arange(1, self.n_modes + 1)
+        ds = xr.Dataset(
+            {
+                "natural_frequency": ("mode", self.frequencies_hz,
+                                      {"units": "Hz", "long_name": "natural frequency"}),
+                "mode_kind": ("mode", np.array(self.kinds, dtype=str),
+                              {"long_name": "mode classification"}),
+                "multiplicity": ("mode", np.array(self.multiplicity, dtype=np.int32),
+                                 {"units": "1", "long_name": "modes at the same frequency"}),
+                "mode_shape": (("dof", "mode"), np.abs(self.shapes) if np.iscomplexobj(
+                    self.shapes) else self.shapes,
+                               {"units": "1", "long_name": "mass-normalised mode shape"}),
+                "mesh_energy_fraction": (("mode", "mesh"), self.mesh_energy,
+                                         {"units": "1",
+                                          "long_name": "modal strain energy fraction in mesh"}),
+                "bearing_energy_fraction": (("mode", "bearing"), self.bearing_energy,
+                                            {"units": "1", "long_name":
+                                             "modal strain energy fraction in bearing"}),
+            },
+            coords={
+                "mode": ("mode", mode, {"long_name": "mode number", "units": "1"}),
+                "dof": ("dof", list(self.dof_names), {"long_name": "coordinate"}),
+                "mesh": ("mesh", list(self.mesh_names), {"long_name": "tooth contact"}),
+                "bearing": ("bearing", list(self.bearing_names),
+                            {"long_name": "bearing direction"}),
+            },
+            attrs={"carrier_speed_rpm": float(self.carrier_speed_rpm)},
+        )
+        return ds
+
+
+def _classify(model: AssembledModel, phi: np.ndarray, freq: float, f_scale: float) -> str:
+    if freq <= 1e-6 * max(f_scale, 1.0):
+        return "rigid-body"
+    m_diag = np.real(np.diag(model.mass))
+    energy = m_diag * np.abs(phi) ** 2
+    total = energy.sum()
+    central_rot = central_trans = 0.0
+    for i, name in enumerate(model.dof_names):
+        body, comp = name.rsplit(".", 1)
+        role = _role(model, body)
+        if role == "planet":
+            continue
+        if comp == "theta":
+            central_rot += energy[i]
+        elif comp in ("x", "y"):
+            central_trans += energy[i]
+    # carrier-coupled masses (absolute planet eta) make M non-diagonal only through constraints;
+    # use the kinetic energy of the full quadratic form as the total
+    total = float(np.real(np.conj(phi) @ model.mass @ phi)) or total
+    tol = _REL_ENERGY * total
+    if central_rot <= tol and central_trans <= tol:
+        return "planet"
+    if central_trans <= tol:
+        return "rotational"
+    if central_rot <= tol:
+        return "translational"
+    return "other"
+
+
+def _role(model: AssembledModel, body: str) -> str:
+    for b in model.meta.get("bodies", []):
+        if b["name"] == body:
+            return b["role"]
+    return "planet" if body.startswith("planet") else "central"
+
+
+def _multiplicity(freqs: np.ndarray) -> list[int]:
+    out = []
+    for f in freqs:
+        tol = _REL_FREQ * max(abs(f), 1e-9) + 1e-9
+        out.append(int(np.sum(np.abs(freqs - f) <= tol)))
+    return out
+
+
+def modal_analysis(model: AssembledModel, *, carrier_speed_rpm: float = 0.0,
+                   stiffness_scale: float = 1.0) -> ModalResult:
+    """Natural frequencies and mode shapes of the mean-stiffness system.
+
+    Parameters
+    ----------
+    model : AssembledModel
+        The assembled gear set.
+    carrier_speed_rpm : float
+        Carrier speed [min^-1]; when nonzero the gyroscopic (``Omega G``) and centripetal
+        (``-Omega^2 K_Omega``) terms are included and a quadratic eigenproblem is solved.
+    stiffness_scale : float
+        Factor on every mesh stiffness (for sensitivity studies).
+
+    Returns
+    -------
+    ModalResult
+    """
+    if not math.isfinite(carrier_speed_rpm):
+        raise ValueError("carrier_speed_rpm must be finite")
+    if not stiffness_scale > 0:
+        raise ValueError(f"stiffness_scale = {stiffness_scale} must be > 0")
+    k_mesh = model.mean_mesh_stiffness() * stiffness_scale
+    k = model.stiffness + model.mesh_stiffness_matrix(k_mesh)
+    m = model.mass
+    omega_c = carrier_speed_rpm * 2 * math.pi / 60.0
+    if omega_c == 0.0:
+        w2, phi = scipy.linalg.eigh(k, m)
+        w2 = np.where(np.abs(w2) < 1e-9 * max(abs(w2).max(), 1.0), 0.0, w2)
+        if (w2 < 0).any():
+            raise ValueError("mean stiffness matrix is not positive semi-definite "
+                             f"(eigenvalue {w2.min():.3g}); check for negative stiffness")
+        freqs = np.sqrt(w2) / (2 * math.pi)
+    else:
+        n = m.shape[0]
+        kk = k - omega_c**2 * model.centripetal
+        a = np.block([[np.zeros((n, n)), np.eye(n)],
+                      [-np.linalg.solve(m, kk), -np.linalg.solve(m, omega_c * model.gyroscopic)]])
+        lam, vec = np.linalg.eig(a)
+        keep = lam.imag >= -1e-9
+        lam, vec = lam[keep], vec[:n, keep]
+        order = np.argsort(np.abs(lam.imag))
+        lam, vec = lam[order][:n], vec[:, order][:, :n]
+        freqs = np.abs(lam.imag) / (2 * math.pi)
+        norms = np.sqrt(np.real(np.einsum("im,ij,jm->m", vec.conj(), m, vec)))
+        phi = vec / norms
+    f_scale = float(freqs.max()) if freqs.size else 1.0
+    kinds = tuple(_classify(model, phi[:, i], freqs[i], f_scale) for i in range(len(freqs)))
+    mult = tuple(_multiplicity(freqs))
+
+    defl = model.mesh_vectors @ phi
+    u_mesh = 0.5 * k_mesh[:, None] * np.abs(defl) ** 2
+    u_b = 0.5 * model.bearing_stiffness[:, None] * np.abs(model.bearing_vectors @ phi) ** 2
+    total = 0.5 * np.real(np.einsum("im,ij,jm->m", phi.conj(), k, phi))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        mesh_frac = np.where(total > 0, u_mesh / total, 0.0).T
+        bear_frac = np.where(total > 0, u_b / total, 0.0).T
+    return ModalResult(
+        frequencies_hz=freqs,
+        shapes=phi,
+        kinds=kinds,
+        multiplicity=mult,
+        mesh_energy=np.nan_to_num(mesh_frac),
+        bearing_energy=np.nan_to_num(bear_frac),
+        dof_names=model.dof_names,
+        mesh_names=model.mesh_names,
+        bearing_names=model.bearing_names,
+        carrier_speed_rpm=float(carrier_speed_rpm),
+    )

@@ -1,0 +1,653 @@
+"""Bodies, supports, meshes and the planetary base structure; builders for common gear sets.
+
+A gear set is a set of *bodies* (nodes carrying mass and inertia) joined by *meshes* (tooth
+contacts), *supports* (bearings to ground, or of a planet on its carrier) and optional shaft
+*couplings*. Following the paper, every planetary gear set is a combination of *base
+structures*: one central gear (external or internal toothing, expressed by the sign of its
+tooth number), one planet and the planet carrier. Base structures share bodies, so a simple set
+with N planets is 2N base structures on four kinds of bodies, a Wolfrom set adds a second ring
+meshing a stepped planet, and a Ravigneaux set adds planet-planet meshes.
+
+Everything here is a plain description; :mod:`gearvib.assembly` turns it into matrices.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass, field, replace
+from typing import Literal
+
+from gearvib.geometry import (
+    MeshGeometry,
+    Toothing,
+    check_planet_angles,
+    mesh_geometry,
+    planet_profile_shift,
+)
+from gearvib.stiffness import MeshStiffness, stiffness_from_dict
+
+__all__ = [
+    "RIGID",
+    "BaseStructure",
+    "Body",
+    "Coupling",
+    "GearSet",
+    "Mesh",
+    "Support",
+    "compose",
+    "ravigneaux",
+    "simple_planetary",
+    "two_stage",
+    "wolfrom",
+]
+
+RIGID = math.inf
+"""Stiffness value of a rigid support: the corresponding DOF is removed."""
+
+Role = Literal["central", "carrier", "planet"]
+
+
+def _check_value(value: float, name: str, *, allow_zero: bool = True, allow_inf: bool = False):
+    v = float(value)
+    if math.isnan(v):
+        raise ValueError(f"{name} is NaN; admissible: a finite number >= 0")
+    if math.isinf(v) and not (allow_inf and v > 0):
+        raise ValueError(f"{name} = {v} is not admissible: must be finite")
+    if v < 0 or (v == 0 and not allow_zero):
+        bound = ">= 0" if allow_zero else "> 0"
+        raise ValueError(f"{name} = {v!r} is not admissible: must be {bound}")
+    return v
+
+
+@dataclass(frozen=True)
+class Support:
+    """Stiffness and damping of a body's support, per direction.
+
+    For central members and carriers the support is to ground: ``radial`` acts on both in-plane
+    translations, ``axial`` on the axial translation, ``torsional`` on the rotation. For planets
+    the support is the planet bearing on its carrier: ``radial`` and ``tangential`` in the
+    carrier frame, ``axial``; ``torsional`` is not used (the planet spins freely on its pin).
+
+    A stiffness of :data:`RIGID` (``inf``) removes the DOF, ``0`` leaves it free. Units are
+    N/m (translations) and N m/rad (rotation); damping in N s/m and N m s/rad.
+    """
+
+    radial: float = RIGID
+    tangential: float = RIGID
+    axial: float = RIGID
+    torsional: float = 0.0
+    radial_damping: float = 0.0
+    tangential_damping: float = 0.0
+    axial_damping: float = 0.0
+    torsional_damping: float = 0.0
+
+    def __post_init__(self) -> None:
+        for name in ("radial", "tangential", "axial", "torsional"):
+            _check_value(getattr(self, name), f"support {name} stiffness", allow_inf=True)
+        for name in ("radial", "tangential", "axial", "torsional"):
+            _check_value(getattr(self, f"{name}_damping"), f"support {name} damping")
+
+
+@dataclass(frozen=True)
+class Body:
+    """A rigid body (node): central gear, carrier or planet.
+
+    Parameters
+    ----------
+    name : str
+        Unique name, used in DOF, mesh and output names.
+    role : {"central", "carrier", "planet"}
+        Central members (suns, rings) and carriers rotate about the main axis.
+    mass : float
+        Mass [kg] (> 0).
+    inertia : float
+        Polar moment of inertia about the body's own axis [kg m^2] (> 0).
+    support : Support
+        Bearing stiffness per direction (see :class:`Support`).
+    carrier : str, optional
+        For planets: the carrier they sit on.
+    angle : float
+        For planets: position angle on the carrier [rad] (the paper's assembly angle).
+    radius : float, optional
+        For planets: distance of the planet axis from the main axis [m]. Taken from the
+        centre distance of the planet's first central-gear mesh when omitted.
+    """
+
+    name: str
+    role: Role
+    mass: float
+    inertia: float
+    support: Support = field(default_factory=Support)
+    carrier: str | None = None
+    angle: float = 0.0
+    radius: float | None = None
+
+    def __post_init__(self) -> None:
+        if self.role not in ("central", "carrier", "planet"):
+            raise ValueError(
+                f"body {self.name!r}: role {self.role!r} is not admissible "
+                "(central, carrier or planet)"
+            )
+        _check_value(self.mass, f"mass of body {self.name!r}", allow_zero=False)
+        _check_value(self.inertia, f"inertia of body {self.name!r}", allow_zero=False)
+        if self.role == "planet" and not self.carrier:
+            raise ValueError(f"planet {self.name!r} needs a carrier")
+        if not math.isfinite(self.angle):
+            raise ValueError(f"angle of planet {self.name!r} must be finite")
+        if self.radius is not None:
+            _check_value(self.radius, f"radius of planet {self.name!r}", allow_zero=False)
+
+
+@dataclass(frozen=True)
+class Mesh:
+    """A tooth contact between ``gear1`` (central gear or first planet) and ``gear2`` (planet).
+
+    Either tooth geometry (``toothing1``, ``toothing2``) or lumped parameters (signed base
+    radii, working pressure angle) describe the contact; lumped values override geometry.
+
+    Parameters
+    ----------
+    name : str
+        Mesh name, e.g. ``"sun-planet1"``.
+    gear1, gear2 : str
+        Body names; ``gear2`` is always a planet.
+    stiffness : MeshStiffness
+        Left (drive) flank stiffness as a function of mesh position.
+    toothing1, toothing2 : Toothing, optional
+        Tooth geometry of the two gears (signed tooth numbers).
+    base_radius1, base_radius2 : float, optional
+        Signed base radii [m] (negative for internal toothing), for lumped models.
+    pressure_angle : float, optional
+        Working transverse pressure angle [rad], for lumped models.
+    helix_angle : float
+        Base helix angle [rad] for lumped models (0: spur).
+    z1, z2 : int, optional
+        Signed tooth numbers for the mesh position and phasing of lumped models.
+    back_stiffness : MeshStiffness, optional
+        Right (back) flank stiffness; the drive-flank model when omitted.
+    backlash : float
+        Total normal backlash [m]; negative: both flanks in contact (preload).
+    damping : float, optional
+        Viscous mesh damping [N s/m].
+    damping_ratio : float, optional
+        Alternative to ``damping``: fraction of critical damping of the pair's torsional
+        mode at the mean stiffness.
+    phase : float, optional
+        Mesh position at the assembly reference [cycles]; computed from geometry if omitted.
+    """
+
+    name: str
+    gear1: str
+    gear2: str
+    stiffness: MeshStiffness
+    toothing1: Toothing | None = None
+    toothing2: Toothing | None = None
+    base_radius1: float | None = None
+    base_radius2: float | None = None
+    pressure_angle: float | None = None
+    helix_angle: float = 0.0
+    z1: int | None = None
+    z2: int | None = None
+    back_stiffness: MeshStiffness | None = None
+    backlash: float = 0.0
+    damping: float | None = None
+    damping_ratio: float | None = None
+    phase: float | None = None
+    centre_distance: float | None = None
+
+    def __post_init__(self) -> None:
+        geometric = self.toothing1 is not None and self.toothing2 is not None
+        lumped = self.base_radius1 is not None and self.base_radius2 is not None
+        if not (geometric or lumped):
+            raise ValueError(
+                f"mesh {self.name!r} needs either toothing1/toothing2 or "
+                "base_radius1/base_radius2 (+ pressure_angle)"
+            )
+        if lumped and not geometric and self.pressure_angle is None:
+            raise ValueError(f"mesh {self.name!r}: lumped description needs pressure_angle")
+        if self.pressure_angle is not None and not 0 <= self.pressure_angle < math.radians(60):
+            raise ValueError(
+                f"mesh {self.name!r}: pressure_angle {math.degrees(self.pressure_angle):.3g}° "
+                "is not admissible (0° to 60°)"
+            )
+        if not math.isfinite(self.backlash):
+            raise ValueError(f"mesh {self.name!r}: backlash must be finite")
+        if self.damping is not None:
+            _check_value(self.damping, f"damping of mesh {self.name!r}")
+        if self.damping_ratio is not None:
+            _check_value(self.damping_ratio, f"damping_ratio of mesh {self.name!r}")
+        for label, model in (("stiffness", self.stiffness), ("back_stiffness",
+                                                              self.back_stiffness)):
+            if model is not None and not model.min >= 0:
+                raise ValueError(
+                    f"mesh {self.name!r}: {label} reaches {model.min:.4g} N/m; "
+                    "admissible: >= 0"
+                )
+
+    @property
+    def geometry(self) -> MeshGeometry | None:
+        """Involute mesh geometry when both toothings are given."""
+        if self.toothing1 is None or self.toothing2 is None:
+            return None
+        return mesh_geometry(self.toothing1, self.toothing2, self.centre_distance)
+
+
+@dataclass(frozen=True)
+class Coupling:
+    """Torsional shaft between two bodies (``stiffness`` :data:`RIGID` joins them)."""
+
+    body1: str
+    body2: str
+    stiffness: float = RIGID
+    damping: float = 0.0
+
+    def __post_init__(self) -> None:
+        _check_value(self.stiffness, f"coupling {self.body1}-{self.body2} stiffness",
+                     allow_zero=False, allow_inf=True)
+        _check_value(self.damping, f"coupling {self.body1}-{self.body2} damping")
+
+
+@dataclass(frozen=True)
+class BaseStructure:
+    """The paper's base structure: a central gear, a planet and the carrier, with their mesh.
+
+    ``variant`` tells the three forms: ``"external"`` (external central gear, e.g. a sun),
+    ``"internal"`` (internal central gear, e.g. a ring) and ``"internal-planet"`` (an
+    external central gear meshing an internally toothed planet).
+    """
+
+    central: Body
+    planet: Body
+    carrier: Body
+    mesh: Mesh
+
+    def __post_init__(self) -> None:
+        if self.central.role != "central":
+            raise ValueError(f"base structure: {self.central.name!r} is not a central member")
+        if self.planet.role != "planet" or self.planet.carrier != self.carrier.name:
+            raise ValueError(
+                f"base structure: {self.planet.name!r} is not a planet of "
+                f"{self.carrier.name!r}"
+            )
+        if (self.mesh.gear1, self.mesh.gear2) != (self.central.name, self.planet.name):
+            raise ValueError(
+                f"base structure: mesh {self.mesh.name!r} does not join "
+                f"{self.central.name!r} and {self.planet.name!r}"
+            )
+
+    @property
+    def variant(self) -> str:
+        """``"external"``, ``"internal"`` or ``"internal-planet"``."""
+        z1 = _signed_z(self.mesh, 1)
+        z2 = _signed_z(self.mesh, 2)
+        if z2 is not None and z2 < 0:
+            return "internal-planet"
+        if z1 is not None and z1 < 0:
+            return "internal"
+        if self.mesh.base_radius1 is not None and self.mesh.base_radius1 < 0:
+            return "internal"
+        return "external"
+
+
+def _signed_z(mesh: Mesh, which: int) -> int | None:
+    t = mesh.toothing1 if which == 1 else mesh.toothing2
+    if t is not None:
+        return t.z
+    return mesh.z1 if which == 1 else mesh.z2
+
+
+@dataclass(frozen=True)
+class GearSet:
+    """A complete gear set: bodies, meshes, couplings and the operating roles.
+
+    Parameters
+    ----------
+    name : str
+        Name used in outputs.
+    bodies : tuple of Body
+        All bodies, names unique.
+    meshes : tuple of Mesh
+        All tooth contacts.
+    fixed : tuple of str
+        Members held at rest (their rotation is removed).
+    input, output : str
+        Driven and loaded members.
+    couplings : tuple of Coupling
+        Shafts joining members of different stages.
+    config : dict
+        The description this set was built from (kept for provenance).
+    """
+
+    name: str
+    bodies: tuple[Body, ...]
+    meshes: tuple[Mesh, ...]
+    fixed: tuple[str, ...]
+    input: str
+    output: str
+    couplings: tuple[Coupling, ...] = ()
+    config: dict = field(default_factory=dict, compare=False)
+
+    def __post_init__(self) -> None:
+        names = [b.name for b in self.bodies]
+        dup = {n for n in names if names.count(n) > 1}
+        if dup:
+            raise ValueError(f"gear set {self.name!r}: duplicate body names {sorted(dup)}")
+        known = set(names)
+        by_name = {b.name: b for b in self.bodies}
+        for b in self.bodies:
+            if b.role == "planet" and (b.carrier not in known
+                                       or by_name[b.carrier].role != "carrier"):
+                raise ValueError(
+                    f"planet {b.name!r}: carrier {b.carrier!r} is not a carrier of this set"
+                )
+        mesh_names = [m.name for m in self.meshes]
+        if len(set(mesh_names)) != len(mesh_names):
+            raise ValueError(f"gear set {self.name!r}: duplicate mesh names")
+        for m in self.meshes:
+            for g in (m.gear1, m.gear2):
+                if g not in known:
+                    raise ValueError(f"mesh {m.name!r}: unknown body {g!r}")
+            if by_name[m.gear2].role != "planet":
+                raise ValueError(f"mesh {m.name!r}: gear2 {m.gear2!r} must be a planet")
+            if by_name[m.gear1].role == "carrier":
+                raise ValueError(f"mesh {m.name!r}: a carrier has no teeth")
+        for role_name, member in (("input", self.input), ("output", self.output)):
+            if member not in known:
+                raise ValueError(f"{role_name} member {member!r} is not a body of the set "
+                                 f"(bodies: {sorted(known)})")
+        for f in self.fixed:
+            if f not in known:
+                raise ValueError(f"fixed member {f!r} is not a body of the set")
+            if f in (self.input, self.output):
+                raise ValueError(f"member {f!r} cannot be fixed and {self.input!r}/"
+                                 f"{self.output!r} at once")
+        for c in self.couplings:
+            for g in (c.body1, c.body2):
+                if g not in known:
+                    raise ValueError(f"coupling: unknown body {g!r}")
+
+    def body(self, name: str) -> Body:
+        """The body called ``name``."""
+        for b in self.bodies:
+            if b.name == name:
+                return b
+        raise KeyError(name)
+
+    @property
+    def planets(self) -> tuple[Body, ...]:
+        """All planets in description order."""
+        return tuple(b for b in self.bodies if b.role == "planet")
+
+    def base_structures(self) -> tuple[BaseStructure, ...]:
+        """Every central-gear/planet/carrier triple (planet-planet meshes excluded)."""
+        out = []
+        for m in self.meshes:
+            c = self.body(m.gear1)
+            if c.role != "central":
+                continue
+            p = self.body(m.gear2)
+            out.append(BaseStructure(c, p, self.body(p.carrier), m))
+        return tuple(out)
+
+    def with_operation(self, *, fixed: Sequence[str] | None = None, input: str | None = None,
+                       output: str | None = None) -> GearSet:
+        """A copy with other operating roles."""
+        return replace(
+            self,
+            fixed=tuple(self.fixed if fixed is None else fixed),
+            input=self.input if input is None else input,
+            output=self.output if output is None else output,
+        )
+
+
+def compose(name: str, base_structures: Iterable[BaseStructure], *, fixed: Sequence[str],
+            input: str, output: str, extra_meshes: Iterable[Mesh] = (),
+            extra_bodies: Iterable[Body] = (), couplings: Iterable[Coupling] = (),
+            config: dict | None = None) -> GearSet:
+    """Combine base structures that share bodies into one gear set.
+
+    Bodies that appear in several base structures must be the same object description.
+    """
+    bodies: dict[str, Body] = {}
+    meshes: list[Mesh] = []
+
+    def add(b: Body) -> None:
+        old = bodies.get(b.name)
+        if old is not None and old != b:
+            raise ValueError(f"body {b.name!r} is described differently in two base structures")
+        bodies[b.name] = b
+
+    for bs in base_structures:
+        for b in (bs.central, bs.carrier, bs.planet):
+            add(b)
+        meshes.append(bs.mesh)
+    for b in extra_bodies:
+        add(b)
+    meshes.extend(extra_meshes)
+    ordered = sorted(bodies.values(), key=lambda b: ("central", "carrier", "planet").index(
+        b.role))
+    return GearSet(name=name, bodies=tuple(ordered), meshes=tuple(meshes), fixed=tuple(fixed),
+                   input=input, output=output, couplings=tuple(couplings),
+                   config=dict(config or {}))
+
+
+# --------------------------------------------------------------------------------------------
+# Builders
+# --------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class MeshSpec:
+    """Stiffness, backlash and damping shared by a family of meshes (all sun-planet, ...)."""
+
+    stiffness: MeshStiffness | dict
+    back_stiffness: MeshStiffness | dict | None = None
+    backlash: float = 0.0
+    damping: float | None = None
+    damping_ratio: float | None = None
+
+    def resolve(self, geometry: MeshGeometry) -> MeshSpec:
+        """Build stiffness models given as TOML tables (contact ratio from ``geometry``)."""
+        def build(model):
+            return stiffness_from_dict(model, geometry) if isinstance(model, dict) else model
+
+        return replace(self, stiffness=build(self.stiffness),
+                       back_stiffness=build(self.back_stiffness))
+
+
+def _mesh(name: str, g1: str, g2: str, t1: Toothing, t2: Toothing, spec: MeshSpec,
+          centre_distance: float | None = None) -> Mesh:
+    spec = spec.resolve(mesh_geometry(t1, t2, centre_distance))
+    return Mesh(name=name, gear1=g1, gear2=g2, stiffness=spec.stiffness, toothing1=t1,
+                toothing2=t2, back_stiffness=spec.back_stiffness, backlash=spec.backlash,
+                damping=spec.damping, damping_ratio=spec.damping_ratio,
+                centre_distance=centre_distance)
+
+
+def _planet_angles(z_sun: int, z_ring: int, n_planets: int | None,
+                   angles: Sequence[float] | None) -> list[float]:
+    if angles is None:
+        if n_planets is None or n_planets < 1:
+            raise ValueError("give n_planets (>= 1) or planet angles")
+        angles = [2 * math.pi * i / n_planets for i in range(n_planets)]
+    angles = [float(a) for a in angles]
+    check_planet_angles(z_sun, z_ring, angles)
+    return angles
+
+
+def simple_planetary(*, z_sun: int, z_ring: int, module: float, sun: Body, ring: Body,
+                     carrier: Body, planet: Body, sun_mesh: MeshSpec, ring_mesh: MeshSpec,
+                     z_planet: int | None = None, n_planets: int | None = None,
+                     planet_angles: Sequence[float] | None = None,
+                     pressure_angle: float = math.radians(20.0), helix_angle: float = 0.0,
+                     face_width: float = 0.02, profile_shift_sun: float = 0.0,
+                     profile_shift_ring: float = 0.0, profile_shift_planet: float | None = None,
+                     fixed: str = "ring", input: str = "sun", output: str = "carrier",
+                     name: str = "simple-planetary", config: dict | None = None) -> GearSet:
+    """A simple planetary set: sun, ring (``z_ring < 0``), carrier and N planets.
+
+    ``planet`` is the template of every planet (its name gets the index appended, its angle is
+    set from ``planet_angles``). The planet tooth number defaults to ``(|z_ring| - z_sun)//2``;
+    when that leaves the centre distances unequal (``|z_ring| - z_sun`` odd), the planet
+    profile shift is solved so that both meshes share one centre distance, unless given.
+    """
+    if z_ring >= 0:
+        raise ValueError(f"z_ring = {z_ring} must be negative (internal toothing)")
+    if z_sun <= 0:
+        raise ValueError(f"z_sun = {z_sun} must be positive (external toothing)")
+    if z_planet is None:
+        z_planet = (abs(z_ring) - z_sun) // 2
+    angles = _planet_angles(z_sun, z_ring, n_planets, planet_angles)
+    common = dict(module=module, pressure_angle=pressure_angle, face_width=face_width)
+    t_sun = Toothing(z=z_sun, helix_angle=helix_angle, profile_shift=profile_shift_sun, **common)
+    t_ring = Toothing(z=z_ring, helix_angle=helix_angle, profile_shift=profile_shift_ring,
+                      **common)
+    if profile_shift_planet is None:
+        profile_shift_planet = planet_profile_shift(t_sun, t_ring, z_planet)
+    t_pl = Toothing(z=z_planet, helix_angle=-helix_angle, profile_shift=profile_shift_planet,
+                    **common)
+    g_sun = mesh_geometry(t_sun, t_pl)
+    g_ring = mesh_geometry(t_ring, t_pl)
+    a = g_sun.centre_distance
+    if not math.isclose(a, g_ring.centre_distance, rel_tol=1e-6):
+        raise ValueError(
+            f"centre distances differ: sun-planet {a * 1e3:.4f} mm, ring-planet "
+            f"{g_ring.centre_distance * 1e3:.4f} mm; adjust profile_shift_planet "
+            f"(the solved value would be {planet_profile_shift(t_sun, t_ring, z_planet):.4f})"
+        )
+    check_planet_angles(z_sun, z_ring, angles, centre_distance=a,
+                        planet_tip_radius=t_pl.tip_radius)
+    sun_b = replace(sun, role="central")
+    ring_b = replace(ring, role="central")
+    car_b = replace(carrier, role="carrier")
+    structures = []
+    for i, psi in enumerate(angles, start=1):
+        p = replace(planet, name=f"{planet.name}{i}", role="planet", carrier=car_b.name,
+                    angle=psi, radius=a)
+        structures.append(BaseStructure(sun_b, p, car_b, _mesh(
+            f"{sun_b.name}-{p.name}", sun_b.name, p.name, t_sun, t_pl, sun_mesh, a)))
+        structures.append(BaseStructure(ring_b, p, car_b, _mesh(
+            f"{ring_b.name}-{p.name}", ring_b.name, p.name, t_ring, t_pl, ring_mesh, a)))
+    # order meshes: all sun meshes first, then ring meshes (reads naturally in outputs)
+    structures.sort(key=lambda s: 0 if s.central.name == sun_b.name else 1)
+    return compose(name, structures, fixed=(fixed,) if fixed else (), input=input,
+                   output=output, config=config)
+
+
+def wolfrom(*, z_sun: int, z_ring1: int, z_ring2: int, z_planet1: int, z_planet2: int,
+            module: float, sun: Body, ring1: Body, ring2: Body, carrier: Body, planet: Body,
+            sun_mesh: MeshSpec, ring_mesh: MeshSpec, n_planets: int = 3,
+            pressure_angle: float = math.radians(20.0), face_width: float = 0.02,
+            module2: float | None = None, fixed: str = "ring1", input: str = "sun",
+            output: str = "ring2", name: str = "wolfrom", config: dict | None = None) -> GearSet:
+    """A Wolfrom set: sun, stepped planets (``z_planet1`` meshing sun and fixed ring 1,
+    ``z_planet2`` meshing the output ring 2) and a free carrier.
+
+    The second step may use its own module (``module2``) so that both steps share the centre
+    distance; profile shifts of the second step are solved for that.
+    """
+    m2 = module if module2 is None else module2
+    common = dict(pressure_angle=pressure_angle, face_width=face_width)
+    t_s = Toothing(z=z_sun, module=module, **common)
+    t_r1 = Toothing(z=z_ring1, module=module, **common)
+    t_p1 = Toothing(z=z_planet1, module=module,
+                    profile_shift=planet_profile_shift(t_s, t_r1, z_planet1), **common)
+    a = mesh_geometry(t_s, t_p1).centre_distance
+    t_p2 = Toothing(z=z_planet2, module=m2, **common)
+    t_r2 = Toothing(z=z_ring2, module=m2, **common)
+    g2 = mesh_geometry(t_r2, t_p2, a)
+    if g2.contact_ratio < 1:
+        raise ValueError("ring2-planet contact ratio below 1 at the common centre distance")
+    angles = _planet_angles(z_sun, z_ring1, n_planets, None)
+    sun_b, r1, r2 = (replace(b, role="central") for b in (sun, ring1, ring2))
+    car_b = replace(carrier, role="carrier")
+    structures = []
+    for i, psi in enumerate(angles, start=1):
+        p = replace(planet, name=f"{planet.name}{i}", role="planet", carrier=car_b.name,
+                    angle=psi, radius=a)
+        structures.append(BaseStructure(sun_b, p, car_b, _mesh(
+            f"{sun_b.name}-{p.name}", sun_b.name, p.name, t_s, t_p1, sun_mesh, a)))
+        structures.append(BaseStructure(r1, p, car_b, _mesh(
+            f"{r1.name}-{p.name}", r1.name, p.name, t_r1, t_p1, ring_mesh, a)))
+        structures.append(BaseStructure(r2, p, car_b, _mesh(
+            f"{r2.name}-{p.name}", r2.name, p.name, t_r2, t_p2, ring_mesh, a)))
+    return compose(name, structures, fixed=(fixed,), input=input, output=output,
+                   config=config)
+
+
+def ravigneaux(*, z_sun_small: int, z_sun_large: int, z_ring: int, z_planet_short: int,
+               z_planet_long: int, module: float, sun_small: Body, sun_large: Body, ring: Body,
+               carrier: Body, planet_short: Body, planet_long: Body, sun_mesh: MeshSpec,
+               ring_mesh: MeshSpec, planet_mesh: MeshSpec, n_pairs: int = 3,
+               pressure_angle: float = math.radians(20.0), face_width: float = 0.02,
+               fixed: str = "sun_large", input: str = "sun_small", output: str = "ring",
+               name: str = "ravigneaux", config: dict | None = None) -> GearSet:
+    """A Ravigneaux set: small sun – short planets – long planets – ring, large sun – long
+    planets, with planet-planet meshes (the paper's Figures 4 and 5).
+
+    The long planet meshes the large sun, the ring and the short planet with one toothing;
+    the short-planet position follows from the three centre distances (law of cosines).
+    Planet-planet mesh phases default to 0 (give ``phase`` explicitly for other values).
+    """
+    common = dict(module=module, pressure_angle=pressure_angle, face_width=face_width)
+    t_s1 = Toothing(z=z_sun_small, **common)
+    t_s2 = Toothing(z=z_sun_large, **common)
+    t_r = Toothing(z=z_ring, **common)
+    t_ps = Toothing(z=z_planet_short, **common)
+    t_pl = Toothing(z=z_planet_long, profile_shift=planet_profile_shift(t_s2, t_r,
+                                                                         z_planet_long),
+                    **common)
+    a_l = mesh_geometry(t_s2, t_pl).centre_distance
+    a_s = mesh_geometry(t_s1, t_ps).centre_distance
+    d = mesh_geometry(t_ps, t_pl).centre_distance
+    cos_d = (a_s**2 + a_l**2 - d**2) / (2 * a_s * a_l)
+    if not -1 < cos_d < 1:
+        raise ValueError("Ravigneaux: short and long planet cannot mesh at these centre "
+                         "distances (check tooth numbers)")
+    offset = math.acos(cos_d)
+    sun1, sun2, ring_b = (replace(b, role="central") for b in (sun_small, sun_large, ring))
+    car_b = replace(carrier, role="carrier")
+    structures, pp = [], []
+    for i in range(n_pairs):
+        psi = 2 * math.pi * i / n_pairs
+        pl = replace(planet_long, name=f"{planet_long.name}{i + 1}", role="planet",
+                     carrier=car_b.name, angle=psi, radius=a_l)
+        ps = replace(planet_short, name=f"{planet_short.name}{i + 1}", role="planet",
+                     carrier=car_b.name, angle=psi + offset, radius=a_s)
+        structures.append(BaseStructure(sun1, ps, car_b, _mesh(
+            f"{sun1.name}-{ps.name}", sun1.name, ps.name, t_s1, t_ps, sun_mesh, a_s)))
+        structures.append(BaseStructure(sun2, pl, car_b, _mesh(
+            f"{sun2.name}-{pl.name}", sun2.name, pl.name, t_s2, t_pl, sun_mesh, a_l)))
+        structures.append(BaseStructure(ring_b, pl, car_b, _mesh(
+            f"{ring_b.name}-{pl.name}", ring_b.name, pl.name, t_r, t_pl, ring_mesh, a_l)))
+        pp.append(_mesh(f"{ps.name}-{pl.name}", ps.name, pl.name, t_ps, t_pl, planet_mesh, d))
+    return compose(name, structures, extra_meshes=pp, fixed=(fixed,), input=input,
+                   output=output, config=config)
+
+
+def _prefixed(gs: GearSet, prefix: str) -> tuple[list[Body], list[Mesh]]:
+    ren = {b.name: f"{prefix}{b.name}" for b in gs.bodies}
+    bodies = [replace(b, name=ren[b.name], carrier=ren.get(b.carrier) if b.carrier else None)
+              for b in gs.bodies]
+    meshes = [replace(m, name=f"{prefix}{m.name}", gear1=ren[m.gear1], gear2=ren[m.gear2])
+              for m in gs.meshes]
+    return bodies, meshes
+
+
+def two_stage(stage1: GearSet, stage2: GearSet, *, shaft_stiffness: float = RIGID,
+              shaft_damping: float = 0.0, name: str = "two-stage",
+              config: dict | None = None) -> GearSet:
+    """Two planetary stages in series: the output of stage 1 drives the input of stage 2.
+
+    Bodies and meshes are renamed with the prefixes ``s1.`` and ``s2.``; a torsional shaft
+    (rigid by default) joins ``stage1.output`` and ``stage2.input``.
+    """
+    b1, m1 = _prefixed(stage1, "s1.")
+    b2, m2 = _prefixed(stage2, "s2.")
+    fixed = tuple(f"s1.{f}" for f in stage1.fixed) + tuple(f"s2.{f}" for f in stage2.fixed)
+    coupling = Coupling(f"s1.{stage1.output}", f"s2.{stage2.input}", shaft_stiffness,
+                        shaft_damping)
+    return GearSet(name=name, bodies=tuple(b1 + b2), meshes=tuple(m1 + m2), fixed=fixed,
+                   input=f"s1.{stage1.input}", output=f"s2.{stage2.output}",
+                   couplings=(coupling,), config=dict(config or {}))
