@@ -561,7 +561,8 @@ class TabulatedPair(PairSuperposition):
         if np.any(np.diff(u) <= 0.0):
             i = int(np.argmax(np.diff(u) <= 0.0))
             raise ValueError(
-                f"position is not strictly increasing at row {i + 1}: {u[i]!r} -> {u[i + 1]!r}"
+                f"position is not strictly increasing at row {i + 1}: "
+                f"{float(u[i])!r} -> {float(u[i + 1])!r}"
             )
         tol = 1e-6 * eps
         if u[0] < -tol or u[-1] > eps + tol:
@@ -573,7 +574,9 @@ class TabulatedPair(PairSuperposition):
             raise ValueError("stiffness contains NaN or inf (admissible: finite, >= 0)")
         if np.any(k < 0.0):
             i = int(np.argmax(k < 0.0))
-            raise ValueError(f"stiffness at row {i + 1} is {k[i]!r} N/m (admissible: >= 0 N/m)")
+            raise ValueError(
+                f"stiffness at row {i + 1} is {float(k[i])!r} N/m (admissible: >= 0 N/m)"
+            )
         self.position = np.clip(u, 0.0, eps)
         self.stiffness = k
         self.source = source
