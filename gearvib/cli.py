@@ -35,6 +35,127 @@ def _cmd_modes(args: argparse.Namespace) -> int:
     return 0
 
 
+def _speed_range(text: str) -> tuple[float, float]:
+    try:
+        lo, hi = (float(v) for v in text.split(":"))
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"--speed {text!r}: expected START:END in min-1, e.g. 0:4000") from None
+    if lo < 0 or hi < 0:
+        raise argparse.ArgumentTypeError("--speed: speeds must be >= 0 min-1")
+    return lo, hi
+
+
+def _positive(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not v > 0:
+        raise argparse.ArgumentTypeError(f"{text!r} must be > 0")
+    return v
+
+
+def run_settings(cfg: dict, args: argparse.Namespace | None = None) -> dict:
+    """Run-up settings: the description's ``[simulation]`` table, overridden by CLI options."""
+    sim = dict(cfg.get("simulation", {}))
+    run = {
+        "speed_start_rpm": float(sim.get("speed_start_rpm", 0.0)),
+        "speed_end_rpm": float(sim.get("speed_end_rpm", 4000.0)),
+        "duration": float(sim.get("duration", 1.0)),
+        "input_torque": sim.get("input_torque"),
+        "load_torque": sim.get("load_torque"),
+        "fs_out": sim.get("fs_out"),
+        "dt": sim.get("dt"),
+        "gyroscopic": bool(sim.get("gyroscopic", False)),
+    }
+    if args is not None:
+        if getattr(args, "speed", None):
+            run["speed_start_rpm"], run["speed_end_rpm"] = args.speed
+        for key in ("duration", "fs_out", "dt", "input_torque"):
+            value = getattr(args, key, None)
+            if value is not None:
+                run[key] = value
+    if run["input_torque"] is None and run["load_torque"] is None:
+        run["input_torque"] = 0.0
+    return run
+
+
+def _cmd_simulate(args: argparse.Namespace) -> int:
+    from gearvib.assembly import assemble
+    from gearvib.config import gearset_from_dict, load_config
+    from gearvib.io import write_netcdf
+    from gearvib.simulate import SpeedRamp, simulate
+
+    cfg, base = load_config(args.config)
+    out = _check_output_file(args.output)
+    run = run_settings(cfg, args)
+    model = assemble(gearset_from_dict(cfg, base=base))
+    cond = SpeedRamp(run["speed_start_rpm"], run["speed_end_rpm"], run["duration"],
+                     load_torque=float(run["load_torque"] or 0.0),
+                     input_torque=None if run["load_torque"] is not None
+                     else float(run["input_torque"]))
+    result = simulate(model, cond, dt=run["dt"], fs_out=run["fs_out"],
+                      gyroscopic=run["gyroscopic"], progress=None if not args.quiet else False,
+                      config={"gearset": cfg, "run": run})
+    path = write_netcdf(result.to_dataset(), out)
+    print(f"wrote {path}")
+    return 0
+
+
+def _check_output_file(path: str):
+    from pathlib import Path
+
+    p = Path(path)
+    parent = p.parent if str(p.parent) else Path(".")
+    if not parent.is_dir():
+        raise CliError(f"output folder {str(parent)!r} does not exist")
+    import os
+
+    if not os.access(parent, os.W_OK):
+        raise CliError(f"output folder {str(parent)!r} is not writable")
+    return p
+
+
+def _cmd_report(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from gearvib.report import build_report, load_study, run_study
+
+    inputs = [Path(i) for i in args.inputs]
+    out = Path(args.output)
+    if len(inputs) == 1 and inputs[0].suffix == ".toml":
+        result = run_study(load_study(inputs[0]), out, progress=not args.quiet,
+                           duration=args.duration)
+        paths = result.report
+    else:
+        for p in inputs:
+            if p.suffix not in (".nc", ".nc4"):
+                raise CliError(f"{str(p)!r}: expected a study .toml or run .nc files")
+        paths = build_report(inputs, out)
+    print(f"report: {paths.html}")
+    print(f"        {paths.pdf}")
+    return 0
+
+
+def _cmd_demo(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from gearvib.report import Study, run_study
+
+    out = Path(args.output)
+    study = Study.for_presets(["paper-case1", "paper-case2"],
+                              title="gearvib demo: the paper's cases 1 and 2")
+    print(f"gearvib demo: simulating the paper's run-ups (0 -> 4000 min-1 in "
+          f"{args.duration or 1.0:g} s, cases 1 and 2) into {out}/ ...")
+    result = run_study(study, out, progress=not args.quiet, duration=args.duration)
+    for name, path in result.runs.items():
+        print(f"  run {name}: {path}")
+    print(f"  report: {result.report.html}")
+    print(f"          {result.report.pdf}")
+    return 0
+
+
 def _parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(
         prog="gearvib",
@@ -52,12 +173,46 @@ def _parser() -> argparse.ArgumentParser:
                    help="carrier speed for gyroscopic/centripetal terms [min-1] (default 0)")
     m.set_defaults(func=_cmd_modes)
 
-    for register in _EXTRA_COMMANDS:
-        register(sub)
+    s = sub.add_parser("simulate", help="simulate a run-up and write it as netCDF",
+                       description="Simulate a run-up (speed ramp at the input, constant "
+                       "torque) and write tooth forces, bearing forces, displacements and "
+                       "speeds as a CF netCDF4 file.")
+    s.add_argument("config", help="TOML file or preset name")
+    s.add_argument("-o", "--output", required=True, help="output .nc file")
+    s.add_argument("--speed", type=_speed_range, metavar="START:END",
+                   help="input speed range [min-1], e.g. 0:4000")
+    s.add_argument("--duration", type=_positive, metavar="S", help="run-up duration [s]")
+    s.add_argument("--fs", dest="fs_out", type=_positive, metavar="HZ",
+                   help="output sample rate [Hz] (default >= 20 kHz)")
+    s.add_argument("--dt", type=_positive, metavar="S", help="integration step [s] (default: "
+                   "from the highest natural and mesh frequency)")
+    s.add_argument("--torque", dest="input_torque", type=float, metavar="NM",
+                   help="input torque [N m] (default from the description)")
+    s.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    s.set_defaults(func=_cmd_simulate)
+
+    r = sub.add_parser("report", help="order-analysis report (HTML + PDF)",
+                       description="Render a study recipe (TOML: simulates its cases) or "
+                       "existing run files (.nc) into report.html and report.pdf.")
+    r.add_argument("inputs", nargs="+", help="a study .toml, or one or more run .nc files")
+    r.add_argument("-o", "--output", default="gearvib-report", help="output folder "
+                   "(default ./gearvib-report)")
+    r.add_argument("--duration", type=_positive, metavar="S",
+                   help="override the run-up duration of a study [s]")
+    r.add_argument("-q", "--quiet", action="store_true", help="no progress display")
+    r.set_defaults(func=_cmd_report)
+
+    d = sub.add_parser("demo", help="the paper's example: two run-ups and their report",
+                       description="Simulate the paper's cases 1 (planets at 120 deg) and 2 "
+                       "(0, 122.45, 244.90 deg), 0 -> 4000 min-1 in 1 s at constant input "
+                       "torque, and write the netCDF runs and an order-analysis report.")
+    d.add_argument("-o", "--output", default="gearvib-demo",
+                   help="output folder (default ./gearvib-demo)")
+    d.add_argument("--duration", type=_positive, metavar="S",
+                   help="run-up duration [s] (default 1; shorter for a quick look)")
+    d.add_argument("-q", "--quiet", action="store_true", help="no progress display")
+    d.set_defaults(func=_cmd_demo)
     return p
-
-
-_EXTRA_COMMANDS: list = []
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -70,6 +225,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         print("gearvib: interrupted (nothing half-written was kept)", file=sys.stderr)
         return 130
     except (CliError, ValueError, FileNotFoundError, PermissionError, OSError) as exc:
-        msg = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-        print(f"gearvib: error: {msg}", file=sys.stderr)
+        print(f"gearvib: error: {_one_line(exc)}", file=sys.stderr)
         return 2
+    except RuntimeError as exc:  # a failed computation, e.g. a numerical blow-up
+        print(f"gearvib: failed: {_one_line(exc)}", file=sys.stderr)
+        return 1
+
+
+def _one_line(exc: BaseException) -> str:
+    text = str(exc).strip()
+    return text.splitlines()[0] if text else type(exc).__name__
