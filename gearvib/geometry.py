@@ -587,7 +587,7 @@ def check_planet_angles(
     centre_distance: float | None = None,
     planet_tip_radius: float | None = None,
     clearance: float = 0.0,
-    tol: float = 1e-6,
+    tol: float = 1e-3,
 ) -> np.ndarray:
     """Check that planets at ``angles`` [rad] can be assembled and do not overlap.
 
@@ -603,7 +603,9 @@ def check_planet_angles(
     clearance : float
         Minimum tip-to-tip clearance [m] (>= 0).
     tol : float
-        Tolerance on the integer assembly condition.
+        Tolerance on the integer assembly condition, in units of ``delta_min`` (default
+        1e-3, so the paper's rounded 122.45° = 50.0004 delta_min passes). Phases computed from
+        rounded angles carry that error; use :func:`admissible_planet_angles` for exact ones.
 
     Returns
     -------

@@ -156,7 +156,11 @@ def test_admissible_angles_and_paper_offsets():
     all_ = admissible_planet_angles(33, -114)
     assert all_.size == 147
     paper = np.radians([0.0, 122.449, 244.898])
-    check_planet_angles(33, -114, paper, tol=1e-4)  # paper's 122.45/122.45/115.10 set
+    check_planet_angles(33, -114, paper)
+    # the paper's rounded 122.45/122.45/115.10 set
+    check_planet_angles(33, -114, np.radians(np.cumsum([0.0, 122.45, 122.45])))
+    with pytest.raises(ValueError, match="not admissible"):
+        check_planet_angles(33, -114, np.radians([0.0, 122.45]), tol=1e-6)
     check_planet_angles(33, -114, [0.0, 50 * all_[1], 100 * all_[1]])
     with pytest.raises(
         ValueError,
