@@ -755,9 +755,19 @@ def planetary_meshes(
 ) -> tuple[MeshGeometry, MeshGeometry]:
     """Sun-planet and ring-planet mesh geometries at one common centre distance.
 
-    By default the smaller of the two zero-backlash centre distances is used for an external
-    mesh only if it is admissible for both: the common distance must satisfy
-    ``a >= a_sp,free`` and ``a <= a_rp,free``.
+    Parameters
+    ----------
+    sun, ring, planet : Toothing
+        Sun (``z > 0``), ring (``z < 0``) and planet.
+    centre_distance : float, optional
+        Common operating centre distance [m]. By default the midpoint of the zero-backlash
+        distances ``a_sp <= a <= a_rp`` (equal when the planet shift comes from
+        :func:`planet_profile_shift`), which shares the backlash between both meshes.
+
+    Raises
+    ------
+    ValueError
+        If ``a_sp > a_rp`` (no common distance without tooth overlap) or a mesh is invalid.
     """
     a_sp = _free_centre_distance(sun, planet)
     a_rp = _free_centre_distance(ring, planet)
@@ -768,8 +778,7 @@ def planetary_meshes(
                 "common centre distance without tooth overlap (adjust profile shifts, see "
                 "planet_profile_shift)"
             )
-        centre_distance = 0.5 * (a_sp + a_rp) if a_sp < a_rp else a_sp
-        centre_distance = min(max(centre_distance, a_sp), a_rp)
+        centre_distance = min(max(0.5 * (a_sp + a_rp), a_sp), a_rp)
     return (
         mesh_geometry(sun, planet, centre_distance),
         mesh_geometry(ring, planet, centre_distance),
