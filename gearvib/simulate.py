@@ -42,6 +42,7 @@ __all__ = [
     "TorqueDriven",
     "choose_step",
     "decimation_filter",
+    "default_coupling",
     "rigid_body_velocity",
     "simulate",
     "static_equilibrium",
@@ -623,6 +624,24 @@ class _Setup:
     drive: str
 
 
+def default_coupling(model: AssembledModel) -> DriveCoupling:
+    """The default drive coupling of speed-driven runs.
+
+    Its rigid-body mode (all members turning on the coupling) lies at
+    :data:`COUPLING_FREQUENCY_FRACTION` x the lowest elastic natural frequency of the mean
+    system, critically damped: ``k = J_eff w_c**2``, ``c = 2 J_eff w_c`` with ``J_eff`` the
+    inertia of the kinematic motion reduced to the input member.
+    """
+    rigid = rigid_body_velocity(model)
+    k_in = int(model.rotation_dofs[model.input_member])
+    f_el = _elastic(_frequencies(np.asarray(model.mass, float), model.mean_stiffness_matrix()))
+    if f_el.size == 0:
+        raise ValueError("the model has no elastic mode to choose a drive coupling from")
+    j_eff = float(rigid @ model.mass @ rigid) / rigid[k_in] ** 2
+    wc = 2.0 * math.pi * COUPLING_FREQUENCY_FRACTION * float(f_el[0])
+    return DriveCoupling(float(j_eff * wc * wc), float(2.0 * j_eff * wc))
+
+
 def _setup(model: AssembledModel, conditions: Conditions, gyroscopic: bool) -> _Setup:
     n = model.n_dof
     rigid = rigid_body_velocity(model)
@@ -662,14 +681,7 @@ def _setup(model: AssembledModel, conditions: Conditions, gyroscopic: bool) -> _
         if t_load != 0.0 and k_out < 0:
             raise ValueError(f"output member {model.output_member!r} has no rotation coordinate")
         load = (t_load, 0.0, 0.0)
-        coupling = conditions.coupling
-        if coupling is None:
-            f_el = _elastic(_frequencies(mass, model.mean_stiffness_matrix()))
-            if f_el.size == 0:
-                raise ValueError("the model has no elastic mode to choose a drive coupling from")
-            j_eff = float(rigid @ mass @ rigid) / rigid[k_in] ** 2
-            wc = 2.0 * math.pi * COUPLING_FREQUENCY_FRACTION * float(f_el[0])
-            coupling = DriveCoupling(float(j_eff * wc * wc), float(2.0 * j_eff * wc))
+        coupling = conditions.coupling or default_coupling(model)
         fpar[kn.FP_KC] = coupling.stiffness
         fpar[kn.FP_CC] = coupling.damping
         speed_max = float(np.abs(w).max())
