@@ -1,1 +1,43 @@
-"""Order-analysis reports (HTML and PDF) built from run-up Datasets."""
+"""Order-analysis reports (HTML and PDF) built from run-up Datasets.
+
+Typical use::
+
+    from gearvib.report import load_study, run_study, build_report
+
+    result = run_study(load_study("reports/paper-cases.toml"), "out")
+    result.report.html        # out/report.html (self-contained), out/report.pdf
+    build_report(["out/case1.nc", "out/case2.nc"], "again")   # from the runs alone
+
+Modules: :mod:`~gearvib.report.study` (recipes), :mod:`~gearvib.report.runner` (run and build),
+:mod:`~gearvib.report.figures` (content and figures), :mod:`~gearvib.report.compare` (case
+comparison), :mod:`~gearvib.report.html`, :mod:`~gearvib.report.pdf` (writers).
+"""
+
+from gearvib.report.compare import Comparison, compare_cases
+from gearvib.report.figures import SECTION_IDS, CaseAnalysis, analyse_case
+from gearvib.report.runner import (
+    ReportPaths,
+    StudyResult,
+    build_report,
+    check_output_dir,
+    run_study,
+)
+from gearvib.report.study import AnalysisSettings, Case, RunSettings, Study, load_study
+
+__all__ = [
+    "SECTION_IDS",
+    "AnalysisSettings",
+    "Case",
+    "CaseAnalysis",
+    "Comparison",
+    "ReportPaths",
+    "RunSettings",
+    "Study",
+    "StudyResult",
+    "analyse_case",
+    "build_report",
+    "check_output_dir",
+    "compare_cases",
+    "load_study",
+    "run_study",
+]

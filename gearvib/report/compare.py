@@ -1,0 +1,346 @@
+"""Compare two analysed runs: which resonance regions weakened, vanished or appeared.
+
+The comparison of a case against a reference (e.g. the paper's case 2 against case 1) matches
+
+* the resonance regions of the tooth-force sonogram (detected spots grouped by speed, see
+  :func:`gearvib.report.figures.resonance_regions`): by speed, within a tolerance of a few
+  percent of the top speed; the change of strength is given in dB;
+* the unstable intervals of the Floquet stability charts: by overlap in speed; the change of
+  width is relative;
+* the natural frequencies, mode by mode;
+* the peak-to-peak fluctuation of the summed sun-mesh stiffness.
+
+It then checks the paper's statements that apply: when the summed sun-mesh stiffness
+fluctuation differs (planet phasing), the paper found *fewer resonance regions with less
+intensity*; when the natural frequencies differ (e.g. elastic bearings), it found *lower natural
+frequencies, wider instability regions and new ones*. The verdict says whether this run
+reproduces that, and if not, which regions got stronger or appeared.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from gearvib.report.figures import CaseAnalysis, ResonanceRegion
+
+__all__ = ["Comparison", "FloquetChange", "RegionChange", "compare_cases"]
+
+PAPER_PHASING = ("Paper, section 3.3: with the planets offset (case 2) the sun-mesh stiffness "
+                 "oscillates less, so there are fewer resonance regions with less intensity "
+                 "than in case 1; modifications usually improve one speed range only and "
+                 "often cause new resonance regions.")
+PAPER_BEARINGS = ("Paper, closing remarks of section 3: bearing stiffness lowers the natural "
+                  "frequencies, widens the instability regions already present with rigid "
+                  "bearings and adds new ones (planet translation).")
+
+
+@dataclass(frozen=True)
+class RegionChange:
+    """One resonance region of either case and what happened to it.
+
+    Attributes
+    ----------
+    status : str
+        ``"weaker"``, ``"stronger"``, ``"unchanged"``, ``"vanished"`` (only in the reference)
+        or ``"appeared"`` (only in the other case).
+    reference, other : ResonanceRegion or None
+        The matched regions.
+    delta_db : float
+        Strength change ``other - reference`` [dB] (NaN if unmatched).
+    """
+
+    status: str
+    reference: ResonanceRegion | None
+    other: ResonanceRegion | None
+    delta_db: float
+
+    @property
+    def rpm(self) -> float:
+        """Speed of the strongest spot (reference if present) [min^-1]."""
+        r = self.reference or self.other
+        return r.rpm_peak if r is not None else math.nan
+
+    def row(self) -> tuple[str, ...]:
+        """Formatted table row."""
+        def span(r: ResonanceRegion | None) -> str:
+            return "–" if r is None else f"{r.rpm_low:.0f}–{r.rpm_high:.0f}"
+
+        def strength(r: ResonanceRegion | None) -> str:
+            return "–" if r is None else f"{r.strength_db:.1f} ({r.n_spots})"
+
+        mech = (self.reference or self.other).mechanisms[0] if (self.reference or self.other) \
+            else ""
+        d = "–" if math.isnan(self.delta_db) else f"{self.delta_db:+.1f}"
+        return (self.status, span(self.reference), strength(self.reference), span(self.other),
+                strength(self.other), d, mech)
+
+
+@dataclass(frozen=True)
+class FloquetChange:
+    """One unstable interval of the Floquet chart of either case.
+
+    Attributes
+    ----------
+    status : str
+        ``"wider"``, ``"narrower"``, ``"unchanged"``, ``"vanished"`` or ``"appeared"``.
+    reference, other : (float, float) or None
+        Speed interval [min^-1].
+    candidate : str
+        Theory candidate of the interval.
+    """
+
+    status: str
+    reference: tuple[float, float] | None
+    other: tuple[float, float] | None
+    candidate: str
+
+    def row(self) -> tuple[str, ...]:
+        """Formatted table row."""
+        def span(r: tuple[float, float] | None) -> str:
+            return "–" if r is None else f"{r[0]:.0f}–{r[1]:.0f} ({r[1] - r[0]:.0f})"
+
+        return self.status, span(self.reference), span(self.other), self.candidate or "–"
+
+
+@dataclass(frozen=True)
+class Comparison:
+    """Result of :func:`compare_cases`.
+
+    Attributes
+    ----------
+    reference, other : str
+        Case names.
+    regions : list of RegionChange
+        Resonance regions of the sonograms, matched by speed.
+    floquet : list of FloquetChange
+        Unstable intervals, matched by overlap (empty without stability charts).
+    natural_frequencies : list of (str, float, float)
+        ``(name, f_reference, f_other)`` [Hz], mode by mode.
+    stiffness_p2p : (float or None, float or None)
+        Peak-to-peak fluctuation of the summed sun-mesh stiffness [N/m].
+    n_regions : (int, int)
+        Resonance regions in each case.
+    total_strength_db : (float, float)
+        Energetic sum ``10 log10 sum 10^(s/10)`` of the region strengths (-inf if none).
+    fewer_or_weaker : bool
+        The other case has fewer regions, or as many but weaker in total (by more than
+        ``db_tol``).
+    claims : list of (str, bool or None, str)
+        ``(paper statement, reproduced?, evidence)`` for the statements that apply.
+    verdict : str
+        One-paragraph summary.
+    explanation : list of str
+        Details (regions that got stronger or appeared, the paper's caveats).
+    """
+
+    reference: str
+    other: str
+    regions: list[RegionChange]
+    floquet: list[FloquetChange]
+    natural_frequencies: list[tuple[str, float, float]]
+    stiffness_p2p: tuple[float | None, float | None]
+    n_regions: tuple[int, int]
+    total_strength_db: tuple[float, float]
+    fewer_or_weaker: bool
+    claims: list[tuple[str, bool | None, str]] = field(default_factory=list)
+    verdict: str = ""
+    explanation: list[str] = field(default_factory=list)
+
+
+def _energy_db(values: list[float]) -> float:
+    if not values:
+        return -math.inf
+    return float(10.0 * np.log10(np.sum(10.0 ** (np.asarray(values) / 10.0))))
+
+
+def _match_regions(ref: list[ResonanceRegion], oth: list[ResonanceRegion], tol_rpm: float,
+                   db_tol: float) -> list[RegionChange]:
+    pairs = []
+    for i, a in enumerate(ref):
+        for j, b in enumerate(oth):
+            if b.rpm_low - tol_rpm <= a.rpm_high and a.rpm_low - tol_rpm <= b.rpm_high:
+                pairs.append((abs(a.rpm_peak - b.rpm_peak), i, j))
+    pairs.sort()
+    used_i: set[int] = set()
+    used_j: set[int] = set()
+    out = []
+    for _, i, j in pairs:
+        if i in used_i or j in used_j:
+            continue
+        used_i.add(i)
+        used_j.add(j)
+        d = oth[j].strength_db - ref[i].strength_db
+        status = "unchanged" if abs(d) <= db_tol else ("weaker" if d < 0 else "stronger")
+        out.append(RegionChange(status, ref[i], oth[j], float(d)))
+    out += [RegionChange("vanished", a, None, math.nan) for i, a in enumerate(ref)
+            if i not in used_i]
+    out += [RegionChange("appeared", None, b, math.nan) for j, b in enumerate(oth)
+            if j not in used_j]
+    out.sort(key=lambda c: c.rpm)
+    return out
+
+
+def _floquet_intervals(ca: CaseAnalysis) -> list[tuple[float, float, str]]:
+    if ca.chart is None:
+        return []
+    f = ca.mesh_frequency_per_rpm
+    return [(r["lower"] / f, r["upper"] / f, str(r["candidate"])) for r in ca.chart.region_table]
+
+
+def _match_floquet(ref: list[tuple[float, float, str]], oth: list[tuple[float, float, str]],
+                   rel_tol: float) -> list[FloquetChange]:
+    used: set[int] = set()
+    out = []
+    for a in ref:
+        best, best_ov = None, 0.0
+        for j, b in enumerate(oth):
+            ov = min(a[1], b[1]) - max(a[0], b[0])
+            if j not in used and ov > best_ov:
+                best, best_ov = j, ov
+        if best is None:
+            out.append(FloquetChange("vanished", (a[0], a[1]), None, a[2]))
+            continue
+        used.add(best)
+        b = oth[best]
+        wa, wb = a[1] - a[0], b[1] - b[0]
+        rel = (wb - wa) / wa if wa > 0 else math.inf
+        status = "unchanged" if abs(rel) <= rel_tol else ("wider" if rel > 0 else "narrower")
+        out.append(FloquetChange(status, (a[0], a[1]), (b[0], b[1]), b[2] or a[2]))
+    out += [FloquetChange("appeared", None, (b[0], b[1]), b[2]) for j, b in enumerate(oth)
+            if j not in used]
+    out.sort(key=lambda c: (c.reference or c.other)[0])  # type: ignore[index]
+    return out
+
+
+def _fmt_region(r: ResonanceRegion) -> str:
+    return (f"{r.rpm_low:.0f}–{r.rpm_high:.0f} min⁻¹ (strongest {r.strength_db:.1f} dB at "
+            f"{r.frequency_hz:.0f} Hz, {r.mechanisms[0]})")
+
+
+def compare_cases(reference: CaseAnalysis, other: CaseAnalysis, *, rpm_tol: float | None = None,
+                  db_tol: float = 1.0, width_rel_tol: float = 0.1) -> Comparison:
+    """Compare ``other`` against ``reference``.
+
+    Parameters
+    ----------
+    reference, other : CaseAnalysis
+        The analysed runs (same speed range for a meaningful comparison).
+    rpm_tol : float, optional
+        Speed tolerance for matching resonance regions [min^-1]; default 3 % of the top speed.
+    db_tol : float
+        Strength changes within ``±db_tol`` count as unchanged [dB].
+    width_rel_tol : float
+        Relative width change of a Floquet interval that counts as wider/narrower.
+
+    Returns
+    -------
+    Comparison
+    """
+    top = max(reference.speed_range[1], other.speed_range[1])
+    tol = 0.03 * top if rpm_tol is None else float(rpm_tol)
+    changes = _match_regions(reference.regions, other.regions, tol, db_tol)
+    floq = _match_floquet(_floquet_intervals(reference), _floquet_intervals(other),
+                          width_rel_tol)
+    nat = [(n, float(a), float(b)) for n, a, b in zip(
+        reference.mode_names, reference.natural_frequencies_hz, other.natural_frequencies_hz,
+        strict=False)]
+    p2p = (reference.stiffness.peak_to_peak if reference.stiffness else None,
+           other.stiffness.peak_to_peak if other.stiffness else None)
+    n_ref, n_oth = len(reference.regions), len(other.regions)
+    e_ref = _energy_db([r.strength_db for r in reference.regions])
+    e_oth = _energy_db([r.strength_db for r in other.regions])
+    fewer_or_weaker = n_oth < n_ref or (n_oth == n_ref and e_oth < e_ref - db_tol)
+    a, b = reference.name, other.name
+
+    claims: list[tuple[str, bool | None, str]] = []
+    explanation: list[str] = []
+    region_text = (f"{b}: {n_oth} sun-mesh resonance regions (total {e_oth:.1f} dB) against "
+                   f"{n_ref} in {a} (total {e_ref:.1f} dB)")
+    worse = [c for c in changes if c.status in ("stronger", "appeared")]
+    better = [c for c in changes if c.status in ("weaker", "vanished")]
+    phasing = (p2p[0] is not None and p2p[1] is not None and
+               abs(p2p[1] - p2p[0]) > 0.05 * max(p2p[0], p2p[1], 1.0))
+    if phasing:
+        stiff_text = (f"summed sun-mesh stiffness fluctuation {p2p[1] / 1e8:.3f}e8 N/m "
+                      f"peak-to-peak in {b} against {p2p[0] / 1e8:.3f}e8 N/m in {a}")
+        claims.append(("the summed sun-mesh stiffness oscillates less", p2p[1] < p2p[0],
+                       stiff_text))
+        claims.append(("fewer or weaker sun-mesh resonance regions", fewer_or_weaker,
+                       region_text))
+    freq_change = [(n, fa, fb) for n, fa, fb in nat if abs(fb - fa) > 0.01 * fa]
+    n_modes_differ = reference.natural_frequencies_hz.size != other.natural_frequencies_hz.size
+    bearings = bool(freq_change) or n_modes_differ
+    if bearings:
+        lowered = (other.natural_frequencies_hz.min() < reference.natural_frequencies_hz.min()
+                   if other.natural_frequencies_hz.size and
+                   reference.natural_frequencies_hz.size else None)
+        claims.append(("lower natural frequencies", lowered,
+                       f"lowest natural frequency {other.natural_frequencies_hz.min():.0f} Hz "
+                       f"in {b} against {reference.natural_frequencies_hz.min():.0f} Hz in {a}; "
+                       f"{other.natural_frequencies_hz.size} against "
+                       f"{reference.natural_frequencies_hz.size} elastic modes"))
+        if floq:
+            wider = [c for c in floq if c.status == "wider"]
+            new = [c for c in floq if c.status == "appeared"]
+            matched = [c for c in floq if c.reference and c.other]
+            claims.append(("instability regions become wider",
+                           bool(wider) and len(wider) >= len(matched) / 2,
+                           f"{len(wider)} of {len(matched)} matched Floquet intervals wider"))
+            claims.append(("new instability regions appear", bool(new),
+                           f"{len(new)} Floquet intervals only in {b}"))
+        else:
+            claims.append(("instability regions become wider / new ones appear", None,
+                           "no Floquet charts to compare"))
+        claims.append(("new resonance regions in the sonogram",
+                       any(c.status == "appeared" for c in changes),
+                       f"{sum(c.status == 'appeared' for c in changes)} regions only in {b}"))
+
+    if phasing:
+        if fewer_or_weaker:
+            verdict = (f"This run reproduces the paper's finding for planet phasing: {region_text}"
+                       f"; the {claims[0][2]}.")
+        else:
+            verdict = (f"This run does not reproduce the paper's finding of fewer or weaker "
+                       f"sun-mesh resonance regions: {region_text}, although the "
+                       f"{claims[0][2]}.")
+            if worse:
+                explanation.append(
+                    "Regions that got stronger or appeared in " + b + ": "
+                    + "; ".join(f"{c.status} {_fmt_region(c.other)}"  # type: ignore[arg-type]
+                                + (f" ({c.delta_db:+.1f} dB)" if c.status == "stronger"
+                                   else "") for c in worse) + ".")
+            if better:
+                explanation.append(
+                    "Regions that weakened or vanished: "
+                    + "; ".join(f"{c.status} {_fmt_region(c.reference)}"  # type: ignore[arg-type]
+                                for c in better) + ".")
+            explanation.append(
+                "Why: shifting the planets cancels the tangential (rotational) part of the "
+                "stiffness variation, but the broken symmetry leaves the radial part "
+                "un-equalised, so the planet modes (f3 = f4) are excited as strongly or more "
+                "(the paper notes the same for the 3rd and 4th natural frequencies); and "
+                "modifications usually improve one speed range only and can cause new "
+                "resonance regions.")
+        explanation.append(PAPER_PHASING)
+    elif bearings:
+        ok = [c for c in claims if c[1]]
+        verdict = (f"{b} against {a}: {len(ok)} of {len(claims)} statements of the paper on "
+                   "elastic bearings are reproduced (" + "; ".join(
+                       f"{c[0]}: {'yes' if c[1] else ('n/a' if c[1] is None else 'no')}"
+                       for c in claims) + f"). {region_text}.")
+        explanation.append(PAPER_BEARINGS)
+    else:
+        verdict = (f"{b} against {a}: same natural frequencies and sun-mesh stiffness "
+                   f"fluctuation; {region_text}.")
+    if floq:
+        counts = {s: sum(c.status == s for c in floq) for s in
+                  ("wider", "narrower", "unchanged", "vanished", "appeared")}
+        explanation.append("Floquet intervals: " + ", ".join(
+            f"{v} {k}" for k, v in counts.items() if v) + ".")
+    return Comparison(reference=a, other=b, regions=changes, floquet=floq,
+                      natural_frequencies=nat, stiffness_p2p=p2p, n_regions=(n_ref, n_oth),
+                      total_strength_db=(e_ref, e_oth), fewer_or_weaker=fewer_or_weaker,
+                      claims=claims, verdict=verdict, explanation=explanation)

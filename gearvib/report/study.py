@@ -1,0 +1,397 @@
+"""Study recipes: which gear sets to simulate, how, and how to analyse them (TOML).
+
+A recipe names one or more *cases* (preset names or TOML files, relative paths resolved against
+the recipe), optional run settings shared by all cases and optional analysis settings::
+
+    [study]
+    title = "Planet phasing: the paper's cases 1 and 2"
+    cases = [ {name = "case1", config = "paper-case1"},
+              {name = "case2", config = "paper-case2"} ]
+    reference = "case1"          # optional: the case the others are compared with (default first)
+
+    [run]                        # optional; defaults from each gear set's [simulation] table
+    speed_start_rpm = 0.0
+    speed_end_rpm = 4000.0
+    duration = 1.0
+    input_torque = 60.0
+    fs_out = 25000.0
+
+    [analysis]                   # optional
+    n_max = 4
+    stability_points = 300
+
+Every table is checked like :mod:`gearvib.config`: an unknown key is an error naming the key and
+the admissible ones.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import tomllib
+from dataclasses import asdict, dataclass, field, replace
+from pathlib import Path
+from typing import Any
+
+from gearvib.config import ConfigError, list_presets, load_config
+
+__all__ = [
+    "DEFAULT_RUN",
+    "AnalysisSettings",
+    "Case",
+    "RunSettings",
+    "Study",
+    "load_study",
+    "resolve_run",
+]
+
+DEFAULT_RUN = {"speed_start_rpm": 0.0, "speed_end_rpm": 4000.0, "duration": 1.0,
+               "input_torque": 60.0, "fs_out": 25000.0}
+"""Run settings used when neither the recipe nor the gear set's ``[simulation]`` gives one."""
+
+_TOP = {"study", "run", "analysis"}
+_STUDY = {"title", "cases", "reference", "description"}
+_CASE = {"name", "config", "label"}
+_RUN = set(DEFAULT_RUN)
+_ANALYSIS = {"n_max", "stability_points", "map_resolution_hz", "map_overlap", "orders",
+             "threshold_db", "tolerance", "frequency_max_hz", "force_mesh", "spectrum_peaks"}
+_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]*$")
+
+
+def _check_keys(table: Any, allowed: set[str], where: str) -> dict:
+    if not isinstance(table, dict):
+        raise ConfigError(f"{where} must be a table, got {type(table).__name__}")
+    unknown = sorted(set(table) - allowed)
+    if unknown:
+        raise ConfigError(
+            f"unknown key {unknown[0]!r} in {where} (admissible: {', '.join(sorted(allowed))})"
+        )
+    return table
+
+
+def _number(value: Any, where: str, *, positive: bool = False, minimum: float | None = None
+            ) -> float:
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise ConfigError(f"{where} must be a number, got {value!r}")
+    v = float(value)
+    if not math.isfinite(v):
+        raise ConfigError(f"{where} = {value!r}; admissible: a finite number")
+    if positive and not v > 0:
+        raise ConfigError(f"{where} = {value!r}; admissible: a number > 0")
+    if minimum is not None and v < minimum:
+        raise ConfigError(f"{where} = {value!r}; admissible: a number >= {minimum:g}")
+    return v
+
+
+def _integer(value: Any, where: str, minimum: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, int) or value < minimum:
+        raise ConfigError(f"{where} = {value!r}; admissible: an integer >= {minimum}")
+    return int(value)
+
+
+@dataclass(frozen=True)
+class Case:
+    """One gear set of a study.
+
+    Attributes
+    ----------
+    name : str
+        Short identifier (letters, digits, ``_.-``); the run file is ``<name>.nc``.
+    config : str
+        Preset name (``paper-case1``) or path of a gear-set TOML file (absolute, or relative to
+        the recipe when loaded with :func:`load_study`).
+    label : str
+        Display name in the report (default: the gear set's title).
+    """
+
+    name: str
+    config: str
+    label: str = ""
+
+    def load(self) -> tuple[dict, Path | None]:
+        """The gear-set description dict and its base directory (see
+        :func:`gearvib.config.load_config`)."""
+        return load_config(self.config)
+
+
+@dataclass(frozen=True)
+class RunSettings:
+    """Run-up settings shared by all cases; ``None`` takes the gear set's value.
+
+    Attributes
+    ----------
+    speed_start_rpm, speed_end_rpm : float or None
+        Input speed at the start and end of the linear ramp [min^-1].
+    duration : float or None
+        Ramp duration [s].
+    input_torque : float or None
+        Constant input torque [N m].
+    fs_out : float or None
+        Output sample rate [Hz].
+    """
+
+    speed_start_rpm: float | None = None
+    speed_end_rpm: float | None = None
+    duration: float | None = None
+    input_torque: float | None = None
+    fs_out: float | None = None
+
+    def to_dict(self) -> dict[str, float]:
+        """The settings that are given (``None`` omitted)."""
+        return {k: v for k, v in asdict(self).items() if v is not None}
+
+
+@dataclass(frozen=True)
+class AnalysisSettings:
+    """How the runs are analysed.
+
+    Attributes
+    ----------
+    n_max : int
+        Highest order ``n`` of the theory candidates ``2 f_i/n``, ``(f_i + f_j)/n``.
+    stability_points : int
+        Speeds of the Floquet stability chart over the run-up range (boundaries refined).
+    map_resolution_hz : float
+        Resolution bandwidth of the rpm-frequency map [Hz].
+    map_overlap : float
+        Frame overlap of the maps, in ``[0, 1)``.
+    orders : int
+        Mesh orders ``1..orders`` drawn in the sonogram and used for resonance detection.
+    threshold_db : float
+        Minimum rise above the background of a detected resonance [dB].
+    tolerance : float
+        Relative tolerance of peak labels and resonance classification.
+    frequency_max_hz : float
+        Upper frequency of the sonogram and spectra [Hz] (0: automatic, 2.2 x the highest
+        natural frequency, at most fs/2).
+    force_mesh : str
+        Mesh whose tooth force is order-analysed (default: the first sun mesh).
+    spectrum_peaks : int
+        Peaks labelled in each tooth-force spectrum.
+    """
+
+    n_max: int = 4
+    stability_points: int = 300
+    map_resolution_hz: float = 20.0
+    map_overlap: float = 0.9
+    orders: int = 7
+    threshold_db: float = 6.0
+    tolerance: float = 0.03
+    frequency_max_hz: float = 0.0
+    force_mesh: str = ""
+    spectrum_peaks: int = 10
+
+    def to_dict(self) -> dict[str, Any]:
+        """All settings as a plain dict."""
+        return asdict(self)
+
+    @classmethod
+    def from_dict(cls, table: dict, where: str = "[analysis]") -> AnalysisSettings:
+        """Checked settings from a dict (unknown keys rejected)."""
+        _check_keys(table, _ANALYSIS, where)
+        kw: dict[str, Any] = {}
+        for k in ("n_max", "stability_points", "orders", "spectrum_peaks"):
+            if k in table:
+                kw[k] = _integer(table[k], f"{where}.{k}", 2 if k == "stability_points" else 1)
+        for k in ("map_resolution_hz", "tolerance"):
+            if k in table:
+                kw[k] = _number(table[k], f"{where}.{k}", positive=True)
+        for k in ("threshold_db", "frequency_max_hz"):
+            if k in table:
+                kw[k] = _number(table[k], f"{where}.{k}", minimum=0.0)
+        if "map_overlap" in table:
+            v = _number(table["map_overlap"], f"{where}.map_overlap", minimum=0.0)
+            if v >= 1.0:
+                raise ConfigError(f"{where}.map_overlap = {v!r}; admissible: 0 <= overlap < 1")
+            kw["map_overlap"] = v
+        if "tolerance" in kw and kw["tolerance"] >= 0.5:
+            raise ConfigError(f"{where}.tolerance = {kw['tolerance']!r}; admissible: < 0.5")
+        if "force_mesh" in table:
+            if not isinstance(table["force_mesh"], str):
+                raise ConfigError(f"{where}.force_mesh must be a mesh name (string)")
+            kw["force_mesh"] = table["force_mesh"]
+        return cls(**kw)
+
+
+@dataclass(frozen=True)
+class Study:
+    """A study recipe (see the module docstring).
+
+    Attributes
+    ----------
+    title : str
+        Report title.
+    cases : tuple of Case
+        The gear sets, in report order (names unique).
+    run : RunSettings
+        Run-up settings overriding each gear set's ``[simulation]`` table.
+    analysis : AnalysisSettings
+        Analysis settings.
+    reference : str
+        Name of the case the others are compared with (default: the first case).
+    source : Path or None
+        The recipe file, if loaded from one.
+    """
+
+    title: str
+    cases: tuple[Case, ...]
+    run: RunSettings = field(default_factory=RunSettings)
+    analysis: AnalysisSettings = field(default_factory=AnalysisSettings)
+    reference: str = ""
+    source: Path | None = None
+
+    def __post_init__(self) -> None:
+        if not self.cases:
+            raise ConfigError("a study needs at least one case")
+        names = [c.name for c in self.cases]
+        for n in names:
+            if not _NAME.match(n):
+                raise ConfigError(f"case name {n!r} is not admissible: use letters, digits, "
+                                  "'_', '.', '-' (it names the output file)")
+        dup = sorted({n for n in names if names.count(n) > 1})
+        if dup:
+            raise ConfigError(f"case name {dup[0]!r} is used twice")
+        if self.reference and self.reference not in names:
+            raise ConfigError(f"reference = {self.reference!r} is not a case (cases: "
+                              f"{', '.join(names)})")
+
+    @property
+    def reference_case(self) -> str:
+        """Name of the reference case (the first case unless ``reference`` is set)."""
+        return self.reference or self.cases[0].name
+
+    @classmethod
+    def for_presets(cls, names: list[str] | tuple[str, ...], *, title: str | None = None,
+                    analysis: AnalysisSettings | None = None, **run: float) -> Study:
+        """A study of built-in presets (or TOML paths), case names from the preset names.
+
+        Parameters
+        ----------
+        names : sequence of str
+            Preset names or gear-set TOML paths.
+        title : str, optional
+            Report title (default: the names joined).
+        analysis : AnalysisSettings, optional
+            Analysis settings.
+        **run : float
+            Run settings (``speed_start_rpm``, ``speed_end_rpm``, ``duration``,
+            ``input_torque``, ``fs_out``).
+
+        Examples
+        --------
+        >>> Study.for_presets(["paper-case1", "paper-case2"], duration=0.25).cases[1].name
+        'paper-case2'
+        """
+        _check_keys(run, _RUN, "the run settings")
+        settings = RunSettings(**{k: _number(v, k) for k, v in run.items()})
+        cases = tuple(Case(name=Path(n).stem if n.endswith(".toml") else n, config=str(n))
+                      for n in names)
+        return cls(title=title or "gearvib study: " + ", ".join(c.name for c in cases),
+                   cases=cases, run=settings, analysis=analysis or AnalysisSettings())
+
+    def with_duration(self, duration: float) -> Study:
+        """A copy whose run-up lasts ``duration`` seconds (same speed range)."""
+        return replace(self, run=replace(self.run, duration=_number(duration, "duration",
+                                                                     positive=True)))
+
+
+def resolve_run(run: RunSettings, gearset_cfg: dict) -> dict[str, float]:
+    """Complete run settings for one gear set.
+
+    Order of precedence: the study's ``[run]`` value, the gear set's ``[simulation]`` value,
+    :data:`DEFAULT_RUN`. Only the keys of :data:`DEFAULT_RUN` are used from ``[simulation]``.
+
+    Returns
+    -------
+    dict
+        ``speed_start_rpm``, ``speed_end_rpm``, ``duration``, ``input_torque``, ``fs_out``.
+    """
+    sim = gearset_cfg.get("simulation", {}) if isinstance(gearset_cfg, dict) else {}
+    given = run.to_dict()
+    out = {}
+    for k, default in DEFAULT_RUN.items():
+        v = given.get(k, sim.get(k, default))
+        out[k] = _number(v, f"run setting {k}")
+    if not out["duration"] > 0:
+        raise ConfigError(f"duration = {out['duration']!r}; admissible: > 0 s")
+    if out["speed_end_rpm"] <= out["speed_start_rpm"] or out["speed_start_rpm"] < 0:
+        raise ConfigError(f"speed range {out['speed_start_rpm']:g} -> {out['speed_end_rpm']:g} "
+                          "min-1 is not admissible: need 0 <= start < end (a run-up)")
+    if not out["fs_out"] > 0:
+        raise ConfigError(f"fs_out = {out['fs_out']!r}; admissible: > 0 Hz")
+    return out
+
+
+def _case(table: Any, i: int, base: Path) -> Case:
+    where = f"[study].cases #{i + 1}"
+    _check_keys(table, _CASE, where)
+    for k in ("name", "config"):
+        if k not in table:
+            raise ConfigError(f"missing key {k!r} in {where}")
+        if not isinstance(table[k], str) or not table[k]:
+            raise ConfigError(f"{where}.{k} must be a non-empty string")
+    config = table["config"]
+    p = Path(config)
+    if config not in list_presets() and (p.suffix == ".toml" or "/" in config):
+        if not p.is_absolute():
+            p = base / p
+        if not p.is_file():
+            raise ConfigError(f"{where}: gear-set file {str(p)!r} not found")
+        config = str(p)
+    elif config not in list_presets():
+        raise ConfigError(f"{where}: unknown preset {config!r} (available: "
+                          f"{', '.join(list_presets())}; or give a path to a .toml file)")
+    label = table.get("label", "")
+    if not isinstance(label, str):
+        raise ConfigError(f"{where}.label must be a string")
+    return Case(name=table["name"], config=config, label=label)
+
+
+def load_study(path: str | Path) -> Study:
+    """Read and check a study recipe.
+
+    Parameters
+    ----------
+    path : path-like
+        The recipe TOML file.
+
+    Returns
+    -------
+    Study
+
+    Raises
+    ------
+    ConfigError
+        Invalid TOML, unknown or missing keys (the message names the key), unknown presets or
+        missing gear-set files.
+    """
+    p = Path(path)
+    if not p.is_file():
+        raise ConfigError(f"study file {str(p)!r} not found")
+    try:
+        doc = tomllib.loads(p.read_text(encoding="utf-8"))
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"{p}: invalid TOML: {exc}") from None
+    except UnicodeDecodeError as exc:
+        raise ConfigError(f"{p}: not a UTF-8 text file ({exc.reason})") from None
+    _check_keys(doc, _TOP, f"{p.name} (top level)")
+    st = _check_keys(doc.get("study", None) if "study" in doc else None, _STUDY, "[study]") \
+        if "study" in doc else None
+    if st is None:
+        raise ConfigError(f"{p.name}: missing table [study]")
+    cases_t = st.get("cases")
+    if not isinstance(cases_t, list) or not cases_t:
+        raise ConfigError("[study].cases must be a non-empty list of {name = ..., config = ...}")
+    base = p.resolve().parent
+    cases = tuple(_case(t, i, base) for i, t in enumerate(cases_t))
+    title = st.get("title", p.stem)
+    if not isinstance(title, str):
+        raise ConfigError("[study].title must be a string")
+    run_t = _check_keys(doc.get("run", {}), _RUN, "[run]")
+    run = RunSettings(**{k: _number(v, f"[run].{k}") for k, v in run_t.items()})
+    analysis = AnalysisSettings.from_dict(doc.get("analysis", {}))
+    reference = st.get("reference", "")
+    if not isinstance(reference, str):
+        raise ConfigError("[study].reference must be a case name (string)")
+    return Study(title=title, cases=cases, run=run, analysis=analysis, reference=reference,
+                 source=p)
