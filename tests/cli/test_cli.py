@@ -1,0 +1,101 @@
+"""The command line: modes, simulate, errors and exit codes."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from gearvib.cli import main
+
+
+def test_modes_json(capsys):
+    assert main(["modes", "paper-case1", "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    modes = data["modes"]
+    assert len(modes) == 5
+    assert [m["kind"] for m in modes] == ["rigid-body", "rotational", "planet", "planet",
+                                          "rotational"]
+    assert modes[2]["multiplicity"] == modes[3]["multiplicity"] == 2
+    assert 1240 <= modes[1]["frequency_hz"] <= 1280
+
+
+def test_modes_table(capsys):
+    assert main(["modes", "paper-case2"]) == 0
+    out = capsys.readouterr().out
+    assert "rotational" in out and "planet" in out and "paper-case2" in out
+
+
+@pytest.mark.parametrize("argv", [
+    ["modes", "paper-case9"],
+    ["modes", "missing.toml"],
+    ["simulate", "paper-case9", "-o", "x.nc"],
+])
+def test_bad_input_gives_one_line_and_exit_2(argv, capsys, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("gearvib: error:")
+    assert len(err.splitlines()) == 1
+    assert not list(tmp_path.iterdir())
+
+
+def test_unknown_toml_key_is_named(tmp_path, capsys):
+    from importlib import resources
+
+    text = resources.files("gearvib.presets").joinpath("paper-case1.toml").read_text()
+    bad = tmp_path / "bad.toml"
+    bad.write_text(text.replace("[bodies.sun]\n", "[bodies.sun]\ncolour = 'red'\n"))
+    assert main(["modes", str(bad)]) == 2
+    assert "colour" in capsys.readouterr().err
+
+
+def test_simulate_writes_a_readable_run(tmp_path, capsys):
+    out = tmp_path / "run.nc"
+    code = main(["simulate", "paper-case1", "-o", str(out), "--speed", "1400:1600",
+                 "--duration", "0.05", "--fs", "25000", "-q"])
+    assert code == 0
+    assert str(out) in capsys.readouterr().out
+    with xr.open_dataset(out, engine="netcdf4") as ds:
+        assert ds.attrs["Conventions"] == "CF-1.11"
+        speed = ds["input_speed"].values
+        assert speed[0] == pytest.approx(1400, abs=1) and speed[-1] == pytest.approx(1600, abs=1)
+        assert 1 / float(np.diff(ds["time"].values[:2])[0]) == pytest.approx(25000)
+        cfg = json.loads(ds.attrs["config_json"])
+        assert cfg["model"]["gearset"]["name"] == "paper-case1"
+        assert cfg["model"]["run"]["speed_end_rpm"] == 1600
+    assert [p.name for p in tmp_path.iterdir()] == ["run.nc"]
+
+
+@pytest.mark.skipif(os.geteuid() == 0, reason="root can write anywhere")
+def test_simulate_unwritable_folder(tmp_path, capsys):
+    ro = tmp_path / "ro"
+    ro.mkdir()
+    ro.chmod(0o500)
+    assert main(["simulate", "paper-case1", "-o", str(ro / "x.nc"), "--duration", "0.01"]) == 2
+    assert "not writable" in capsys.readouterr().err
+
+
+def test_simulate_missing_folder(tmp_path, capsys):
+    assert main(["simulate", "paper-case1", "-o", str(tmp_path / "no" / "x.nc")]) == 2
+    assert "does not exist" in capsys.readouterr().err
+
+
+def test_bad_speed_option_is_rejected(capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(["simulate", "paper-case1", "-o", "x.nc", "--speed", "fast"])
+    assert exc.value.code == 2
+    assert "START:END" in capsys.readouterr().err
+
+
+def test_python_dash_m_help():
+    res = subprocess.run([sys.executable, "-m", "gearvib", "--help"], capture_output=True,
+                         text=True, check=False)
+    assert res.returncode == 0
+    for cmd in ("demo", "modes", "simulate", "report"):
+        assert cmd in res.stdout
