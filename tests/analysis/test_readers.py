@@ -33,7 +33,17 @@ from analysis.readers import (
 )
 from analysis.readers.layout import clean_attrs, sanitize_names
 
-UFF_DIR = Path("/work/shared/data/uff")
+
+def _uff_dir() -> Path:
+    """The shared UFF files: beside the checkout (as CI lays it out), else /work/shared."""
+    here = Path(__file__).resolve().parents[2]
+    for base in (here.parent / "shared", Path("/work/shared")):
+        if (base / "data" / "uff").is_dir():
+            return base / "data" / "uff"
+    return here.parent / "shared" / "data" / "uff"
+
+
+UFF_DIR = _uff_dir()
 FS = 2048.0
 
 
