@@ -126,8 +126,9 @@ class Comparison:
     total_strength_db : (float, float)
         Energetic sum ``10 log10 sum 10^(s/10)`` of the region strengths (-inf if none).
     fewer_or_weaker : bool
-        The other case has fewer regions, or as many but weaker in total (by more than
-        ``db_tol``).
+        The other case has fewer regions and is not stronger in total (energetic sum of the
+        region strengths, within ``db_tol``), or no more regions and weaker in total by more
+        than ``db_tol``: the paper's "fewer resonance areas with less intensity".
     claims : list of (str, bool or None, str)
         ``(paper statement, reproduced?, evidence)`` for the statements that apply.
     verdict : str
@@ -252,7 +253,8 @@ def compare_cases(reference: CaseAnalysis, other: CaseAnalysis, *, rpm_tol: floa
     n_ref, n_oth = len(reference.regions), len(other.regions)
     e_ref = _energy_db([r.strength_db for r in reference.regions])
     e_oth = _energy_db([r.strength_db for r in other.regions])
-    fewer_or_weaker = n_oth < n_ref or (n_oth == n_ref and e_oth < e_ref - db_tol)
+    fewer_or_weaker = ((n_oth < n_ref and e_oth <= e_ref + db_tol)
+                       or (n_oth <= n_ref and e_oth < e_ref - db_tol))
     a, b = reference.name, other.name
 
     claims: list[tuple[str, bool | None, str]] = []
@@ -303,8 +305,9 @@ def compare_cases(reference: CaseAnalysis, other: CaseAnalysis, *, rpm_tol: floa
             verdict = (f"This run reproduces the paper's finding for planet phasing: {region_text}"
                        f"; the {claims[0][2]}.")
         else:
-            verdict = (f"This run does not reproduce the paper's finding of fewer or weaker "
-                       f"sun-mesh resonance regions: {region_text}, although the "
+            partly = (" (fewer regions, but stronger in total)" if n_oth < n_ref else "")
+            verdict = (f"This run does not reproduce the paper's finding of fewer and weaker "
+                       f"sun-mesh resonance regions{partly}: {region_text}, although the "
                        f"{claims[0][2]}.")
             if worse:
                 explanation.append(

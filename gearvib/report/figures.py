@@ -72,6 +72,7 @@ PAPER_SPEEDS_RPM = (1500.0, 2600.0, 3100.0)
 
 _STIFFNESS_CYCLES = 3
 _SPOT_RANGE_DB = 30.0  # spots more than this below the map maximum are background clutter
+_MIN_SPOT_FRACTION = 0.15  # spots below 0.15 x the lowest natural frequency: near-DC content
 _REGION_GAP = 0.03  # spots closer than 3 % of the top speed belong to one resonance region
 _RPM_MIN_FRACTION = 0.02  # order tracking needs rpm > 0: skip the first 2 % of the speed range
 
@@ -154,8 +155,9 @@ class ResonanceRegion:
         return any(not m.startswith("unclassified") for m in self.mechanisms)
 
 
-def _above_floor(res: Resonances, map_ds: xr.Dataset, range_db: float) -> Resonances:
-    """Spots whose absolute level is within ``range_db`` of the map maximum."""
+def _above_floor(res: Resonances, map_ds: xr.Dataset, range_db: float, f_min: float
+                 ) -> Resonances:
+    """Spots within ``range_db`` of the map maximum and at ``f_min`` [Hz] or above."""
     if not len(res):
         return res
     amp = map_ds["amplitude"].transpose("time", "frequency").values
@@ -163,7 +165,7 @@ def _above_floor(res: Resonances, map_ds: xr.Dataset, range_db: float) -> Resona
     jf = np.clip(np.searchsorted(map_ds["frequency"].values, res.frequency), 0,
                  amp.shape[1] - 1)
     level = amp[it, jf]
-    keep = level >= float(amp.max()) * 10 ** (-range_db / 20.0)
+    keep = (level >= float(amp.max()) * 10 ** (-range_db / 20.0)) & (res.frequency >= f_min)
     return Resonances(time=res.time[keep], rpm=res.rpm[keep], frequency=res.frequency[keep],
                       f_mesh=res.f_mesh[keep], order=res.order[keep],
                       mechanism=res.mechanism[keep], mode=res.mode[keep],
@@ -172,7 +174,10 @@ def _above_floor(res: Resonances, map_ds: xr.Dataset, range_db: float) -> Resona
 
 
 def resonance_regions(res: Resonances, *, rpm_gap: float) -> list[ResonanceRegion]:
-    """Group resonance spots into speed regions (spots closer than ``rpm_gap`` join).
+    """Group resonance spots into speed regions.
+
+    Spots closer than ``rpm_gap`` join a region; a region spans at most ``4 rpm_gap`` (dense
+    clutter must not chain into one region over the whole run-up).
 
     Parameters
     ----------
@@ -191,7 +196,8 @@ def resonance_regions(res: Resonances, *, rpm_gap: float) -> list[ResonanceRegio
     order = np.argsort(res.rpm, kind="stable")
     groups: list[list[int]] = [[int(order[0])]]
     for i in order[1:]:
-        if res.rpm[i] - res.rpm[groups[-1][-1]] <= rpm_gap:
+        g = groups[-1]
+        if res.rpm[i] - res.rpm[g[-1]] <= rpm_gap and res.rpm[i] - res.rpm[g[0]] <= 4 * rpm_gap:
             groups[-1].append(int(i))
         else:
             groups.append([int(i)])
@@ -713,7 +719,8 @@ def analyse_case(ds: xr.Dataset, *, name: str | None = None,
         orders=range(1, settings.orders + 1), candidates=candidates,
         threshold_db=settings.threshold_db, tolerance=settings.tolerance,
         n_max=settings.n_max, names=names)
-    resonances = _above_floor(resonances, map_ds, _SPOT_RANGE_DB)
+    resonances = _above_floor(resonances, map_ds, _SPOT_RANGE_DB,
+                              _MIN_SPOT_FRACTION * float(fn.min()) if fn.size else 0.0)
     regions = resonance_regions(resonances, rpm_gap=_REGION_GAP * float(run["speed_end_rpm"]))
 
     # (g) Floquet stability over the run-up speed range
@@ -1077,9 +1084,11 @@ def report_sections(cases: Sequence[CaseAnalysis], comparisons: Sequence[Any] = 
             Block("heading", ca.name),
             Block("text", f"{ca.name}: {len(ca.resonances)} resonance spots (rise ≥ "
                   f"{ca.settings.threshold_db:g} dB above the background, within "
-                  f"{_SPOT_RANGE_DB:g} dB of the map maximum) in {len(ca.regions)} speed "
-                  f"regions; {sum(r.classified for r in ca.regions)} regions contain a "
-                  "classified spot (forced resonance or parametric instability)."),
+                  f"{_SPOT_RANGE_DB:g} dB of the map maximum, above "
+                  f"{_MIN_SPOT_FRACTION:g} × the lowest natural frequency) in "
+                  f"{len(ca.regions)} speed regions; "
+                  f"{sum(r.classified for r in ca.regions)} regions contain a classified "
+                  "spot (forced resonance or parametric instability)."),
             _table(f"Identified resonance regions of {ca.name}",
                    ("speed [min⁻¹]", "peak speed", "f [Hz]", "rise [dB]", "spots",
                     "mechanisms (mode)"),
