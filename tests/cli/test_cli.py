@@ -101,3 +101,45 @@ def test_python_dash_m_help():
     assert res.returncode == 0
     for cmd in ("demo", "modes", "simulate", "report"):
         assert cmd in res.stdout
+
+
+def test_demo_runs_end_to_end_on_a_short_run_up(tmp_path, capsys):
+    out = tmp_path / "demo"
+    assert main(["demo", "-o", str(out), "--duration", "0.2", "-q"]) == 0
+    printed = capsys.readouterr().out
+    names = sorted(p.name for p in out.iterdir())
+    assert names == ["paper-case1.nc", "paper-case2.nc", "report.html", "report.pdf"]
+    assert str(out / "report.html") in printed
+    html = (out / "report.html").read_text(encoding="utf-8")
+    for section in ("parameters", "modes", "tooth-forces", "spectra", "mesh-stiffness",
+                    "sonograms", "resonances", "stability", "comparison", "provenance"):
+        assert f'id="{section}"' in html, section
+    with xr.open_dataset(out / "paper-case2.nc", engine="netcdf4") as ds:
+        assert float(ds["input_speed"].values[-1]) == pytest.approx(4000.0, rel=1e-6)
+
+
+def test_report_from_unreadable_netcdf(tmp_path, capsys):
+    bad = tmp_path / "broken.nc"
+    bad.write_bytes(b"this is not a netCDF file")
+    out = tmp_path / "rep"
+    assert main(["report", str(bad), "-o", str(out), "-q"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "broken.nc" in err
+    assert not out.exists()
+
+
+def test_report_study_with_unknown_preset(tmp_path, capsys):
+    recipe = tmp_path / "study.toml"
+    recipe.write_text('[study]\ntitle = "x"\ncases = [{name = "a", config = "paper-case9"}]\n')
+    out = tmp_path / "rep"
+    assert main(["report", str(recipe), "-o", str(out), "-q"]) == 2
+    assert "paper-case9" in capsys.readouterr().err
+    assert not out.exists()
+
+
+def test_demo_unwritable_output_folder(tmp_path, capsys, monkeypatch):
+    target = tmp_path / "blocked"
+    target.write_text("a file where the folder should be")
+    assert main(["demo", "-o", str(target), "--duration", "0.05", "-q"]) == 2
+    assert len(capsys.readouterr().err.strip().splitlines()) == 1
+    assert target.read_text() == "a file where the folder should be"
