@@ -15,6 +15,7 @@ from __future__ import annotations
 import contextlib
 import logging
 import os
+import sys
 import tempfile
 import time
 import uuid
@@ -284,7 +285,15 @@ def run_study(study: Study, out_dir: str | os.PathLike, *, progress: bool = True
         prepared.append((case, cfg, base, gs, resolve_run(study.run, cfg)))
     runs: dict[str, Path] = {}
     sim_time: dict[str, float] = {}
-    for case, cfg, base, gs, run in prepared:
+    n_steps = len(prepared) + 1
+
+    def step(i: int, text: str) -> None:
+        if progress:
+            print(f"  [{i}/{n_steps}] {text}", file=sys.stderr, flush=True)
+
+    for i, (case, cfg, base, gs, run) in enumerate(prepared, start=1):
+        step(i, f"simulating {case.name}: {run['speed_start_rpm']:g} -> "
+             f"{run['speed_end_rpm']:g} min-1 in {run['duration']:g} s")
         model = assemble(gs)
         modal = modal_analysis(model)
         config = {"gearset": cfg, "gearset_dir": str(base) if base is not None else None,
@@ -302,6 +311,7 @@ def run_study(study: Study, out_dir: str | os.PathLike, *, progress: bool = True
             raise SimulationError(f"case {case.name!r}: {exc}") from exc
         sim_time[case.name] = res.wall_time
         runs[case.name] = write_netcdf(res.to_dataset(), out / f"{case.name}.nc")
+    step(n_steps, "analysing the runs and writing the report (maps, spectra, Floquet charts)")
     report = build_report(list(runs.values()), out, title=study.title,
                           analysis=study.analysis, reference=study.reference_case)
     return StudyResult(study=study, out_dir=out, runs=runs, report=report,
