@@ -174,3 +174,36 @@ def test_time_varying_lumped_mesh_needs_tooth_numbers():
                 base_radius2=0.02, pressure_angle=math.radians(20))
     with pytest.raises(ValueError, match="tooth numbers"):
         assemble(GearSet("x", bodies, (mesh,), fixed=("c",), input="a", output="p"))
+
+
+def test_helical_meshes_add_axial_coordinates_and_couple_them():
+    sun, ring = _bodies("sun", "ring")
+    car = Body("carrier", "carrier", 3.0, 2e-2, Support(radial=1e8, axial=1e8))
+    pl = Body("planet", "planet", 0.5, 2e-4, Support(radial=1e8, tangential=1e8, axial=5e7),
+              carrier="carrier")
+    sun = Body("sun", "central", 2.0, 1e-2, Support(radial=1e8, axial=1e8))
+    ring = Body("ring", "central", 2.0, 1e-2, Support(radial=1e8, axial=1e8))
+    k = ConstantStiffness(3e8)
+    beta = math.radians(15.0)
+    gs = simple_planetary(z_sun=21, z_ring=-75, z_planet=27, module=2e-3, sun=sun, ring=ring,
+                          carrier=car, planet=pl, sun_mesh=MeshSpec(k), ring_mesh=MeshSpec(k),
+                          n_planets=3, helix_angle=beta)
+    model = assemble(gs)
+    assert "sun.z" in model.dof_names and "planet1.z" in model.dof_names
+    iz = model.dof_names.index("sun.z")
+    # each sun mesh pushes the sun axially with sin(beta_b) of its normal deflection
+    beta_b = gs.meshes[0].geometry.base_helix_angle
+    np.testing.assert_allclose(np.abs(model.mesh_vectors[:3, iz]), math.sin(beta_b), rtol=1e-12)
+    spur = assemble(simple_planetary(
+        z_sun=21, z_ring=-75, z_planet=27, module=2e-3, sun=sun, ring=ring, carrier=car,
+        planet=pl, sun_mesh=MeshSpec(k), ring_mesh=MeshSpec(k), n_planets=3))
+    assert "sun.z" not in spur.dof_names
+    res = modal_analysis(model)
+    assert np.all(np.isfinite(res.frequencies_hz))
+    # axial modes couple to the gear meshes: some mode has both axial and torsional motion
+    shapes = res.shapes
+    iz_all = [i for i, n in enumerate(model.dof_names) if n.endswith(".z")]
+    it_all = [i for i, n in enumerate(model.dof_names) if n.endswith(".theta")]
+    mixed = (np.abs(shapes[iz_all]).max(axis=0) > 1e-3 * np.abs(shapes).max(axis=0)) & (
+        np.abs(shapes[it_all]).max(axis=0) > 1e-3 * np.abs(shapes).max(axis=0))
+    assert mixed.any()
