@@ -44,6 +44,7 @@ from gearvib.config import config_hash, gearset_from_dict
 from gearvib.modal import ModalResult, modal_analysis
 from gearvib.model import AssembledModel
 from gearvib.report.study import AnalysisSettings
+from gearvib.stability import first_order_regions, stability_over_speed
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -325,6 +326,7 @@ class CaseAnalysis:
     settings: AnalysisSettings
     notes: list[str] = field(default_factory=list)
     provenance: list[tuple[str, str]] = field(default_factory=list)
+    first_order: list[tuple[str, ...]] = field(default_factory=list)
 
     @property
     def speed_range(self) -> tuple[float, float]:
@@ -562,10 +564,6 @@ def _run_settings(caller: dict, ds: xr.Dataset) -> dict:
 
 def _stability(model: AssembledModel, run: dict, settings: AnalysisSettings
                ) -> tuple[Any, str]:
-    try:
-        from gearvib.stability import stability_over_speed
-    except ImportError as exc:  # the module is still being finished
-        return None, f"Floquet stability chart not available: gearvib.stability ({exc})"
     hi = float(run["speed_end_rpm"])
     lo = max(float(run["speed_start_rpm"]), _RPM_MIN_FRACTION * hi)
     speeds = np.linspace(lo, hi, settings.stability_points)
@@ -573,6 +571,26 @@ def _stability(model: AssembledModel, run: dict, settings: AnalysisSettings
         return stability_over_speed(model, speeds, n_max=settings.n_max, refine=True), ""
     except (ValueError, ArithmeticError, np.linalg.LinAlgError) as exc:
         return None, f"Floquet stability chart failed: {exc}"
+
+
+def _first_order_rows(model: AssembledModel, run: dict, settings: AnalysisSettings
+                      ) -> list[tuple[str, ...]]:
+    """First-order (Hsu) regions inside the run-up speed range, for the stability section."""
+    try:
+        widths = first_order_regions(model, l_max=settings.n_max)
+    except (ValueError, ArithmeticError, np.linalg.LinAlgError):
+        return []
+    lo_r, hi_r = float(run["speed_start_rpm"]), float(run["speed_end_rpm"])
+    rows = []
+    order = np.argsort(widths.lower_rpm)
+    for i in order:
+        lo, hi = float(widths.lower_rpm[i]), float(widths.upper_rpm[i])
+        w = float(widths.width_hz[i])
+        if not (np.isfinite(lo) and np.isfinite(hi)) or w <= 0 or hi < lo_r or lo > hi_r:
+            continue
+        rows.append((str(widths.label[i]), f"{lo:.0f}", f"{hi:.0f}", f"{hi - lo:.1f}",
+                     f"{float(widths.undamped_width_hz[i]) / model.mesh_frequency_per_rpm:.1f}"))
+    return rows
 
 
 def _candidates(model: AssembledModel | None, modal: ModalResult | None, fn: np.ndarray,
@@ -725,10 +743,12 @@ def analyse_case(ds: xr.Dataset, *, name: str | None = None,
 
     # (g) Floquet stability over the run-up speed range
     chart = None
+    first_order: list[tuple[str, ...]] = []
     if model is not None:
         chart, why = _stability(model, run, settings)
         if why:
             notes.append(why)
+        first_order = _first_order_rows(model, run, settings)
 
     # (h) provenance (no dates: same input, same report)
     gs_cfg = caller.get("gearset")
@@ -756,7 +776,7 @@ def analyse_case(ds: xr.Dataset, *, name: str | None = None,
         spectra=spectra, stiffness=stiff, fmap=fmap, omap=omap, frequency_max_hz=fmax,
         resonances=resonances, regions=regions, candidates=candidates, chart=chart, run=run,
         settings=settings,
-        notes=notes, provenance=prov,
+        notes=notes, provenance=prov, first_order=first_order,
     )
 
 
@@ -880,7 +900,7 @@ def sonogram_figure(ca: CaseAnalysis, *, figsize: tuple[float, float] = (7.5, 6.
 
     Speed is on the vertical axis; the inclined dashed lines are the orders 1..N of the mesh
     frequency, the dotted vertical lines the natural frequencies; circles mark the detected
-    resonances.
+    resonances and red bands the speed ranges the Floquet analysis finds unstable.
     """
     orders = list(range(1, ca.settings.orders + 1))
     fig = rpm_frequency_map_figure(
@@ -893,6 +913,12 @@ def sonogram_figure(ca: CaseAnalysis, *, figsize: tuple[float, float] = (7.5, 6.
     if len(r):
         ax.plot(r.frequency, r.rpm, "o", mfc="none", mec="r", ms=9, lw=0,
                 label="detected resonance")
+    if ca.chart is not None:
+        for k, reg in enumerate(ca.chart.region_table):
+            ax.axhspan(reg["lower"] / ca.mesh_frequency_per_rpm,
+                       reg["upper"] / ca.mesh_frequency_per_rpm, color="r", alpha=0.18, lw=0,
+                       label="Floquet unstable" if k == 0 else None)
+    if len(r) or (ca.chart is not None and len(ca.chart.region_table)):
         ax.legend(loc="lower right", fontsize=8)
     ax.set_title(f"{ca.name}: sonogram of the tooth force {ca.force_mesh} (cf. paper Fig. 11)\n"
                  f"{ca.fmap.window}, RBW {ca.fmap.resolution_hz:.3g} Hz", fontsize=9)
@@ -1108,6 +1134,12 @@ def report_sections(cases: Sequence[CaseAnalysis], comparisons: Sequence[Any] = 
                 _table(f"Unstable speed intervals of {ca.name} (Floquet)",
                        ("from [min⁻¹]", "to [min⁻¹]", "width [min⁻¹]", "f_mesh [Hz]",
                         "growth [1/s]", "candidate", "mechanism"), ca.region_rows())]
+        if ca.first_order:
+            s["stability"] += [_table(
+                f"First-order perturbation regions of {ca.name} (Hsu 1963), beside the Floquet "
+                "intervals above (first order is exact only for n = 1; higher orders need "
+                "Floquet)", ("region", "from [min⁻¹]", "to [min⁻¹]", "width [min⁻¹]",
+                             "undamped width [min⁻¹]"), ca.first_order)]
         else:
             s["stability"] += [Block("text", f"{ca.name}: no Floquet stability chart. " + " ".join(
                 n for n in ca.notes if "stability" in n or "gear-set" in n))]
