@@ -168,6 +168,12 @@ def test_report_lists_identified_regions(study_run, html_text):
     stab = _section(html_text, "stability")
     assert "Unstable speed intervals of paper-case1" in stab
     assert "parametric instability" in stab
+    # first-order widths beside the Floquet intervals: the planet-pair principal regions agree
+    first = stab.split("First-order perturbation regions of paper-case1")[1].split("</table>")[0]
+    fo = {lab: (int(a), int(b)) for lab, a, b in
+          re.findall(r"<tr><td>([^<]+)</td><td>(\d+)</td><td>(\d+)</td>", first)}
+    lo, hi = fo["2 (f3=f4)/3"]
+    assert 2700 < lo < 2810 < hi < 2900  # Floquet: 2773-2835 min-1
 
 
 def test_comparison_reports_fewer_weaker_or_explains(study_run, html_text):
