@@ -13,6 +13,7 @@ rigid-body mode is removed and the stability chart describes the simulated syste
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -35,6 +36,7 @@ __all__ = [
     "first_order_regions",
     "gear_set_candidates",
     "periodic_system",
+    "stability_map",
     "stability_over_speed",
 ]
 
@@ -233,6 +235,43 @@ def stability_over_speed(model: AssembledModel, speeds_rpm: np.ndarray, *,
                                 speed_range=(float(speeds[0]), float(speeds[-1])))
     return stability_chart(system.at, speeds * f_per_rpm, mesh_frequency_per_rpm=f_per_rpm,
                            candidates=cands, refine=refine)
+
+
+def stability_map(model_for: Callable[[float], AssembledModel], speeds_rpm: np.ndarray,
+                  values: np.ndarray, *, parameter_name: str = "parameter",
+                  parameter_units: str = "1", refine: bool = False) -> StabilityChart:
+    """Ince-Strutt style chart of a gear set over input speed x one design parameter.
+
+    Parameters
+    ----------
+    model_for : callable
+        ``model_for(value) -> AssembledModel``, e.g. the gear set rebuilt with another mesh
+        damping ratio, stiffness variation or contact ratio.
+    speeds_rpm : array_like
+        Increasing input speeds [min^-1].
+    values : array_like
+        Parameter values (one Floquet scan over speed each).
+    parameter_name, parameter_units : str
+        Metadata of the parameter axis.
+    refine : bool
+        Refine region boundaries (slower).
+    """
+    speeds = np.asarray(speeds_rpm, dtype=float)
+    vals = [float(v) for v in np.asarray(values, dtype=float).ravel()]
+    if speeds.ndim != 1 or speeds.size < 2 or not (speeds > 0).all() or not vals:
+        raise ValueError("speeds_rpm must be increasing positive speeds and values non-empty")
+    systems: dict[float, PeriodicGearSystem] = {}
+
+    def system(value: float) -> PeriodicGearSystem:
+        if value not in systems:
+            systems[value] = periodic_system(model_for(value))
+        return systems[value]
+
+    f_per_rpm = system(vals[0]).model.mesh_frequency_per_rpm
+    return stability_chart(lambda f, p: system(float(p)).at(f), speeds * f_per_rpm,
+                           parameter_values=vals, mesh_frequency_per_rpm=f_per_rpm,
+                           refine=refine, parameter_name=parameter_name,
+                           parameter_units=parameter_units)
 
 
 def first_order_regions(model: AssembledModel, *, coupling: DriveCoupling | None = None,

@@ -101,3 +101,22 @@ def test_first_order_widths_are_reported(case1):
     widths = first_order_regions(case1, l_max=4)
     ds = widths.to_dataset()
     assert ds.sizes[next(iter(ds.sizes))] > 0
+
+
+def test_speed_by_damping_chart_shrinks_the_region_with_damping():
+    from gearvib.config import gearset_from_dict, load_config
+    from gearvib.stability import stability_map
+
+    cfg, _ = load_config("paper-case1")
+
+    def model_for(zeta):
+        c = {**cfg, "meshes": {k: {**v, "damping_ratio": zeta} for k, v in cfg["meshes"].items()}}
+        return assemble(gearset_from_dict(c))
+
+    speeds = np.linspace(2740.0, 2870.0, 27)
+    chart = stability_map(model_for, speeds, [0.0, 0.005, 0.02],
+                          parameter_name="mesh damping ratio")
+    mu = chart.to_dataset()["max_modulus"].transpose("parameter", "f_mesh").values
+    unstable = (mu > 1 + 1e-7).sum(axis=1)
+    assert unstable[0] >= unstable[1] >= unstable[2]
+    assert unstable[0] > 0 and unstable[2] == 0
