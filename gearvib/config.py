@@ -38,6 +38,7 @@ from gearvib.structure import MeshSpec as _MeshSpec
 
 __all__ = [
     "ConfigError",
+    "check_keys",
     "config_hash",
     "gearset_from_dict",
     "list_presets",
@@ -87,7 +88,8 @@ _MESHES = {
 }
 
 
-def _check_keys(table: Any, allowed: set[str], where: str) -> dict:
+def check_keys(table: Any, allowed: set[str], where: str) -> dict:
+    """Return ``table``; raise :class:`ConfigError` naming the first unknown key."""
     if not isinstance(table, dict):
         raise ConfigError(f"{where} must be a table, got {type(table).__name__}")
     unknown = sorted(set(table) - allowed)
@@ -126,7 +128,7 @@ def _stiffness_value(value: Any, where: str) -> float:
 def _support(table: dict | None, where: str) -> Support:
     if table is None:
         return Support()
-    _check_keys(table, _SUPPORT, where)
+    check_keys(table, _SUPPORT, where)
     kw = {}
     for k, v in table.items():
         kw[k] = _stiffness_value(v, f"{where}.{k}") if not k.endswith("_damping") else \
@@ -138,7 +140,7 @@ def _support(table: dict | None, where: str) -> Support:
 
 
 def _body(name: str, table: dict, role: str, where: str) -> Body:
-    _check_keys(table, _BODY, where)
+    check_keys(table, _BODY, where)
     try:
         # planet templates get their carrier and angle from the builder
         return Body(name=name, role=role, carrier="carrier" if role == "planet" else None,
@@ -178,7 +180,7 @@ def _stiffness_table(table: Any, where: str, base: Path | None, deferred: bool):
 
 def _mesh_spec(table: dict, where: str, base: Path | None,
                deferred: bool = False) -> _MeshSpec:
-    _check_keys(table, _MESH_SPEC, where)
+    check_keys(table, _MESH_SPEC, where)
     try:
         return _MeshSpec(
             stiffness=_stiffness_table(_require(table, "stiffness", where),
@@ -198,7 +200,7 @@ def _mesh_spec(table: dict, where: str, base: Path | None,
 
 
 def _toothing(table: dict, where: str) -> Toothing:
-    _check_keys(table, _TOOTHING, where)
+    check_keys(table, _TOOTHING, where)
     kw: dict[str, Any] = {"z": int(_require(table, "z", where)),
                           "module": _number(_require(table, "module", where), f"{where}.module")}
     if "pressure_angle_deg" in table:
@@ -215,7 +217,7 @@ def _toothing(table: dict, where: str) -> Toothing:
 
 
 def _operation(cfg: dict) -> dict:
-    op = _check_keys(_require(cfg, "operation", "the description"), _OPERATION, "[operation]")
+    op = check_keys(_require(cfg, "operation", "the description"), _OPERATION, "[operation]")
     fixed = op.get("fixed", [])
     fixed = [fixed] if isinstance(fixed, str) else list(fixed)
     return {"fixed": fixed, "input": _require(op, "input", "[operation]"),
@@ -223,11 +225,11 @@ def _operation(cfg: dict) -> dict:
 
 
 def _builder_set(kind: str, cfg: dict, base: Path | None) -> GearSet:
-    geo = _check_keys(_require(cfg, "geometry", "the description"), _GEOMETRY[kind],
+    geo = check_keys(_require(cfg, "geometry", "the description"), _GEOMETRY[kind],
                       "[geometry]")
-    bodies_t = _check_keys(_require(cfg, "bodies", "the description"), set(_BODIES[kind]),
+    bodies_t = check_keys(_require(cfg, "bodies", "the description"), set(_BODIES[kind]),
                            "[bodies]")
-    meshes_t = _check_keys(_require(cfg, "meshes", "the description"), set(_MESHES[kind]),
+    meshes_t = check_keys(_require(cfg, "meshes", "the description"), set(_MESHES[kind]),
                            "[meshes]")
     roles = {"carrier": "carrier"}
     bodies = {}
@@ -301,7 +303,7 @@ def _general_set(cfg: dict, base: Path | None) -> GearSet:
     bodies = []
     for i, t in enumerate(_require(cfg, "body", "the description")):
         where = f"[[body]] #{i + 1}"
-        _check_keys(t, _BODY_GENERAL, where)
+        check_keys(t, _BODY_GENERAL, where)
         try:
             bodies.append(Body(
                 name=str(_require(t, "name", where)), role=_require(t, "role", where),
@@ -318,7 +320,7 @@ def _general_set(cfg: dict, base: Path | None) -> GearSet:
     meshes = []
     for i, t in enumerate(_require(cfg, "mesh", "the description")):
         where = f"[[mesh]] #{i + 1}"
-        _check_keys(t, _MESH_GENERAL, where)
+        check_keys(t, _MESH_GENERAL, where)
         spec = _mesh_spec({k: v for k, v in t.items() if k in _MESH_SPEC}, where, base)
         kw: dict[str, Any] = {}
         for k in ("base_radius1", "base_radius2", "centre_distance", "phase"):
@@ -345,7 +347,7 @@ def _general_set(cfg: dict, base: Path | None) -> GearSet:
     couplings = []
     for i, t in enumerate(cfg.get("coupling", [])):
         where = f"[[coupling]] #{i + 1}"
-        _check_keys(t, _COUPLING, where)
+        check_keys(t, _COUPLING, where)
         couplings.append(Coupling(
             str(_require(t, "body1", where)), str(_require(t, "body2", where)),
             _stiffness_value(t.get("stiffness", "rigid"), f"{where}.stiffness"),
@@ -375,9 +377,9 @@ def gearset_from_dict(cfg: dict, *, base: Path | None = None) -> GearSet:
         Unknown or missing keys, inadmissible values, or an inconsistent gear set.
     """
     cfg = copy.deepcopy(cfg)
-    _check_keys(cfg, _TOP, "the description (top level)")
+    check_keys(cfg, _TOP, "the description (top level)")
     if "simulation" in cfg:
-        _check_keys(cfg["simulation"], _SIMULATION, "[simulation]")
+        check_keys(cfg["simulation"], _SIMULATION, "[simulation]")
     kind = cfg.get("type", "simple")
     if kind in _GEOMETRY:
         return _builder_set(kind, cfg, base)
@@ -388,7 +390,7 @@ def gearset_from_dict(cfg: dict, *, base: Path | None = None) -> GearSet:
                                 "name": "stage1"}, base=base)
         s2 = gearset_from_dict({**_require(cfg, "stage2", "the description"),
                                 "name": "stage2"}, base=base)
-        shaft = _check_keys(cfg.get("shaft", {}), {"stiffness", "damping"}, "[shaft]")
+        shaft = check_keys(cfg.get("shaft", {}), {"stiffness", "damping"}, "[shaft]")
         return two_stage(s1, s2, shaft_stiffness=_stiffness_value(
             shaft.get("stiffness", "rigid"), "[shaft].stiffness"),
                          shaft_damping=_number(shaft.get("damping", 0.0), "[shaft].damping"),

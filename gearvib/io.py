@@ -13,13 +13,22 @@ import contextlib
 import json
 import os
 import uuid
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from pathlib import Path
+from typing import TypeVar
 
 import numpy as np
 import xarray as xr
 
-__all__ = ["GearvibFileError", "read_run", "sanitize_attrs", "write_netcdf"]
+__all__ = [
+    "GearvibFileError",
+    "atomic_write",
+    "read_run",
+    "sanitize_attrs",
+    "write_netcdf",
+]
+
+T = TypeVar("T")
 
 _TIME_CHUNK = 65536
 
@@ -96,23 +105,45 @@ def write_netcdf(ds: xr.Dataset, path: str | os.PathLike) -> Path:
 
     Notes
     -----
-    The temporary file lives in the destination directory (so ``os.replace`` is an atomic
-    rename on the same file system), is fsync-ed before the rename and is removed on any error,
-    including ``KeyboardInterrupt``.
+    Written through :func:`atomic_write`: nothing half-written is left on any error, including
+    ``KeyboardInterrupt``.
     """
     dest = Path(path)
-    directory = dest.parent if str(dest.parent) else Path(".")
-    if not directory.is_dir():
-        raise FileNotFoundError(f"directory of {dest} does not exist")
     out = ds.copy(deep=False)
     out.attrs = sanitize_attrs(ds.attrs)
     for name in out.variables:
         out[name].attrs = sanitize_attrs(ds[name].attrs)
+    atomic_write(dest, lambda tmp: out.to_netcdf(tmp, engine="netcdf4", format="NETCDF4",
+                                                 encoding=_encoding(out)))
+    return dest
+
+
+def atomic_write(dest: str | os.PathLike, write: Callable[[Path], T]) -> T:
+    """Write a file atomically: ``write(tmp)`` on a temporary file beside ``dest``, then rename.
+
+    Parameters
+    ----------
+    dest : path-like
+        Destination; its directory must exist. An existing file is replaced only once the new
+        one is complete.
+    write : callable
+        ``write(tmp_path)`` writes the whole content to ``tmp_path``; its result is returned.
+
+    Notes
+    -----
+    The temporary file lives in the destination directory (so ``os.replace`` is an atomic
+    rename on the same file system), is fsync-ed before the rename and is removed on any error,
+    including ``KeyboardInterrupt``; the directory is fsync-ed after the rename where possible.
+    """
+    dest = Path(dest)
+    directory = dest.parent if str(dest.parent) else Path(".")
+    if not directory.is_dir():
+        raise FileNotFoundError(f"directory of {dest} does not exist")
     tmp = directory / f".{dest.name}.{uuid.uuid4().hex}.tmp"
     # O_EXCL: never clobber; mode 0o666 so the process umask applies as for a plain open()
     os.close(os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666))
     try:
-        out.to_netcdf(tmp, engine="netcdf4", format="NETCDF4", encoding=_encoding(out))
+        result = write(tmp)
         with open(tmp, "rb+") as fh:
             os.fsync(fh.fileno())
         os.replace(tmp, dest)
@@ -126,7 +157,7 @@ def write_netcdf(ds: xr.Dataset, path: str | os.PathLike) -> Path:
             os.fsync(dir_fd)
         finally:
             os.close(dir_fd)
-    return dest
+    return result
 
 
 def read_run(path: str | os.PathLike) -> xr.Dataset:

@@ -18,8 +18,7 @@ import os
 import sys
 import tempfile
 import time
-import uuid
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -27,7 +26,7 @@ import xarray as xr
 
 from gearvib.assembly import assemble
 from gearvib.config import gearset_from_dict
-from gearvib.io import GearvibFileError, read_run, write_netcdf
+from gearvib.io import GearvibFileError, atomic_write, read_run, write_netcdf
 from gearvib.modal import modal_analysis
 from gearvib.report.compare import Comparison, compare_cases
 from gearvib.report.figures import CaseAnalysis, analyse_case, report_sections
@@ -133,21 +132,6 @@ def check_output_dir(out_dir: str | os.PathLike) -> Path:
     return p
 
 
-def _atomic(dest: Path, write: Callable[[Path], object]) -> object:
-    """Call ``write(tmp)`` for a temporary file next to ``dest``, then rename it to ``dest``."""
-    tmp = dest.parent / f".{dest.name}.{uuid.uuid4().hex}.tmp"
-    try:
-        out = write(tmp)
-        with open(tmp, "rb+") as fh:
-            os.fsync(fh.fileno())
-        os.replace(tmp, dest)
-    except BaseException:
-        with contextlib.suppress(OSError):
-            tmp.unlink()
-        raise
-    return out
-
-
 def _caller(ds: xr.Dataset) -> dict:
     import json
 
@@ -236,9 +220,9 @@ def build_report(paths_or_datasets: Sequence[RunInput] | RunInput, out_dir: str 
                               for c in cases) + "."
     html_path, pdf_path = out / "report.html", out / "report.pdf"
     text = render_html(sections, title=title, subtitle=subtitle)
-    pages = _atomic(pdf_path, lambda tmp: write_pdf(sections, tmp, title=title,
+    pages = atomic_write(pdf_path, lambda tmp: write_pdf(sections, tmp, title=title,
                                                     subtitle=subtitle))
-    _atomic(html_path, lambda tmp: tmp.write_text(text, encoding="utf-8"))
+    atomic_write(html_path, lambda tmp: tmp.write_text(text, encoding="utf-8"))
     log.info("report written: %s, %s (%d pages)", html_path, pdf_path, pages)
     return ReportPaths(html=html_path, pdf=pdf_path, pdf_pages=int(pages),  # type: ignore[arg-type]
                        sections=tuple(s.id for s in sections), cases=tuple(names),

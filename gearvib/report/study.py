@@ -33,7 +33,7 @@ from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
-from gearvib.config import ConfigError, list_presets, load_config
+from gearvib.config import ConfigError, check_keys, list_presets, load_config
 
 __all__ = [
     "DEFAULT_RUN",
@@ -56,17 +56,6 @@ _RUN = set(DEFAULT_RUN)
 _ANALYSIS = {"n_max", "stability_points", "map_resolution_hz", "map_overlap", "orders",
              "threshold_db", "tolerance", "frequency_max_hz", "force_mesh", "spectrum_peaks"}
 _NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]*$")
-
-
-def _check_keys(table: Any, allowed: set[str], where: str) -> dict:
-    if not isinstance(table, dict):
-        raise ConfigError(f"{where} must be a table, got {type(table).__name__}")
-    unknown = sorted(set(table) - allowed)
-    if unknown:
-        raise ConfigError(
-            f"unknown key {unknown[0]!r} in {where} (admissible: {', '.join(sorted(allowed))})"
-        )
-    return table
 
 
 def _number(value: Any, where: str, *, positive: bool = False, minimum: float | None = None
@@ -188,7 +177,7 @@ class AnalysisSettings:
     @classmethod
     def from_dict(cls, table: dict, where: str = "[analysis]") -> AnalysisSettings:
         """Checked settings from a dict (unknown keys rejected)."""
-        _check_keys(table, _ANALYSIS, where)
+        check_keys(table, _ANALYSIS, where)
         kw: dict[str, Any] = {}
         for k in ("n_max", "stability_points", "orders", "spectrum_peaks"):
             if k in table:
@@ -282,7 +271,7 @@ class Study:
         >>> Study.for_presets(["paper-case1", "paper-case2"], duration=0.25).cases[1].name
         'paper-case2'
         """
-        _check_keys(run, _RUN, "the run settings")
+        check_keys(run, _RUN, "the run settings")
         settings = RunSettings(**{k: _number(v, k) for k, v in run.items()})
         cases = tuple(Case(name=Path(n).stem if n.endswith(".toml") else n, config=str(n))
                       for n in names)
@@ -324,7 +313,7 @@ def resolve_run(run: RunSettings, gearset_cfg: dict) -> dict[str, float]:
 
 def _case(table: Any, i: int, base: Path) -> Case:
     where = f"[study].cases #{i + 1}"
-    _check_keys(table, _CASE, where)
+    check_keys(table, _CASE, where)
     for k in ("name", "config"):
         if k not in table:
             raise ConfigError(f"missing key {k!r} in {where}")
@@ -374,8 +363,8 @@ def load_study(path: str | Path) -> Study:
         raise ConfigError(f"{p}: invalid TOML: {exc}") from None
     except UnicodeDecodeError as exc:
         raise ConfigError(f"{p}: not a UTF-8 text file ({exc.reason})") from None
-    _check_keys(doc, _TOP, f"{p.name} (top level)")
-    st = _check_keys(doc.get("study", None) if "study" in doc else None, _STUDY, "[study]") \
+    check_keys(doc, _TOP, f"{p.name} (top level)")
+    st = check_keys(doc.get("study", None) if "study" in doc else None, _STUDY, "[study]") \
         if "study" in doc else None
     if st is None:
         raise ConfigError(f"{p.name}: missing table [study]")
@@ -387,7 +376,7 @@ def load_study(path: str | Path) -> Study:
     title = st.get("title", p.stem)
     if not isinstance(title, str):
         raise ConfigError("[study].title must be a string")
-    run_t = _check_keys(doc.get("run", {}), _RUN, "[run]")
+    run_t = check_keys(doc.get("run", {}), _RUN, "[run]")
     run = RunSettings(**{k: _number(v, f"[run].{k}") for k, v in run_t.items()})
     analysis = AnalysisSettings.from_dict(doc.get("analysis", {}))
     reference = st.get("reference", "")
