@@ -154,28 +154,25 @@ def _body(name: str, table: dict, role: str, where: str) -> Body:
         raise ConfigError(f"{where}: {exc}") from None
 
 
-def _stiffness(table: Any, where: str, base: Path | None):
-    if not isinstance(table, dict):
-        raise ConfigError(f"{where} must be a table such as {{model = \"constant\", k = 1e8}}")
-    d = dict(table)
-    if "path" in d and base is not None and not Path(d["path"]).is_absolute():
-        d["path"] = str(base / d["path"])
-    try:
-        return stiffness_from_dict(d)
-    except (ValueError, TypeError, KeyError) as exc:
-        raise ConfigError(f"{where}: {exc}") from None
-
-
-def _stiffness_table(table: Any, where: str, base: Path | None, deferred: bool):
-    """A stiffness model, or its checked table when the builder supplies the geometry."""
-    if not deferred:
-        return _stiffness(table, where, base)
+def _stiffness_dict(table: Any, where: str, base: Path | None) -> dict:
+    """The checked stiffness table with a relative CSV ``path`` resolved against ``base``."""
     if not isinstance(table, dict):
         raise ConfigError(f"{where} must be a table such as {{model = \"constant\", k = 1e8}}")
     d = dict(table)
     if "path" in d and base is not None and not Path(d["path"]).is_absolute():
         d["path"] = str(base / d["path"])
     return d
+
+
+def _stiffness_table(table: Any, where: str, base: Path | None, deferred: bool):
+    """A stiffness model, or its checked table when the builder supplies the geometry."""
+    d = _stiffness_dict(table, where, base)
+    if deferred:
+        return d
+    try:
+        return stiffness_from_dict(d)
+    except (ValueError, TypeError, KeyError) as exc:
+        raise ConfigError(f"{where}: {exc}") from None
 
 
 def _mesh_spec(table: dict, where: str, base: Path | None,

@@ -465,6 +465,20 @@ def _mesh(name: str, g1: str, g2: str, t1: Toothing, t2: Toothing, spec: MeshSpe
                 centre_distance=centre_distance)
 
 
+def _planet(template: Body, index: int, carrier: Body, angle: float, radius: float) -> Body:
+    """Planet ``index`` of a builder, placed at ``angle`` on ``carrier``."""
+    return replace(template, name=f"{template.name}{index}", role="planet", carrier=carrier.name,
+                   angle=angle, radius=radius)
+
+
+def _base(central: Body, planet: Body, carrier: Body, t_central: Toothing, t_planet: Toothing,
+          spec: MeshSpec, centre_distance: float) -> BaseStructure:
+    """Base structure with the mesh named ``"<central>-<planet>"``."""
+    return BaseStructure(central, planet, carrier, _mesh(
+        f"{central.name}-{planet.name}", central.name, planet.name, t_central, t_planet, spec,
+        centre_distance))
+
+
 def _planet_angles(z_sun: int, z_ring: int, n_planets: int | None,
                    angles: Sequence[float] | None) -> list[float]:
     if angles is None:
@@ -523,12 +537,9 @@ def simple_planetary(*, z_sun: int, z_ring: int, module: float, sun: Body, ring:
     car_b = replace(carrier, role="carrier")
     structures = []
     for i, psi in enumerate(angles, start=1):
-        p = replace(planet, name=f"{planet.name}{i}", role="planet", carrier=car_b.name,
-                    angle=psi, radius=a)
-        structures.append(BaseStructure(sun_b, p, car_b, _mesh(
-            f"{sun_b.name}-{p.name}", sun_b.name, p.name, t_sun, t_pl, sun_mesh, a)))
-        structures.append(BaseStructure(ring_b, p, car_b, _mesh(
-            f"{ring_b.name}-{p.name}", ring_b.name, p.name, t_ring, t_pl, ring_mesh, a)))
+        p = _planet(planet, i, car_b, psi, a)
+        structures.append(_base(sun_b, p, car_b, t_sun, t_pl, sun_mesh, a))
+        structures.append(_base(ring_b, p, car_b, t_ring, t_pl, ring_mesh, a))
     # order meshes: all sun meshes first, then ring meshes (reads naturally in outputs)
     structures.sort(key=lambda s: 0 if s.central.name == sun_b.name else 1)
     return compose(name, structures, fixed=(fixed,) if fixed else (), input=input,
@@ -564,14 +575,10 @@ def wolfrom(*, z_sun: int, z_ring1: int, z_ring2: int, z_planet1: int, z_planet2
     car_b = replace(carrier, role="carrier")
     structures = []
     for i, psi in enumerate(angles, start=1):
-        p = replace(planet, name=f"{planet.name}{i}", role="planet", carrier=car_b.name,
-                    angle=psi, radius=a)
-        structures.append(BaseStructure(sun_b, p, car_b, _mesh(
-            f"{sun_b.name}-{p.name}", sun_b.name, p.name, t_s, t_p1, sun_mesh, a)))
-        structures.append(BaseStructure(r1, p, car_b, _mesh(
-            f"{r1.name}-{p.name}", r1.name, p.name, t_r1, t_p1, ring_mesh, a)))
-        structures.append(BaseStructure(r2, p, car_b, _mesh(
-            f"{r2.name}-{p.name}", r2.name, p.name, t_r2, t_p2, ring_mesh, a)))
+        p = _planet(planet, i, car_b, psi, a)
+        structures.append(_base(sun_b, p, car_b, t_s, t_p1, sun_mesh, a))
+        structures.append(_base(r1, p, car_b, t_r1, t_p1, ring_mesh, a))
+        structures.append(_base(r2, p, car_b, t_r2, t_p2, ring_mesh, a))
     return compose(name, structures, fixed=(fixed,), input=input, output=output,
                    config=config)
 
@@ -611,16 +618,11 @@ def ravigneaux(*, z_sun_small: int, z_sun_large: int, z_ring: int, z_planet_shor
     structures, pp = [], []
     for i in range(n_pairs):
         psi = 2 * math.pi * i / n_pairs
-        pl = replace(planet_long, name=f"{planet_long.name}{i + 1}", role="planet",
-                     carrier=car_b.name, angle=psi, radius=a_l)
-        ps = replace(planet_short, name=f"{planet_short.name}{i + 1}", role="planet",
-                     carrier=car_b.name, angle=psi + offset, radius=a_s)
-        structures.append(BaseStructure(sun1, ps, car_b, _mesh(
-            f"{sun1.name}-{ps.name}", sun1.name, ps.name, t_s1, t_ps, sun_mesh, a_s)))
-        structures.append(BaseStructure(sun2, pl, car_b, _mesh(
-            f"{sun2.name}-{pl.name}", sun2.name, pl.name, t_s2, t_pl, sun_mesh, a_l)))
-        structures.append(BaseStructure(ring_b, pl, car_b, _mesh(
-            f"{ring_b.name}-{pl.name}", ring_b.name, pl.name, t_r, t_pl, ring_mesh, a_l)))
+        pl = _planet(planet_long, i + 1, car_b, psi, a_l)
+        ps = _planet(planet_short, i + 1, car_b, psi + offset, a_s)
+        structures.append(_base(sun1, ps, car_b, t_s1, t_ps, sun_mesh, a_s))
+        structures.append(_base(sun2, pl, car_b, t_s2, t_pl, sun_mesh, a_l))
+        structures.append(_base(ring_b, pl, car_b, t_r, t_pl, ring_mesh, a_l))
         pp.append(_mesh(f"{ps.name}-{pl.name}", ps.name, pl.name, t_ps, t_pl, planet_mesh, d))
     return compose(name, structures, extra_meshes=pp, fixed=(fixed,), input=input,
                    output=output, config=config)
