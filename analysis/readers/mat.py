@@ -1,10 +1,12 @@
-"""MATLAB .mat reader and writer (v4 to v7.2 via :func:`scipy.io.loadmat`).
+"""MATLAB .mat reader and writer (v4 to v7.2 via :func:`scipy.io.loadmat`, v7.3 via h5py).
 
 Every numeric vector in the file is a channel; a numeric matrix gives one channel per column
 (samples along the longer dimension), named ``<variable>_1``, ``<variable>_2``, ... Numeric
 scalars are metadata (one of them may be the sample rate). An optional struct variable
 ``units`` maps channel variable names to unit labels (written by :func:`write_mat`).
-MATLAB v7.3 files are HDF5 and are not supported by scipy: re-save them with ``-v7``.
+MATLAB v7.3 files (HDF5; told apart by the ``MATLAB 7.3 MAT-file`` header text) are decoded
+by :mod:`analysis.readers.mat73` into the same values and then follow the same rules; they
+need ``pip install "gearvib[hdf5]"`` (h5py).
 """
 
 from __future__ import annotations
@@ -12,6 +14,7 @@ from __future__ import annotations
 import os
 from collections.abc import Mapping, Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import xarray as xr
@@ -24,27 +27,31 @@ from analysis.readers.layout import (
     to_udunits,
     validate_dataset,
 )
+from analysis.readers.mat73 import is_mat73, load_mat73
 
 __all__ = ["read_mat", "write_mat"]
 
 _FS_NAMES = ("fs", "Fs", "FS", "sample_rate", "sample_rate_hz", "samplerate", "SampleRate")
 
 
-def _load(p: Path) -> dict:
+def _load(p: Path) -> tuple[dict[str, Any], str]:
+    """Variables of the file (as ``loadmat(squeeze_me=True)`` gives them) and the format tag."""
     from scipy.io import loadmat
 
+    if is_mat73(p):
+        return load_mat73(p), "mat73"
     try:
-        return loadmat(p, squeeze_me=True, chars_as_strings=True)
+        return loadmat(p, squeeze_me=True, chars_as_strings=True), "mat"
     except NotImplementedError:
-        raise ReaderError(
-            f"{p}: MATLAB v7.3 (HDF5) files are not supported; re-save in MATLAB with "
-            "save(file, ..., '-v7') or export the channels to another format"
-        ) from None
+        # scipy saw the v7.3 version field under a header text that does not say so
+        return load_mat73(p), "mat73"
     except (ValueError, OSError, TypeError, EOFError) as exc:
         raise ReaderError(f"{p}: not a readable MAT file (truncated or corrupt?): {exc}") from None
 
 
 def _units_struct(value: object) -> dict[str, str]:
+    if isinstance(value, Mapping):  # a v7.3 struct
+        return {str(k): str(v) for k, v in value.items()}
     arr = np.asarray(value)
     if arr.dtype.names is None or arr.size != 1:
         return {}
@@ -59,12 +66,14 @@ def read_mat(
     variables: Sequence[str] | None = None,
     units: str | Sequence[str] | Mapping[str, str] | None = None,
 ) -> xr.Dataset:
-    """Read a MATLAB v4-v7.2 .mat file into the common layout.
+    """Read a MATLAB .mat file (v4 to v7.3) into the common layout.
 
     Parameters
     ----------
     path : path-like
-        MAT file.
+        MAT file. v4-v7.2 files are read with :func:`scipy.io.loadmat`; v7.3 (HDF5) files,
+        recognised by their header text, with h5py (``pip install "gearvib[hdf5]"``). Both
+        give the same Dataset for the same content.
     fs : float or str, optional
         Sample rate [Hz], or the name of a scalar variable in the file holding it. Default: the
         ``time_variable``, else a scalar named ``fs``/``Fs``/``sample_rate``/...
@@ -79,18 +88,23 @@ def read_mat(
     Returns
     -------
     xarray.Dataset
-        Common layout.
+        Common layout; ``source_format`` is ``"mat"`` (v4-v7.2) or ``"mat73"`` (v7.3).
 
     Raises
     ------
     ReaderError
-        v7.3 file, corrupt file, no sample rate, missing variables, channels of unequal length,
-        NaN samples (naming the channel and sample index).
+        Truncated or corrupt file, no sample rate, missing or non-numeric variables, empty
+        channels, channels of unequal length, NaN samples (naming the channel and sample index).
+    ValueError
+        ``fs`` disagrees with ``time_variable``; ``units`` of the wrong length.
+    ImportError
+        A v7.3 file and h5py is not installed.
     """
     p = Path(path)
     if not p.is_file():
         raise FileNotFoundError(f"MAT file not found: {p}")
-    content = {k: v for k, v in _load(p).items() if not k.startswith("__")}
+    loaded, source_format = _load(p)
+    content = {k: v for k, v in loaded.items() if not k.startswith("__")}
     file_units = _units_struct(content.pop("units", None))
     scalars = {
         k: float(v)
@@ -169,7 +183,12 @@ def read_mat(
             ch.attrs["source_units"] = str(label)
     attrs = {"mat_scalar_" + k: v for k, v in scalars.items() if k not in _FS_NAMES}
     return build_dataset(
-        channels, rate, source_format="mat", source_file=str(p), start_time=start, attrs=attrs
+        channels,
+        rate,
+        source_format=source_format,
+        source_file=str(p),
+        start_time=start,
+        attrs=attrs,
     )
 
 
