@@ -122,3 +122,113 @@ def test_bad_input_raises():
         gfft.irfft(np.ones(8, complex), n=-4)
     with pytest.raises(ValueError, match="effort"):
         gfft.set_planner_effort("FAST")
+
+
+def test_results_are_fresh_arrays_not_plan_buffers():
+    # FFTW writes each result into a new array: later calls of the same cached plan must not
+    # change an earlier result (issue #4 removed the output copy).
+    rng = np.random.default_rng(7)
+    x1, x2 = rng.standard_normal((2, 3, 256))
+    y1 = gfft.rfft(x1)
+    y1_before = y1.copy()
+    y2 = gfft.rfft(x2)
+    assert y2 is not y1
+    np.testing.assert_array_equal(y1, y1_before)
+    z1 = gfft.irfft(y1, n=256)
+    z1_before = z1.copy()
+    gfft.irfft(y2, n=256)
+    np.testing.assert_array_equal(z1, z1_before)
+    np.testing.assert_allclose(z1, x1, rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("aligned", [True, False])
+def test_out_argument(aligned):
+    rng = np.random.default_rng(8)
+    x = rng.standard_normal((4, 300))
+    if aligned:
+        out = gfft.empty_aligned((4, 257), np.complex128)
+    else:  # 16 bytes off a 32-byte boundary: FFTW cannot write there, the result is copied in
+        base = np.empty(4 * 257 + 1, np.complex128)
+        start = 1 if base.ctypes.data % 32 == 0 else 0
+        out = base[start : start + 4 * 257].reshape(4, 257)
+        assert out.ctypes.data % 32 == 16
+    got = gfft.rfft(x, n=512, out=out)
+    assert got is out
+    np.testing.assert_array_equal(out, gfft.rfft(x, n=512))
+    assert _rel_err(out, np.fft.rfft(x, n=512)) < 1e-12
+    back = gfft.empty_aligned((4, 512)) if aligned else np.empty((512, 4)).T
+    assert gfft.irfft(out, n=512, out=back) is back
+    np.testing.assert_allclose(back[:, :300], x, rtol=0, atol=1e-12)
+    with pytest.raises(ValueError, match="out"):
+        gfft.rfft(x, out=np.empty((4, 150), np.complex64))
+    with pytest.raises(ValueError, match="out"):
+        gfft.irfft(out, out=np.empty((4, 511)))
+
+
+def test_rfft_plan_batches_rows_like_rfft():
+    rng = np.random.default_rng(9)
+    x = rng.standard_normal((6, 1000))
+    plan = gfft.rfft_plan(6, 1000)
+    assert gfft.rfft_plan(6, 1000) is plan  # cached
+    plan.input[...] = x
+    spec = plan.execute()
+    assert spec.shape == (6, 501)
+    assert spec.dtype == np.complex128
+    np.testing.assert_array_equal(spec, gfft.rfft(x))
+    assert _rel_err(spec, np.fft.rfft(x)) < 1e-12
+    # every row alone gives the same numbers as the batch (to rounding)
+    for i in range(6):
+        assert _rel_err(spec[i], gfft.rfft(x[i])) < 1e-13
+    with pytest.raises(ValueError, match="rows"):
+        gfft.rfft_plan(0, 16)
+    with pytest.raises(ValueError, match=r"n = 2\.5"):
+        gfft.rfft_plan(1, 2.5)  # type: ignore[arg-type]
+
+
+def test_rfft_plan_per_thread():
+    main = gfft.rfft_plan(2, 64)
+    other: list[gfft.RfftPlan] = []
+    t = threading.Thread(target=lambda: other.append(gfft.rfft_plan(2, 64)))
+    t.start()
+    t.join()
+    assert other[0] is not main
+    assert other[0].input is not main.input
+
+
+def test_repeated_calls_bit_identical():
+    x = np.random.default_rng(10).standard_normal((5, 4096))
+    a = gfft.rfft(x)
+    b = gfft.rfft(x)
+    np.testing.assert_array_equal(a, b)
+    plan = gfft.rfft_plan(5, 4096)
+    plan.input[...] = x
+    first = plan.execute().copy()
+    plan.input[...] = x
+    np.testing.assert_array_equal(plan.execute(), first)
+
+
+def test_plan_cache_stays_within_its_byte_budget(monkeypatch):
+    monkeypatch.setattr(gfft, "_CACHE_MAX_BYTES", 3 * 16 * 1024 * 12)
+    for n in range(1000, 1008):
+        gfft.rfft_plan(8, n)
+    sizes = [b for _, b in gfft._cache.values()]
+    assert sum(sizes) <= gfft._CACHE_MAX_BYTES
+    assert len(sizes) >= 1
+
+
+def test_rfft_plan_and_out_with_scipy_fallback(monkeypatch):
+    x = np.random.default_rng(11).standard_normal((3, 200))
+    with_fftw = gfft.rfft_plan(3, 200)
+    with_fftw.input[...] = x
+    ref = with_fftw.execute().copy()
+    monkeypatch.setattr(gfft, "_pyfftw", None)
+    plan = gfft.rfft_plan(3, 200)
+    assert plan is not with_fftw  # the backend is part of the cache key
+    plan.input[...] = x
+    np.testing.assert_allclose(plan.execute(), ref, rtol=0, atol=1e-12 * np.abs(ref).max())
+    out = gfft.empty_aligned((3, 101), np.complex128)
+    assert gfft.rfft(x, out=out) is out
+    assert _rel_err(out, ref) < 1e-12
+    back = np.empty((3, 200))
+    assert gfft.irfft(out, n=200, out=back) is back
+    np.testing.assert_allclose(back, x, rtol=0, atol=1e-12)
