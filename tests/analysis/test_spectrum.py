@@ -2,11 +2,16 @@
 
 from __future__ import annotations
 
+import subprocess
+import sys
+
 import numpy as np
 import pytest
 import scipy.signal
 import xarray as xr
 
+import analysis.fft as gfft
+import analysis.spectrum as spmod
 from analysis.spectrum import (
     Spectrum,
     find_peaks,
@@ -247,3 +252,131 @@ def test_bad_signals_raise():
     with pytest.raises(ValueError, match="Spectrum"):
         find_peaks(np.ones(10))  # type: ignore[arg-type]
     assert isinstance(spectrum(np.ones(10), FS), Spectrum)
+
+
+# ---------------------------------------------------- batched segment loop (issue #4)
+
+
+def _welch_one_by_one(x, seg, step, nfft, window, average):
+    """Reference: every frame windowed and transformed alone with numpy.fft."""
+    w = get_window(window, seg)
+    starts = range(0, x.shape[-1] - seg + 1, step)
+    p = np.stack([np.abs(np.fft.rfft(x[..., s : s + seg] * w, n=nfft)) ** 2 for s in starts])
+    return p.mean(axis=0) if average == "mean" else p.max(axis=0)
+
+
+@pytest.mark.parametrize("average", ["mean", "max"])
+@pytest.mark.parametrize("block", [1, 3000, 1 << 17])
+def test_batched_blocks_match_frame_by_frame(monkeypatch, average, block):
+    # blocks of 1 frame, of 3 frames (10 frames per channel: blocks span two channels and the
+    # last block is shorter) and of all 60 frames: same numbers as frame by frame
+    monkeypatch.setattr(spmod, "_BLOCK_ELEMENTS", block)
+    rng = np.random.default_rng(12)
+    x = rng.standard_normal((2, 3, 7000))
+    s = spectrum(
+        x,
+        FS,
+        window="hann",
+        scaling="power",
+        segment_length=900,
+        nfft=1000,
+        overlap=0.3,
+        average=average,
+    )
+    w = get_window("hann", 900)
+    ref = _welch_one_by_one(x, 900, 630, 1000, "hann", average) / w.sum() ** 2
+    ref[..., 1:-1] *= 2
+    assert s.n_averages == (7000 - 900) // 630 + 1
+    np.testing.assert_allclose(s.values, ref, rtol=1e-12, atol=0)
+
+
+def test_block_size_does_not_change_results_beyond_rounding(monkeypatch):
+    rng = np.random.default_rng(13)
+    x = rng.standard_normal((3, 20000))
+    default = spectrum(x, FS, segment_length=1024).values
+    for block in (1, 1 << 12, 1 << 22):
+        monkeypatch.setattr(spmod, "_BLOCK_ELEMENTS", block)
+        np.testing.assert_allclose(spectrum(x, FS, segment_length=1024).values, default, rtol=1e-13)
+    # each channel alone equals its row of the multi-channel result
+    for i in range(3):
+        np.testing.assert_allclose(
+            spectrum(x[i], FS, segment_length=1024).values, default[i], rtol=1e-13
+        )
+
+
+def test_zero_padding_survives_shared_plan_buffers():
+    # A cached plan's input buffer is shared: a full-length call must not leave data in the
+    # columns that a later zero-padded call relies on being zero.
+    rng = np.random.default_rng(14)
+    x = rng.standard_normal(40 * 512)
+    spectrum(x, FS, segment_length=1024, overlap=0.5)  # fills every column of the plan
+    s = spectrum(x, FS, window="hann", scaling="power", segment_length=1000, nfft=1024)
+    ref = (
+        _welch_one_by_one(x, 1000, 500, 1024, "hann", "mean") / get_window("hann", 1000).sum() ** 2
+    )
+    ref[1:-1] *= 2
+    np.testing.assert_allclose(s.values, ref, rtol=1e-12)
+
+
+def test_integer_and_float32_input_are_windowed_in_float64():
+    rng = np.random.default_rng(15)
+    xi = rng.integers(-1000, 1000, 10000)
+    np.testing.assert_array_equal(
+        spectrum(xi, FS, segment_length=512).values,
+        spectrum(xi.astype(float), FS, segment_length=512).values,
+    )
+    xf = rng.standard_normal(10000).astype(np.float32)
+    np.testing.assert_array_equal(
+        spectrum(xf, FS, segment_length=512).values,
+        spectrum(xf.astype(float), FS, segment_length=512).values,
+    )
+
+
+def test_scipy_fallback_gives_the_same_spectrum(monkeypatch):
+    rng = np.random.default_rng(16)
+    x = rng.standard_normal((2, 30000))
+    kwargs = {"segment_length": 2048, "nfft": 2500, "scaling": "psd"}
+    ours = spectrum(x, FS, **kwargs).values
+    peak_hold = spectrum(x, FS, average="max", **kwargs).values
+    monkeypatch.setattr(gfft, "_pyfftw", None)
+    assert gfft.backend() == "scipy"
+    np.testing.assert_allclose(spectrum(x, FS, **kwargs).values, ours, rtol=1e-12)
+    np.testing.assert_allclose(
+        spectrum(x, FS, average="max", **kwargs).values, peak_hold, rtol=1e-12
+    )
+
+
+def test_workers_do_not_change_results():
+    x = np.random.default_rng(17).standard_normal((2, 50000))
+    one = spectrum(x, FS, segment_length=4096, workers=1).values
+    np.testing.assert_allclose(
+        spectrum(x, FS, segment_length=4096, workers=2).values, one, rtol=1e-12
+    )
+    with pytest.raises(ValueError, match="workers"):
+        spectrum(x, FS, segment_length=4096, workers=0)
+
+
+_DETERMINISM_SCRIPT = """
+import hashlib, numpy as np
+from analysis.spectrum import spectrum
+x = np.random.default_rng(18).standard_normal((2, 150000))
+h = hashlib.sha256()
+for seg, nfft, avg in ((256, None, "mean"), (4096, None, "max"), (16384, 20000, "mean"),
+                       (65536, None, "mean"), (None, None, "mean")):
+    h.update(spectrum(x, 51200.0, segment_length=seg, nfft=nfft, average=avg).values.tobytes())
+print(h.hexdigest())
+"""
+
+
+def test_same_input_same_output_bit_for_bit_within_and_across_processes(capsys):
+    # FFTW_ESTIMATE plans, a block partition fixed by the shapes and a fixed summation order:
+    # two calls, and a fresh process, give identical bytes
+    exec(_DETERMINISM_SCRIPT, {})
+    exec(_DETERMINISM_SCRIPT, {})
+    here = capsys.readouterr().out.split()
+    assert len(here) == 2
+    assert here[0] == here[1]
+    out = subprocess.run(
+        [sys.executable, "-c", _DETERMINISM_SCRIPT], capture_output=True, text=True, check=True
+    )
+    assert out.stdout.strip() == here[0]
