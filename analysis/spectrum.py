@@ -498,7 +498,9 @@ def spectrum(
         Channel name used in ``long_name``.
     workers : int, optional
         FFT threads; ``None`` uses :func:`analysis.fft.get_workers` (1 by default), -1 all
-        CPUs. The result does not depend on it beyond floating-point rounding.
+        CPUs. The result does not depend on it beyond floating-point rounding. Extra threads
+        pay off only when CPUs are idle: each block is a few milliseconds of work, and
+        waiting for a busy CPU at every execute can cost more than it saves.
 
     Returns
     -------
