@@ -21,6 +21,7 @@ the map itself. The input may be float32; it is promoted per block.
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Literal
 
@@ -28,7 +29,13 @@ import numpy as np
 
 from analysis.checks import require_finite
 from analysis.fft import rfft
-from analysis.orders import _default_samples_per_rev, angle_from_speed, resample_to_angle
+from analysis.orders import (
+    _AngleResampler,
+    _block_size,
+    _check_speed,
+    _frame_blocks,
+    _speed_resampler,
+)
 from analysis.spectrum import (
     WindowSpec,
     _check_choice,
@@ -78,6 +85,19 @@ def _line_factors(n_lines: int, nfft: int) -> np.ndarray:
     if nfft % 2 == 0:
         f[-1] = 1.0
     return f
+
+
+def _power_of(values: np.ndarray, amplitude: str, scale: str, nfft: int) -> np.ndarray:
+    """Lines ``values(frame, line)`` of a map in ``amplitude``/``scale`` as power per line."""
+    v = values
+    if scale == "dB":
+        v = 10.0 ** (v / (10.0 if amplitude == "power" else 20.0))
+    if amplitude == "power":
+        return np.array(v, dtype=float, copy=True)
+    p = np.asarray(v, dtype=float) ** 2
+    if amplitude == "peak":
+        p = p * (1.0 / _line_factors(p.shape[1], nfft))
+    return p
 
 
 def _stft_into(
@@ -171,15 +191,7 @@ class _MapBase:
 
     def power(self) -> np.ndarray:
         """Map converted back to power per line (``A^2/2`` for a sine on a line)."""
-        v = self.values
-        if self.scale == "dB":
-            v = 10.0 ** (v / (10.0 if self.amplitude == "power" else 20.0))
-        if self.amplitude == "power":
-            return np.array(v, dtype=float, copy=True)
-        p = np.asarray(v, dtype=float) ** 2
-        if self.amplitude == "peak":
-            p = p * (1.0 / _line_factors(p.shape[1], self.segment_length))
-        return p
+        return _power_of(self.values, self.amplitude, self.scale, self.segment_length)
 
     def _axis(self) -> tuple[str, np.ndarray, dict[str, str]]:
         raise NotImplementedError
@@ -370,6 +382,175 @@ def _values_at(frac_index: np.ndarray, v: np.ndarray) -> np.ndarray:
     return v[i] * (1.0 - u) + v[i + 1] * u
 
 
+class _Plan:
+    """Frame layout of a map and its frames, produced block by block.
+
+    Attributes
+    ----------
+    seg, step, n_frames : int
+        Window length, hop and number of frames (in samples of the analysed axis).
+    window : WindowSpec
+        Window specification.
+    info : WindowInfo
+        Its figures of merit for ``seg`` samples.
+    w : numpy.ndarray
+        The window.
+    rate : float
+        Samples per second (frequency map) or per revolution (order map).
+    block : int
+        Samples per block (a block always holds at least one frame).
+    """
+
+    def __init__(
+        self, seg: int, step: int, n_frames: int, window: WindowSpec, rate: float, block: int
+    ) -> None:
+        self.seg, self.step, self.n_frames = seg, step, n_frames
+        self.window = window
+        self.info = window_info(window, seg)
+        self.w = get_window(window, seg)
+        self.rate = rate
+        self.block = block
+
+    @property
+    def axis(self) -> np.ndarray:
+        """Line positions (Hz or orders)."""
+        return np.arange(self.seg // 2 + 1) * (self.rate / self.seg)
+
+    def centres(self, k0: int, k1: int) -> np.ndarray:
+        """Centres of frames ``[k0, k1)`` as fractional sample indices."""
+        return np.arange(k0, k1) * self.step + 0.5 * (self.seg - 1)
+
+    def blocks(self) -> Iterator[tuple[int, int, np.ndarray, np.ndarray, np.ndarray]]:
+        """``(k0, k1, samples, time, rpm)`` for consecutive ranges of frames ``[k0, k1)``.
+
+        ``samples`` spans frames ``k0 .. k1 - 1``; ``time`` [s] and ``rpm`` [min-1] are at
+        their centres.
+        """
+        raise NotImplementedError
+
+
+class _FrequencyPlan(_Plan):
+    """Frames of an rpm-frequency map: the time signal itself."""
+
+    def __init__(
+        self,
+        x: np.ndarray,
+        rpm: np.ndarray,
+        fs: float,
+        t0: float,
+        seg: int,
+        step: int,
+        n_frames: int,
+        window: WindowSpec,
+        block: int,
+    ) -> None:
+        super().__init__(seg, step, n_frames, window, fs, block)
+        self.x, self.rpm, self.t0 = x, rpm, t0
+
+    def blocks(self) -> Iterator[tuple[int, int, np.ndarray, np.ndarray, np.ndarray]]:
+        for k0, k1 in _frame_blocks(self.n_frames, self.seg, self.step, self.block):
+            centre = self.centres(k0, k1)
+            samples = self.x[k0 * self.step : (k1 - 1) * self.step + self.seg]
+            yield k0, k1, samples, self.t0 + centre / self.rate, _values_at(centre, self.rpm)
+
+
+class _OrderPlan(_Plan):
+    """Frames of an rpm-order map: the signal resampled to constant angle, block by block."""
+
+    def __init__(
+        self,
+        resampler: _AngleResampler,
+        rpm: np.ndarray,
+        fs: float,
+        t0: float,
+        seg: int,
+        step: int,
+        n_frames: int,
+        window: WindowSpec,
+        block: int,
+    ) -> None:
+        super().__init__(seg, step, n_frames, window, float(resampler.samples_per_rev), block)
+        self.resampler, self.rpm, self.fs, self.t0 = resampler, rpm, fs, t0
+
+    def _speed_at(self, tc: np.ndarray) -> np.ndarray:
+        """Speed at the instants ``tc`` (increasing), interpolated linearly in time."""
+        n = self.rpm.size
+        a = max(0, int(np.floor((tc[0] - self.t0) * self.fs)) - 2)
+        b = min(n, int(np.ceil((tc[-1] - self.t0) * self.fs)) + 3)
+        t = self.t0 + np.arange(a, b) / self.fs
+        return np.interp(tc, t, np.asarray(self.rpm[a:b], dtype=float))
+
+    def blocks(self) -> Iterator[tuple[int, int, np.ndarray, np.ndarray, np.ndarray]]:
+        m = self.resampler.n_out
+        for k0, k1 in _frame_blocks(self.n_frames, self.seg, self.step, self.block):
+            j0 = k0 * self.step
+            samples, times = self.resampler.block(j0, (k1 - 1) * self.step + self.seg)
+            centre = self.centres(k0, k1)  # frame-centre time as _values_at(centre, times)
+            i = np.clip(np.floor(centre).astype(np.int64), 0, m - 2)
+            u = centre - i
+            tc = times[i - j0] * (1.0 - u) + times[i - j0 + 1] * u
+            yield k0, k1, samples, tc, self._speed_at(tc)
+
+
+def _frequency_plan(
+    x: Any,
+    fs: float | None,
+    rpm: Any,
+    *,
+    resolution: float | None = None,
+    window: WindowSpec = "hann",
+    overlap: float = 0.5,
+    time: Any = None,
+    name: str = "x",
+    block_size: int | None = None,
+) -> _FrequencyPlan:
+    """Checked inputs and frame layout of :func:`rpm_frequency_map`."""
+    arr = _signal_1d(x, name)
+    n = arr.size
+    r = _speed(rpm, n)
+    rate, t0 = _fs(fs, time, n)
+    block = _block_size(block_size)
+    res = rate / 128.0 if resolution is None else float(resolution)
+    seg = _window_length(window, rate, res, n, "resolution")
+    step, n_frames = _frame_layout(n, seg, overlap)
+    return _FrequencyPlan(arr, r, rate, t0, seg, step, n_frames, window, block)
+
+
+def _order_plan(
+    x: Any,
+    fs: float | None,
+    rpm: Any,
+    *,
+    resolution: float | None = None,
+    window: WindowSpec = "flattop",
+    overlap: float = 0.5,
+    samples_per_rev: int | None = None,
+    max_order: float | None = None,
+    time: Any = None,
+    name: str = "x",
+    block_size: int | None = None,
+) -> _OrderPlan:
+    """Checked inputs, angular resampler and frame layout of :func:`rpm_order_map`."""
+    arr = _signal_1d(x, name)
+    n = arr.size
+    r = _check_speed(
+        rpm,
+        n,
+        "rpm must be > 0 for order tracking (angle strictly increasing); rpm[{i}] = {value}",
+    )
+    rate, t0 = _fs(fs, time, n)
+    if n < 8:
+        raise ValueError(f"{name}: needs at least 8 samples for angular resampling")
+    block = _block_size(block_size)
+    resampler = _speed_resampler(arr, r, samples_per_rev, max_order, block, fs=rate, t0=t0)
+    spr = resampler.samples_per_rev
+    res = spr / 256.0 if resolution is None else float(resolution)
+    m = resampler.n_out
+    seg = _window_length(window, float(spr), res, m, "resolution")
+    step, n_frames = _frame_layout(m, seg, overlap)
+    return _OrderPlan(resampler, r, rate, t0, seg, step, n_frames, window, block)
+
+
 def rpm_frequency_map(
     x: Any,
     fs: float | None,
@@ -414,38 +595,32 @@ def rpm_frequency_map(
     RpmFrequencyMap
         Map ``(time, frequency)`` with speed per frame and the resolution actually used.
     """
-    arr = _signal_1d(x, name)
-    n = arr.size
-    r = _speed(rpm, n)
-    rate, t0 = _fs(fs, time, n)
     _check_choice(amplitude, _AMPLITUDES, "amplitude")
     _check_choice(scale, _SCALES, "scale")
-    res = rate / 128.0 if resolution is None else float(resolution)
-    seg = _window_length(window, rate, res, n, "resolution")
-    step, n_frames = _frame_layout(n, seg, overlap)
-    info = window_info(window, seg)
-    w = get_window(window, seg)
-    out = np.empty((n_frames, seg // 2 + 1))
-    _stft_into(arr, w, step, out, amplitude, scale)
-    centre = np.arange(n_frames) * step + 0.5 * (seg - 1)
+    p = _frequency_plan(
+        x, fs, rpm, resolution=resolution, window=window, overlap=overlap, time=time, name=name
+    )
+    out = np.empty((p.n_frames, p.seg // 2 + 1))
+    _stft_into(p.x, p.w, p.step, out, amplitude, scale)
+    centre = p.centres(0, p.n_frames)
     return RpmFrequencyMap(
-        time=t0 + centre / rate,
-        rpm=_values_at(centre, r),
+        time=p.t0 + centre / p.rate,
+        rpm=_values_at(centre, p.rpm),
         values=out,
-        window=info.label,
+        window=p.info.label,
         window_spec=window,
         amplitude=amplitude,
         scale=scale,
-        enbw_bins=info.enbw_bins,
+        enbw_bins=p.info.enbw_bins,
         overlap=float(overlap),
-        segment_length=seg,
+        segment_length=p.seg,
         signal_units=units,
         name=name,
-        frequency=np.arange(seg // 2 + 1) * (rate / seg),
-        resolution_hz=info.enbw_hz(rate),
-        bin_spacing_hz=rate / seg,
-        enbw_hz=info.enbw_hz(rate),
-        fs=rate,
+        frequency=p.axis,
+        resolution_hz=p.info.enbw_hz(p.rate),
+        bin_spacing_hz=p.rate / p.seg,
+        enbw_hz=p.info.enbw_hz(p.rate),
+        fs=p.rate,
     )
 
 
@@ -464,8 +639,13 @@ def rpm_order_map(
     time: Any = None,
     units: str = "1",
     name: str = "x",
+    block_size: int | None = None,
 ) -> RpmOrderMap:
     """Rpm-order map by computed order tracking (angular resampling, then short-time spectra).
+
+    The signal is resampled to constant angle increments block by block and each block's
+    frames go straight into the map, so the angle-domain signal is never held whole: the
+    memory needed beyond the map is a few blocks, whatever the length of the record.
 
     Parameters
     ----------
@@ -492,60 +672,57 @@ def rpm_order_map(
         Uniform time axis [s].
     units, name : str
         Metadata of ``x``.
+    block_size : int, optional
+        Angle-domain samples resampled per block (default 32768; a block always holds at
+        least one frame). Only the working memory depends on it; the map equals that of a
+        single block to rounding.
 
     Returns
     -------
     RpmOrderMap
         Map ``(time, order)``; time and speed at the angle-frame centres.
     """
-    arr = _signal_1d(x, name)
-    n = arr.size
-    r = require_finite(_speed(rpm, n), "rpm")
-    if np.any(r <= 0):
-        i = int(np.flatnonzero(r <= 0)[0])
-        raise ValueError(
-            f"rpm must be > 0 for order tracking (angle strictly increasing); rpm[{i}] = {r[i]}"
-        )
-    rate, t0 = _fs(fs, time, n)
     _check_choice(amplitude, _AMPLITUDES, "amplitude")
     _check_choice(scale, _SCALES, "scale")
-    t = t0 + np.arange(n) / rate
-    if samples_per_rev is None:
-        spr, mo = _default_samples_per_rev(rate, float(r.max()))
-        mo = mo if max_order is None else max_order
-    else:
-        spr, mo = samples_per_rev, max_order
-    sig = resample_to_angle(arr, t, angle_from_speed(t, r), spr, mo, units=units, name=name)
-    spr = sig.samples_per_rev
-    res = spr / 256.0 if resolution is None else float(resolution)
-    m = sig.values.size
-    seg = _window_length(window, float(spr), res, m, "resolution")
-    step, n_frames = _frame_layout(m, seg, overlap)
-    info = window_info(window, seg)
-    w = get_window(window, seg)
-    out = np.empty((n_frames, seg // 2 + 1))
-    _stft_into(sig.values, w, step, out, amplitude, scale)
-    centre = np.arange(n_frames) * step + 0.5 * (seg - 1)
-    tc = _values_at(centre, sig.time)
+    p = _order_plan(
+        x,
+        fs,
+        rpm,
+        resolution=resolution,
+        window=window,
+        overlap=overlap,
+        samples_per_rev=samples_per_rev,
+        max_order=max_order,
+        time=time,
+        name=name,
+        block_size=block_size,
+    )
+    out = np.empty((p.n_frames, p.seg // 2 + 1))
+    tc = np.empty(p.n_frames)
+    rc = np.empty(p.n_frames)
+    for k0, k1, samples, t_blk, r_blk in p.blocks():
+        _stft_into(samples, p.w, p.step, out[k0:k1], amplitude, scale)
+        tc[k0:k1], rc[k0:k1] = t_blk, r_blk
+    spr = p.resampler.samples_per_rev
     return RpmOrderMap(
         time=tc,
-        rpm=np.interp(tc, t, r),
+        rpm=rc,
         values=out,
-        window=info.label,
+        window=p.info.label,
         window_spec=window,
         amplitude=amplitude,
         scale=scale,
-        enbw_bins=info.enbw_bins,
+        enbw_bins=p.info.enbw_bins,
         overlap=float(overlap),
-        segment_length=seg,
+        segment_length=p.seg,
         signal_units=units,
         name=name,
-        order=np.arange(seg // 2 + 1) * (spr / seg),
-        resolution_orders=info.enbw_hz(spr),
-        bin_spacing_orders=spr / seg,
-        enbw_orders=info.enbw_hz(spr),
+        order=p.axis,
+        resolution_orders=p.info.enbw_hz(spr),
+        bin_spacing_orders=spr / p.seg,
+        enbw_orders=p.info.enbw_hz(spr),
         samples_per_rev=spr,
-        max_order=sig.max_order,
+        max_order=p.resampler.max_order,
     )
 
 
