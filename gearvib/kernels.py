@@ -51,6 +51,7 @@ __all__ = [
     "STATUS_OK",
     "STATUS_SPEED",
     "KernelSystem",
+    "csr",
     "evaluate_rhs",
     "fir_decimate",
     "flank_forces",
@@ -164,8 +165,111 @@ class KernelSystem:
         return int(self.mesh_vectors.shape[0])
 
     def astuple(self) -> tuple:
-        """Arrays in field order: the ``system`` argument of the kernels."""
-        return tuple(getattr(self, f.name) for f in fields(self))
+        """The ``system`` argument of the kernels (see :func:`pack`)."""
+        return pack(self)
+
+
+# Header of the packed integer array: counts, then ``ipar``, then the offsets of every block of
+# the integer and the float array (see :func:`pack`).
+H_N = 0
+H_NMESH = 1
+H_IPAR = 2
+_INT_BLOCKS = ("lp", "li", "cp", "ci", "gp", "gi", "ii", "oi", "vp", "vi", "fp", "fi", "pp", "pi")
+_FLOAT_BLOCKS = (
+    "acc0", "lv", "cv", "gv", "iv", "ov", "vv", "fv", "pv", "s0", "bl", "mc", "fpar", "limit"
+)
+H_LP, H_LI, H_CP, H_CI, H_GP, H_GI, H_II, H_OI, H_VP, H_VI, H_FP, H_FI, H_PP, H_PI = range(
+    H_IPAR + N_IPAR, H_IPAR + N_IPAR + len(_INT_BLOCKS)
+)
+(
+    H_ACC0, H_LV, H_CV, H_GV, H_IV, H_OV, H_VV, H_FV, H_PV, H_S0, H_BL, H_MC, H_FPAR, H_LIMIT
+) = range(H_LP + len(_INT_BLOCKS), H_LP + len(_INT_BLOCKS) + len(_FLOAT_BLOCKS))
+H_NI = H_LIMIT + 1  # number of entries of the sparse input column
+H_NO = H_LIMIT + 2  # ... and of the output column
+N_HEADER = H_LIMIT + 3
+
+
+def csr(mat: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Compressed sparse rows ``(indptr, indices, data)`` of a dense matrix (exact zeros dropped).
+
+    Entries keep the row-major order of the dense matrix, so the sums of the kernels are
+    evaluated in a fixed order (deterministic results).
+    """
+    a = np.asarray(mat, dtype=np.float64)
+    rows, cols = np.nonzero(a)
+    indptr = np.zeros(a.shape[0] + 1, dtype=np.int64)
+    np.cumsum(np.bincount(rows, minlength=a.shape[0]), out=indptr[1:])
+    return indptr, cols.astype(np.int64), np.ascontiguousarray(a[rows, cols])
+
+
+def pack(system: KernelSystem) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Pack a :class:`KernelSystem` into the few flat arrays the compiled kernels take.
+
+    The inverse mass matrix is multiplied into every operator once, here, and every operator is
+    stored sparse (CSR), because bearing, coupling and mesh vectors touch only a few
+    coordinates. Few arguments keep the per-call overhead of the right-hand side small (every
+    array argument of a compiled function is passed as a struct and reference counted).
+
+    Returns
+    -------
+    ints : ndarray of int64
+        Header (``N_HEADER`` entries: ``n``, ``n_mesh``, ``ipar``, block offsets, sparse-column
+        lengths), then the CSR pointers and indices of ``lin = -M^-1 [K C]`` (columns index the
+        state ``y``), ``cent = M^-1 K_Omega``, ``gyro = -M^-1 G`` (columns index ``qdot``), the
+        sparse columns ``M^-1 e`` of the input and output coordinates, the mesh vectors ``v_m``,
+        the rows ``(M^-1 v_m)^T`` and the mesh-position vectors ``w_m``.
+    floats : ndarray
+        ``M^-1 f_const``, the CSR data of the operators above, ``s0``, backlash, mesh damping,
+        ``fpar`` and the deflection limits.
+    tables : ndarray, shape (2, n_mesh, n_table)
+        Left and right flank stiffness tables.
+    speed_table, torque_table : ndarray
+        As in :class:`KernelSystem`.
+
+    Notes
+    -----
+    ``floats`` holds a copy of ``deflection_limit``: pack after setting it.
+    """
+    minv = system.minv
+    n, n_mesh = system.n_dof, system.n_mesh
+
+    def column(k: int) -> tuple[np.ndarray, np.ndarray]:
+        if k < 0:
+            return np.zeros(0, dtype=np.int64), np.zeros(0)
+        idx = np.flatnonzero(minv[:, k]).astype(np.int64)
+        return idx, np.ascontiguousarray(minv[idx, k])
+
+    lp, li, lv = csr(-np.hstack([minv @ system.stiffness, minv @ system.damping]))
+    cp, ci, cv = csr(minv @ system.centripetal)
+    gp, gi, gv = csr(-(minv @ system.gyroscopic))
+    ii, iv = column(int(system.ipar[IP_INPUT]))
+    oi, ov = column(int(system.ipar[IP_OUTPUT]))
+    vp, vi, vv = csr(system.mesh_vectors)
+    fp, fi, fv = csr((minv @ system.mesh_vectors.T).T)
+    pp, pi, pv = csr(system.mesh_position_vectors)
+    int_blocks = [lp, li, cp, ci, gp, gi, ii, oi, vp, vi, fp, fi, pp, pi]
+    float_blocks = [
+        minv @ system.f_const, lv, cv, gv, iv, ov, vv, fv, pv, system.mesh_position_offsets,
+        system.backlash, system.mesh_damping, system.fpar, system.deflection_limit,
+    ]
+    header = np.zeros(N_HEADER, dtype=np.int64)
+    header[H_N] = n
+    header[H_NMESH] = n_mesh
+    header[H_IPAR : H_IPAR + N_IPAR] = system.ipar
+    pos = N_HEADER
+    for h, block in zip(range(H_LP, H_LP + len(int_blocks)), int_blocks, strict=True):
+        header[h] = pos
+        pos += block.size
+    pos = 0
+    for h, block in zip(range(H_ACC0, H_ACC0 + len(float_blocks)), float_blocks, strict=True):
+        header[h] = pos
+        pos += block.size
+    header[H_NI] = ii.size
+    header[H_NO] = oi.size
+    ints = np.concatenate([header, *int_blocks]).astype(np.int64)
+    floats = np.concatenate([np.asarray(b, dtype=np.float64).ravel() for b in float_blocks])
+    tables = np.ascontiguousarray(np.stack([system.left_tables, system.right_tables]))
+    return ints, floats, tables, system.speed_table, system.torque_table
 
 
 def n_signals(n_dof: int, n_mesh: int) -> int:
@@ -174,9 +278,8 @@ def n_signals(n_dof: int, n_mesh: int) -> int:
 
 
 @njit(cache=True)
-def periodic_interp(table: np.ndarray, row: int, s: float) -> float:
-    """Periodic linear interpolation of ``table[row]`` (samples at ``s = i / n_table``)."""
-    n = table.shape[1]
+def _interp_cell(n: int, s: float) -> tuple[int, int, float]:
+    """Cell ``(i0, i1)`` and weight of ``i1`` for periodic linear interpolation at ``s``."""
     frac = s - np.floor(s)
     u = frac * n
     i0 = int(u)
@@ -187,6 +290,13 @@ def periodic_interp(table: np.ndarray, row: int, s: float) -> float:
     i1 = i0 + 1
     if i1 == n:
         i1 = 0
+    return i0, i1, w
+
+
+@njit(cache=True)
+def periodic_interp(table: np.ndarray, row: int, s: float) -> float:
+    """Periodic linear interpolation of ``table[row]`` (samples at ``s = i / n_table``)."""
+    i0, i1, w = _interp_cell(table.shape[1], s)
     return (1.0 - w) * table[row, i0] + w * table[row, i1]
 
 
@@ -239,6 +349,24 @@ def flank_forces(
 
 
 @njit(cache=True)
+def _segment(tt: np.ndarray, t: float) -> int:
+    """Index ``i`` with ``tt[i] <= t < tt[i + 1]`` for ``tt[0] < t < tt[-1]`` (bisection).
+
+    Written out because ``np.searchsorted`` on a scalar costs about 100 ns in numba, and the
+    speed table is read four times per step.
+    """
+    lo = 0
+    hi = tt.shape[0] - 1
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        if tt[mid] <= t:
+            lo = mid
+        else:
+            hi = mid
+    return lo
+
+
+@njit(cache=True)
 def _speed_at(tab: np.ndarray, t: float) -> tuple[float, float]:
     """Prescribed input angle and speed at ``t`` (piecewise-linear speed, exact integral)."""
     tt = tab[0]
@@ -249,7 +377,7 @@ def _speed_at(tab: np.ndarray, t: float) -> tuple[float, float]:
         return phi[0] + w[0] * (t - tt[0]), w[0]
     if t >= tt[n - 1]:
         return phi[n - 1] + w[n - 1] * (t - tt[n - 1]), w[n - 1]
-    i = np.searchsorted(tt, t, side="right") - 1
+    i = _segment(tt, t)
     tau = t - tt[i]
     slope = (w[i + 1] - w[i]) / (tt[i + 1] - tt[i])
     return phi[i] + w[i] * tau + 0.5 * slope * tau * tau, w[i] + slope * tau
@@ -274,87 +402,108 @@ def _table_at(tab: np.ndarray, t: float) -> float:
         return v[0]
     if t >= tt[n - 1]:
         return v[n - 1]
-    i = np.searchsorted(tt, t, side="right") - 1
+    i = _segment(tt, t)
     return v[i] + (v[i + 1] - v[i]) * (t - tt[i]) / (tt[i + 1] - tt[i])
 
 
-@njit(cache=True)
-def _rhs(t, y, dy, system, force, mesh_out):
-    """Right-hand side ``dy = f(t, y)``; ``mesh_out[m] = (F_L, -F_R, k_eff, state, delta)``."""
-    (
-        minv,
-        kmat,
-        cmat,
-        gmat,
-        komega,
-        mv,
-        mp,
-        s0,
-        tab_l,
-        tab_r,
-        backlash,
-        mc,
-        f_const,
-        ipar,
-        fpar,
-        speed_tab,
-        torque_tab,
-        _limit,
-    ) = system
-    n = minv.shape[0]
-    n_mesh = mv.shape[0]
+@njit(cache=True, inline="always")
+def _rhs(t, y, dy, mesh_out, ints, vals, tables, speed_tab, torque_tab):
+    """Right-hand side ``dy = f(t, y)``; ``mesh_out[m] = (F_L, -F_R, k_eff, state, delta)``.
+
+    ``ints, vals, tables, speed_tab, torque_tab`` is the packed system of :func:`pack`; every
+    product runs over the stored non-zeros only.
+    """
+    n = ints[H_N]
+    n_mesh = ints[H_NMESH]
+    n_table = tables.shape[2]
+    lp = ints[H_LP]
+    li = ints[H_LI]
+    lv = ints[H_LV]
+    a0 = ints[H_ACC0]
     for i in range(n):
         dy[i] = y[n + i]
-        acc = f_const[i]
-        for j in range(n):
-            acc -= kmat[i, j] * y[j] + cmat[i, j] * y[n + j]
-        force[i] = acc
-    carrier = ipar[IP_CARRIER]
-    if ipar[IP_GYRO] != 0 and carrier >= 0:
+        acc = vals[a0 + i]
+        for p in range(ints[lp + i], ints[lp + i + 1]):
+            acc += vals[lv + p] * y[ints[li + p]]
+        dy[n + i] = acc
+    fpar = ints[H_FPAR]
+    carrier = ints[H_IPAR + IP_CARRIER]
+    if ints[H_IPAR + IP_GYRO] != 0 and carrier >= 0:
         om = y[n + carrier]
         om2 = om * om
+        cp = ints[H_CP]
+        ci = ints[H_CI]
+        cv = ints[H_CV]
+        gp = ints[H_GP]
+        gi = ints[H_GI]
+        gv = ints[H_GV]
         for i in range(n):
             acc = 0.0
-            for j in range(n):
-                acc += om2 * komega[i, j] * y[j] - om * gmat[i, j] * y[n + j]
-            force[i] += acc
-    mode = ipar[IP_MODE]
-    k_in = ipar[IP_INPUT]
+            for p in range(ints[cp + i], ints[cp + i + 1]):
+                acc += vals[cv + p] * y[ints[ci + p]]
+            acc2 = 0.0
+            for p in range(ints[gp + i], ints[gp + i + 1]):
+                acc2 += vals[gv + p] * y[n + ints[gi + p]]
+            dy[n + i] += om2 * acc + om * acc2
+    mode = ints[H_IPAR + IP_MODE]
+    k_in = ints[H_IPAR + IP_INPUT]
+    torque = 0.0
     if mode == DRIVE_SPEED:
         phi, w = _speed_at(speed_tab, t)
-        force[k_in] += fpar[FP_KC] * (phi - y[k_in]) + fpar[FP_CC] * (w - y[n + k_in])
+        torque = vals[fpar + FP_KC] * (phi - y[k_in]) + vals[fpar + FP_CC] * (w - y[n + k_in])
     elif mode == DRIVE_TORQUE:
-        force[k_in] += _table_at(torque_tab, t)
-    k_out = ipar[IP_OUTPUT]
+        torque = _table_at(torque_tab, t)
+    if torque != 0.0:
+        ii = ints[H_II]
+        iv = ints[H_IV]
+        for p in range(ints[H_NI]):
+            dy[n + ints[ii + p]] += vals[iv + p] * torque
+    k_out = ints[H_IPAR + IP_OUTPUT]
     if k_out >= 0:
-        e = fpar[FP_OUTDIR]
+        e = vals[fpar + FP_OUTDIR]
         wo = e * y[n + k_out]
-        force[k_out] -= e * (fpar[FP_T0] + fpar[FP_C1] * wo + fpar[FP_C2] * wo * abs(wo))
+        load = -e * (
+            vals[fpar + FP_T0] + vals[fpar + FP_C1] * wo + vals[fpar + FP_C2] * wo * abs(wo)
+        )
+        oi = ints[H_OI]
+        ov = ints[H_OV]
+        for p in range(ints[H_NO]):
+            dy[n + ints[oi + p]] += vals[ov + p] * load
+    vp = ints[H_VP]
+    vi = ints[H_VI]
+    vv = ints[H_VV]
+    fp = ints[H_FP]
+    fi = ints[H_FI]
+    fv = ints[H_FV]
+    pp = ints[H_PP]
+    pi = ints[H_PI]
+    pv = ints[H_PV]
+    s0 = ints[H_S0]
+    bl = ints[H_BL]
+    mc = ints[H_MC]
     for m in range(n_mesh):
         d = 0.0
         dd = 0.0
-        s = s0[m]
-        for i in range(n):
-            d += mv[m, i] * y[i]
-            dd += mv[m, i] * y[n + i]
-            s += mp[m, i] * y[i]
-        kl = periodic_interp(tab_l, m, s)
-        kr = periodic_interp(tab_r, m, s)
-        fl, fr, ke, st = flank_forces(d, dd, kl, kr, backlash[m], mc[m])
+        for p in range(ints[vp + m], ints[vp + m + 1]):
+            j = ints[vi + p]
+            d += vals[vv + p] * y[j]
+            dd += vals[vv + p] * y[n + j]
+        s = vals[s0 + m]
+        for p in range(ints[pp + m], ints[pp + m + 1]):
+            s += vals[pv + p] * y[ints[pi + p]]
+        i0, i1, w = _interp_cell(n_table, s)
+        kl = (1.0 - w) * tables[0, m, i0] + w * tables[0, m, i1]
+        kr = (1.0 - w) * tables[1, m, i0] + w * tables[1, m, i1]
+        fl, fr, ke, st = flank_forces(d, dd, kl, kr, vals[bl + m], vals[mc + m])
         f = fl + fr
         if f != 0.0:
-            for i in range(n):
-                force[i] -= f * mv[m, i]
+            for p in range(ints[fp + m], ints[fp + m + 1]):
+                dy[n + ints[fi + p]] -= f * vals[fv + p]
         mesh_out[m, 0] = fl
         mesh_out[m, 1] = -fr
         mesh_out[m, 2] = ke
         mesh_out[m, 3] = st
         mesh_out[m, 4] = d
-    for i in range(n):
-        acc = 0.0
-        for j in range(n):
-            acc += minv[i, j] * force[j]
-        dy[n + i] = acc
 
 
 @njit(cache=True)
@@ -368,11 +517,10 @@ def evaluate_rhs(t: float, y: np.ndarray, system: tuple) -> tuple[np.ndarray, np
     mesh_out : ndarray, shape (n_mesh, 5)
         Per mesh ``F_left, -F_right, k_eff, contact state, delta``.
     """
-    n = system[0].shape[0]
-    dy = np.empty(2 * n)
-    force = np.empty(n)
-    mesh_out = np.empty((system[5].shape[0], 5))
-    _rhs(t, y, dy, system, force, mesh_out)
+    ints, vals, tables, speed_tab, torque_tab = system
+    dy = np.empty(2 * ints[H_N])
+    mesh_out = np.empty((ints[H_NMESH], 5))
+    _rhs(t, y, dy, mesh_out, ints, vals, tables, speed_tab, torque_tab)
     return dy, mesh_out
 
 
@@ -417,17 +565,17 @@ def integrate_chunk(
     status : ndarray of int64, shape (2,)
         Set to ``(STATUS_*, global step)``; ``STATUS_OK`` when all steps were done.
     """
-    n = system[0].shape[0]
-    n_mesh = system[5].shape[0]
-    limit = system[17]
-    speed_limit = system[14][FP_SPEED_LIMIT]
-    k_in = system[13][IP_INPUT]
+    ints, vals, tables, speed_tab, torque_tab = system
+    n = ints[H_N]
+    n_mesh = ints[H_NMESH]
+    lim = ints[H_LIMIT]
+    speed_limit = vals[ints[H_FPAR] + FP_SPEED_LIMIT]
+    k_in = ints[H_IPAR + IP_INPUT]
     k1 = work[0]
     k2 = work[1]
     k3 = work[2]
     k4 = work[3]
     tmp = work[4]
-    force = work[5]
     n2 = 2 * n
     h2 = 0.5 * dt
     h6 = dt / 6.0
@@ -436,7 +584,7 @@ def integrate_chunk(
     for step in range(n_steps):
         g = first_step + step
         t = g * dt
-        _rhs(t, y, k1, system, force, mesh_out)
+        _rhs(t, y, k1, mesh_out, ints, vals, tables, speed_tab, torque_tab)
         row = record_offset + step
         bad = STATUS_OK
         for i in range(n2):
@@ -452,7 +600,7 @@ def integrate_chunk(
             if flank_state[m] >= 0 and st != flank_state[m] and g <= count_until:
                 contact_changes[m] += 1
             flank_state[m] = st
-            if bad == STATUS_OK and not abs(mesh_out[m, 4]) <= limit[m]:
+            if bad == STATUS_OK and not abs(mesh_out[m, 4]) <= vals[lim + m]:
                 bad = STATUS_DEFLECTION
         if bad == STATUS_OK and k_in >= 0 and not abs(y[n + k_in]) <= speed_limit:
             bad = STATUS_SPEED
@@ -462,13 +610,13 @@ def integrate_chunk(
             return
         for i in range(n2):
             tmp[i] = y[i] + h2 * k1[i]
-        _rhs(t + h2, tmp, k2, system, force, mesh_out)
+        _rhs(t + h2, tmp, k2, mesh_out, ints, vals, tables, speed_tab, torque_tab)
         for i in range(n2):
             tmp[i] = y[i] + h2 * k2[i]
-        _rhs(t + h2, tmp, k3, system, force, mesh_out)
+        _rhs(t + h2, tmp, k3, mesh_out, ints, vals, tables, speed_tab, torque_tab)
         for i in range(n2):
             tmp[i] = y[i] + dt * k3[i]
-        _rhs(t + dt, tmp, k4, system, force, mesh_out)
+        _rhs(t + dt, tmp, k4, mesh_out, ints, vals, tables, speed_tab, torque_tab)
         for i in range(n2):
             y[i] += h6 * (k1[i] + 2.0 * (k2[i] + k3[i]) + k4[i])
 
