@@ -174,19 +174,53 @@ class KernelSystem:
 H_N = 0
 H_NMESH = 1
 H_IPAR = 2
-_INT_BLOCKS = ("lp", "li", "cp", "ci", "gp", "gi", "ii", "oi", "vp", "vi", "fp", "fi", "pp", "pi")
-_FLOAT_BLOCKS = (
-    "acc0", "lv", "cv", "gv", "iv", "ov", "vv", "fv", "pv", "s0", "bl", "mc", "fpar", "limit"
+_INT_BLOCKS = (
+    "lp", "li", "cp", "ci", "gp", "gi", "ii", "oi", "vp", "vi", "fp", "fi", "pp", "pi", "bp"
 )
-H_LP, H_LI, H_CP, H_CI, H_GP, H_GI, H_II, H_OI, H_VP, H_VI, H_FP, H_FI, H_PP, H_PI = range(
+_FLOAT_BLOCKS = (
+    "acc0", "lv", "cv", "gv", "iv", "ov", "vv", "fv", "pv", "s0", "bl", "mc", "fpar", "limit",
+    "bv",
+)
+H_LP, H_LI, H_CP, H_CI, H_GP, H_GI, H_II, H_OI, H_VP, H_VI, H_FP, H_FI, H_PP, H_PI, H_BP = range(
     H_IPAR + N_IPAR, H_IPAR + N_IPAR + len(_INT_BLOCKS)
 )
 (
-    H_ACC0, H_LV, H_CV, H_GV, H_IV, H_OV, H_VV, H_FV, H_PV, H_S0, H_BL, H_MC, H_FPAR, H_LIMIT
+    H_ACC0, H_LV, H_CV, H_GV, H_IV, H_OV, H_VV, H_FV, H_PV, H_S0, H_BL, H_MC, H_FPAR, H_LIMIT,
+    H_BV,
 ) = range(H_LP + len(_INT_BLOCKS), H_LP + len(_INT_BLOCKS) + len(_FLOAT_BLOCKS))
-H_NI = H_LIMIT + 1  # number of entries of the sparse input column
-H_NO = H_LIMIT + 2  # ... and of the output column
-N_HEADER = H_LIMIT + 3
+H_NI = H_BV + 1  # number of entries of the sparse input column
+H_NO = H_BV + 2  # ... and of the output column
+N_HEADER = H_BV + 3
+
+#: A table segment whose stiffness changes by more than this fraction of the table's range
+#: within one table interval is a jump (e.g. the tooth-pair changes of a rectangular model).
+JUMP_FRACTION = 0.05
+#: At most this many jump segments per mesh are located; tables with more are smooth enough.
+MAX_JUMPS_PER_MESH = 32
+
+
+def jump_positions(left: np.ndarray, right: np.ndarray) -> list[np.ndarray]:
+    """Mesh positions [cycles, in 0..1) of the ends of the jump segments of every mesh.
+
+    A segment ``[i, i + 1) / n_table`` of the left or right table is a jump when its change
+    exceeds ``JUMP_FRACTION`` of that table's range. The integrator ends its sub-steps at these
+    positions, so no RK4 stage straddles a jump of the stiffness.
+    """
+    out = []
+    for tl, tr in zip(np.atleast_2d(left), np.atleast_2d(right), strict=True):
+        n = tl.size
+        pos: set[int] = set()
+        for tab in (tl, tr):
+            span = float(tab.max() - tab.min())
+            if span <= 0.0:
+                continue
+            step = np.abs(np.roll(tab, -1) - tab)
+            seg = np.flatnonzero(step > JUMP_FRACTION * span)
+            if seg.size <= MAX_JUMPS_PER_MESH:
+                pos.update(int(i) for i in seg)
+                pos.update(int(i + 1) % n for i in seg)
+        out.append(np.array(sorted(pos), dtype=np.float64) / n)
+    return out
 
 
 def csr(mat: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -247,10 +281,13 @@ def pack(system: KernelSystem) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.n
     vp, vi, vv = csr(system.mesh_vectors)
     fp, fi, fv = csr((minv @ system.mesh_vectors.T).T)
     pp, pi, pv = csr(system.mesh_position_vectors)
-    int_blocks = [lp, li, cp, ci, gp, gi, ii, oi, vp, vi, fp, fi, pp, pi]
+    jumps = jump_positions(system.left_tables, system.right_tables)
+    bp = np.concatenate([[0], np.cumsum([j.size for j in jumps])]).astype(np.int64)
+    bv = np.concatenate([np.zeros(0), *jumps])
+    int_blocks = [lp, li, cp, ci, gp, gi, ii, oi, vp, vi, fp, fi, pp, pi, bp]
     float_blocks = [
         minv @ system.f_const, lv, cv, gv, iv, ov, vv, fv, pv, system.mesh_position_offsets,
-        system.backlash, system.mesh_damping, system.fpar, system.deflection_limit,
+        system.backlash, system.mesh_damping, system.fpar, system.deflection_limit, bv,
     ]
     header = np.zeros(N_HEADER, dtype=np.int64)
     header[H_N] = n
@@ -524,6 +561,82 @@ def evaluate_rhs(t: float, y: np.ndarray, system: tuple) -> tuple[np.ndarray, np
     return dy, mesh_out
 
 
+def work_shape(n_dof: int, n_mesh: int) -> tuple[int, int]:
+    """Shape of the ``work`` buffer of :func:`integrate_chunk`."""
+    return 6, max(2 * n_dof, 4 * n_mesh + 4)
+
+
+@njit(cache=True)
+def _split_times(y, dt, ints, vals, splits):
+    """Times in ``(0, dt)`` at which a mesh position reaches a stiffness jump during the step.
+
+    The mesh positions are extrapolated linearly from the state at the start of the step; the
+    sorted, de-duplicated times go to ``splits`` (as many as it holds). Returns their count.
+    """
+    n = ints[H_N]
+    pp = ints[H_PP]
+    pi = ints[H_PI]
+    pv = ints[H_PV]
+    bp = ints[H_BP]
+    bv = ints[H_BV]
+    cap = splits.shape[0]
+    tol = 1e-9 * dt
+    count = 0
+    for m in range(ints[H_NMESH]):
+        b0 = ints[bp + m]
+        b1 = ints[bp + m + 1]
+        if b1 == b0:
+            continue
+        s = vals[ints[H_S0] + m]
+        sd = 0.0
+        for p in range(ints[pp + m], ints[pp + m + 1]):
+            s += vals[pv + p] * y[ints[pi + p]]
+            sd += vals[pv + p] * y[n + ints[pi + p]]
+        if sd == 0.0:
+            continue
+        s_end = s + sd * dt
+        lo = min(s, s_end)
+        hi = max(s, s_end)
+        base = np.floor(lo)
+        for k in range(int(np.floor(hi) - base) + 1):
+            for q in range(b0, b1):
+                tau = (base + k + vals[bv + q] - s) / sd
+                if not (tol < tau < dt - tol):
+                    continue
+                # insert into the sorted list unless a time this close is there already
+                j = count
+                while j > 0 and splits[j - 1] > tau:
+                    j -= 1
+                if (j > 0 and tau - splits[j - 1] <= tol) or (j < count and splits[j] - tau <= tol):
+                    continue
+                if count == cap:
+                    continue
+                for r in range(count, j, -1):
+                    splits[r] = splits[r - 1]
+                splits[j] = tau
+                count += 1
+    return count
+
+
+@njit(cache=True)
+def _rk4_step(t, h, y, k1, k2, k3, k4, tmp, mesh_out, ints, vals, tables, speed_tab, torque_tab):
+    """One classical RK4 step of size ``h`` from ``(t, y)`` (in place); ``k1 = f(t, y)`` given."""
+    n2 = 2 * ints[H_N]
+    h2 = 0.5 * h
+    h6 = h / 6.0
+    for i in range(n2):
+        tmp[i] = y[i] + h2 * k1[i]
+    _rhs(t + h2, tmp, k2, mesh_out, ints, vals, tables, speed_tab, torque_tab)
+    for i in range(n2):
+        tmp[i] = y[i] + h2 * k2[i]
+    _rhs(t + h2, tmp, k3, mesh_out, ints, vals, tables, speed_tab, torque_tab)
+    for i in range(n2):
+        tmp[i] = y[i] + h * k3[i]
+    _rhs(t + h, tmp, k4, mesh_out, ints, vals, tables, speed_tab, torque_tab)
+    for i in range(n2):
+        y[i] += h6 * (k1[i] + 2.0 * (k2[i] + k3[i]) + k4[i])
+
+
 @njit(cache=True)
 def integrate_chunk(
     y: np.ndarray,
@@ -558,8 +671,8 @@ def integrate_chunk(
         Contact state of the previous sample (-1: unknown); updated.
     contact_changes : ndarray of int64, shape (n_mesh,)
         Incremented at every change of the contact state up to global step ``count_until``.
-    work : ndarray, shape (6, 2 n)
-        Stage buffers.
+    work : ndarray, shape :func:`work_shape`
+        Stage buffers; row 5 holds the sub-step times.
     mesh_out : ndarray, shape (n_mesh, 5)
         Scratch for the mesh quantities.
     status : ndarray of int64, shape (2,)
@@ -576,9 +689,8 @@ def integrate_chunk(
     k3 = work[2]
     k4 = work[3]
     tmp = work[4]
+    splits = work[5]
     n2 = 2 * n
-    h2 = 0.5 * dt
-    h6 = dt / 6.0
     status[0] = STATUS_OK
     status[1] = first_step + n_steps
     for step in range(n_steps):
@@ -608,17 +720,17 @@ def integrate_chunk(
             status[0] = bad
             status[1] = g
             return
-        for i in range(n2):
-            tmp[i] = y[i] + h2 * k1[i]
-        _rhs(t + h2, tmp, k2, mesh_out, ints, vals, tables, speed_tab, torque_tab)
-        for i in range(n2):
-            tmp[i] = y[i] + h2 * k2[i]
-        _rhs(t + h2, tmp, k3, mesh_out, ints, vals, tables, speed_tab, torque_tab)
-        for i in range(n2):
-            tmp[i] = y[i] + dt * k3[i]
-        _rhs(t + dt, tmp, k4, mesh_out, ints, vals, tables, speed_tab, torque_tab)
-        for i in range(n2):
-            y[i] += h6 * (k1[i] + 2.0 * (k2[i] + k3[i]) + k4[i])
+        n_split = _split_times(y, dt, ints, vals, splits)
+        t_a = 0.0
+        for j in range(n_split + 1):
+            t_b = splits[j] if j < n_split else dt
+            if j > 0:
+                _rhs(t + t_a, y, k1, mesh_out, ints, vals, tables, speed_tab, torque_tab)
+            _rk4_step(
+                t + t_a, t_b - t_a, y, k1, k2, k3, k4, tmp, mesh_out,
+                ints, vals, tables, speed_tab, torque_tab,
+            )
+            t_a = t_b
 
 
 @njit(cache=True)
@@ -706,7 +818,7 @@ def integrate(
     record = np.empty((n_steps + 1, n_signals(n, nm)))
     flank_state = np.full(nm, -1, dtype=np.int64)
     changes = np.zeros(nm, dtype=np.int64)
-    work = np.empty((6, 2 * n))
+    work = np.empty(work_shape(n, nm))
     mesh_out = np.empty((nm, 5))
     status = np.zeros(2, dtype=np.int64)
     integrate_chunk(
