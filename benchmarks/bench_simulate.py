@@ -12,7 +12,10 @@ paper-case1-elastic, 1 s run-up 0 -> 4000 min^-1 at 60 N m input torque):
 
 Matched accuracy: a DOP853 run at rtol 1e-11 is the reference; the error of the numba RK4 kernel
 (its automatic step) in the sun-mesh tooth force is measured against it, and solve_ivp (RK45)
-is timed at the loosest rtol whose error is no larger.
+is timed at the loosest rtol (half-decade grid) whose error is no larger. Samples whose mesh
+position lies within one table interval of a stiffness jump are left out of the error: there
+the tooth force changes by the whole jump over 1/n_table of a mesh cycle, so it is not defined
+better than the table resolution (the integrator itself ends its sub-steps at the jumps).
 """
 
 from __future__ import annotations
@@ -108,8 +111,8 @@ def versus_solve_ivp(model, window: float) -> dict:
     y0 = np.concatenate([q0, qd0])
     n_steps = round(window / dt)
     t_end = n_steps * dt
-    t_eval = np.linspace(0.0, t_end, 201)
-    idx = np.round(t_eval / dt).astype(int)
+    idx = np.unique(np.round(np.linspace(0, n_steps, 201)).astype(int))
+    t_eval = idx * dt  # on the kernel's step grid
     rhs = numpy_rhs_factory(setup.system)
 
     def force(states):
@@ -121,23 +124,30 @@ def versus_solve_ivp(model, window: float) -> dict:
 
     ref = solve_ivp(rhs, (0, t_end), y0, method="DOP853", rtol=1e-11, atol=1e-14, t_eval=t_eval)
     f_ref = force(ref.y.T)
+    # samples away from the stiffness jumps of the sun mesh (see the module docstring)
+    n_tab = setup.system.left_tables.shape[1]
+    pos = ref.y[: model.n_dof].T @ setup.system.mesh_position_vectors[0]
+    pos = pos + setup.system.mesh_position_offsets[0]
+    jumps = kn.jump_positions(setup.system.left_tables, setup.system.right_tables)[0]
+    dist = np.abs((pos[:, None] - jumps[None, :] + 0.5) % 1.0 - 0.5)
+    keep = dist.min(axis=1, initial=1.0) > 1.0 / n_tab
     kn.integrate(setup.system, y0, dt, 10)
     t0 = time.perf_counter()
     rec, _, _, _ = kn.integrate(setup.system, y0, dt, n_steps)
     t_rk4 = time.perf_counter() - t0
-    err_rk4 = np.abs(force(rec[idx, : 2 * model.n_dof]) - f_ref).max()
+    err_rk4 = np.abs(force(rec[idx, : 2 * model.n_dof]) - f_ref)[keep].max()
     chosen = None
-    for rtol in (1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9):
+    for rtol in 10.0 ** -np.arange(3.0, 11.01, 0.5):
         t0 = time.perf_counter()
         sol = solve_ivp(rhs, (0, t_end), y0, method="RK45", rtol=rtol, atol=1e-3 * rtol * 1e-6,
                         t_eval=t_eval)
         t_ivp = time.perf_counter() - t0
-        err = np.abs(force(sol.y.T) - f_ref).max()
+        err = np.abs(force(sol.y.T) - f_ref)[keep].max()
         if err <= err_rk4:
             chosen = (rtol, t_ivp, err, sol.nfev)
             break
     result = {"window": t_end, "rk4_wall": t_rk4, "rk4_err": err_rk4,
-              "f_scale": np.abs(f_ref).max()}
+              "f_scale": np.abs(f_ref).max(), "excluded": int((~keep).sum()), "samples": keep.size}
     if chosen is not None:
         result.update(ivp_rtol=chosen[0], ivp_wall=chosen[1], ivp_err=chosen[2], ivp_nfev=chosen[3])
     return result
@@ -166,7 +176,8 @@ def bench_model(name: str, duration: float, window: float) -> None:
     cmp_ = versus_solve_ivp(model, window)
     print(f"  side by side on {cmp_['window'] * 1e3:.1f} ms at 1500 min^-1 (tooth force scale "
           f"{cmp_['f_scale']:.0f} N): numba RK4 {cmp_['rk4_wall'] * 1e3:.2f} ms, error "
-          f"{cmp_['rk4_err']:.2e} N")
+          f"{cmp_['rk4_err']:.2e} N ({cmp_['excluded']} of {cmp_['samples']} samples on a "
+          f"stiffness jump left out)")
     if "ivp_wall" in cmp_:
         ratio = cmp_["ivp_wall"] / cmp_["rk4_wall"]
         print(f"  solve_ivp RK45 at rtol {cmp_['ivp_rtol']:g}: {cmp_['ivp_wall']:.3f} s "
@@ -176,7 +187,7 @@ def bench_model(name: str, duration: float, window: float) -> None:
               f"{cmp_['rk4_wall'] / cmp_['window']:.2f} s; full simulate() "
               f"{cmp_['ivp_wall'] / cmp_['window'] / (wall / duration):.0f}x")
     else:
-        print("  solve_ivp did not reach the kernel's accuracy at rtol >= 1e-9")
+        print("  solve_ivp did not reach the kernel's accuracy at rtol >= 1e-11")
 
 
 def main(argv: list[str] | None = None) -> int:
