@@ -27,9 +27,20 @@ Drive (``ipar[IP_MODE]``):
 Load at the output coordinate, in every mode: ``-e (T0 + c1 w + c2 w |w|)`` with
 ``w = e qdot_out`` and ``e = +-1`` the forward sense of the output member.
 
+Integration
+-----------
+Classical RK4 with a fixed step ``dt``. The stiffness tables of rectangular or steep trapezoidal
+models jump at the tooth-pair changes; a stage that straddles a jump costs RK4 its order. The
+ends of every jump segment of the tables are found once (:func:`jump_positions`); at the start
+of each step the mesh positions are extrapolated linearly and the step is split into RK4
+sub-steps that end exactly at the predicted crossings (:func:`integrate_chunk`). Samples stay on
+the fixed grid.
+
 Layouts
 -------
-``system`` is the tuple built by :meth:`KernelSystem.astuple`. A recorded sample row holds
+``system`` is the tuple of a few flat arrays built by :func:`pack` (via
+:meth:`KernelSystem.astuple`): all operators premultiplied by ``M^-1`` and stored sparse.
+A recorded sample row holds
 ``[q (n), qdot (n), F_left (n_mesh), -F_right (n_mesh), k_eff (n_mesh)]``: both flank forces as
 compressive magnitudes (>= 0) and the effective mesh stiffness (0 in the backlash, ``k_L + k_R``
 in double contact). Row ``i`` of a chunk is the state at the start of step ``i``.
