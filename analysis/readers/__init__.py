@@ -5,7 +5,8 @@ data variable per channel carrying ``units`` and ``long_name`` (see
 :mod:`analysis.readers.layout`). :func:`read` dispatches on the file extension.
 
 UFF needs ``pip install "gearvib[uff]"`` (pyuff), TDMS ``pip install "gearvib[tdms]"``
-(npTDMS); both are imported only when such a file is read.
+(npTDMS) and MATLAB v7.3 ``pip install "gearvib[hdf5]"`` (h5py); each is imported only when
+such a file is read.
 """
 
 from __future__ import annotations
