@@ -454,7 +454,7 @@ def _table_at(tab: np.ndarray, t: float) -> float:
     return v[i] + (v[i + 1] - v[i]) * (t - tt[i]) / (tt[i + 1] - tt[i])
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _rhs(t, y, dy, mesh_out, ints, vals, tables, speed_tab, torque_tab):
     """Right-hand side ``dy = f(t, y)``; ``mesh_out[m] = (F_L, -F_R, k_eff, state, delta)``.
 
