@@ -186,7 +186,11 @@ def modal_analysis(model: AssembledModel, *, carrier_speed_rpm: float = 0.0,
         The assembled gear set.
     carrier_speed_rpm : float
         Carrier speed [min^-1]; when nonzero the gyroscopic (``Omega G``) and centripetal
-        (``-Omega^2 K_Omega``) terms are included and a quadratic eigenproblem is solved.
+        (``-Omega^2 K_Omega``) terms of Lin & Parker (1999) are included (frame rotating at the
+        constant speed ``Omega``) and a quadratic eigenproblem is solved. The simulator refers
+        the terms to the carrier's actual angle instead
+        (:meth:`AssembledModel.carrier_frame_operators`): modes without carrier rotation agree
+        exactly, the others to second order (0.1 % at 3000 min^-1 on ``paper-case1-elastic``).
     stiffness_scale : float
         Factor on every mesh stiffness (for sensitivity studies).
 
@@ -215,10 +219,16 @@ def modal_analysis(model: AssembledModel, *, carrier_speed_rpm: float = 0.0,
         a = np.block([[np.zeros((n, n)), np.eye(n)],
                       [-np.linalg.solve(m, kk), -np.linalg.solve(m, omega_c * model.gyroscopic)]])
         lam, vec = np.linalg.eig(a)
-        keep = lam.imag >= -1e-9
-        lam, vec = lam[keep], vec[:n, keep]
-        order = np.argsort(np.abs(lam.imag))
-        lam, vec = lam[order][:n], vec[:, order][:, :n]
+        # one eigenvalue of every oscillating pair (imag > 0); of the non-oscillating ones (a
+        # rigid-body mode gives a double zero) only as many as the pairs leave to make n
+        tol = 1e-9 * max(float(np.abs(lam).max()), 1.0)
+        osc = np.flatnonzero(lam.imag > tol)
+        flat = np.flatnonzero(np.abs(lam.imag) <= tol)
+        flat = flat[np.argsort(-lam[flat].real, kind="stable")][: max(n - osc.size, 0)]
+        idx = np.concatenate([flat, osc])
+        lam, vec = lam[idx], vec[:n, idx]
+        order = np.argsort(np.abs(lam.imag), kind="stable")
+        lam, vec = lam[order], vec[:, order]
         freqs = np.abs(lam.imag) / (2 * math.pi)
         norms = np.sqrt(np.real(np.einsum("im,ij,jm->m", vec.conj(), m, vec)))
         phi = vec / norms

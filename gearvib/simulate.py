@@ -43,7 +43,6 @@ __all__ = [
     "choose_step",
     "decimation_filter",
     "default_coupling",
-    "rigid_body_velocity",
     "simulate",
     "static_equilibrium",
 ]
@@ -248,47 +247,6 @@ def _check_model(model: AssembledModel) -> None:
         raise ValueError("negative mesh or bearing damping")
     if model.rotation_dofs.get(model.input_member, -1) < 0:
         raise ValueError(f"input member {model.input_member!r} has no rotation coordinate")
-
-
-def rigid_body_velocity(model: AssembledModel) -> np.ndarray:
-    """Coordinate velocities per unit input speed (rigid-body kinematics).
-
-    Rotations come from ``model.kinematic_ratios``; the other coordinates (e.g. the absolute
-    tangential planet coordinate, which moves with the carrier) are solved so that the mean
-    stiffness does no work, ``K r = 0``.
-
-    Returns
-    -------
-    ndarray, shape (n,)
-        ``r`` with ``qdot = r * Omega_in``.
-
-    Raises
-    ------
-    ValueError
-        If the kinematic ratios do not describe a rigid-body motion of the model.
-    """
-    n = model.n_dof
-    r = np.zeros(n)
-    known = np.zeros(n, dtype=bool)
-    for member, dof in model.rotation_dofs.items():
-        if dof >= 0:
-            if member not in model.kinematic_ratios:
-                raise ValueError(f"no kinematic ratio for member {member!r}")
-            r[dof] = float(model.kinematic_ratios[member])
-            known[dof] = True
-    k = model.mean_stiffness_matrix()
-    free = ~known
-    if free.any():
-        kff = k[np.ix_(free, free)]
-        rhs = -k[np.ix_(free, known)] @ r[known]
-        r[free] = np.linalg.lstsq(kff, rhs, rcond=None)[0]
-    scale = np.abs(k).max() * np.abs(r).max() + 1e-300
-    if np.abs(k @ r).max() > 1e-8 * scale:
-        raise ValueError(
-            "model.kinematic_ratios are not a rigid-body motion of the model "
-            f"(max |K r| = {np.abs(k @ r).max():.3g}); check the assembly"
-        )
-    return r
 
 
 def _frequencies(mass: np.ndarray, stiffness: np.ndarray) -> np.ndarray:
@@ -636,7 +594,7 @@ def default_coupling(model: AssembledModel) -> DriveCoupling:
     system, critically damped: ``k = J_eff w_c**2``, ``c = 2 J_eff w_c`` with ``J_eff`` the
     inertia of the kinematic motion reduced to the input member.
     """
-    rigid = rigid_body_velocity(model)
+    rigid = model.rigid_body_velocity()
     k_in = int(model.rotation_dofs[model.input_member])
     f_el = _elastic(_frequencies(np.asarray(model.mass, float), model.mean_stiffness_matrix()))
     if f_el.size == 0:
@@ -648,7 +606,7 @@ def default_coupling(model: AssembledModel) -> DriveCoupling:
 
 def _setup(model: AssembledModel, conditions: Conditions, gyroscopic: bool) -> _Setup:
     n = model.n_dof
-    rigid = rigid_body_velocity(model)
+    rigid = model.rigid_body_velocity()
     mass = np.array(model.mass, dtype=float)
     k_in = int(model.rotation_dofs[model.input_member])
     k_out = int(model.rotation_dofs.get(model.output_member, -1))
@@ -713,12 +671,13 @@ def _setup(model: AssembledModel, conditions: Conditions, gyroscopic: bool) -> _
         raise TypeError(f"unsupported operating conditions {type(conditions).__name__}")
     fpar[kn.FP_T0], fpar[kn.FP_C1], fpar[kn.FP_C2] = load
     fpar[kn.FP_SPEED_LIMIT] = 3.0 * speed_max + 100.0
+    gyro, centri = model.carrier_frame_operators()
     system = kn.KernelSystem(
         minv=np.linalg.inv(mass),
         stiffness=model.stiffness,
         damping=model.damping,
-        gyroscopic=model.gyroscopic,
-        centripetal=model.centripetal,
+        gyroscopic=gyro,
+        centripetal=centri,
         mesh_vectors=np.asarray(model.mesh_vectors, dtype=float).reshape(model.n_mesh, n),
         mesh_position_vectors=np.asarray(model.mesh_position_vectors, float).reshape(
             model.n_mesh, n

@@ -17,13 +17,15 @@ split pair therefore land on opposite sides of the two-sided spectrum, and a sig
 ``G -> -G``) swaps the sides. Lines are found in a Blackman-Harris spectrum with zero padding and
 refined by a variable-projection least-squares fit of undamped complex exponentials.
 
-Known defects (strict xfail below, see each reason): ``simulate(..., gyroscopic=True)`` applies
-``G`` and ``K_Omega`` to the absolute coordinates, i.e. also to the rigid-body rotation (absolute
-planet ``eta = a theta_c + ...``); ``modal_analysis`` at a nonzero speed drops the highest mode when
-the model has a rigid-body mode. The free-vibration and Jacobi-integral tests therefore run the
-production kernel with the terms referred to the rigid-body motion (:func:`referenced_system`),
-i.e. the equations that ``modal_analysis`` solves; the translational modes they measure are the
-same for any frame-consistent fix (the carrier does not rotate in them).
+Frames: the simulator refers the terms to the carrier's actual angle
+(:meth:`gearvib.model.AssembledModel.carrier_frame_operators`, ``G P`` and ``K_Omega P`` with
+``P = I - r e_c^T / r_c``), so a steady rotation produces no force (two defects found by these
+tests: the terms used to act on the rigid-body rotation itself, and ``modal_analysis`` at speed
+dropped its highest mode). ``modal_analysis`` uses the constant-rate frame of Lin & Parker. The
+free-vibration and Jacobi-integral tests run the kernel with the terms referred to the rigid-body
+motion (:func:`referenced_system`), i.e. the equations ``modal_analysis`` solves; the
+translational modes they measure are the same in both frames (the carrier does not rotate in
+them), and ``test_production_free_vibration_about_steady_rotation`` checks the production system.
 """
 
 from __future__ import annotations
@@ -56,23 +58,6 @@ PERTURBATION = {"sun.x": 1.0e-7, "ring.y": 0.5e-7, "carrier.x": -0.7e-7, "carrie
 """Initial translations of the central members [m]: excite the translational family only."""
 
 RPM = 2.0 * math.pi / 60.0
-
-REASON_RIGID = (
-    "gearvib bug: kernels._rhs applies Omega_c G qdot and Omega_c^2 K_Omega q to the absolute "
-    "coordinates. The rigid-body motion is not in the null space of G and K_Omega (absolute "
-    "planet eta = a theta_c; K_Omega r != 0, G r != 0), so a steady rotation gets a tangential "
-    "planet force m Omega^2 a theta_c growing with the carrier angle (drive torque drifts, the "
-    "run speeds up or blows up) and a radial load 2 m Omega^2 a instead of m Omega^2 a. Fix "
-    "(checked against this test): in simulate._setup pass G P and K_Omega P with "
-    "P = I - r e_c^T / r_c, i.e. the terms act on the motion relative to the carrier, "
-    "q - r theta_c / r_c."
-)
-REASON_MODAL = (
-    "gearvib bug: modal_analysis with carrier_speed_rpm != 0 keeps both state-space "
-    "eigenvalues of a rigid-body mode (double zero, imag >= -1e-9) among the n retained and "
-    "drops the highest elastic mode instead"
-)
-
 
 # --------------------------------------------------------------------------- models and systems
 
@@ -538,7 +523,6 @@ def test_modal_analysis_solves_the_gyroscopic_eigenproblem(model: AssembledModel
     assert np.abs(ref[0] - f0[0]) > 40.0
 
 
-@pytest.mark.xfail(strict=True, reason=REASON_MODAL)
 def test_modal_analysis_keeps_every_mode_at_speed(model: AssembledModel) -> None:
     """At 1 min^-1 all 16 elastic modes are still reported, next to their values at rest."""
     f0 = modal_analysis(model).elastic()
@@ -730,7 +714,6 @@ def test_jacobi_integral_is_conserved(model: AssembledModel) -> None:
 # --------------------------------------------------------------------------- production path
 
 
-@pytest.mark.xfail(strict=True, reason=REASON_RIGID)
 def test_production_free_vibration_about_steady_rotation(model: AssembledModel) -> None:
     """As the free-vibration test, with the unmodified kernel system of ``simulate``."""
     setup = speed_setup(model)
@@ -747,7 +730,6 @@ def test_production_free_vibration_about_steady_rotation(model: AssembledModel) 
     np.testing.assert_allclose(measured, translational_modes(model, CARRIER_RPM), rtol=F_RTOL)
 
 
-@pytest.mark.xfail(strict=True, reason=REASON_RIGID)
 def test_paper_case1_constant_speed_run_keeps_its_load() -> None:
     """Public API, default preset: a constant-speed run stays loaded with the terms switched on.
 
