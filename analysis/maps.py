@@ -473,12 +473,8 @@ class _OrderPlan(_Plan):
         self.resampler, self.rpm, self.fs, self.t0 = resampler, rpm, fs, t0
 
     def _speed_at(self, tc: np.ndarray) -> np.ndarray:
-        """Speed at the instants ``tc`` (increasing), interpolated linearly in time."""
-        n = self.rpm.size
-        a = max(0, int(np.floor((tc[0] - self.t0) * self.fs)) - 2)
-        b = min(n, int(np.ceil((tc[-1] - self.t0) * self.fs)) + 3)
-        t = self.t0 + np.arange(a, b) / self.fs
-        return np.interp(tc, t, np.asarray(self.rpm[a:b], dtype=float))
+        """Speed at the instants ``tc``, interpolated linearly between samples."""
+        return _values_at((tc - self.t0) * self.fs, self.rpm)
 
     def blocks(self) -> Iterator[tuple[int, int, np.ndarray, np.ndarray, np.ndarray]]:
         m = self.resampler.n_out

@@ -67,7 +67,7 @@ __all__ = [
 _MAX_OVERSAMPLING = 64
 _BLOCK_SAMPLES = 1 << 15  # default block_size: output (angle-domain) samples per block
 _MIN_INTERVAL = 256  # smallest spacing of the time-domain checkpoints [samples]
-_INTERP_BLOCK = 1 << 13  # fine-grid samples per sinc-interpolation call
+_INTERP_BLOCK = 1 << 11  # fine-grid samples per sinc-interpolation call (stays in cache)
 _SINC_HALF = 12
 
 
@@ -449,12 +449,12 @@ class _AngleResampler:
         Output samples per revolution (checked).
     max_order : float
         Highest order kept (checked).
-    interval : int
-        Checkpoint spacing of the forward low-pass.
+    block : int
+        Largest number of output samples, and of time samples, handled at once.
     """
 
     def __init__(
-        self, x: np.ndarray, track: _Track, fs: float, spr: int, max_order: float, interval: int
+        self, x: np.ndarray, track: _Track, fs: float, spr: int, max_order: float, block: int
     ) -> None:
         self.track = track
         self.fs = fs
@@ -480,7 +480,7 @@ class _AngleResampler:
                 f"to {n_max:.4g} Hz needs {over}x angular oversampling (max "
                 f"{_MAX_OVERSAMPLING}); trim the low-speed part of the record or lower max_order"
             )
-        self.signal = _Lowpassed(x, sos, interval)
+        self.signal = _Lowpassed(x, sos, max(_MIN_INTERVAL, block))
         self.oversampling = over
         fine = spr * over
         self.dphi = 2.0 * np.pi / fine
@@ -499,6 +499,8 @@ class _AngleResampler:
             else:  # max_order == spr / 2: plain Nyquist cut
                 self.fir = scipy.signal.firwin(20 * over + 1, spr / 2.0, fs=fine)
         self.n_out = -(-self.n_fine // over)
+        # output samples whose time span is at most `block` samples of the record
+        self._piece = max(1, min(block, int(block * spr * track.step_min / (2.0 * np.pi))))
 
     def angle(self, j0: int, j1: int) -> np.ndarray:
         """Angle of output samples ``[j0, j1)`` [rad]."""
@@ -522,7 +524,22 @@ class _AngleResampler:
         return out, tq
 
     def block(self, j0: int, j1: int) -> tuple[np.ndarray, np.ndarray]:
-        """Output samples ``[j0, j1)`` (shape ``(..., j1 - j0)``) and their instants [s]."""
+        """Output samples ``[j0, j1)`` (shape ``(..., j1 - j0)``) and their instants [s].
+
+        The range is computed in pieces whose time span is at most ``block`` samples of the
+        record, so the working memory stays bounded however many time samples a revolution
+        holds.
+        """
+        if j1 - j0 <= self._piece:
+            return self._piece_at(j0, j1)
+        values = np.empty((*self.lead, j1 - j0))
+        times = np.empty(j1 - j0)
+        for p0 in range(j0, j1, self._piece):
+            p1 = min(j1, p0 + self._piece)
+            values[..., p0 - j0 : p1 - j0], times[p0 - j0 : p1 - j0] = self._piece_at(p0, p1)
+        return values, times
+
+    def _piece_at(self, j0: int, j1: int) -> tuple[np.ndarray, np.ndarray]:
         over = self.oversampling
         if self.fir is None:
             return self._fine(j0, j1)
@@ -595,7 +612,7 @@ def _speed_resampler(
     interval = max(_MIN_INTERVAL, block)
     track = _Track(x.shape[-1], interval, time=time, t0=t0, fs=fs, rpm=rpm)
     spr, mo = _check_sampling(spr, mo)
-    return _AngleResampler(x, track, fs, spr, mo, interval)
+    return _AngleResampler(x, track, fs, spr, mo, block)
 
 
 def resample_to_angle(
@@ -649,7 +666,7 @@ def resample_to_angle(
     interval = max(_MIN_INTERVAL, block)
     track = _Track(t.size, interval, time=t, angle=th)
     spr, mo = _check_sampling(samples_per_rev, max_order)
-    res = _AngleResampler(arr, track, fs, spr, mo, interval)
+    res = _AngleResampler(arr, track, fs, spr, mo, block)
     values = np.empty((*arr.shape[:-1], res.n_out))
     times = np.empty(res.n_out)
     for j0 in range(0, res.n_out, block):
