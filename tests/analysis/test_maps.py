@@ -165,3 +165,52 @@ def test_map_errors():
         rpm_frequency_map(np.ones((2, 5000)), FS, rpm)
     with pytest.raises(ValueError, match="rpm must be > 0"):
         rpm_order_map(x, FS, np.where(np.arange(5000) > 100, rpm, -5.0))
+
+
+@pytest.mark.parametrize("kw", [{}, {"samples_per_rev": 32, "overlap": 0.75, "scale": "dB"}])
+def test_order_map_blockwise_equals_whole_record(kw):
+    from tests.analysis.test_orders import _whole_record_resample
+
+    t, rpm, x = _runup(duration=4.0)
+    x = x + 0.1 * np.random.default_rng(2).standard_normal(x.size)
+    one = rpm_order_map(x, FS, rpm, block_size=10**9, **kw)
+    # a block boundary every frame or every few frames
+    for block in (150, 1000):
+        m = rpm_order_map(x, FS, rpm, block_size=block, **kw)
+        # to rounding of the amplitudes (lines 130 dB down carry relative rounding errors
+        # of 1e-10 in dB scale, hence the comparison as power)
+        p_ref = one.power()
+        np.testing.assert_allclose(m.power(), p_ref, rtol=1e-12, atol=1e-14 * p_ref.max())
+        np.testing.assert_allclose(m.time, one.time, rtol=1e-14)
+        np.testing.assert_allclose(m.rpm, one.rpm, rtol=1e-14)
+    # the same frames of the whole resampled record (as computed before block-wise working)
+    spr = one.samples_per_rev
+    ref, ref_t = _whole_record_resample(x, t, angle_from_speed(t, rpm), spr)
+    frames = rpm_frequency_map(
+        ref,
+        float(spr),
+        np.ones(ref.size),
+        resolution=one.resolution_orders,
+        window="flattop",
+        overlap=kw.get("overlap", 0.5),
+        scale=kw.get("scale", "linear"),
+    )
+    assert frames.segment_length == one.segment_length
+    p_ref = frames.power()
+    np.testing.assert_allclose(one.power(), p_ref, rtol=1e-10, atol=1e-14 * p_ref.max())
+    centre = frames.time * spr  # frame centres in samples of the angle signal
+    np.testing.assert_allclose(one.time, np.interp(centre, np.arange(ref.size), ref_t))
+    np.testing.assert_allclose(one.rpm, np.interp(one.time, t, rpm), rtol=1e-12)
+
+
+def test_order_map_memory_is_bounded():
+    from tests.analysis.test_orders import _long_record, _peak_bytes
+
+    # Beyond the map itself, the block-wise map allocates a few blocks (about 0.3x one
+    # float64 channel here, a fixed ~5 MB whatever the record's length); one array as long
+    # as the record (low-passed signal, angle, time axis, resampled signal) would be 1x.
+    fs, _t, rpm, x = _long_record()
+    channel = 8 * x.size
+    peak, m = _peak_bytes(lambda: rpm_order_map(x, fs, rpm, samples_per_rev=32, max_order=10.0))
+    assert peak - m.values.nbytes < 0.75 * channel
+    assert m.values.shape[1] == m.order.size
