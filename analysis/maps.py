@@ -13,7 +13,9 @@ rms amplitude; linear scale.
 
 **Memory.** Frames are windowed and transformed block-wise straight into the preallocated
 output (a few MB of temporaries), so a 10-minute, 51.2 kHz channel needs little more than
-the map itself. The input may be float32; it is promoted per block.
+the map itself. The input may be float32; it is promoted per block. The order map resamples
+the signal to constant angle block by block as well (``block_size``, see
+:mod:`analysis.orders`) and never holds the angle-domain signal.
 
 **Amplitude** of a line: ``"power"`` ``2|X|^2/S1^2`` (a sine on a line reads ``A^2/2``),
 ``"rms"`` its square root, ``"peak"`` ``sqrt(2)`` times that (DC and Nyquist not doubled).
