@@ -1,4 +1,5 @@
-"""Rpm-frequency map: throughput vs scipy.signal.ShortTimeFFT, and peak memory of a long map.
+"""Rpm maps and order analysis: throughput vs scipy.signal.ShortTimeFFT, peak memory of long
+recordings.
 
 Run: ``python3 benchmarks/bench_maps.py [--quick]``.
 
@@ -9,6 +10,12 @@ Run: ``python3 benchmarks/bench_maps.py [--quick]``.
    xarray Dataset; the map of one channel is computed with ``rpm_frequency_map_ds`` under
    tracemalloc. Target: peak allocation beyond the input < 1.5x the size of one channel in
    float64 (the output map alone is about 1.0x at the default resolution).
+3. Memory of the order analysis of the same channel (``--quick``: its first 20 s), angular
+   resampling block by block:
+   ``rpm_order_map_ds`` (defaults: flat-top, ``samples_per_rev / 256`` orders),
+   ``order_spectrum`` (0.1-order resolution) and ``order_cuts`` (orders 3, 7, 20), each under
+   tracemalloc with the same target; the order map itself is about 0.55x one channel (the
+   run-up holds 0.55x as many revolutions as the top speed would).
 """
 
 from __future__ import annotations
@@ -16,12 +23,15 @@ from __future__ import annotations
 import argparse
 import time
 import tracemalloc
+from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 import scipy.signal
 import xarray as xr
 
-from analysis.maps import rpm_frequency_map, rpm_frequency_map_ds
+from analysis.maps import rpm_frequency_map, rpm_frequency_map_ds, rpm_order_map_ds
+from analysis.orders import order_cuts, order_spectrum
 from analysis.spectrum import get_window
 
 FS = 51200.0
@@ -59,7 +69,20 @@ def _timed(fn) -> float:
     return time.perf_counter() - t0
 
 
-def memory(minutes: float) -> None:
+def _traced(fn: Callable[[], Any]) -> tuple[int, float, Any]:
+    """Peak allocation beyond the start [bytes], wall time [s] and result of ``fn()``."""
+    tracemalloc.start()
+    tracemalloc.reset_peak()
+    base, _ = tracemalloc.get_traced_memory()
+    t0 = time.perf_counter()
+    result = fn()
+    elapsed = time.perf_counter() - t0
+    _, peak = tracemalloc.get_traced_memory()
+    tracemalloc.stop()
+    return peak - base, elapsed, result
+
+
+def memory(minutes: float, order_minutes: float) -> None:
     n = int(FS * 60 * minutes)
     rng = np.random.default_rng(1)
     t = np.arange(n) / FS
@@ -77,15 +100,7 @@ def memory(minutes: float) -> None:
     )
     one = ds.isel(channel=0)  # a view, no copy
     channel_f64 = n * 8
-    tracemalloc.start()
-    tracemalloc.reset_peak()
-    base, _ = tracemalloc.get_traced_memory()
-    t0 = time.perf_counter()
-    m = rpm_frequency_map_ds(one, "acceleration", speed="shaft_speed")
-    elapsed = time.perf_counter() - t0
-    _, peak = tracemalloc.get_traced_memory()
-    tracemalloc.stop()
-    extra = peak - base
+    extra, elapsed, m = _traced(lambda: rpm_frequency_map_ds(one, "acceleration", "shaft_speed"))
     print(f"memory, {minutes:g}-min 4-channel float32 recording ({n} samples/channel):")
     print(
         f"  one channel in float64: {channel_f64 / 1e6:.1f} MB; map output: "
@@ -95,6 +110,24 @@ def memory(minutes: float) -> None:
         f"  peak allocation beyond the input: {extra / 1e6:.1f} MB = "
         f"{extra / channel_f64:.2f}x one channel (target < 1.5x); time {elapsed:.1f} s"
     )
+    n_ord = min(n, int(FS * 60 * order_minutes))
+    part = one.isel(time=slice(0, n_ord))  # views of the recording, no copies
+    x = part["acceleration"].values
+    t = part["time"].values
+    rpm = part["shaft_speed"].values
+    cases: list[tuple[str, Callable[[], Any]]] = [
+        ("rpm_order_map", lambda: rpm_order_map_ds(part, "acceleration", "shaft_speed")),
+        ("order_spectrum", lambda: order_spectrum(x, t, rpm, orders_resolution=0.1)),
+        ("order_cuts", lambda: order_cuts(x, None, rpm, [3, 7, 20], time=t)),
+    ]
+    print(f"  order analysis of {n_ord / FS:g} s (block-wise angular resampling):")
+    for label, fn in cases:
+        extra, elapsed, r = _traced(fn)
+        print(
+            f"  {label + ':':<16}peak beyond the input {extra / 1e6:6.1f} MB = "
+            f"{extra / (8 * n_ord):.2f}x one channel (target < 1.5x; output "
+            f"{r.values.nbytes / 1e6:.1f} MB); time {elapsed:.1f} s"
+        )
 
 
 def main() -> None:
@@ -102,7 +135,10 @@ def main() -> None:
     parser.add_argument("--quick", action="store_true", help="short signals")
     args = parser.parse_args()
     throughput(10.0 if args.quick else 60.0)
-    memory(1.0 if args.quick else 10.0)
+    if args.quick:
+        memory(1.0, order_minutes=1 / 3)
+    else:
+        memory(10.0, order_minutes=10.0)
 
 
 if __name__ == "__main__":
