@@ -347,17 +347,6 @@ def _signal_1d(x: Any, name: str) -> np.ndarray:
     return arr
 
 
-def _speed(rpm: Any, n: int) -> np.ndarray:
-    r = np.asarray(rpm)
-    if r.ndim != 1 or r.size != n:
-        raise ValueError(
-            f"sample-count mismatch (x: {n}, rpm: {r.size}); rpm must be 1-D, one value per "
-            "sample of x"
-        )
-    _check_finite_blocks(r, "rpm")
-    return r
-
-
 def _fs(fs: float | None, time: Any, n: int) -> tuple[float, float]:
     """Sample rate and start time from ``fs`` and/or ``time`` (checked against each other)."""
     if time is None:
@@ -505,7 +494,7 @@ def _frequency_plan(
     """Checked inputs and frame layout of :func:`rpm_frequency_map`."""
     arr = _signal_1d(x, name)
     n = arr.size
-    r = _speed(rpm, n)
+    r = _check_speed(rpm, n)
     rate, t0 = _fs(fs, time, n)
     block = _block_size(block_size)
     res = rate / 128.0 if resolution is None else float(resolution)

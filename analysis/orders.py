@@ -589,8 +589,11 @@ def _check_signal(x: Any, name: str) -> np.ndarray:
     return arr
 
 
-def _check_speed(rpm: Any, n: int, message: str) -> np.ndarray:
-    """``rpm`` as an array of ``n`` finite values > 0, checked block-wise (no copy)."""
+def _check_speed(rpm: Any, n: int, message: str | None = None) -> np.ndarray:
+    """``rpm`` as an array of ``n`` finite values, checked block-wise (no copy).
+
+    With ``message`` (formatted with ``i`` and ``value``) every value must also be > 0.
+    """
     r = np.asarray(rpm)
     if r.ndim != 1 or r.size != n:
         raise ValueError(
@@ -598,6 +601,8 @@ def _check_speed(rpm: Any, n: int, message: str) -> np.ndarray:
             "sample of x"
         )
     _check_finite_blocks(r, "rpm")
+    if message is None:
+        return r
     for a in range(0, n, _BLOCK_SAMPLES):
         bad = np.flatnonzero(r[a : a + _BLOCK_SAMPLES] <= 0)
         if bad.size:
