@@ -110,7 +110,7 @@ def run_kernel(packed: tuple, y0: np.ndarray, dt: float, n_steps: int, n: int,
     status = np.zeros(2, dtype=np.int64)
     kn.integrate_chunk(np.array(y0), 0, n_steps + 1, dt, packed, record, 0,
                        np.full(nm, -1, dtype=np.int64), np.zeros(nm, dtype=np.int64), n_steps,
-                       np.empty(kn.work_shape(n, nm)), np.empty((nm, 5)), status)
+                       np.empty(kn.work_shape(n, nm)), np.empty((nm, kn.MESH_OUT_COLUMNS)), status)
     return record
 
 

@@ -57,6 +57,7 @@ __all__ = [
     "DRIVE_NONE",
     "DRIVE_SPEED",
     "DRIVE_TORQUE",
+    "MESH_OUT_COLUMNS",
     "STATUS_DEFLECTION",
     "STATUS_NONFINITE",
     "STATUS_OK",
@@ -68,9 +69,12 @@ __all__ = [
     "flank_forces",
     "integrate",
     "integrate_chunk",
+    "jump_positions",
     "n_signals",
+    "pack",
     "periodic_interp",
     "speed_profile",
+    "work_shape",
 ]
 
 STATUS_OK = 0
@@ -320,6 +324,10 @@ def pack(system: KernelSystem) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.n
     return ints, floats, tables, system.speed_table, system.torque_table
 
 
+MESH_OUT_COLUMNS = 6
+"""Columns of the per-mesh scratch ``mesh_out``: ``F_L, -F_R, k_eff, state, delta, s``."""
+
+
 def n_signals(n_dof: int, n_mesh: int) -> int:
     """Number of columns of a recorded sample row: ``2 n_dof + 3 n_mesh``."""
     return 2 * n_dof + 3 * n_mesh
@@ -400,8 +408,8 @@ def flank_forces(
 def _segment(tt: np.ndarray, t: float) -> int:
     """Index ``i`` with ``tt[i] <= t < tt[i + 1]`` for ``tt[0] < t < tt[-1]`` (bisection).
 
-    Written out because ``np.searchsorted`` on a scalar costs about 100 ns in numba, and the
-    speed table is read four times per step.
+    A scalar loop instead of ``np.searchsorted``: the speed table is read at every stage of
+    every step.
     """
     lo = 0
     hi = tt.shape[0] - 1
@@ -456,7 +464,7 @@ def _table_at(tab: np.ndarray, t: float) -> float:
 
 @njit(cache=True)
 def _rhs(t, y, dy, mesh_out, ints, vals, tables, speed_tab, torque_tab):
-    """Right-hand side ``dy = f(t, y)``; ``mesh_out[m] = (F_L, -F_R, k_eff, state, delta)``.
+    """Right-hand side ``dy = f(t, y)``; ``mesh_out[m] = (F_L, -F_R, k_eff, state, delta, s)``.
 
     ``ints, vals, tables, speed_tab, torque_tab`` is the packed system of :func:`pack`; every
     product runs over the stored non-zeros only.
@@ -552,6 +560,7 @@ def _rhs(t, y, dy, mesh_out, ints, vals, tables, speed_tab, torque_tab):
         mesh_out[m, 2] = ke
         mesh_out[m, 3] = st
         mesh_out[m, 4] = d
+        mesh_out[m, 5] = s
 
 
 @njit(cache=True)
@@ -562,12 +571,12 @@ def evaluate_rhs(t: float, y: np.ndarray, system: tuple) -> tuple[np.ndarray, np
     -------
     dy : ndarray, shape (2 n,)
         ``[qdot, qddot]``.
-    mesh_out : ndarray, shape (n_mesh, 5)
-        Per mesh ``F_left, -F_right, k_eff, contact state, delta``.
+    mesh_out : ndarray, shape (n_mesh, MESH_OUT_COLUMNS)
+        Per mesh ``F_left, -F_right, k_eff, contact state, delta`` and the mesh position ``s``.
     """
     ints, vals, tables, speed_tab, torque_tab = system
     dy = np.empty(2 * ints[H_N])
-    mesh_out = np.empty((ints[H_NMESH], 5))
+    mesh_out = np.empty((ints[H_NMESH], MESH_OUT_COLUMNS))
     _rhs(t, y, dy, mesh_out, ints, vals, tables, speed_tab, torque_tab)
     return dy, mesh_out
 
@@ -578,11 +587,12 @@ def work_shape(n_dof: int, n_mesh: int) -> tuple[int, int]:
 
 
 @njit(cache=True)
-def _split_times(y, dt, ints, vals, splits):
+def _split_times(y, dt, ints, vals, mesh_out, splits):
     """Times in ``(0, dt)`` at which a mesh position reaches a stiffness jump during the step.
 
-    The mesh positions are extrapolated linearly from the state at the start of the step; the
-    sorted, de-duplicated times go to ``splits`` (as many as it holds). Returns their count.
+    The mesh positions ``mesh_out[:, 5]`` (left there by the right-hand side evaluated at the
+    start of the step, state ``y``) are extrapolated linearly with their rates ``w_m . qdot``;
+    the sorted, de-duplicated times go to ``splits`` (as many as it holds). Returns their count.
     """
     n = ints[H_N]
     pp = ints[H_PP]
@@ -598,10 +608,9 @@ def _split_times(y, dt, ints, vals, splits):
         b1 = ints[bp + m + 1]
         if b1 == b0:
             continue
-        s = vals[ints[H_S0] + m]
+        s = mesh_out[m, 5]
         sd = 0.0
         for p in range(ints[pp + m], ints[pp + m + 1]):
-            s += vals[pv + p] * y[ints[pi + p]]
             sd += vals[pv + p] * y[n + ints[pi + p]]
         if sd == 0.0:
             continue
@@ -684,7 +693,7 @@ def integrate_chunk(
         Incremented at every change of the contact state up to global step ``count_until``.
     work : ndarray, shape :func:`work_shape`
         Stage buffers; row 5 holds the sub-step times.
-    mesh_out : ndarray, shape (n_mesh, 5)
+    mesh_out : ndarray, shape (n_mesh, MESH_OUT_COLUMNS)
         Scratch for the mesh quantities.
     status : ndarray of int64, shape (2,)
         Set to ``(STATUS_*, global step)``; ``STATUS_OK`` when all steps were done.
@@ -731,7 +740,7 @@ def integrate_chunk(
             status[0] = bad
             status[1] = g
             return
-        n_split = _split_times(y, dt, ints, vals, splits)
+        n_split = _split_times(y, dt, ints, vals, mesh_out, splits)
         t_a = 0.0
         for j in range(n_split + 1):
             t_b = splits[j] if j < n_split else dt
@@ -830,7 +839,7 @@ def integrate(
     flank_state = np.full(nm, -1, dtype=np.int64)
     changes = np.zeros(nm, dtype=np.int64)
     work = np.empty(work_shape(n, nm))
-    mesh_out = np.empty((nm, 5))
+    mesh_out = np.empty((nm, MESH_OUT_COLUMNS))
     status = np.zeros(2, dtype=np.int64)
     integrate_chunk(
         y,

@@ -839,7 +839,7 @@ def simulate(
     buf = np.empty((chunk + 2 * half + dec + 1, nsig))
     out = np.empty((n_out, nsig))
     work = np.empty(kn.work_shape(n, nm))
-    mesh_out = np.empty((nm, 5))
+    mesh_out = np.empty((nm, kn.MESH_OUT_COLUMNS))
     status = np.zeros(2, dtype=np.int64)
     flank_state = np.full(nm, -1, dtype=np.int64)
     changes = np.zeros(nm, dtype=np.int64)
