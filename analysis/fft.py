@@ -304,6 +304,17 @@ def _execute(obj: Any, a: np.ndarray, out: np.ndarray | None) -> np.ndarray:
     return target
 
 
+def _fallback(
+    func: Any, a: np.ndarray, n: int | None, axis: int, threads: int, out: np.ndarray | None
+) -> np.ndarray:
+    """``scipy.fft`` transform (no pyfftw), written into ``out`` when given."""
+    res = func(a, n=n, axis=axis, workers=threads)
+    if out is None:
+        return res
+    out[...] = res
+    return out
+
+
 def _check_out(out: Any, shape: tuple[int, ...], dtype: np.dtype[Any]) -> np.ndarray | None:
     if out is None:
         return None
@@ -463,11 +474,7 @@ def rfft(
     dtype = np.dtype(np.complex64 if a.dtype == np.float32 else np.complex128)
     out = _check_out(out, shape, dtype)
     if _pyfftw is None:
-        res = scipy.fft.rfft(a, n=n, axis=axis, workers=threads)
-        if out is None:
-            return res
-        out[...] = res
-        return out
+        return _fallback(scipy.fft.rfft, a, n, axis, threads, out)
     return _execute(_builder("rfft", a, n, axis, threads), a, out)
 
 
@@ -507,9 +514,5 @@ def irfft(
     dtype = np.dtype(np.float32 if a.dtype == np.complex64 else np.float64)
     out = _check_out(out, shape, dtype)
     if _pyfftw is None:
-        res = scipy.fft.irfft(a, n=n, axis=axis, workers=threads)
-        if out is None:
-            return res
-        out[...] = res
-        return out
+        return _fallback(scipy.fft.irfft, a, n, axis, threads, out)
     return _execute(_builder("irfft", a, n, axis, threads), a, out)
