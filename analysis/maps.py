@@ -36,6 +36,7 @@ from analysis.orders import (
     _block_size,
     _check_speed,
     _frame_blocks,
+    _frame_coords,
     _speed_resampler,
 )
 from analysis.spectrum import (
@@ -170,26 +171,22 @@ class _MapBase:
     signal_units: str
     name: str
 
-    _axis_name = "axis"
+    @property
+    def _level_units(self) -> str:
+        """Units of a linear level: the signal's, squared for ``power``."""
+        if self.amplitude == "power" and self.signal_units != "1":
+            return f"({self.signal_units})^2"
+        return self.signal_units
 
     @property
     def units(self) -> str:
         """Units of ``values`` (``"1"`` for dB levels)."""
-        if self.scale == "dB":
-            return "1"
-        if self.amplitude == "power":
-            return "1" if self.signal_units == "1" else f"({self.signal_units})^2"
-        return self.signal_units
+        return "1" if self.scale == "dB" else self._level_units
 
     @property
     def level_reference(self) -> str:
         """Reference of the dB levels (e.g. ``"1 m s-2"``)."""
-        u = (
-            self.signal_units
-            if self.amplitude != "power"
-            else ("1" if self.signal_units == "1" else f"({self.signal_units})^2")
-        )
-        return f"1 {u}"
+        return f"1 {self._level_units}"
 
     def power(self) -> np.ndarray:
         """Map converted back to power per line (``A^2/2`` for a sine on a line)."""
@@ -206,6 +203,9 @@ class _MapBase:
         import xarray as xr
 
         name, axis, axis_attrs = self._axis()
+        frame = _frame_coords(
+            self.time, self.rpm, "shaft speed at frame centre (revolutions per minute)"
+        )
         long = f"{self.amplitude} amplitude of {self.name}"
         if self.amplitude == "power":
             long = f"power per line of {self.name}"
@@ -219,18 +219,7 @@ class _MapBase:
                     {"units": self.units, "long_name": long},
                 )
             },
-            coords={
-                "time": ("time", self.time, {"units": "s", "long_name": "frame centre time"}),
-                name: (name, axis, axis_attrs),
-                "rpm": (
-                    "time",
-                    self.rpm,
-                    {
-                        "units": "min-1",
-                        "long_name": "shaft speed at frame centre (revolutions per minute)",
-                    },
-                ),
-            },
+            coords={"time": frame["time"], name: (name, axis, axis_attrs), "rpm": frame["rpm"]},
         )
         ds.attrs.update(
             window=self.window,
@@ -817,14 +806,7 @@ class OverallLevel:
             long += f" (dB re {self.level_reference})"
         return xr.Dataset(
             {"overall_level": ("time", self.values, {"units": self.units, "long_name": long})},
-            coords={
-                "time": ("time", self.time, {"units": "s", "long_name": "frame centre time"}),
-                "rpm": (
-                    "time",
-                    self.rpm,
-                    {"units": "min-1", "long_name": "shaft speed (revolutions per minute)"},
-                ),
-            },
+            coords=_frame_coords(self.time, self.rpm),
             attrs={
                 "f_min_hz": float(self.frequency_range[0]),
                 "f_max_hz": float(self.frequency_range[1]),

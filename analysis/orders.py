@@ -566,6 +566,18 @@ class _AngleResampler:
         return dec[..., first : first + j1 - j0], tq[j0 * over - f0 :: over][: j1 - j0]
 
 
+def _frame_coords(
+    time: np.ndarray,
+    rpm: np.ndarray,
+    rpm_long_name: str = "shaft speed (revolutions per minute)",
+) -> dict[str, tuple[str, np.ndarray, dict[str, str]]]:
+    """CF coordinates of a frame-wise result: ``time`` (frame centres) and ``rpm(time)``."""
+    return {
+        "time": ("time", time, {"units": "s", "long_name": "frame centre time"}),
+        "rpm": ("time", rpm, {"units": "min-1", "long_name": rpm_long_name}),
+    }
+
+
 def _check_sampling(samples_per_rev: Any, max_order: float | None) -> tuple[int, float]:
     if isinstance(samples_per_rev, bool) or not isinstance(samples_per_rev, int | np.integer):
         raise ValueError(f"samples_per_rev = {samples_per_rev!r} must be an integer >= 4")
@@ -973,12 +985,7 @@ class OrderCut:
             {"level": (("order", "time"), self.values, {"units": self.units, "long_name": long})},
             coords={
                 "order": ("order", self.orders, {"units": "1", "long_name": "tracked order"}),
-                "time": ("time", self.time, {"units": "s", "long_name": "frame centre time"}),
-                "rpm": (
-                    "time",
-                    self.rpm,
-                    {"units": "min-1", "long_name": "shaft speed (revolutions per minute)"},
-                ),
+                **_frame_coords(self.time, self.rpm),
             },
             attrs={
                 "amplitude": self.amplitude,
