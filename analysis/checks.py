@@ -7,16 +7,25 @@ admissible, so that a user looking at a measured file knows what to fix.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
 __all__ = [
+    "require_block_size",
+    "require_choice",
     "require_finite",
+    "require_finite_blocks",
+    "require_int",
     "require_monotonic",
     "require_positive",
     "require_same_length",
     "sample_rate",
+    "uniform_rate",
 ]
+
+#: Default ``block_size`` of the block-wise order analysis (samples per block).
+BLOCK_SAMPLES = 1 << 15
 
 
 def require_finite(values: np.ndarray, name: str) -> np.ndarray:
@@ -91,3 +100,80 @@ def sample_rate(time: np.ndarray, *, name: str = "time", rtol: float = 1e-6) -> 
             f"{dt:.6g} s (allowed {rtol:g} relative); resample the channel first"
         )
     return 1.0 / dt
+
+
+def require_choice(value: Any, allowed: tuple[str, ...], name: str) -> str:
+    """Return ``value``; raise unless it is one of ``allowed``."""
+    if value not in allowed:
+        raise ValueError(f"{name} = {value!r} is not admissible: must be one of {allowed}")
+    return value
+
+
+def require_int(value: Any, name: str, minimum: int) -> int:
+    """Return ``value`` as int; raise unless it is an integer (not a bool) >= ``minimum``."""
+    if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < minimum:
+        raise ValueError(f"{name} = {value!r} is not admissible: must be an integer >= {minimum}")
+    return int(value)
+
+
+def require_block_size(block_size: int | None) -> int:
+    """Checked ``block_size`` of the block-wise order analysis (default :data:`BLOCK_SAMPLES`)."""
+    if block_size is None:
+        return BLOCK_SAMPLES
+    if isinstance(block_size, bool) or not isinstance(block_size, int | np.integer):
+        raise ValueError(f"block_size = {block_size!r} must be an integer >= 1")
+    if block_size < 1:
+        raise ValueError(f"block_size = {block_size!r} must be an integer >= 1")
+    return int(block_size)
+
+
+def uniform_rate(time: Any, name: str = "time", rtol: float = 1e-6) -> float:
+    """Sample rate [Hz] of a uniform time axis, checked block-wise (bounded memory).
+
+    Unlike :func:`sample_rate` it never converts the whole axis at once, so it suits
+    memory-mapped or very long axes.
+    """
+    t = np.asarray(time)
+    if t.ndim != 1 or t.size < 2:
+        raise ValueError(f"{name}: needs a 1-D axis with at least two samples")
+    if not np.issubdtype(t.dtype, np.number):
+        raise ValueError(f"{name}: must be numeric seconds (units 's'), got dtype {t.dtype}")
+    n = t.size
+    dt = (float(t[-1]) - float(t[0])) / (n - 1)
+    if not np.isfinite(dt) or dt <= 0:
+        raise ValueError(f"{name} must be finite and strictly increasing")
+    tol = rtol * dt + 1e-12 * abs(float(t[-1]))
+    block = 1 << 18
+    for start in range(0, n - 1, block):
+        seg = np.asarray(t[start : min(n, start + block + 1)], dtype=float)
+        if not np.all(np.isfinite(seg)):
+            raise ValueError(f"{name}: non-finite value near sample {start}")
+        d = np.diff(seg)
+        if np.any(d <= 0):
+            i = start + int(np.flatnonzero(d <= 0)[0])
+            raise ValueError(
+                f"{name} must be strictly increasing; it is not between samples {i} and {i + 1}"
+            )
+        dev = float(np.max(np.abs(d - dt)))
+        if dev > tol:
+            raise ValueError(
+                f"{name} is not uniformly sampled: step deviates by {dev:.3g} s from the mean "
+                f"{dt:.6g} s (allowed {rtol:g} relative); resample the channel first"
+            )
+    return 1.0 / dt
+
+
+def require_finite_blocks(x: np.ndarray, name: str) -> None:
+    """Raise if ``x`` is empty or holds NaN/inf; works block-wise along the last axis."""
+    if x.size == 0:
+        raise ValueError(f"{name}: channel is empty (needs at least one sample)")
+    n = x.shape[-1]
+    step = max(1, (1 << 20) // max(1, x.size // max(n, 1)))
+    for start in range(0, n, step):
+        blk = x[..., start : start + step]
+        if not np.all(np.isfinite(blk)):
+            idx = start + int(np.argwhere(~np.isfinite(blk))[0][-1])
+            raise ValueError(
+                f"{name}: non-finite value (NaN or inf) at time sample {idx}; only finite "
+                "values are admissible (gap-fill or trim the channel first)"
+            )

@@ -23,32 +23,27 @@ the signal to constant angle block by block as well (``block_size``, see
 
 from __future__ import annotations
 
-from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
-from analysis.checks import require_finite
-from analysis.fft import rfft
-from analysis.orders import (
-    _AngleResampler,
-    _block_size,
-    _check_speed,
-    _frame_blocks,
-    _frame_coords,
-    _speed_resampler,
+from analysis.checks import require_choice, require_finite
+from analysis.frames import (
+    frame_coords,
+    frequency_plan,
+    order_plan,
+    stft_into,
+    values_at,
 )
-from analysis.spectrum import (
-    WindowSpec,
-    _check_choice,
-    _check_finite_blocks,
-    _parse_window,
-    _uniform_rate,
-    get_window,
-    to_db,
-    window_info,
+from analysis.levels import power_of, to_db
+from analysis.plots import (
+    campbell_figure,
+    overall_level_figure,
+    rpm_frequency_map_figure,
+    rpm_order_map_figure,
 )
+from analysis.windows import WindowSpec
 
 if TYPE_CHECKING:
     import matplotlib.figure
@@ -67,93 +62,8 @@ __all__ = [
     "rpm_order_map_ds",
 ]
 
-_BLOCK_ELEMENTS = 1 << 19  # windowed samples per block (4 MB of float64)
 _AMPLITUDES = ("rms", "peak", "power")
 _SCALES = ("linear", "dB")
-
-
-def _main_lobe_half_width(window: WindowSpec) -> float:
-    """Half width of the main lobe in bins (first null for the cosine sums)."""
-    name, beta = _parse_window(window)
-    table = {"rectangular": 1.0, "hann": 2.0, "hamming": 2.0, "blackmanharris": 4.0, "flattop": 5.0}
-    if name == "kaiser":
-        assert beta is not None
-        return float(np.sqrt(1.0 + (beta / np.pi) ** 2))
-    return table[name]
-
-
-def _line_factors(n_lines: int, nfft: int) -> np.ndarray:
-    f = np.full(n_lines, 2.0)
-    f[0] = 1.0
-    if nfft % 2 == 0:
-        f[-1] = 1.0
-    return f
-
-
-def _power_of(values: np.ndarray, amplitude: str, scale: str, nfft: int) -> np.ndarray:
-    """Lines ``values(frame, line)`` of a map in ``amplitude``/``scale`` as power per line."""
-    v = values
-    if scale == "dB":
-        v = 10.0 ** (v / (10.0 if amplitude == "power" else 20.0))
-    if amplitude == "power":
-        return np.array(v, dtype=float, copy=True)
-    p = np.asarray(v, dtype=float) ** 2
-    if amplitude == "peak":
-        p = p * (1.0 / _line_factors(p.shape[1], nfft))
-    return p
-
-
-def _stft_into(
-    x: np.ndarray,
-    w: np.ndarray,
-    step: int,
-    out: np.ndarray,
-    amplitude: str,
-    scale: str,
-) -> None:
-    """Fill ``out[frame, line]`` with the scaled short-time spectrum of 1-D ``x``, block-wise."""
-    seg = w.size
-    frames = np.lib.stride_tricks.sliding_window_view(x, seg)[::step]
-    n_frames = out.shape[0]
-    s1 = float(w.sum())
-    factor = _line_factors(out.shape[1], seg) / (s1 * s1)
-    peak_gain = np.sqrt(_line_factors(out.shape[1], seg))
-    block = max(1, _BLOCK_ELEMENTS // seg)
-    for start in range(0, n_frames, block):
-        stop = min(n_frames, start + block)
-        spec = rfft(frames[start:stop] * w, axis=-1)
-        dst = out[start:stop]
-        np.multiply(spec.real, spec.real, out=dst)
-        dst += spec.imag * spec.imag
-        dst *= factor
-        if amplitude != "power":
-            np.sqrt(dst, out=dst)
-            if amplitude == "peak":
-                dst *= peak_gain
-        if scale == "dB":
-            np.maximum(dst, 1e-40, out=dst)
-            np.log10(dst, out=dst)
-            dst *= 10.0 if amplitude == "power" else 20.0
-
-
-def _frame_layout(n: int, seg: int, overlap: float) -> tuple[int, int]:
-    if not 0.0 <= float(overlap) < 1.0:
-        raise ValueError(f"overlap = {overlap!r} is not admissible: must be in [0, 1)")
-    step = max(1, round(seg * (1.0 - float(overlap))))
-    return step, (n - seg) // step + 1
-
-
-def _window_length(window: WindowSpec, rate: float, resolution: float, n: int, name: str) -> int:
-    if not np.isfinite(resolution) or resolution <= 0:
-        raise ValueError(f"{name} = {resolution!r} is not admissible: must be finite and > 0")
-    enbw = window_info(window, 4096).enbw_bins
-    seg = round(enbw * rate / resolution)
-    if seg < 4:
-        raise ValueError(
-            f"{name} = {resolution:g} is too coarse: the window would have {seg} < 4 samples "
-            f"(admissible: <= {enbw * rate / 4:.6g})"
-        )
-    return min(seg, n)  # record too short: one estimate over the whole record (MATLAB)
 
 
 @dataclass
@@ -190,7 +100,7 @@ class _MapBase:
 
     def power(self) -> np.ndarray:
         """Map converted back to power per line (``A^2/2`` for a sine on a line)."""
-        return _power_of(self.values, self.amplitude, self.scale, self.segment_length)
+        return power_of(self.values, self.amplitude, self.scale, self.segment_length)
 
     def _axis(self) -> tuple[str, np.ndarray, dict[str, str]]:
         raise NotImplementedError
@@ -203,7 +113,7 @@ class _MapBase:
         import xarray as xr
 
         name, axis, axis_attrs = self._axis()
-        frame = _frame_coords(
+        frame = frame_coords(
             self.time, self.rpm, "shaft speed at frame centre (revolutions per minute)"
         )
         long = f"{self.amplitude} amplitude of {self.name}"
@@ -273,8 +183,6 @@ class RpmFrequencyMap(_MapBase):
 
     def plot(self, **kwargs: Any) -> matplotlib.figure.Figure:
         """Sonogram figure (see :func:`analysis.plots.rpm_frequency_map_figure`)."""
-        from analysis.plots import rpm_frequency_map_figure
-
         return rpm_frequency_map_figure(self, **kwargs)
 
 
@@ -321,210 +229,7 @@ class RpmOrderMap(_MapBase):
 
     def plot(self, **kwargs: Any) -> matplotlib.figure.Figure:
         """Figure (see :func:`analysis.plots.rpm_order_map_figure`)."""
-        from analysis.plots import rpm_order_map_figure
-
         return rpm_order_map_figure(self, **kwargs)
-
-
-def _signal_1d(x: Any, name: str) -> np.ndarray:
-    arr = np.asarray(x)
-    if np.iscomplexobj(arr) or not np.issubdtype(arr.dtype, np.number):
-        raise ValueError(f"{name} must be a real numeric array; got dtype {arr.dtype}")
-    if arr.ndim != 1:
-        raise ValueError(f"{name} must be 1-D (one channel); got shape {arr.shape}")
-    _check_finite_blocks(arr, name)
-    return arr
-
-
-def _fs(fs: float | None, time: Any, n: int) -> tuple[float, float]:
-    """Sample rate and start time from ``fs`` and/or ``time`` (checked against each other)."""
-    if time is None:
-        if fs is None:
-            raise ValueError("fs (Hz, > 0) or time (s) is required")
-        fs = float(fs)
-        if not np.isfinite(fs) or fs <= 0:
-            raise ValueError(f"fs = {fs!r} is not admissible: must be finite and > 0 Hz")
-        return fs, 0.0
-    t = np.asarray(time)
-    if t.ndim != 1 or t.size != n:
-        raise ValueError(f"sample-count mismatch (x: {n}, time: {t.size})")
-    fs_t = _uniform_rate(t, "time")
-    if fs is not None and abs(float(fs) - fs_t) > 1e-6 * fs_t:
-        raise ValueError(
-            f"sample-rate mismatch: fs = {fs!r} Hz but the time axis gives {fs_t:.9g} Hz"
-        )
-    return fs_t, float(t[0])
-
-
-def _values_at(frac_index: np.ndarray, v: np.ndarray) -> np.ndarray:
-    i = np.clip(np.floor(frac_index).astype(np.int64), 0, v.size - 2)
-    u = frac_index - i
-    return v[i] * (1.0 - u) + v[i + 1] * u
-
-
-class _Plan:
-    """Frame layout of a map and its frames, produced block by block.
-
-    Attributes
-    ----------
-    seg, step, n_frames : int
-        Window length, hop and number of frames (in samples of the analysed axis).
-    window : WindowSpec
-        Window specification.
-    info : WindowInfo
-        Its figures of merit for ``seg`` samples.
-    w : numpy.ndarray
-        The window.
-    rate : float
-        Samples per second (frequency map) or per revolution (order map).
-    block : int
-        Samples per block (a block always holds at least one frame).
-    """
-
-    def __init__(
-        self, seg: int, step: int, n_frames: int, window: WindowSpec, rate: float, block: int
-    ) -> None:
-        self.seg, self.step, self.n_frames = seg, step, n_frames
-        self.window = window
-        self.info = window_info(window, seg)
-        self.w = get_window(window, seg)
-        self.rate = rate
-        self.block = block
-
-    @property
-    def axis(self) -> np.ndarray:
-        """Line positions (Hz or orders)."""
-        return np.arange(self.seg // 2 + 1) * (self.rate / self.seg)
-
-    def centres(self, k0: int, k1: int) -> np.ndarray:
-        """Centres of frames ``[k0, k1)`` as fractional sample indices."""
-        return np.arange(k0, k1) * self.step + 0.5 * (self.seg - 1)
-
-    def blocks(self) -> Iterator[tuple[int, int, np.ndarray, np.ndarray, np.ndarray]]:
-        """``(k0, k1, samples, time, rpm)`` for consecutive ranges of frames ``[k0, k1)``.
-
-        ``samples`` spans frames ``k0 .. k1 - 1``; ``time`` [s] and ``rpm`` [min-1] are at
-        their centres.
-        """
-        raise NotImplementedError
-
-
-class _FrequencyPlan(_Plan):
-    """Frames of an rpm-frequency map: the time signal itself."""
-
-    def __init__(
-        self,
-        x: np.ndarray,
-        rpm: np.ndarray,
-        fs: float,
-        t0: float,
-        seg: int,
-        step: int,
-        n_frames: int,
-        window: WindowSpec,
-        block: int,
-    ) -> None:
-        super().__init__(seg, step, n_frames, window, fs, block)
-        self.x, self.rpm, self.t0 = x, rpm, t0
-
-    def blocks(self) -> Iterator[tuple[int, int, np.ndarray, np.ndarray, np.ndarray]]:
-        for k0, k1 in _frame_blocks(self.n_frames, self.seg, self.step, self.block):
-            centre = self.centres(k0, k1)
-            samples = self.x[k0 * self.step : (k1 - 1) * self.step + self.seg]
-            yield k0, k1, samples, self.t0 + centre / self.rate, _values_at(centre, self.rpm)
-
-
-class _OrderPlan(_Plan):
-    """Frames of an rpm-order map: the signal resampled to constant angle, block by block."""
-
-    def __init__(
-        self,
-        resampler: _AngleResampler,
-        rpm: np.ndarray,
-        fs: float,
-        t0: float,
-        seg: int,
-        step: int,
-        n_frames: int,
-        window: WindowSpec,
-        block: int,
-    ) -> None:
-        super().__init__(seg, step, n_frames, window, float(resampler.samples_per_rev), block)
-        self.resampler, self.rpm, self.fs, self.t0 = resampler, rpm, fs, t0
-
-    def _speed_at(self, tc: np.ndarray) -> np.ndarray:
-        """Speed at the instants ``tc``, interpolated linearly between samples."""
-        return _values_at((tc - self.t0) * self.fs, self.rpm)
-
-    def blocks(self) -> Iterator[tuple[int, int, np.ndarray, np.ndarray, np.ndarray]]:
-        m = self.resampler.n_out
-        for k0, k1 in _frame_blocks(self.n_frames, self.seg, self.step, self.block):
-            j0 = k0 * self.step
-            samples, times = self.resampler.block(j0, (k1 - 1) * self.step + self.seg)
-            centre = self.centres(k0, k1)  # frame-centre time as _values_at(centre, times)
-            i = np.clip(np.floor(centre).astype(np.int64), 0, m - 2)
-            u = centre - i
-            tc = times[i - j0] * (1.0 - u) + times[i - j0 + 1] * u
-            yield k0, k1, samples, tc, self._speed_at(tc)
-
-
-def _frequency_plan(
-    x: Any,
-    fs: float | None,
-    rpm: Any,
-    *,
-    resolution: float | None = None,
-    window: WindowSpec = "hann",
-    overlap: float = 0.5,
-    time: Any = None,
-    name: str = "x",
-    block_size: int | None = None,
-) -> _FrequencyPlan:
-    """Checked inputs and frame layout of :func:`rpm_frequency_map`."""
-    arr = _signal_1d(x, name)
-    n = arr.size
-    r = _check_speed(rpm, n)
-    rate, t0 = _fs(fs, time, n)
-    block = _block_size(block_size)
-    res = rate / 128.0 if resolution is None else float(resolution)
-    seg = _window_length(window, rate, res, n, "resolution")
-    step, n_frames = _frame_layout(n, seg, overlap)
-    return _FrequencyPlan(arr, r, rate, t0, seg, step, n_frames, window, block)
-
-
-def _order_plan(
-    x: Any,
-    fs: float | None,
-    rpm: Any,
-    *,
-    resolution: float | None = None,
-    window: WindowSpec = "flattop",
-    overlap: float = 0.5,
-    samples_per_rev: int | None = None,
-    max_order: float | None = None,
-    time: Any = None,
-    name: str = "x",
-    block_size: int | None = None,
-) -> _OrderPlan:
-    """Checked inputs, angular resampler and frame layout of :func:`rpm_order_map`."""
-    arr = _signal_1d(x, name)
-    n = arr.size
-    r = _check_speed(
-        rpm,
-        n,
-        "rpm must be > 0 for order tracking (angle strictly increasing); rpm[{i}] = {value}",
-    )
-    rate, t0 = _fs(fs, time, n)
-    if n < 8:
-        raise ValueError(f"{name}: needs at least 8 samples for angular resampling")
-    block = _block_size(block_size)
-    resampler = _speed_resampler(arr, r, samples_per_rev, max_order, block, fs=rate, t0=t0)
-    spr = resampler.samples_per_rev
-    res = spr / 256.0 if resolution is None else float(resolution)
-    m = resampler.n_out
-    seg = _window_length(window, float(spr), res, m, "resolution")
-    step, n_frames = _frame_layout(m, seg, overlap)
-    return _OrderPlan(resampler, r, rate, t0, seg, step, n_frames, window, block)
 
 
 def rpm_frequency_map(
@@ -571,17 +276,17 @@ def rpm_frequency_map(
     RpmFrequencyMap
         Map ``(time, frequency)`` with speed per frame and the resolution actually used.
     """
-    _check_choice(amplitude, _AMPLITUDES, "amplitude")
-    _check_choice(scale, _SCALES, "scale")
-    p = _frequency_plan(
+    require_choice(amplitude, _AMPLITUDES, "amplitude")
+    require_choice(scale, _SCALES, "scale")
+    p = frequency_plan(
         x, fs, rpm, resolution=resolution, window=window, overlap=overlap, time=time, name=name
     )
     out = np.empty((p.n_frames, p.seg // 2 + 1))
-    _stft_into(p.x, p.w, p.step, out, amplitude, scale)
+    stft_into(p.x, p.w, p.step, out, amplitude, scale)
     centre = p.centres(0, p.n_frames)
     return RpmFrequencyMap(
         time=p.t0 + centre / p.rate,
-        rpm=_values_at(centre, p.rpm),
+        rpm=values_at(centre, p.rpm),
         values=out,
         window=p.info.label,
         window_spec=window,
@@ -658,9 +363,9 @@ def rpm_order_map(
     RpmOrderMap
         Map ``(time, order)``; time and speed at the angle-frame centres.
     """
-    _check_choice(amplitude, _AMPLITUDES, "amplitude")
-    _check_choice(scale, _SCALES, "scale")
-    p = _order_plan(
+    require_choice(amplitude, _AMPLITUDES, "amplitude")
+    require_choice(scale, _SCALES, "scale")
+    p = order_plan(
         x,
         fs,
         rpm,
@@ -677,7 +382,7 @@ def rpm_order_map(
     tc = np.empty(p.n_frames)
     rc = np.empty(p.n_frames)
     for k0, k1, samples, t_blk, r_blk in p.blocks():
-        _stft_into(samples, p.w, p.step, out[k0:k1], amplitude, scale)
+        stft_into(samples, p.w, p.step, out[k0:k1], amplitude, scale)
         tc[k0:k1], rc[k0:k1] = t_blk, r_blk
     spr = p.resampler.samples_per_rev
     return RpmOrderMap(
@@ -806,7 +511,7 @@ class OverallLevel:
             long += f" (dB re {self.level_reference})"
         return xr.Dataset(
             {"overall_level": ("time", self.values, {"units": self.units, "long_name": long})},
-            coords=_frame_coords(self.time, self.rpm),
+            coords=frame_coords(self.time, self.rpm),
             attrs={
                 "f_min_hz": float(self.frequency_range[0]),
                 "f_max_hz": float(self.frequency_range[1]),
@@ -818,8 +523,6 @@ class OverallLevel:
 
     def plot(self, **kwargs: Any) -> matplotlib.figure.Figure:
         """Figure (see :func:`analysis.plots.overall_level_figure`)."""
-        from analysis.plots import overall_level_figure
-
         return overall_level_figure(self, **kwargs)
 
 
@@ -857,7 +560,7 @@ def overall_level(
     OverallLevel
         Level per frame with the speed.
     """
-    _check_choice(scale, _SCALES, "scale")
+    require_choice(scale, _SCALES, "scale")
     m = rpm_frequency_map(
         x,
         fs,
@@ -955,8 +658,6 @@ class Campbell:
 
     def plot(self, **kwargs: Any) -> matplotlib.figure.Figure:
         """Figure (see :func:`analysis.plots.campbell_figure`)."""
-        from analysis.plots import campbell_figure
-
         return campbell_figure(self, **kwargs)
 
 

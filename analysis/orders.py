@@ -1,71 +1,55 @@
-"""Computed order tracking: speed to angle, angular resampling, order spectra and order cuts.
+"""Order spectra and order cuts of signals measured at varying speed.
 
-Method (Fyfe & Munck 1997; Brandt 2011, ch. 12; Blough 2003): the shaft angle is the
-cumulative trapezoidal integral of the speed; the signal is low-pass filtered in time,
-interpolated onto a constant-angle grid finer than needed, low-pass filtered *in the angle
-domain* and decimated to ``samples_per_rev``. The two filter stages make the result free of
-aliasing at every speed of a run-up, not just at the top speed:
-
-1. a zero-phase 8th-order Butterworth low-pass at ``1.25 * max_order`` times the highest
-   shaft frequency (skipped when that exceeds 0.45 ``fs``) removes what cannot be an order of
-   interest;
-2. the angle grid is oversampled by an integer factor ``L`` chosen so that whatever survives
-   step 1 at the *lowest* speed lies below the fine grid's Nyquist order and cannot alias
-   into ``[0, samples_per_rev / 2]``; a 24-tap Kaiser-windowed sinc interpolator (error
-   < 0.01 dB up to 0.4 ``fs``) evaluates the signal at the instants of the fine angle grid;
-3. a Kaiser-window FIR (80 dB stop band, pass band up to ``max_order``, stop band from
-   ``samples_per_rev / 2``) removes everything above the final Nyquist order before
-   decimation by ``L``.
-
-Orders up to ``max_order`` are therefore reproduced without aliasing; between ``max_order``
-and ``samples_per_rev / 2`` the FIR transition band attenuates them.
-
-**Long recordings** are resampled block by block (``block_size`` output samples, and at most
-as many samples of the record, per block; default 32768): a first pass integrates the angle
-and keeps it every block (checkpoints); each block then recomputes only the stretch of the
-record it needs, widened by the support of each step — the half length of the angle-domain
-FIR on the fine grid, the 12 samples of the sinc interpolator, and for the zero-phase
-Butterworth its settling length (its forward pass restarts exactly from stored states, its
-backward pass starts where an error in its initial state has decayed below 1e-17). Blocks
-therefore reproduce the whole-record computation to rounding (about 1e-15 relative; an
-ill-conditioned low-pass far below ``fs`` amplifies rounding of any start to 1e-12, as it
-does in ``sosfiltfilt`` itself). :func:`order_spectrum`, :func:`order_cuts` and
-:func:`analysis.maps.rpm_order_map` feed each block straight into their frames and
-accumulators, so they never hold the angle-domain signal: beyond their output they need a
-few MB whatever the record's length. :func:`resample_to_angle` returns the whole signal.
+Both rest on the angular resampling of :mod:`analysis.resample` (computed order tracking)
+and on the frame machinery of :mod:`analysis.frames`: :func:`order_spectrum` averages the
+segments of the resampled signal block by block, :func:`order_cuts` sums the lines of the
+frames of an rpm-order map (proportional band) or rpm-frequency map (fixed band) into order
+bands, and :func:`order_cuts_from_map` does the same on a computed map. Neither holds the
+angle-domain signal: beyond their output they need a few MB whatever the record's length.
+:func:`angle_from_speed` and :func:`resample_to_angle` are re-exported from
+:mod:`analysis.resample`.
 """
 
 from __future__ import annotations
 
 import dataclasses
-import math
-from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
-import scipy.integrate
-import scipy.signal
 
-from analysis.checks import require_finite, require_monotonic, require_same_length
-from analysis.spectrum import (
-    Peaks,
-    Spectrum,
-    WindowSpec,
-    _check_choice,
-    _check_finite_blocks,
-    _uniform_rate,
-    find_peaks,
-    spectrum,
-    to_db,
-    window_info,
+from analysis.checks import (
+    require_block_size,
+    require_choice,
+    require_finite,
+    require_same_length,
+    uniform_rate,
 )
+from analysis.frames import (
+    BLOCK_ELEMENTS,
+    check_speed,
+    frame_coords,
+    frame_ranges,
+    frequency_plan,
+    order_plan,
+    stft_into,
+)
+from analysis.levels import line_factors, power_of, to_db
+from analysis.maps import RpmFrequencyMap, RpmOrderMap
+from analysis.plots import order_cuts_figure, order_spectrum_figure
+from analysis.resample import (
+    AngleSignal,
+    angle_from_speed,
+    check_signal,
+    resample_to_angle,
+    speed_resampler,
+)
+from analysis.spectrum import Peaks, Spectrum, find_peaks, spectrum
+from analysis.windows import WindowSpec, main_lobe_half_width, window_info
 
 if TYPE_CHECKING:
     import matplotlib.figure
     import xarray as xr
-
-    from analysis.maps import RpmFrequencyMap, RpmOrderMap
 
 __all__ = [
     "AngleSignal",
@@ -77,635 +61,6 @@ __all__ = [
     "order_spectrum",
     "resample_to_angle",
 ]
-
-_MAX_OVERSAMPLING = 64
-_BLOCK_SAMPLES = 1 << 15  # default block_size: output (angle-domain) samples per block
-_MIN_INTERVAL = 256  # smallest spacing of the time-domain checkpoints [samples]
-_INTERP_BLOCK = 1 << 11  # fine-grid samples per sinc-interpolation call (stays in cache)
-_SINC_HALF = 12
-
-
-def angle_from_speed(time: Any, rpm: Any) -> np.ndarray:
-    """Shaft angle [rad] from a speed trace by cumulative trapezoidal integration.
-
-    Parameters
-    ----------
-    time : array_like
-        Sample instants [s], strictly increasing.
-    rpm : array_like
-        Speed [min-1] at ``time`` (same length).
-
-    Returns
-    -------
-    numpy.ndarray
-        Angle [rad], 0 at ``time[0]``.
-    """
-    t = require_monotonic(time, "time")
-    n = require_finite(rpm, "rpm")
-    if t.ndim != 1 or n.ndim != 1:
-        raise ValueError("time and rpm must be 1-D")
-    require_same_length([t, n], ["time", "rpm"])
-    return scipy.integrate.cumulative_trapezoid(n * (2.0 * np.pi / 60.0), t, initial=0.0)
-
-
-@dataclass
-class AngleSignal:
-    """A signal sampled at constant angle increments.
-
-    Attributes
-    ----------
-    angle : numpy.ndarray
-        Shaft angle of each sample [rad] (uniform, step ``2 pi / samples_per_rev``).
-    time : numpy.ndarray
-        Instant at which the shaft passes each angle [s].
-    values : numpy.ndarray
-        Samples, shape ``(..., angle)``.
-    samples_per_rev : int
-        Samples per revolution.
-    max_order : float
-        Highest order reproduced without attenuation or aliasing.
-    oversampling : int
-        Oversampling factor of the intermediate fine angle grid.
-    units, name : str
-        Units and name of the signal.
-    """
-
-    angle: np.ndarray
-    time: np.ndarray
-    values: np.ndarray
-    samples_per_rev: int
-    max_order: float
-    oversampling: int
-    units: str = "1"
-    name: str = "x"
-
-    @property
-    def revolutions(self) -> np.ndarray:
-        """Angle in revolutions."""
-        return self.angle / (2.0 * np.pi)
-
-    def to_dataset(self) -> xr.Dataset:
-        """:class:`xarray.Dataset` with dimension ``angle`` and auxiliary coordinate ``time``."""
-        import xarray as xr
-
-        dims = (*(f"dim_{i}" for i in range(self.values.ndim - 1)), "angle")
-        return xr.Dataset(
-            {self.name: (dims, self.values, {"units": self.units, "long_name": self.name})},
-            coords={
-                "angle": ("angle", self.angle, {"units": "rad", "long_name": "shaft angle"}),
-                "time": (
-                    "angle",
-                    self.time,
-                    {"units": "s", "long_name": "time at which the shaft reaches the angle"},
-                ),
-            },
-            attrs={
-                "samples_per_rev": int(self.samples_per_rev),
-                "max_order": float(self.max_order),
-                "oversampling": int(self.oversampling),
-            },
-        )
-
-
-# Power series of the Kaiser window: I0(beta sqrt(z)) = sum_k (beta^2 / 4)^k z^k / (k!)^2 for
-# beta = 7 and z = 1 - (tau / _SINC_HALF)^2 in [0, 1]; all terms are positive and the omitted
-# ones (k > 22) add less than 1e-19 relative, so Horner's rule in z evaluates it to rounding.
-_KAISER_SERIES = np.array([(49.0 / 4.0) ** k / math.factorial(k) ** 2 for k in range(23)])
-_SINC_TAPS = np.arange(-_SINC_HALF + 1, _SINC_HALF + 1)
-_SINC_SIGNS = np.where(_SINC_TAPS % 2 == 0, 1.0, -1.0)  # sin(pi (f - k)) = (-1)^k sin(pi f)
-
-
-def _sinc_at(
-    x: np.ndarray, pos: np.ndarray, start: int = 0, n_total: int | None = None
-) -> np.ndarray:
-    """Band-limited interpolation of a record at fractional sample indices ``pos``.
-
-    ``x`` holds the samples ``start, start + 1, ...`` (last axis) of a record of ``n_total``
-    samples (default: ``x`` is the whole record) and must cover every sample the kernel
-    reaches. Kaiser-windowed sinc with ``2 * _SINC_HALF`` taps (beta 7), rows normalised to
-    unit DC gain: amplitude error below 0.01 dB up to 0.4 ``fs`` (checked numerically; the
-    cubic Lagrange interpolator would lose 0.25 dB already at 0.17 ``fs``). Samples beyond
-    the ends of the record are taken equal to the end samples. The window is evaluated by
-    its power series and the sine once per row (both exact to rounding): half the cost of
-    ``numpy.sinc(tau) * numpy.i0(...)``.
-    """
-    n = start + x.shape[-1] if n_total is None else n_total
-    base = np.floor(pos).astype(np.int64)
-    frac = pos - base
-    tau = frac[:, None] - _SINC_TAPS[None, :]
-    z = tau / _SINC_HALF
-    z *= z
-    np.subtract(1.0, z, out=z)
-    np.maximum(z, 0.0, out=z)
-    h = np.full_like(z, _KAISER_SERIES[-1])
-    for c in _KAISER_SERIES[-2::-1]:
-        h *= z
-        h += c
-    sinc = np.multiply(np.pi, tau, out=tau)
-    with np.errstate(divide="ignore", invalid="ignore"):  # tau = 0 only where frac = 0
-        np.divide(_SINC_SIGNS, sinc, out=sinc)
-        sinc *= np.sin(np.pi * frac)[:, None]
-    on_sample = frac == 0.0
-    if on_sample.any():
-        sinc[on_sample] = _SINC_TAPS == 0
-    h *= sinc
-    h /= h.sum(axis=1, keepdims=True)
-    idx = base[:, None] + _SINC_TAPS[None, :]
-    np.clip(idx, 0, n - 1, out=idx)
-    if start:
-        idx -= start
-    return np.einsum("...mj,mj->...m", x[..., idx], h)
-
-
-def _block_size(block_size: int | None) -> int:
-    """Checked ``block_size`` (default :data:`_BLOCK_SAMPLES`)."""
-    if block_size is None:
-        return _BLOCK_SAMPLES
-    if isinstance(block_size, bool) or not isinstance(block_size, int | np.integer):
-        raise ValueError(f"block_size = {block_size!r} must be an integer >= 1")
-    if block_size < 1:
-        raise ValueError(f"block_size = {block_size!r} must be an integer >= 1")
-    return int(block_size)
-
-
-def _frame_blocks(n_frames: int, seg: int, step: int, block: int) -> Iterator[tuple[int, int]]:
-    """Consecutive ranges ``[k0, k1)`` of frames spanning at most ``block`` samples each.
-
-    A range always holds at least one frame, so a frame longer than ``block`` is processed
-    alone.
-    """
-    per = max(1, (block - seg) // step + 1)
-    for k0 in range(0, n_frames, per):
-        yield k0, min(n_frames, k0 + per)
-
-
-class _Track:
-    """Time axis and shaft angle of a record, read block-wise.
-
-    The angle is either given as an array or integrated from the speed by the trapezoidal
-    rule exactly as :func:`angle_from_speed` does (same operations in the same order). A
-    first pass stores the angle every ``interval`` samples, so that any stretch can later be
-    recomputed bit for bit from the checkpoint before it; the same pass checks that the
-    angle is finite and strictly increasing and records its smallest and largest step.
-
-    Parameters
-    ----------
-    n : int
-        Number of samples.
-    interval : int
-        Samples between checkpoints.
-    time : numpy.ndarray, optional
-        Sample instants [s]; default ``t0 + k / fs``.
-    t0, fs : float
-        Start time [s] and sample rate [Hz] when ``time`` is not given.
-    angle : numpy.ndarray, optional
-        Shaft angle [rad] per sample.
-    rpm : numpy.ndarray, optional
-        Speed [min-1] per sample (used when ``angle`` is not given).
-    """
-
-    def __init__(
-        self,
-        n: int,
-        interval: int,
-        *,
-        time: np.ndarray | None = None,
-        t0: float = 0.0,
-        fs: float = 1.0,
-        angle: np.ndarray | None = None,
-        rpm: np.ndarray | None = None,
-    ) -> None:
-        self.n = n
-        self.interval = interval
-        self._time = time
-        self._t0 = t0
-        self._fs = fs
-        self._angle = angle
-        self._rpm = rpm
-        self._checkpoints = np.empty(-(-n // interval))
-        d_min, d_max = np.inf, -np.inf
-        th = np.zeros(1)
-        for k in range(self._checkpoints.size):
-            a = k * interval
-            b = min(n, a + interval + 1)
-            if angle is None:
-                th = self._integrate(a, b, float(th[-1]))
-            else:
-                th = np.asarray(angle[a:b], dtype=float)
-                if not np.all(np.isfinite(th)):
-                    i = a + int(np.flatnonzero(~np.isfinite(th))[0])
-                    raise ValueError(
-                        f"angle: non-finite value (NaN or inf) at sample {i}; only finite "
-                        "values are admissible"
-                    )
-            self._checkpoints[k] = th[0]
-            d = np.diff(th)
-            if d.size == 0:
-                continue
-            if np.any(d <= 0):
-                i = a + int(np.flatnonzero(d <= 0)[0])
-                raise ValueError(
-                    f"angle must be strictly increasing (speed > 0); it is not between samples "
-                    f"{i} and {i + 1} (t = {self.time(i, i + 1)[0]:.6g} s); trim standstill or "
-                    "reversing parts first"
-                )
-            d_min, d_max = min(d_min, float(d.min())), max(d_max, float(d.max()))
-        self.first = float(self._checkpoints[0])
-        self.last = float(th[-1])
-        self.step_min, self.step_max = d_min, d_max
-
-    def time(self, a: int, b: int) -> np.ndarray:
-        """Sample instants ``[a, b)`` [s]."""
-        if self._time is not None:
-            return np.asarray(self._time[a:b], dtype=float)
-        return self._t0 + np.arange(a, b) / self._fs
-
-    def _integrate(self, a: int, b: int, start: float) -> np.ndarray:
-        """Angle of samples ``[a, b)`` given the angle ``start`` of sample ``a``."""
-        assert self._rpm is not None
-        t = self.time(a, b)
-        w = np.asarray(self._rpm[a:b], dtype=float) * (2.0 * np.pi / 60.0)
-        inc = np.empty(b - a)
-        inc[0] = start
-        inc[1:] = np.diff(t) * (w[1:] + w[:-1]) / 2.0
-        return np.cumsum(inc, out=inc)
-
-    def angle(self, a: int, b: int) -> np.ndarray:
-        """Shaft angle of samples ``[a, b)`` [rad]."""
-        if self._angle is not None:
-            return np.asarray(self._angle[a:b], dtype=float)
-        k = a // self.interval
-        c = k * self.interval
-        return self._integrate(c, b, float(self._checkpoints[k]))[a - c :]
-
-    def span(self, lo: float, hi: float) -> tuple[np.ndarray, np.ndarray]:
-        """Angle and time of the shortest stretch of samples bracketing ``[lo, hi]``.
-
-        Linear interpolation in the stretch therefore equals interpolation in the whole
-        record for every angle in ``[lo, hi]``.
-        """
-        ck = self._checkpoints
-        ka = max(0, int(np.searchsorted(ck, lo, side="right")) - 1)
-        kb = int(np.searchsorted(ck, hi, side="left"))
-        a = ka * self.interval
-        b = self.n if kb >= ck.size else min(self.n, kb * self.interval + 1)
-        th = self.angle(a, b)
-        i0 = max(0, int(np.searchsorted(th, lo, side="right")) - 1)
-        i1 = min(th.size, int(np.searchsorted(th, hi, side="left")) + 1)
-        return th[i0:i1], self.time(a + i0, a + i1)
-
-
-def _settling_length(sos: np.ndarray, tol: float = 1e-17) -> int:
-    """Samples after which a unit error in any state of the filter ``sos`` is below ``tol``."""
-    n_sec = sos.shape[0]
-    z = np.zeros((n_sec, 2 * n_sec, 2))  # free responses from each unit state, side by side
-    for i in range(2 * n_sec):
-        z[i // 2, i, i % 2] = 1.0
-    chunk = 4096
-    zeros = np.zeros((2 * n_sec, chunk))
-    last, start = -1, 0
-    while True:  # the responses decay geometrically: stop after a chunk entirely below tol
-        y, z = scipy.signal.sosfilt(sos, zeros, axis=-1, zi=z)
-        above = np.flatnonzero(np.max(np.abs(y), axis=0) > tol)
-        if above.size == 0:
-            return last + 2
-        last, start = start + int(above[-1]), start + chunk
-
-
-class _Lowpassed:
-    """A record after the zero-phase time-domain low-pass, computed block-wise.
-
-    Equals ``scipy.signal.sosfiltfilt(sos, x)`` (odd extension of ``3 * ntaps`` samples at
-    both ends, steady-state initial conditions) without holding the filtered record. The
-    forward pass is exact: its state is stored every ``interval`` samples as the record is
-    traversed and a stretch is refiltered from the stored state before it. The backward pass
-    of a stretch starts :func:`_settling_length` samples after its end, where the error of
-    its starting state has decayed below 1e-17 of that state, or at the end of the record,
-    where it starts exactly as ``sosfiltfilt`` does.
-    """
-
-    def __init__(self, x: np.ndarray, sos: np.ndarray | None, interval: int) -> None:
-        self._x = x
-        self.n = x.shape[-1]
-        self._sos = sos
-        self._interval = interval
-        if sos is None:
-            return
-        n_sec = sos.shape[0]
-        ntaps = 2 * n_sec + 1 - min(int((sos[:, 2] == 0).sum()), int((sos[:, 5] == 0).sum()))
-        self._pad = 3 * ntaps
-        if self.n <= self._pad:
-            raise ValueError(
-                f"needs more than {self._pad} samples for the anti-alias low-pass; the record "
-                f"has {self.n}"
-            )
-        self._zi = scipy.signal.sosfilt_zi(sos).reshape(n_sec, *([1] * (x.ndim - 1)), 2)
-        self._settle = _settling_length(sos)
-        left = 2.0 * self._float(0, 1) - np.asarray(x[..., self._pad : 0 : -1], dtype=float)
-        _, z = scipy.signal.sosfilt(sos, left, axis=-1, zi=self._zi * left[..., :1])
-        self._states = [z]  # forward state before sample k * interval
-
-    def _float(self, a: int, b: int) -> np.ndarray:
-        return np.asarray(self._x[..., a:b], dtype=float)
-
-    def _forward(self, a: int, e: int) -> tuple[np.ndarray, np.ndarray]:
-        """Forward-filtered samples ``[a, e)`` and the state after sample ``e - 1``."""
-        assert self._sos is not None
-        iv = self._interval
-        k = min(a // iv, len(self._states) - 1)
-        pos, z = k * iv, self._states[k]
-        parts = []
-        while pos < e:
-            stop = min(e, len(self._states) * iv)
-            y, z = scipy.signal.sosfilt(self._sos, self._float(pos, stop), axis=-1, zi=z)
-            if stop > a:
-                parts.append(y[..., max(0, a - pos) :])
-            if stop == len(self._states) * iv and stop < self.n:
-                self._states.append(z)
-            pos = stop
-        return np.concatenate(parts, axis=-1), z
-
-    def get(self, a: int, b: int) -> np.ndarray:
-        """Low-passed samples ``[a, b)`` (float64)."""
-        if self._sos is None:
-            return self._float(a, b)
-        e = min(self.n, b + self._settle)
-        y, z = self._forward(a, e)
-        if e == self.n:  # the end of the record: odd extension as sosfiltfilt
-            right = 2.0 * self._float(self.n - 1, self.n) - np.asarray(
-                self._x[..., -2 : -(self._pad + 2) : -1], dtype=float
-            )
-            tail, _ = scipy.signal.sosfilt(self._sos, right, axis=-1, zi=z)
-            y = np.concatenate([y, tail], axis=-1)
-        back, _ = scipy.signal.sosfilt(self._sos, y[..., ::-1], axis=-1, zi=self._zi * y[..., -1:])
-        return back[..., ::-1][..., : b - a]
-
-
-class _AngleResampler:
-    """Alias-free resampling of a record onto constant angle increments, block by block.
-
-    See the module docstring for the three steps. :meth:`block` returns any range of output
-    samples; it resamples only the stretch of the record that range needs: the fine angle
-    grid is extended by the half length of the angle-domain FIR on both sides, the time
-    samples by the half length of the sinc interpolator, and the low-pass by its settling
-    length (see :class:`_Lowpassed`), so that consecutive blocks reproduce the unchunked
-    computation to rounding.
-
-    Parameters
-    ----------
-    x : numpy.ndarray
-        Signal, time along the last axis (checked finite).
-    track : _Track
-        Time axis and angle of ``x``.
-    fs : float
-        Sample rate [Hz].
-    spr : int
-        Output samples per revolution (checked).
-    max_order : float
-        Highest order kept (checked).
-    block : int
-        Largest number of output samples, and of time samples, handled at once.
-    """
-
-    def __init__(
-        self, x: np.ndarray, track: _Track, fs: float, spr: int, max_order: float, block: int
-    ) -> None:
-        self.track = track
-        self.fs = fs
-        self.samples_per_rev = spr
-        self.max_order = max_order
-        self.lead = x.shape[:-1]
-        n_min = track.step_min * (fs / (2.0 * np.pi))  # shaft frequency [Hz]
-        n_max = track.step_max * (fs / (2.0 * np.pi))
-        # 1) time-domain low-pass
-        fc = 1.25 * max_order * n_max
-        sos = None
-        if fc < 0.45 * fs:
-            sos = scipy.signal.butter(8, fc, fs=fs, output="sos")
-            f_top = 1.5 * fc  # above this the Butterworth (applied twice) is below -56 dB
-        else:
-            f_top = 0.5 * fs
-        # 2) oversampled angle grid
-        o_top = f_top / n_min
-        over = max(1, int(np.ceil((o_top + spr / 2.0) / spr)))
-        if over > _MAX_OVERSAMPLING:
-            raise ValueError(
-                f"speed range too wide for alias-free resampling: shaft frequency {n_min:.4g} "
-                f"to {n_max:.4g} Hz needs {over}x angular oversampling (max "
-                f"{_MAX_OVERSAMPLING}); trim the low-speed part of the record or lower max_order"
-            )
-        self.signal = _Lowpassed(x, sos, max(_MIN_INTERVAL, block))
-        self.oversampling = over
-        fine = spr * over
-        self.dphi = 2.0 * np.pi / fine
-        self.n_fine = int(np.floor((track.last - track.first) / self.dphi)) + 1
-        self.t_first = float(track.time(0, 1)[0])
-        # 3) angle-domain anti-alias FIR for the decimation by `over`
-        self.fir: np.ndarray | None = None
-        if over > 1:
-            width = (spr / 2.0 - max_order) / (fine / 2.0)
-            if width > 0:
-                numtaps, beta = scipy.signal.kaiserord(80.0, width)
-                numtaps |= 1
-                self.fir = scipy.signal.firwin(
-                    numtaps, (max_order + spr / 2.0) / 2.0, window=("kaiser", beta), fs=fine
-                )
-            else:  # max_order == spr / 2: plain Nyquist cut
-                self.fir = scipy.signal.firwin(20 * over + 1, spr / 2.0, fs=fine)
-        self.n_out = -(-self.n_fine // over)
-        # output samples whose time span is at most `block` samples of the record
-        self._piece = max(1, min(block, int(block * spr * track.step_min / (2.0 * np.pi))))
-
-    def angle(self, j0: int, j1: int) -> np.ndarray:
-        """Angle of output samples ``[j0, j1)`` [rad]."""
-        over = self.oversampling
-        return self.track.first + self.dphi * np.arange(j0 * over, j1 * over, over)
-
-    def _fine(self, f0: int, f1: int) -> tuple[np.ndarray, np.ndarray]:
-        """Signal and time at the fine-grid angles ``[f0, f1)``."""
-        phi = self.track.first + self.dphi * np.arange(f0, f1)
-        th, t = self.track.span(float(phi[0]), float(phi[-1]))
-        tq = np.interp(phi, th, t)
-        pos = (tq - self.t_first) * self.fs
-        n = self.signal.n
-        lo = max(0, int(np.floor(pos[0])) - _SINC_HALF + 1)
-        hi = min(n, int(np.floor(pos[-1])) + _SINC_HALF + 1)
-        data = self.signal.get(lo, hi)
-        out = np.empty((*self.lead, f1 - f0))
-        for s in range(0, f1 - f0, _INTERP_BLOCK):
-            sl = slice(s, s + _INTERP_BLOCK)
-            out[..., sl] = _sinc_at(data, pos[sl], lo, n)
-        return out, tq
-
-    def block(self, j0: int, j1: int) -> tuple[np.ndarray, np.ndarray]:
-        """Output samples ``[j0, j1)`` (shape ``(..., j1 - j0)``) and their instants [s].
-
-        The range is computed in pieces whose time span is at most ``block`` samples of the
-        record, so the working memory stays bounded however many time samples a revolution
-        holds.
-        """
-        if j1 - j0 <= self._piece:
-            return self._piece_at(j0, j1)
-        values = np.empty((*self.lead, j1 - j0))
-        times = np.empty(j1 - j0)
-        for p0 in range(j0, j1, self._piece):
-            p1 = min(j1, p0 + self._piece)
-            values[..., p0 - j0 : p1 - j0], times[p0 - j0 : p1 - j0] = self._piece_at(p0, p1)
-        return values, times
-
-    def _piece_at(self, j0: int, j1: int) -> tuple[np.ndarray, np.ndarray]:
-        over = self.oversampling
-        if self.fir is None:
-            return self._fine(j0, j1)
-        reach = -(-(self.fir.size // 2) // over)  # FIR half length in output samples
-        f0 = max(0, j0 - reach) * over
-        f1 = min(self.n_fine, (j1 - 1) * over + self.fir.size // 2 + 1)
-        fine, tq = self._fine(f0, f1)
-        dec = scipy.signal.resample_poly(fine, 1, over, axis=-1, window=self.fir)
-        first = j0 - f0 // over
-        return dec[..., first : first + j1 - j0], tq[j0 * over - f0 :: over][: j1 - j0]
-
-
-def _frame_coords(
-    time: np.ndarray,
-    rpm: np.ndarray,
-    rpm_long_name: str = "shaft speed (revolutions per minute)",
-) -> dict[str, tuple[str, np.ndarray, dict[str, str]]]:
-    """CF coordinates of a frame-wise result: ``time`` (frame centres) and ``rpm(time)``."""
-    return {
-        "time": ("time", time, {"units": "s", "long_name": "frame centre time"}),
-        "rpm": ("time", rpm, {"units": "min-1", "long_name": rpm_long_name}),
-    }
-
-
-def _check_sampling(samples_per_rev: Any, max_order: float | None) -> tuple[int, float]:
-    if isinstance(samples_per_rev, bool) or not isinstance(samples_per_rev, int | np.integer):
-        raise ValueError(f"samples_per_rev = {samples_per_rev!r} must be an integer >= 4")
-    spr = int(samples_per_rev)
-    if spr < 4:
-        raise ValueError(f"samples_per_rev = {spr} is not admissible: must be >= 4")
-    mo = spr / 2.56 if max_order is None else float(max_order)
-    if not 0 < mo <= spr / 2:
-        raise ValueError(
-            f"max_order = {max_order!r} is not admissible: must be in (0, samples_per_rev/2 = "
-            f"{spr / 2:g}]"
-        )
-    return spr, mo
-
-
-def _check_signal(x: Any, name: str) -> np.ndarray:
-    arr = np.asarray(x)
-    if np.iscomplexobj(arr) or not np.issubdtype(arr.dtype, np.number) or arr.ndim == 0:
-        raise ValueError(f"x must be a real numeric array with time last; got {arr.dtype}")
-    _check_finite_blocks(arr, name)
-    return arr
-
-
-def _check_speed(rpm: Any, n: int, message: str | None = None) -> np.ndarray:
-    """``rpm`` as an array of ``n`` finite values, checked block-wise (no copy).
-
-    With ``message`` (formatted with ``i`` and ``value``) every value must also be > 0.
-    """
-    r = np.asarray(rpm)
-    if r.ndim != 1 or r.size != n:
-        raise ValueError(
-            f"sample-count mismatch (x: {n}, rpm: {r.size}); rpm must be 1-D, one value per "
-            "sample of x"
-        )
-    _check_finite_blocks(r, "rpm")
-    if message is None:
-        return r
-    for a in range(0, n, _BLOCK_SAMPLES):
-        bad = np.flatnonzero(r[a : a + _BLOCK_SAMPLES] <= 0)
-        if bad.size:
-            i = a + int(bad[0])
-            raise ValueError(message.format(i=i, value=r[i]))
-    return r
-
-
-def _speed_resampler(
-    x: np.ndarray,
-    rpm: np.ndarray,
-    samples_per_rev: int | None,
-    max_order: float | None,
-    block: int,
-    *,
-    fs: float,
-    time: np.ndarray | None = None,
-    t0: float = 0.0,
-) -> _AngleResampler:
-    """Resampler of ``x`` driven by the speed ``rpm`` (checked), with the default sampling."""
-    if samples_per_rev is None:
-        spr, mo_default = _default_samples_per_rev(fs, float(np.max(rpm)))
-        mo = mo_default if max_order is None else max_order
-    else:
-        spr, mo = samples_per_rev, max_order
-    interval = max(_MIN_INTERVAL, block)
-    track = _Track(x.shape[-1], interval, time=time, t0=t0, fs=fs, rpm=rpm)
-    spr, mo = _check_sampling(spr, mo)
-    return _AngleResampler(x, track, fs, spr, mo, block)
-
-
-def resample_to_angle(
-    x: Any,
-    time: Any,
-    angle: Any,
-    samples_per_rev: int,
-    max_order: float | None = None,
-    *,
-    units: str = "1",
-    name: str = "x",
-    block_size: int | None = None,
-) -> AngleSignal:
-    """Resample a time signal onto a constant-angle grid, with anti-alias filtering.
-
-    The whole resampled signal is returned; :func:`order_spectrum`, :func:`order_cuts` and
-    :func:`analysis.maps.rpm_order_map` use the same resampling block by block instead and
-    never hold it.
-
-    Parameters
-    ----------
-    x : array_like
-        Signal, time along the last axis.
-    time : array_like
-        Uniform sample instants [s] (same length as ``x``).
-    angle : array_like
-        Shaft angle [rad] at ``time``; must be strictly increasing (positive speed).
-    samples_per_rev : int
-        Samples per revolution of the output (>= 4).
-    max_order : float, optional
-        Highest order to keep, ``<= samples_per_rev / 2``; default ``samples_per_rev / 2.56``.
-    units, name : str
-        Metadata of ``x``.
-    block_size : int, optional
-        Output samples resampled per block (default 32768). Only the working memory depends
-        on it; the result equals that of a single block to rounding.
-
-    Returns
-    -------
-    AngleSignal
-        Resampled signal, starting at ``angle[0]``.
-    """
-    arr = _check_signal(x, name)
-    fs = _uniform_rate(time, "time")
-    t = np.asarray(time)
-    th = np.asarray(angle)
-    require_same_length([arr, t, th], [name, "time", "angle"])
-    if t.size < 8:
-        raise ValueError(f"{name}: needs at least 8 samples for angular resampling")
-    block = _block_size(block_size)
-    interval = max(_MIN_INTERVAL, block)
-    track = _Track(t.size, interval, time=t, angle=th)
-    spr, mo = _check_sampling(samples_per_rev, max_order)
-    res = _AngleResampler(arr, track, fs, spr, mo, block)
-    values = np.empty((*arr.shape[:-1], res.n_out))
-    times = np.empty(res.n_out)
-    for j0 in range(0, res.n_out, block):
-        j1 = min(res.n_out, j0 + block)
-        values[..., j0:j1], times[j0:j1] = res.block(j0, j1)
-    return AngleSignal(
-        res.angle(0, res.n_out), times, values, spr, mo, res.oversampling, units, name
-    )
 
 
 # ---------------------------------------------------------------------------- order spectrum
@@ -788,15 +143,7 @@ class OrderSpectrum:
 
     def plot(self, **kwargs: Any) -> matplotlib.figure.Figure:
         """Figure (see :func:`analysis.plots.order_spectrum_figure`)."""
-        from analysis.plots import order_spectrum_figure
-
         return order_spectrum_figure(self, **kwargs)
-
-
-def _default_samples_per_rev(fs: float, rpm_max: float) -> tuple[int, float]:
-    """Angular sampling matching ``fs`` at the top speed, and its max order ``spr / 2.56``."""
-    spr = int(2 * np.ceil(0.5 * fs / (rpm_max / 60.0)))
-    return max(spr, 8), max(spr, 8) / 2.56
 
 
 def order_spectrum(
@@ -853,25 +200,23 @@ def order_spectrum(
     OrderSpectrum
         Energy-averaged order spectrum.
     """
-    from analysis.maps import _line_factors
-
-    arr = _check_signal(x, name)
+    arr = check_signal(x, name)
     t = np.asarray(time)
-    n = _check_speed(
+    n = check_speed(
         rpm, t.size, "rpm must be > 0 everywhere for order tracking (min-1); rpm[{i}] = {value}"
     )
     res = float(orders_resolution)
     if not np.isfinite(res) or res <= 0:
         raise ValueError(f"orders_resolution = {orders_resolution!r} must be finite and > 0")
-    _check_choice(scaling, ("peak", "rms", "power", "psd"), "scaling")
+    require_choice(scaling, ("peak", "rms", "power", "psd"), "scaling")
     if not 0.0 <= float(overlap) < 1.0:
         raise ValueError(f"overlap = {overlap!r} is not admissible: must be in [0, 1)")
-    fs = _uniform_rate(t, "time")
+    fs = uniform_rate(t, "time")
     require_same_length([arr, t], [name, "time"])
     if t.size < 8:
         raise ValueError(f"{name}: needs at least 8 samples for angular resampling")
-    block = _block_size(block_size)
-    resampler = _speed_resampler(arr, n, samples_per_rev, max_order, block, fs=fs, time=t)
+    block = require_block_size(block_size)
+    resampler = speed_resampler(arr, n, samples_per_rev, max_order, block, fs=fs, time=t)
     spr = resampler.samples_per_rev
     m = resampler.n_out
     seg = round(spr / res)
@@ -886,7 +231,7 @@ def order_spectrum(
     kind = "psd" if scaling == "psd" else "power"
     total = np.zeros((*arr.shape[:-1], seg // 2 + 1))
     values = np.empty(0)
-    for k0, k1 in _frame_blocks(n_seg, seg, step, block):
+    for k0, k1 in frame_ranges(n_seg, seg, step, block):
         values, _ = resampler.block(k0 * step, (k1 - 1) * step + seg)
         part = spectrum(
             values, float(spr), window=window, scaling=kind, segment_length=seg, overlap=overlap
@@ -896,7 +241,7 @@ def order_spectrum(
     if scaling in ("rms", "peak"):
         np.sqrt(total, out=total)
         if scaling == "peak":
-            total *= np.sqrt(_line_factors(total.shape[-1], seg))
+            total *= np.sqrt(line_factors(total.shape[-1], seg))
     # metadata (units, window label, ENBW...) from the last block in the requested scaling
     last = spectrum(
         values,
@@ -985,7 +330,7 @@ class OrderCut:
             {"level": (("order", "time"), self.values, {"units": self.units, "long_name": long})},
             coords={
                 "order": ("order", self.orders, {"units": "1", "long_name": "tracked order"}),
-                **_frame_coords(self.time, self.rpm),
+                **frame_coords(self.time, self.rpm),
             },
             attrs={
                 "amplitude": self.amplitude,
@@ -999,8 +344,6 @@ class OrderCut:
 
     def plot(self, **kwargs: Any) -> matplotlib.figure.Figure:
         """Figure (see :func:`analysis.plots.order_cuts_figure`)."""
-        from analysis.plots import order_cuts_figure
-
         return order_cuts_figure(self, **kwargs)
 
 
@@ -1015,10 +358,8 @@ def _cut_setup(
     scale: str,
 ) -> tuple[np.ndarray, str, float, float]:
     """Checked orders, band kind (``"order"``/``"Hz"``), band width and line spacing."""
-    from analysis.maps import _main_lobe_half_width
-
-    _check_choice(amplitude, ("rms", "peak", "power"), "amplitude")
-    _check_choice(scale, ("linear", "dB"), "scale")
+    require_choice(amplitude, ("rms", "peak", "power"), "amplitude")
+    require_choice(scale, ("linear", "dB"), "scale")
     ords = np.atleast_1d(require_finite(orders, "orders"))
     if ords.ndim != 1 or np.any(ords <= 0):
         raise ValueError("orders must be a 1-D list of orders > 0")
@@ -1027,7 +368,7 @@ def _cut_setup(
     spacing = float(axis[1] - axis[0])
     if bandwidth is None and bandwidth_hz is None:
         kind = "Hz" if is_freq else "order"
-        bw = 2.0 * _main_lobe_half_width(window) * spacing
+        bw = 2.0 * main_lobe_half_width(window) * spacing
     elif bandwidth is not None:
         kind, bw = "order", float(bandwidth)
     else:
@@ -1160,8 +501,6 @@ def order_cuts_from_map(
     OrderCut
         Levels; NaN where the band exceeds the map's axis.
     """
-    from analysis.maps import _BLOCK_ELEMENTS, RpmFrequencyMap, RpmOrderMap, _power_of
-
     if not isinstance(m, RpmFrequencyMap | RpmOrderMap):
         raise ValueError("m must be an RpmFrequencyMap or RpmOrderMap")
     is_freq = isinstance(m, RpmFrequencyMap)
@@ -1170,10 +509,10 @@ def order_cuts_from_map(
         m.window_spec, axis, is_freq, orders, bandwidth, bandwidth_hz, amplitude, scale
     )
     band = np.empty((ords.size, m.values.shape[0]))
-    rows = max(1, _BLOCK_ELEMENTS // max(1, m.values.shape[1]))
+    rows = max(1, BLOCK_ELEMENTS // max(1, m.values.shape[1]))
     for r0 in range(0, m.values.shape[0], rows):
         sl = slice(r0, r0 + rows)
-        power = _power_of(m.values[sl], m.amplitude, m.scale, m.segment_length)
+        power = power_of(m.values[sl], m.amplitude, m.scale, m.segment_length)
         band[:, sl] = _band_power(power, m.rpm[sl], axis, ords, kind, bw, is_freq, m.enbw_bins)
     return _cut_result(
         band,
@@ -1231,12 +570,10 @@ def order_cuts(
     OrderCut
         See :func:`order_cuts_from_map`.
     """
-    from analysis.maps import _frequency_plan, _order_plan, _stft_into
-
     units = str(map_kwargs.pop("units", "1"))
     name = str(map_kwargs.get("name", "x"))
     is_freq = bandwidth_hz is not None
-    plan = (_frequency_plan if is_freq else _order_plan)(x, fs, rpm, **map_kwargs)
+    plan = (frequency_plan if is_freq else order_plan)(x, fs, rpm, **map_kwargs)
     axis = plan.axis
     ords, kind, bw, spacing = _cut_setup(
         plan.window, axis, is_freq, orders, bandwidth, bandwidth_hz, amplitude, scale
@@ -1251,7 +588,7 @@ def order_cuts(
     rc = np.empty(plan.n_frames)
     for k0, k1, samples, t_blk, r_blk in plan.blocks():
         power = np.empty((k1 - k0, axis.size))
-        _stft_into(samples, plan.w, plan.step, power, "power", "linear")
+        stft_into(samples, plan.w, plan.step, power, "power", "linear")
         band[:, k0:k1] = _band_power(
             power, r_blk, axis, ords, kind, bw, is_freq, plan.info.enbw_bins
         )

@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from analysis.spectrum import to_db
+from analysis.levels import to_db
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure

@@ -30,7 +30,24 @@ import numpy as np
 import scipy.optimize
 import scipy.signal
 
+from analysis.checks import (
+    require_choice,
+    require_finite_blocks,
+    require_int,
+    uniform_rate,
+)
 from analysis.fft import RfftPlan, rfft_plan
+from analysis.levels import SCALINGS, to_db, units_of
+from analysis.plots import spectrum_figure
+from analysis.windows import (
+    WINDOWS,
+    WindowInfo,
+    WindowSpec,
+    get_window,
+    window_info,
+    window_info_of,
+    window_sums,
+)
 
 if TYPE_CHECKING:
     import matplotlib.figure
@@ -49,210 +66,7 @@ __all__ = [
     "window_info",
 ]
 
-#: Admissible window names (``"boxcar"`` is an alias of ``"rectangular"``).
-WINDOWS = ("rectangular", "boxcar", "hann", "hamming", "blackmanharris", "flattop", "kaiser")
-#: Admissible spectrum scalings.
-SCALINGS = ("peak", "rms", "power", "psd")
-
-# Cosine-sum coefficients a_k of w[n] = sum_k (-1)^k a_k cos(2 pi k n / L), periodic form.
-_COSINE_SUMS: dict[str, tuple[float, ...]] = {
-    "rectangular": (1.0,),
-    "hann": (0.5, 0.5),
-    "hamming": (0.54, 0.46),
-    # 4-term Blackman-Harris, -92 dB sidelobes (Harris 1978, table 1)
-    "blackmanharris": (0.35875, 0.48829, 0.14128, 0.01168),
-    # 5-term flat-top of ISO 18431-2 / D'Antona & Ferrero 2006 (same as MATLAB flattopwin);
-    # scalloping loss < 0.01 dB, ENBW 3.77 bins (Heinzel et al. 2002, appendix D)
-    "flattop": (0.21557895, 0.41663158, 0.277263158, 0.083578947, 0.006947368),
-}
-_KAISER_DEFAULT_BETA = 0.5  # MATLAB kaiser() / rpmfreqmap default
 _BLOCK_ELEMENTS = 1 << 17  # windowed samples per FFT block (1 MiB: stays in the CPU cache)
-
-WindowSpec = str | tuple[str, float]
-
-
-@dataclass(frozen=True)
-class WindowInfo:
-    """Name, parameter and figures of merit of a window of a given length.
-
-    Attributes
-    ----------
-    name : str
-        Canonical window name.
-    beta : float or None
-        Kaiser shape parameter (``None`` for the other windows).
-    length : int
-        Number of samples.
-    coherent_gain : float
-        ``sum(w) / L`` (amplitude gain for a sine on bin).
-    enbw_bins : float
-        Equivalent noise bandwidth in bins, ``L * sum(w**2) / sum(w)**2``.
-    """
-
-    name: str
-    beta: float | None
-    length: int
-    coherent_gain: float
-    enbw_bins: float
-
-    def enbw_hz(self, fs: float) -> float:
-        """Equivalent noise bandwidth [Hz] at sample rate ``fs`` (independent of zero padding)."""
-        return self.enbw_bins * fs / self.length
-
-    @property
-    def label(self) -> str:
-        """``"kaiser(beta=..)"`` or the plain name."""
-        return self.name if self.beta is None else f"{self.name}(beta={self.beta:g})"
-
-
-def _parse_window(window: WindowSpec) -> tuple[str, float | None]:
-    beta: float | None = None
-    if isinstance(window, tuple):
-        if len(window) != 2 or not isinstance(window[0], str):
-            raise ValueError(
-                f"window = {window!r} is not admissible: use a name from {WINDOWS} or "
-                "('kaiser', beta)"
-            )
-        name, beta = window[0].lower(), float(window[1])
-        if name != "kaiser":
-            raise ValueError(f"window = {window!r}: only 'kaiser' takes a parameter (beta)")
-    elif isinstance(window, str):
-        name = window.lower()
-    else:
-        raise ValueError(f"window = {window!r} is not admissible: must be one of {WINDOWS}")
-    if name not in WINDOWS:
-        raise ValueError(f"window = {window!r} is not admissible: must be one of {WINDOWS}")
-    if name == "boxcar":
-        name = "rectangular"
-    if name == "kaiser":
-        beta = _KAISER_DEFAULT_BETA if beta is None else beta
-        if not np.isfinite(beta) or beta < 0:
-            raise ValueError(f"window kaiser beta = {beta!r} is not admissible: must be >= 0")
-    return name, beta
-
-
-def get_window(window: WindowSpec, n: int) -> np.ndarray:
-    """Periodic ("DFT-even") window of length ``n`` for spectral analysis.
-
-    Parameters
-    ----------
-    window : str or ("kaiser", beta)
-        One of :data:`WINDOWS`; ``"kaiser"`` alone uses beta = 0.5 (MATLAB's default).
-    n : int
-        Length (>= 1).
-
-    Returns
-    -------
-    numpy.ndarray
-        Window samples; the cosine-sum windows have their maximum at index ``n // 2``.
-    """
-    name, beta = _parse_window(window)
-    if isinstance(n, bool) or not isinstance(n, int | np.integer) or n < 1:
-        raise ValueError(f"window length n = {n!r} is not admissible: must be an integer >= 1")
-    k = np.arange(n, dtype=float)
-    if name == "kaiser":
-        assert beta is not None
-        r = 2.0 * k / n - 1.0  # periodic: symmetric window of n + 1 points without the last
-        return np.i0(beta * np.sqrt(np.clip(1.0 - r * r, 0.0, None))) / np.i0(beta)
-    coeffs = _COSINE_SUMS[name]
-    w = np.full(n, coeffs[0])
-    for j, a in enumerate(coeffs[1:], start=1):
-        w += (-1) ** j * a * np.cos(2.0 * np.pi * j * k / n)
-    return w
-
-
-def window_info(window: WindowSpec, n: int) -> WindowInfo:
-    """Coherent gain and ENBW of a window of length ``n`` (see :class:`WindowInfo`)."""
-    return _window_info_of(window, get_window(window, n))
-
-
-def _window_sums(w: np.ndarray) -> tuple[float, float]:
-    """``sum(w)`` and ``sum(w**2)`` by numpy's pairwise summation.
-
-    Not ``np.dot``: above 10 000 samples OpenBLAS splits a dot product over its threads,
-    which costs milliseconds on a loaded machine and makes the rounding depend on the thread
-    count.
-    """
-    return float(w.sum()), float(np.square(w).sum())
-
-
-def _window_info_of(window: WindowSpec, w: np.ndarray) -> WindowInfo:
-    """:class:`WindowInfo` of the samples ``w`` of ``window`` (no second evaluation)."""
-    name, beta = _parse_window(window)
-    n = w.size
-    s1, s2 = _window_sums(w)
-    return WindowInfo(name, beta, int(n), s1 / n, n * s2 / (s1 * s1))
-
-
-def to_db(values: np.ndarray, scaling: str, ref: float = 1.0) -> np.ndarray:
-    """Level in dB: ``20 log10`` for amplitude scalings, ``10 log10`` for power and PSD.
-
-    Zero values map to -400 dB (no ``-inf``).
-    """
-    _check_choice(scaling, (*SCALINGS, "linear"), "scaling")
-    factor = 20.0 if scaling in ("peak", "rms") else 10.0
-    v = np.maximum(np.abs(np.asarray(values, dtype=float)) / ref, 1e-20)
-    return factor * np.log10(v)
-
-
-def _check_choice(value: Any, allowed: tuple[str, ...], name: str) -> str:
-    if value not in allowed:
-        raise ValueError(f"{name} = {value!r} is not admissible: must be one of {allowed}")
-    return value
-
-
-def _uniform_rate(time: Any, name: str = "time", rtol: float = 1e-6) -> float:
-    """Sample rate of a uniform time axis, checked block-wise (bounded memory)."""
-    t = np.asarray(time)
-    if t.ndim != 1 or t.size < 2:
-        raise ValueError(f"{name}: needs a 1-D axis with at least two samples")
-    if not np.issubdtype(t.dtype, np.number):
-        raise ValueError(f"{name}: must be numeric seconds (units 's'), got dtype {t.dtype}")
-    n = t.size
-    dt = (float(t[-1]) - float(t[0])) / (n - 1)
-    if not np.isfinite(dt) or dt <= 0:
-        raise ValueError(f"{name} must be finite and strictly increasing")
-    tol = rtol * dt + 1e-12 * abs(float(t[-1]))
-    block = 1 << 18
-    for start in range(0, n - 1, block):
-        seg = np.asarray(t[start : min(n, start + block + 1)], dtype=float)
-        if not np.all(np.isfinite(seg)):
-            raise ValueError(f"{name}: non-finite value near sample {start}")
-        d = np.diff(seg)
-        if np.any(d <= 0):
-            i = start + int(np.flatnonzero(d <= 0)[0])
-            raise ValueError(
-                f"{name} must be strictly increasing; it is not between samples {i} and {i + 1}"
-            )
-        dev = float(np.max(np.abs(d - dt)))
-        if dev > tol:
-            raise ValueError(
-                f"{name} is not uniformly sampled: step deviates by {dev:.3g} s from the mean "
-                f"{dt:.6g} s (allowed {rtol:g} relative); resample the channel first"
-            )
-    return 1.0 / dt
-
-
-def _check_finite_blocks(x: np.ndarray, name: str) -> None:
-    """Raise if ``x`` is empty or holds NaN/inf; works block-wise along the last axis."""
-    if x.size == 0:
-        raise ValueError(f"{name}: channel is empty (needs at least one sample)")
-    n = x.shape[-1]
-    step = max(1, (1 << 20) // max(1, x.size // max(n, 1)))
-    for start in range(0, n, step):
-        blk = x[..., start : start + step]
-        if not np.all(np.isfinite(blk)):
-            idx = start + int(np.argwhere(~np.isfinite(blk))[0][-1])
-            raise ValueError(
-                f"{name}: non-finite value (NaN or inf) at time sample {idx}; only finite "
-                "values are admissible (gap-fill or trim the channel first)"
-            )
-
-
-def _int_param(value: Any, name: str, minimum: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < minimum:
-        raise ValueError(f"{name} = {value!r} is not admissible: must be an integer >= {minimum}")
-    return int(value)
 
 
 @dataclass
@@ -366,17 +180,7 @@ class Spectrum:
 
     def plot(self, **kwargs: Any) -> matplotlib.figure.Figure:
         """Figure of the spectrum (see :func:`analysis.plots.spectrum_figure`)."""
-        from analysis.plots import spectrum_figure
-
         return spectrum_figure(self, **kwargs)
-
-
-def _units_of(units: str, scaling: str) -> str:
-    if scaling in ("peak", "rms"):
-        return units
-    if scaling == "power":
-        return "1" if units == "1" else f"({units})^2"
-    return "Hz-1" if units == "1" else f"({units})^2 Hz-1"
 
 
 def _frame_blocks(
@@ -524,7 +328,7 @@ def spectrum(
             raise ValueError(f"x: DataArray needs a 'time' dimension; it has dims {x.dims}")
         if "time" not in x.coords:
             raise ValueError("x: DataArray needs a 'time' coordinate in seconds")
-        fs_coord = _uniform_rate(x["time"].values, "x.time")
+        fs_coord = uniform_rate(x["time"].values, "x.time")
         if fs is not None and abs(float(fs) - fs_coord) > 1e-6 * fs_coord:
             raise ValueError(
                 f"sample-rate mismatch: fs = {fs!r} Hz but the time coordinate of x gives "
@@ -550,16 +354,16 @@ def spectrum(
         raise ValueError(f"x must be a real numeric array; got dtype {arr.dtype}")
     if arr.ndim == 0:
         raise ValueError("x must have at least one dimension (time last)")
-    _check_finite_blocks(arr, name)
+    require_finite_blocks(arr, name)
     if not dims:
         dims = tuple(f"dim_{i}" for i in range(arr.ndim - 1))
-    _check_choice(scaling, SCALINGS, "scaling")
-    _check_choice(average, ("mean", "max"), "average")
+    require_choice(scaling, SCALINGS, "scaling")
+    require_choice(average, ("mean", "max"), "average")
     n = arr.shape[-1]
-    seg = n if segment_length is None else _int_param(segment_length, "segment_length", 2)
+    seg = n if segment_length is None else require_int(segment_length, "segment_length", 2)
     if seg > n:
         raise ValueError(f"segment_length = {seg} is not admissible: must be <= {n} (x length)")
-    nfft = seg if nfft is None else _int_param(nfft, "nfft", 1)
+    nfft = seg if nfft is None else require_int(nfft, "nfft", 1)
     if nfft < seg:
         raise ValueError(f"nfft = {nfft} is not admissible: must be >= segment_length = {seg}")
     overlap = float(overlap)
@@ -567,8 +371,8 @@ def spectrum(
         raise ValueError(f"overlap = {overlap!r} is not admissible: must be in [0, 1)")
     step = max(1, round(seg * (1.0 - overlap)))
     w = get_window(window, seg)
-    info = _window_info_of(window, w)
-    s1, s2 = _window_sums(w)
+    info = window_info_of(window, w)
+    s1, s2 = window_sums(w)
     power, n_avg = _segment_power(arr, w, nfft, step, average, workers)
     one_sided = np.full(nfft // 2 + 1, 2.0)
     one_sided[0] = 1.0
@@ -590,7 +394,7 @@ def spectrum(
         enbw_hz=info.enbw_hz(fs),
         resolution_hz=fs / nfft,
         n_averages=n_avg,
-        units=_units_of(units, scaling),
+        units=units_of(units, scaling),
         fs=fs,
         segment_length=seg,
         nfft=nfft,
@@ -773,7 +577,7 @@ def find_peaks(
             )
         kwargs["distance"] = max(1, round(min_distance_hz / spectrum.resolution_hz))
     if max_peaks is not None:
-        _int_param(max_peaks, "max_peaks", 1)
+        require_int(max_peaks, "max_peaks", 1)
     levels = to_db(vals, spectrum.scaling)
     idx, _ = scipy.signal.find_peaks(np.concatenate(([-np.inf], levels, [-np.inf])), **kwargs)
     idx = idx - 1
