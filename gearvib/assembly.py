@@ -420,11 +420,14 @@ def assemble(gs: GearSet, *, n_table: int = N_TABLE) -> AssembledModel:
     for b in gs.bodies:
         ratios[b.name] = float(full_mode[coords.get(b.name, "theta")])
 
-    f_per_rpm = math.nan
-    if n_mesh and resolved[gs.meshes[0].name].z1 is not None:
-        m0 = gs.meshes[0]
-        car = bodies[m0.gear2].carrier
-        f_per_rpm = abs(resolved[m0.name].z1 * (ratios[m0.gear1] - ratios[car])) / 60.0
+    # mesh frequency of every mesh per input speed, |z1 (n1 - n_c)| / 60 (paper eq. 5); NaN
+    # without tooth numbers. Stages and planet toothings may differ (two-stage, Wolfrom).
+    f_per_rpm = np.full(n_mesh, math.nan)
+    for k, m in enumerate(gs.meshes):
+        z1 = resolved[m.name].z1
+        if z1 is not None:
+            car = bodies[m.gear2].carrier
+            f_per_rpm[k] = abs(z1 * (ratios[m.gear1] - ratios[car])) / 60.0
 
     bearing_vectors = (np.array([u for _, u, _, _ in bearings]) @ tmat if bearings
                        else np.zeros((0, len(kept))))
@@ -463,7 +466,7 @@ def assemble(gs: GearSet, *, n_table: int = N_TABLE) -> AssembledModel:
         output_member=gs.output,
         fixed_members=tuple(gs.fixed),
         kinematic_ratios=ratios,
-        mesh_frequency_per_rpm=f_per_rpm,
+        mesh_frequencies_per_rpm=f_per_rpm,
         meta=meta,
     )
 

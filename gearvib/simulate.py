@@ -180,7 +180,8 @@ def simulate(
         k_max[system.ipar[kn.IP_INPUT], system.ipar[kn.IP_INPUT]] += setup.coupling.stiffness
     f_nat = undamped_frequencies(setup.mass, k_max)
     f_nat_max = float(f_nat.max()) if f_nat.size else 0.0
-    f_mesh_max = abs(model.mesh_frequency_per_rpm) * setup.speed_max / RAD_S_PER_RPM
+    f_rpm = model.mesh_frequencies_per_rpm
+    f_mesh_max = float(np.nanmax(f_rpm, initial=0.0)) * setup.speed_max / RAD_S_PER_RPM
     step = choose_step(f_nat_max, f_mesh_max, dt=dt, fs_out=fs_out)
     taps = decimation_filter(step.decimation)
     half = (taps.size - 1) // 2

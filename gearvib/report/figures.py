@@ -11,15 +11,21 @@ pyplot); they compute nothing themselves.
 
 The gear set is rebuilt from the ``config_json`` attribute of the Dataset (its ``"gearset"``
 entry). If that is missing, the analysis falls back to what the Dataset holds: the stored
-natural frequencies, the mesh frequency per speed from the ``mesh_frequency`` and
+natural frequencies, the mesh frequencies per speed from the ``mesh_frequency(mesh, time)`` and
 ``input_speed`` coordinates and the simulated ``mesh_stiffness``; the stability chart and the
 mode types are then not available, and the report says so.
+
+A gear set with several mesh frequencies (two stages, the two toothings of a Wolfrom planet)
+gets order lines, order marks, theory candidates and Floquet intervals for every one of them,
+labelled with its name (``stage 1``, ``stage 2``); the first is the reference of the speed
+axis of the stability chart.
 """
 
 from __future__ import annotations
 
 import json
 import math
+import textwrap
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -262,7 +268,11 @@ class CaseAnalysis:
     mode_names : list of str
         Their names (``f2, f3, ...``: mode 1 is the rigid-body rotation, as in the paper).
     mesh_frequency_per_rpm : float
-        Mesh frequency per input speed [Hz per min^-1] (paper eq. 5).
+        Mesh frequency per input speed [Hz per min^-1] (paper eq. 5); with several mesh
+        frequencies the first (reference) one.
+    mesh_frequencies : list of (str, float)
+        Every distinct mesh frequency: name (``"stage 2"``; ``"mesh"`` for a set with one) and
+        Hz per min^-1, reference first.
     parameters : list of (str, str)
         Gear-set and run parameters.
     modes : list of tuple
@@ -327,6 +337,12 @@ class CaseAnalysis:
     notes: list[str] = field(default_factory=list)
     provenance: list[tuple[str, str]] = field(default_factory=list)
     first_order: list[tuple[str, ...]] = field(default_factory=list)
+    mesh_frequencies: list[tuple[str, float]] = field(default_factory=list)
+
+    @property
+    def several_mesh_frequencies(self) -> bool:
+        """True when the gear set has more than one mesh frequency."""
+        return len(self.mesh_frequencies) > 1
 
     @property
     def speed_range(self) -> tuple[float, float]:
@@ -335,8 +351,16 @@ class CaseAnalysis:
         return float(v.min()), float(v.max())
 
     def mesh_frequency_at(self, rpm: float) -> float:
-        """Mesh frequency at an input speed [Hz]."""
+        """Mesh frequency at an input speed [Hz] (the reference one if there are several)."""
         return self.mesh_frequency_per_rpm * rpm
+
+    def group_frequencies_text(self, f_ref_lo: float, f_ref_hi: float) -> str:
+        """A reference mesh-frequency interval [Hz] in every mesh frequency, as text."""
+        if not self.several_mesh_frequencies:
+            return f"{f_ref_lo:.1f}–{f_ref_hi:.1f}"
+        return "; ".join(f"{name}: {f_ref_lo * f / self.mesh_frequency_per_rpm:.1f}–"
+                         f"{f_ref_hi * f / self.mesh_frequency_per_rpm:.1f}"
+                         for name, f in self.mesh_frequencies)
 
     def resonance_rows(self) -> list[tuple[str, ...]]:
         """Rows of the resonance table (formatted strings)."""
@@ -357,7 +381,8 @@ class CaseAnalysis:
             open_lo = "≤ " if int(reg["lower_open"][i]) else ""
             open_hi = " ≥" if int(reg["upper_open"][i]) else ""
             rows.append((f"{open_lo}{lo_s:.0f}", f"{hi_s:.0f}{open_hi}", f"{hi_s - lo_s:.1f}",
-                         f"{float(reg['lower'][i]):.1f}–{float(reg['upper'][i]):.1f}",
+                         self.group_frequencies_text(float(reg["lower"][i]),
+                                                     float(reg["upper"][i])),
                          f"{float(reg['peak_growth_rate'][i]):.3g}",
                          str(reg["candidate"].values[i]) or "–",
                          _mechanism(str(reg["candidate"].values[i]), self.candidates)))
@@ -367,14 +392,14 @@ class CaseAnalysis:
         """Rows of the theory-candidate table."""
         c = self.candidates
         return [(f"{c.rpm[i]:.0f}", f"{c.f_mesh_hz[i]:.1f}", str(c.kind[i]), str(c.n[i]),
-                 str(c.label[i]), "yes" if c.allowed[i] else f"no: {c.reason[i]}")
+                 c.full_label(i), "yes" if c.allowed[i] else f"no: {c.reason[i]}")
                 for i in range(len(c))]
 
 
 def _mechanism(label: str, cands: Candidates) -> str:
     if not label:
         return "no theory candidate in range"
-    idx = np.flatnonzero(cands.label == label)
+    idx = np.flatnonzero([cands.full_label(i) == label for i in range(len(cands))])
     if idx.size == 0:
         return ""
     i = int(idx[0])
@@ -417,13 +442,60 @@ def _rebuild(caller: dict) -> tuple[AssembledModel | None, str]:
         return None, f"the stored gear-set description could not be rebuilt: {exc}"
 
 
-def _mesh_frequency_per_rpm(ds: xr.Dataset) -> float:
+def _stored_mesh_frequencies(ds: xr.Dataset) -> list[tuple[str, float]]:
+    """Distinct mesh frequencies per speed [Hz per min^-1] from ``mesh_frequency``.
+
+    Reads ``mesh_frequency(mesh, time)``, and the single ``mesh_frequency(time)`` of runs
+    written before every mesh had its own. Groups are named like
+    :meth:`gearvib.model.AssembledModel.mesh_frequency_groups` (stage prefix or numbered).
+    """
     fm = np.asarray(ds["mesh_frequency"].values, dtype=float)
     sp = np.abs(np.asarray(ds["input_speed"].values, dtype=float))
     ok = sp > 0.05 * sp.max()
     if not ok.any():
         raise ValueError("the run has no speed > 0: cannot derive the mesh frequency per speed")
-    return float(np.median(fm[ok] / sp[ok]))
+    if fm.ndim == 1:
+        return [("mesh", float(np.median(fm[ok] / sp[ok])))]
+    meshes = [str(m) for m in ds["mesh_frequency"]["mesh"].values]
+    per_mesh = np.median(fm[:, ok] / sp[ok], axis=1)
+    groups: list[tuple[float, list[str]]] = []
+    for name, f in zip(meshes, per_mesh, strict=True):
+        if not (np.isfinite(f) and f > 0):
+            continue
+        for g in groups:
+            if abs(f - g[0]) <= 1e-6 * max(f, g[0]):
+                g[1].append(name)
+                break
+        else:
+            groups.append((float(f), [name]))
+    if not groups:
+        raise ValueError("the run has no mesh with a mesh frequency")
+    if len(groups) == 1:
+        return [("mesh", groups[0][0])]
+    heads = [{m.split(".", 1)[0] for m in g[1]} for g in groups]
+    if all(len(h) == 1 and all("." in m for m in g[1]) for h, g in zip(heads, groups,
+                                                                      strict=True)) \
+            and len({next(iter(h)) for h in heads}) == len(groups):
+        names = [_stage_name(next(iter(h))) for h in heads]
+    else:
+        names = [f"f_mesh,{i + 1}" for i in range(len(groups))]
+    return [(n, g[0]) for n, g in zip(names, groups, strict=True)]
+
+
+def _stage_name(prefix: str) -> str:
+    return f"stage {prefix[1:]}" if prefix[:1] == "s" and prefix[1:].isdigit() else prefix
+
+
+def _sun_ring_meshes(meshes: Sequence[str]) -> tuple[tuple[str, ...], tuple[str, ...]]:
+    """Sun-planet and ring-planet meshes; in a multi-stage set those of the first stage."""
+    sun = tuple(m for m in meshes if m.startswith("sun"))
+    ring = tuple(m for m in meshes if m.startswith("ring"))
+    if sun or ring or not meshes or "." not in meshes[0]:
+        return sun, ring
+    head = meshes[0].split(".", 1)[0] + "."
+    first = [m for m in meshes if m.startswith(head)]
+    return (tuple(m for m in first if m[len(head):].startswith("sun")),
+            tuple(m for m in first if m[len(head):].startswith("ring")))
 
 
 def _signed_force(ds: xr.Dataset, mesh: str) -> np.ndarray:
@@ -453,7 +525,7 @@ def summed_sun_stiffness(model: AssembledModel, *, cycles: float = _STIFFNESS_CY
     -------
     SummedStiffness
     """
-    names = tuple(n for n in model.mesh_names if n.startswith("sun"))
+    names = _sun_ring_meshes(model.mesh_names)[0]
     if not names:
         raise ValueError(f"the gear set has no sun mesh (meshes: {', '.join(model.mesh_names)})")
     idx = [model.mesh_names.index(n) for n in names]
@@ -482,7 +554,8 @@ def _simulated_stiffness(ds: xr.Dataset, sun: Sequence[str], f_per_rpm: float
 
 
 def _parameters(ds: xr.Dataset, caller: dict, model: AssembledModel | None, run: dict,
-                f_per_rpm: float) -> list[tuple[str, str]]:
+                f_per_rpm: float, mesh_freqs: Sequence[tuple[str, float]] = ()
+                ) -> list[tuple[str, str]]:
     rows: list[tuple[str, str]] = []
     gs = caller.get("gearset", {}) if isinstance(caller.get("gearset"), dict) else {}
     if gs:
@@ -524,9 +597,18 @@ def _parameters(ds: xr.Dataset, caller: dict, model: AssembledModel | None, run:
                              f"{m.get('phase_lag', 0.0):.4f} cycles"))
         rows.append(("degrees of freedom", f"{model.n_dof} ({model.n_mesh} meshes, "
                                            f"{len(model.bearing_names)} elastic bearings)"))
-    rows.append(("mesh frequency per input speed",
-                 f"{f_per_rpm:.6g} Hz per min⁻¹ (paper eq. 5, {60 * f_per_rpm:.4g} mesh "
-                 "cycles per input revolution)"))
+    if len(mesh_freqs) > 1:
+        groups = {g.name: g for g in model.mesh_frequency_groups()} if model is not None else {}
+        for name, f in mesh_freqs:
+            members = (f"; meshes {', '.join(groups[name].mesh_names)}" if name in groups
+                       else "")
+            rows.append((f"mesh frequency per input speed, {name}",
+                         f"{f:.6g} Hz per min⁻¹ ({60 * f:.4g} mesh cycles per input "
+                         f"revolution{members})"))
+    else:
+        rows.append(("mesh frequency per input speed",
+                     f"{f_per_rpm:.6g} Hz per min⁻¹ (paper eq. 5, {60 * f_per_rpm:.4g} mesh "
+                     "cycles per input revolution)"))
     rows.append(("run-up", f"{run['speed_start_rpm']:g} → {run['speed_end_rpm']:g} min⁻¹ in "
                            f"{run['duration']:g} s, input torque {run['input_torque']:g} N m"))
     rows.append(("output sample rate", f"{float(ds.attrs.get('fs_out', 0.0)):g} Hz"))
@@ -581,6 +663,7 @@ def _first_order_rows(model: AssembledModel, run: dict, settings: AnalysisSettin
     except (ValueError, ArithmeticError, np.linalg.LinAlgError):
         return []
     lo_r, hi_r = float(run["speed_start_rpm"]), float(run["speed_end_rpm"])
+    factor = {g.name: g.frequency_per_rpm for g in model.mesh_frequency_groups()}
     rows = []
     order = np.argsort(widths.lower_rpm)
     for i in order:
@@ -588,8 +671,11 @@ def _first_order_rows(model: AssembledModel, run: dict, settings: AnalysisSettin
         w = float(widths.width_hz[i])
         if not (np.isfinite(lo) and np.isfinite(hi)) or w <= 0 or hi < lo_r or lo > hi_r:
             continue
-        rows.append((str(widths.label[i]), f"{lo:.0f}", f"{hi:.0f}", f"{hi - lo:.1f}",
-                     f"{float(widths.undamped_width_hz[i]) / model.mesh_frequency_per_rpm:.1f}"))
+        group = "" if widths.mesh_frequency is None else str(widths.mesh_frequency[i])
+        f = factor.get(group) or (w / (hi - lo) if hi > lo else math.nan)
+        rows.append((f"{widths.label[i]} [{group}]" if group else str(widths.label[i]),
+                     f"{lo:.0f}", f"{hi:.0f}", f"{hi - lo:.1f}",
+                     f"{float(widths.undamped_width_hz[i]) / f:.1f}"))
     return rows
 
 
@@ -606,6 +692,21 @@ def _candidates(model: AssembledModel | None, modal: ModalResult | None, fn: np.
     note = "theory candidates without the planetary mesh-phasing selection rule"
     return instability_candidates(fn, n_max=n_max, mesh_frequency_per_rpm=f_per_rpm,
                                   speed_range=speed_range, mode_labels=names), note
+
+
+def _stored_candidates(fn: np.ndarray, names: list[str], groups: list[tuple[str, float]],
+                       speed_range: tuple[float, float], n_max: int) -> Candidates:
+    """Candidates of every stored mesh frequency (no gear-set model), sorted by speed."""
+    tables = [instability_candidates(fn, n_max=n_max, mesh_frequency_per_rpm=f,
+                                     speed_range=speed_range, mode_labels=names,
+                                     mesh_frequency_name=g) for g, f in groups]
+    cols = ("kind", "mode_i", "mode_j", "n", "f_mesh_hz", "rpm", "allowed", "reason", "label",
+            "mesh_frequency")
+    merged = {c: np.concatenate([getattr(t, c) for t in tables]) for c in cols}
+    order = np.argsort(merged["rpm"], kind="stable")
+    return Candidates(**{c: v[order] for c, v in merged.items()}, notes=tables[0].notes,
+                      natural_frequencies_hz=tables[0].natural_frequencies_hz,
+                      mesh_frequency_per_rpm=groups[0][1])
 
 
 def analyse_case(ds: xr.Dataset, *, name: str | None = None,
@@ -649,11 +750,13 @@ def analyse_case(ds: xr.Dataset, *, name: str | None = None,
         keep = np.array([k != "rigid-body" for k in modal.kinds], dtype=bool)
         fn = modal.frequencies_hz[keep]
         names = [f"f{i + 1}" for i in np.flatnonzero(keep)]
-        f_per_rpm = abs(model.mesh_frequency_per_rpm)
+        mesh_freqs = [(g.name, g.frequency_per_rpm) for g in model.mesh_frequency_groups()]
+        if not mesh_freqs:
+            mesh_freqs = _stored_mesh_frequencies(ds)
     else:
         fn = np.asarray(ds["natural_frequency"].values, dtype=float)
         names = [f"f{i + 2}" for i in range(fn.size)]
-        f_per_rpm = _mesh_frequency_per_rpm(ds)
+        mesh_freqs = _stored_mesh_frequencies(ds)
         notes.append("natural frequencies are those stored in the run, named f2, f3, ... "
                      "assuming one rigid-body mode (f1)")
     gs_name = caller.get("gearset", {}).get("name", "") if isinstance(
@@ -662,9 +765,9 @@ def analyse_case(ds: xr.Dataset, *, name: str | None = None,
     label = str(caller.get("label", "")) or (
         caller.get("gearset", {}).get("title", "") if gs_name else "") or case
     run = _run_settings(caller, ds)
+    f_per_rpm = mesh_freqs[0][1]
     meshes = [str(m) for m in ds["mesh"].values]
-    sun = tuple(m for m in meshes if m.startswith("sun"))
-    ring = tuple(m for m in meshes if m.startswith("ring"))
+    sun, ring = _sun_ring_meshes(meshes)
     force_mesh = settings.force_mesh or (sun[0] if sun else meshes[0])
     if force_mesh not in meshes:
         raise ValueError(f"force_mesh = {force_mesh!r} is not a mesh of the run "
@@ -717,7 +820,7 @@ def analyse_case(ds: xr.Dataset, *, name: str | None = None,
     if moving[first:].all() and moving.sum() > 64:
         try:
             xm = x[first:]
-            mesh_order = 60.0 * f_per_rpm
+            mesh_order = 60.0 * min(f for _, f in mesh_freqs)  # resolve the slowest stage
             omap = rpm_order_map(xm - xm.mean(), None, rpm[first:], time=t[first:],
                                  window="hann", overlap=settings.map_overlap, amplitude="rms",
                                  resolution=max(mesh_order / 8.0, 0.5), units="N",
@@ -726,11 +829,19 @@ def analyse_case(ds: xr.Dataset, *, name: str | None = None,
             notes.append(f"rpm-order map not available: {exc}")
 
     # (f) resonances in the map, against the theory candidates
-    candidates, cnote = _candidates(model, modal, fn, names, f_per_rpm,
-                                    (float(run["speed_start_rpm"]),
-                                     float(run["speed_end_rpm"])), settings.n_max)
+    span = (float(run["speed_start_rpm"]), float(run["speed_end_rpm"]))
+    if model is None and len(mesh_freqs) > 1:
+        candidates = _stored_candidates(fn, names, mesh_freqs, span, settings.n_max)
+        cnote = "theory candidates without the planetary mesh-phasing selection rule"
+    else:
+        candidates, cnote = _candidates(model, modal, fn, names, f_per_rpm, span,
+                                        settings.n_max)
     if cnote:
         notes.append(cnote)
+    if len(mesh_freqs) > 1:
+        notes.append(f"resonance spots are classified against the mesh orders of "
+                     f"{mesh_freqs[0][0]} (the reference); the order lines of every mesh "
+                     "frequency are drawn on the sonogram")
     map_ds = fmap.to_dataset().sel(frequency=slice(0.0, fmax))
     resonances = detect_resonances(
         map_ds, natural_frequencies_hz=fn, mesh_frequency_per_rpm=f_per_rpm,
@@ -771,13 +882,26 @@ def analyse_case(ds: xr.Dataset, *, name: str | None = None,
     return CaseAnalysis(
         name=case, label=label, dataset=ds, config=cfg, model=model, modal=modal,
         natural_frequencies_hz=fn, mode_names=names, mesh_frequency_per_rpm=f_per_rpm,
-        parameters=_parameters(ds, caller, model, run, f_per_rpm),
+        parameters=_parameters(ds, caller, model, run, f_per_rpm, mesh_freqs),
+        mesh_frequencies=mesh_freqs,
         modes=_modes_rows(modal, ds), force_mesh=force_mesh, sun_meshes=sun, ring_meshes=ring,
         spectra=spectra, stiffness=stiff, fmap=fmap, omap=omap, frequency_max_hz=fmax,
         resonances=resonances, regions=regions, candidates=candidates, chart=chart, run=run,
         settings=settings,
         notes=notes, provenance=prov, first_order=first_order,
     )
+
+
+def _mesh_frequency_text(ca: CaseAnalysis) -> str:
+    """The sonogram section's sentence on the mesh frequencies."""
+    if ca.several_mesh_frequencies:
+        return (f"{ca.name}: " + "; ".join(
+            f"f_mesh,{name} = {f:.5g} Hz per min⁻¹ × n_in ({60 * f:.4g} mesh cycles per input "
+            "revolution)" for name, f in ca.mesh_frequencies) + ". " + "; ".join(
+            f"at {r[0]} f_mesh = {r[1]}" for r in key_speed_rows(ca)) + ".")
+    return (f"{ca.name}: f_mesh = {ca.mesh_frequency_per_rpm:.5g} Hz per min⁻¹ × "
+            f"n_S (paper eq. 5). " + "; ".join(
+                f"at {r[0]} f_mesh = {r[1]}" for r in key_speed_rows(ca)) + ".")
 
 
 def key_speed_rows(ca: CaseAnalysis) -> list[tuple[str, str, str]]:
@@ -787,23 +911,28 @@ def key_speed_rows(ca: CaseAnalysis) -> list[tuple[str, str, str]]:
     -------
     list of (str, str, str)
         ``("1500 min⁻¹", "640 Hz", "f_mesh ≈ f2/2 (631 Hz)")`` rows for the speeds of
-        :data:`PAPER_SPEEDS_RPM` inside the run's speed range.
+        :data:`PAPER_SPEEDS_RPM` inside the run's speed range; with several mesh frequencies
+        one row per speed and mesh frequency (``"1500 min⁻¹", "144 Hz (stage 2)", ...``).
     """
     lo, hi = ca.speed_range
+    several = ca.several_mesh_frequencies
+    groups = ca.mesh_frequencies if several else [("", ca.mesh_frequency_per_rpm)]
     rows = []
     for rpm in PAPER_SPEEDS_RPM:
         if not lo <= rpm <= hi:
             continue
-        fm = ca.mesh_frequency_at(rpm)
-        lab = label_peaks([fm], ca.natural_frequencies_hz, n_max=6, tolerance=0.1,
-                          names=ca.mode_names) if ca.natural_frequencies_hz.size else None
-        text = "–"
-        if lab is not None and lab.matches[0]:
-            best = sorted(lab.matches[0], key=lambda m: m.relative_error)[:2]
-            text = " ; ".join(f"f_mesh ≈ {m.expression} ({m.value_hz:.0f} Hz, "
-                              f"{100 * m.relative_error:+.0f} %)".replace("+-", "-")
-                              for m in best)
-        rows.append((f"{rpm:.0f} min⁻¹", f"{fm:.0f} Hz", text))
+        for name, f in groups:
+            fm = f * rpm
+            lab = label_peaks([fm], ca.natural_frequencies_hz, n_max=6, tolerance=0.1,
+                              names=ca.mode_names) if ca.natural_frequencies_hz.size else None
+            text = "–"
+            if lab is not None and lab.matches[0]:
+                best = sorted(lab.matches[0], key=lambda m: m.relative_error)[:2]
+                text = " ; ".join(f"f_mesh ≈ {m.expression} ({m.value_hz:.0f} Hz, "
+                                  f"{100 * m.relative_error:+.0f} %)".replace("+-", "-")
+                                  for m in best)
+            rows.append((f"{rpm:.0f} min⁻¹", f"{fm:.0f} Hz" + (f" ({name})" if several else ""),
+                         text))
     return rows
 
 
@@ -903,12 +1032,15 @@ def sonogram_figure(ca: CaseAnalysis, *, figsize: tuple[float, float] = (7.5, 6.
     resonances and red bands the speed ranges the Floquet analysis finds unstable.
     """
     orders = list(range(1, ca.settings.orders + 1))
+    several = ca.several_mesh_frequencies
     fig = rpm_frequency_map_figure(
-        ca.fmap, hz_per_rpm=ca.mesh_frequency_per_rpm, orders=orders,
-        order_labels=[f"{k}×" for k in orders],
+        ca.fmap, hz_per_rpm=() if several else ca.mesh_frequency_per_rpm, orders=orders,
+        order_labels=None if several else [f"{k}×" for k in orders],
         natural_frequencies_hz=list(ca.natural_frequencies_hz), dynamic_range_db=50.0,
         frequency_max=ca.frequency_max_hz, figsize=figsize)
     ax = fig.axes[0]
+    if several:
+        _order_line_families(ax, ca, orders)
     r = ca.resonances
     if len(r):
         ax.plot(r.frequency, r.rpm, "o", mfc="none", mec="r", ms=9, lw=0,
@@ -918,11 +1050,46 @@ def sonogram_figure(ca: CaseAnalysis, *, figsize: tuple[float, float] = (7.5, 6.
             ax.axhspan(reg["lower"] / ca.mesh_frequency_per_rpm,
                        reg["upper"] / ca.mesh_frequency_per_rpm, color="r", alpha=0.18, lw=0,
                        label="Floquet unstable" if k == 0 else None)
-    if len(r) or (ca.chart is not None and len(ca.chart.region_table)):
-        ax.legend(loc="lower right", fontsize=8)
+    if len(r) or (ca.chart is not None and len(ca.chart.region_table)) or several:
+        leg = ax.legend(loc="lower right", fontsize=8)
+        if several:  # the white mesh-order entry on a white legend: give it a dark face
+            leg.get_frame().set_facecolor("0.35")
+            for text in leg.get_texts():
+                text.set_color("w")
     ax.set_title(f"{ca.name}: sonogram of the tooth force {ca.force_mesh} (cf. paper Fig. 11)\n"
                  f"{ca.fmap.window}, RBW {ca.fmap.resolution_hz:.3g} Hz", fontsize=9)
     return fig
+
+
+_FAMILY_STYLES = (("w", "--"), ("#00e5ff", "-"), ("#ff66ff", "-."), ("#ffd400", ":"))
+
+
+def _order_line_families(ax: Any, ca: CaseAnalysis, orders: Sequence[int]) -> None:
+    """Mesh-order lines of every mesh frequency, one colour and dash style per frequency.
+
+    Each line ``f = k f_g(rpm)`` is labelled ``"k×"`` in its colour where it leaves the plot
+    (top edge, or right edge for lines that reach the frequency limit first); a legend names
+    the families.
+    """
+    lo, hi = ax.get_ylim()
+    fmax = ax.get_xlim()[1]
+    for j, (name, f) in enumerate(ca.mesh_frequencies):
+        colour, dash = _FAMILY_STYLES[j % len(_FAMILY_STYLES)]
+        for i, k in enumerate(orders):
+            rpm = np.array([lo, hi])
+            freq = k * f * rpm
+            if freq[0] >= fmax:
+                continue
+            ax.plot(freq, rpm, color=colour, lw=0.9, ls=dash,
+                    label=f"mesh orders, {name}" if i == 0 else None)
+            if freq[1] <= fmax:
+                ax.annotate(f"{k}×", (freq[1], hi), xytext=(-2, -9), textcoords="offset points",
+                            color=colour, fontsize=7, ha="right")
+            else:
+                ax.annotate(f"{k}×", (fmax, fmax / (k * f)), xytext=(-3, 2),
+                            textcoords="offset points", color=colour, fontsize=7, ha="right")
+    ax.set_xlim(0, fmax)
+    ax.set_ylim(lo, hi)
 
 
 def order_map_figure(ca: CaseAnalysis, *, figsize: tuple[float, float] = (7.5, 5.0)
@@ -930,12 +1097,30 @@ def order_map_figure(ca: CaseAnalysis, *, figsize: tuple[float, float] = (7.5, 5
     """Rpm-order map of the same tooth force with the mesh orders marked (None if absent)."""
     if ca.omap is None:
         return None
-    mesh_order = 60.0 * ca.mesh_frequency_per_rpm
-    marks = [k * mesh_order for k in range(1, ca.settings.orders + 1)
-             if k * mesh_order <= ca.omap.max_order]
-    fig = rpm_order_map_figure(ca.omap, orders=marks, dynamic_range_db=50.0, figsize=figsize)
-    fig.axes[0].set_title(f"{ca.name}: rpm-order map of {ca.force_mesh} (dashed: mesh orders "
-                          f"k × {mesh_order:.3g})", fontsize=9)
+    groups = ca.mesh_frequencies or [("mesh", ca.mesh_frequency_per_rpm)]
+    if len(groups) == 1:
+        mesh_order = 60.0 * groups[0][1]
+        marks = [k * mesh_order for k in range(1, ca.settings.orders + 1)
+                 if k * mesh_order <= ca.omap.max_order]
+        fig = rpm_order_map_figure(ca.omap, orders=marks, dynamic_range_db=50.0,
+                                   figsize=figsize)
+        fig.axes[0].set_title(f"{ca.name}: rpm-order map of {ca.force_mesh} (dashed: mesh "
+                              f"orders k × {mesh_order:.3g})", fontsize=9)
+        return fig
+    fig = rpm_order_map_figure(ca.omap, orders=(), dynamic_range_db=50.0, figsize=figsize)
+    ax = fig.axes[0]
+    for j, (name, f) in enumerate(groups):
+        colour, dash = _FAMILY_STYLES[j % len(_FAMILY_STYLES)]
+        for k in range(1, ca.settings.orders + 1):
+            if k * 60.0 * f <= ca.omap.max_order:
+                ax.axvline(k * 60.0 * f, color=colour, ls=dash, lw=0.9,
+                           label=f"{name}: k × {60.0 * f:.4g}" if k == 1 else None)
+    leg = ax.legend(loc="lower right", fontsize=8)
+    leg.get_frame().set_facecolor("0.35")
+    for text in leg.get_texts():
+        text.set_color("w")
+    ax.set_title(f"{ca.name}: rpm-order map of {ca.force_mesh} with the mesh orders of every "
+                 "mesh frequency", fontsize=9)
     return fig
 
 
@@ -944,7 +1129,8 @@ def stability_figure(ca: CaseAnalysis, *, figsize: tuple[float, float] = (8.0, 4
     """Floquet growth rate over input speed with the unstable regions shaded (None if absent).
 
     Theory candidates (allowed: solid ticks; suppressed by the mesh-phasing rule: dotted) are
-    marked at the top.
+    marked at the top. With several mesh frequencies the ticks take the colour of their mesh
+    frequency and only the candidates the unstable regions are attributed to are named.
     """
     ch = ca.chart
     if ch is None:
@@ -958,20 +1144,39 @@ def stability_figure(ca: CaseAnalysis, *, figsize: tuple[float, float] = (8.0, 4
         ax.axvspan(lo, hi, color="C3", alpha=0.25)
     top = float(max(ch.growth_rate.max(), 1e-9))
     c = ca.candidates
+    several = ca.several_mesh_frequencies
+    colour = {name: f"C{j}" if j else "k" for j, (name, _) in enumerate(ca.mesh_frequencies)}
+    attributed = {str(reg["candidate"]) for reg in ch.region_table}
     for i in range(len(c)):
-        ax.axvline(c.rpm[i], ymin=0.9, ymax=1.0, color="k" if c.allowed[i] else "0.6",
+        group = str(c.mesh_frequency[i]) if c.mesh_frequency is not None else ""
+        ax.axvline(c.rpm[i], ymin=0.9, ymax=1.0,
+                   color=colour.get(group, "k") if c.allowed[i] else "0.6",
                    ls="-" if c.allowed[i] else ":", lw=0.8)
-        if c.allowed[i]:
-            ax.annotate(str(c.label[i]), (c.rpm[i], top), fontsize=6, rotation=90,
-                        va="top", ha="right")
+        # several mesh frequencies list many candidates: name only those of unstable regions
+        if c.allowed[i] and (not several or c.full_label(i) in attributed):
+            text = f"{c.label[i]} ({_short(group)})" if several else c.full_label(i)
+            ax.annotate(text, (c.rpm[i], top), fontsize=6, rotation=90, va="top", ha="right",
+                        color=colour.get(group, "k"))
+    if several:
+        for name, _ in ca.mesh_frequencies:
+            ax.plot([], [], color=colour[name], lw=0.8,
+                    label=f"candidates of {name} ({_short(name)})")
     ax.set_xlabel("input speed [min⁻¹]")
     ax.set_ylabel("growth rate [1/s]")
     ax.set_xlim(speed[0], speed[-1])
     ax.grid(True, alpha=0.3)
     ax.legend(loc="upper left", fontsize=8)
-    ax.set_title(f"{ca.name}: Floquet stability over speed (shaded: unstable; "
-                 f"{speed.size} speeds, boundaries refined)", fontsize=9)
+    title = (f"{ca.name}: Floquet stability over speed (shaded: unstable; "
+             f"{speed.size} speeds, boundaries refined)")
+    if ch.method:
+        title += "\n" + "\n".join(textwrap.wrap(ch.method, 110))
+    ax.set_title(title, fontsize=9)
     return fig
+
+
+def _short(name: str) -> str:
+    """Short form of a mesh-frequency name for plot labels (``"stage 2"`` -> ``"s2"``)."""
+    return f"s{name[6:]}" if name.startswith("stage ") else name
 
 
 def table_figure(title: str, header: Sequence[str], rows: Sequence[Sequence[str]], *,
@@ -984,8 +1189,6 @@ def table_figure(title: str, header: Sequence[str], rows: Sequence[Sequence[str]
     list of Figure
         One A4 portrait figure per page.
     """
-    import textwrap
-
     cols = [list(map(str, header))] + [list(map(str, r)) for r in rows]
     widths = [min(max(len(r[j]) for r in cols), 48) for j in range(len(header))]
 
@@ -1094,15 +1297,17 @@ def report_sections(cases: Sequence[CaseAnalysis], comparisons: Sequence[Any] = 
                    [(fsp.mesh, lab) for fsp in ca.spectra for lab in fsp.labels.labels])]
         s["sonograms"] += [
             Block("heading", ca.name),
-            Block("text", f"{ca.name}: f_mesh = {ca.mesh_frequency_per_rpm:.5g} Hz per min⁻¹ × "
-                  f"n_S (paper eq. 5). " + "; ".join(
-                      f"at {r[0]} f_mesh = {r[1]}" for r in key_speed_rows(ca)) + "."),
+            Block("text", _mesh_frequency_text(ca)),
             _table(f"Mesh frequency at the paper's resonance speeds ({ca.name})",
                    ("sun speed", "mesh frequency", "nearest theory values"),
                    key_speed_rows(ca)),
             Block("figure", f"{ca.name}: sonogram (rpm-frequency map) of the tooth force "
                   f"{ca.force_mesh}; speed vertical, inclined lines = mesh orders 1–"
-                  f"{ca.settings.orders}, dotted vertical lines = natural frequencies, circles "
+                  f"{ca.settings.orders}"
+                  + (" of every mesh frequency (" + ", ".join(
+                      f"{_short(n)} = {n}" for n, _ in ca.mesh_frequencies) + ")"
+                     if ca.several_mesh_frequencies else "")
+                  + ", dotted vertical lines = natural frequencies, circles "
                   "= detected resonances.", figure=lambda ca=ca: sonogram_figure(ca)),
             Block("figure", f"{ca.name}: rpm-order map of the same force.",
                   figure=lambda ca=ca: order_map_figure(ca))]
@@ -1143,8 +1348,15 @@ def report_sections(cases: Sequence[CaseAnalysis], comparisons: Sequence[Any] = 
         else:
             s["stability"] += [Block("text", f"{ca.name}: no Floquet stability chart. " + " ".join(
                 n for n in ca.notes if "stability" in n or "gear-set" in n))]
+        if ca.chart is not None and ca.chart.method:
+            s["stability"] += [Block("text", f"{ca.name}: several mesh frequencies ("
+                                     + ", ".join(f"{n} {f:.5g} Hz per min⁻¹"
+                                                 for n, f in ca.mesh_frequencies)
+                                     + f"); Floquet analysis: {ca.chart.method}.")]
         s["stability"] += [_table(
-            f"Theory candidates of {ca.name} in the run-up range (2 f_i/n, (f_i + f_j)/n)",
+            f"Theory candidates of {ca.name} in the run-up range (2 f_i/n, (f_i + f_j)/n"
+            + (" of every mesh frequency, [name] = the mesh frequency" if
+               ca.several_mesh_frequencies else "") + ")",
             ("speed [min⁻¹]", "f_mesh [Hz]", "kind", "n", "label", "allowed"),
             ca.candidate_rows())]
         s["provenance"] += [Block("heading", ca.name),

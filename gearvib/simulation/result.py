@@ -99,8 +99,9 @@ class RunUpResult:
         the input member (torque-driven).
     drive_torque : ndarray, shape (n_time,)
         Torque applied to the input member by the coupling or the torque table [N m].
-    mesh_frequency : ndarray, shape (n_time,)
-        ``|mesh_frequency_per_rpm * input_speed|`` [Hz].
+    mesh_frequency : ndarray, shape (n_mesh, n_time)
+        Mesh frequency of every mesh, ``|mesh_frequencies_per_rpm[m] * input_speed|`` [Hz]
+        (NaN for a mesh without tooth numbers). Stages and planet toothings have their own.
     natural_frequencies : ndarray, shape (n_mode,)
         Elastic natural frequencies of the mean system [Hz].
     flank_contact_changes : ndarray of int64, shape (n_mesh,)
@@ -205,7 +206,11 @@ class RunUpResult:
             ),
             "input_angle": var(t, self.input_angle, "rad", "input rotation angle", "input_angle"),
             "mesh_frequency": var(
-                t, self.mesh_frequency, "Hz", "gear mesh frequency", "mesh_frequency"
+                ("mesh", "time"),
+                np.atleast_2d(self.mesh_frequency).reshape(len(self.mesh_names), -1),
+                "Hz",
+                "tooth-mesh frequency of the mesh at the input speed",
+                "mesh_frequency",
             ),
         }
         data = {
@@ -392,7 +397,7 @@ def build_result(
         input_speed=input_speed,
         input_angle=angle,
         drive_torque=drive_torque,
-        mesh_frequency=np.abs(model.mesh_frequency_per_rpm * input_speed),
+        mesh_frequency=np.abs(np.outer(model.mesh_frequencies_per_rpm, input_speed)),
         natural_frequencies=nat,
         flank_contact_changes=changes.copy(),
         step=step,

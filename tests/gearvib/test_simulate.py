@@ -86,7 +86,8 @@ def planetary(
         carrier_dof=1, input_member="sun", output_member="carrier", fixed_members=("ring",),
         kinematic_ratios={"sun": 1.0, "carrier": ratio_c, "ring": 0.0,
                           **dict.fromkeys(planets, ratio_p)},
-        mesh_frequency_per_rpm=z_s * (1 - ratio_c) / 60, meta={"name": "hand-built planetary"},
+        mesh_frequencies_per_rpm=np.full(nm, z_s * (1 - ratio_c) / 60),
+        meta={"name": "hand-built planetary"},
     )
 
 
@@ -272,8 +273,10 @@ def test_mesh_frequency_and_speed_outputs() -> None:
     model = planetary()
     res = simulate(model, SpeedRamp(0, 3000, 0.06, input_torque=30.0))
     np.testing.assert_allclose(res.input_speed, 3000 * res.time / 0.06, atol=1e-9)
-    np.testing.assert_allclose(res.mesh_frequency,
-                               model.mesh_frequency_per_rpm * res.input_speed, rtol=1e-12)
+    # every mesh has its own mesh frequency; here all share z_s (n_s - n_c) / 60
+    assert res.mesh_frequency.shape == (model.n_mesh, res.time.size)
+    hand = 33 * (1 - 33 / 147) / 60 * res.input_speed
+    np.testing.assert_allclose(res.mesh_frequency, np.tile(hand, (model.n_mesh, 1)), rtol=1e-12)
     # members follow the kinematics (coupling lag is small), angles are the speed integral
     carrier = res.members.index("carrier")
     np.testing.assert_allclose(res.speed[carrier, -1],
