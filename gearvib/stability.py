@@ -428,6 +428,19 @@ def _mode_families(model: AssembledModel, modal: ModalResult, keep: np.ndarray
     return fam
 
 
+def _loaded(model: AssembledModel) -> AssembledModel:
+    """The model with the stiffness of the flanks in contact as its mean-system tables.
+
+    A negative backlash loads both flanks (stiffness ``k_L + k_R``), which the modes that
+    give the theory candidates must see, as the Floquet system does.
+    """
+    both = np.asarray(model.mesh_backlash) < 0
+    if not both.any():
+        return model
+    tables = model.mesh_stiffness_tables + both[:, None] * model.mesh_back_tables
+    return dataclasses.replace(model, mesh_stiffness_tables=tables)
+
+
 def _concatenate(tables: Sequence, order_by: str):
     """Rows of several candidate or width tables (same dataclass) in one, sorted."""
     first = tables[0]
@@ -462,7 +475,8 @@ def gear_set_candidates(model: AssembledModel, modal: ModalResult | None = None,
     selection rule (Parker 2000; physics notes 4.5) marks the candidates the phasing
     suppresses. Each mode's family is its classification with the dominant circular harmonic
     ``p`` of the planets' motion (0 rotational, 1 translational, ``j`` planet modes); the rule
-    is not applied when a mode is of no pure family (unequal spacing, ``other`` modes).
+    is not applied when a mode is of no pure family (unequal spacing, ``other`` modes). The
+    modes are those of the loaded mean system (both flanks for a negative backlash).
 
     A set with several mesh frequencies (two-stage, Wolfrom) gets the candidates of every mesh
     frequency ``f_g`` (``f_g = 2 f_i / n`` ...), each row naming its mesh frequency
@@ -470,12 +484,13 @@ def gear_set_candidates(model: AssembledModel, modal: ModalResult | None = None,
     sorted by speed. Combination frequencies of two groups (``l f_1 + m f_2``) are second order
     in the stiffness variation and not listed; the Floquet chart contains them.
     """
-    modal = modal or modal_analysis(model)
+    modal = modal or modal_analysis(_loaded(model))
     keep = np.array([k != "rigid-body" for k in modal.kinds], dtype=bool)
     freqs = modal.frequencies_hz[keep]
     labels = [f"f{i + 1}" for i in np.flatnonzero(keep)]
     varying = _varying(model)
-    groups = tuple(g for g in model.mesh_frequency_groups() if varying[list(g.meshes)].any())
+    every = model.mesh_frequency_groups()
+    groups = tuple(g for g in every if varying[list(g.meshes)].any()) or every[:1]
     if len(groups) > 1:
         tables = [instability_candidates(
             freqs, n_max=n_max, mesh_frequency_per_rpm=g.frequency_per_rpm,
@@ -499,9 +514,11 @@ def gear_set_candidates(model: AssembledModel, modal: ModalResult | None = None,
             rule = MeshPhasingRule(n_planets=n, sun_teeth=int(z_sun),
                                    ring_teeth=int(z_ring) if z_ring else None)
     return instability_candidates(
-        freqs, n_max=n_max, mesh_frequency_per_rpm=model.mesh_frequency_per_rpm,
+        freqs, n_max=n_max,
+        mesh_frequency_per_rpm=groups[0].frequency_per_rpm if groups else None,
         speed_range=speed_range, mode_labels=labels,
-        mode_families=families if rule else None, mesh_harmonic_rule=rule)
+        mode_families=families if rule else None, mesh_harmonic_rule=rule,
+        mesh_frequency_name=groups[0].name if len(every) > 1 else None)
 
 
 def _chart_metadata(system: PeriodicGearSystem) -> dict:
