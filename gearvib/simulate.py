@@ -194,6 +194,7 @@ def simulate(
         qd0,
         rigid_acceleration=setup.alpha0,
         free_rigid=setup.free_rigid,
+        mesh_names=model.mesh_names,
     )
     delta0 = system.mesh_vectors @ q0
     system.deflection_limit[:] = np.maximum(
