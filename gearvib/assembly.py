@@ -30,7 +30,12 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg
 
-from gearvib.geometry import MeshGeometry, sun_ring_phase
+from gearvib.geometry import (
+    MeshGeometry,
+    planet_mesh_position,
+    planet_tooth_angle,
+    sun_ring_phase,
+)
 from gearvib.model import AssembledModel
 from gearvib.structure import RIGID, Body, GearSet, Mesh
 
@@ -223,7 +228,6 @@ def assemble(gs: GearSet, *, n_table: int = N_TABLE) -> AssembledModel:
     v_mesh = np.zeros((n_mesh, n))
     w_mesh = np.zeros((n_mesh, n))
     s0 = np.zeros(n_mesh)
-    first_central: dict[str, Mesh] = {}
     mesh_meta = []
     for k, m in enumerate(gs.meshes):
         r = resolved[m.name]
@@ -268,18 +272,6 @@ def assemble(gs: GearSet, *, n_table: int = N_TABLE) -> AssembledModel:
             w[coords.get(b2.name, "theta")] -= r.z2
             w[ic] += -r.z1 + r.z2
             w_mesh[k] = w / (4 * math.pi)
-        if m.phase is not None:
-            s0[k] = m.phase
-        elif b1.role == "central" and r.z1 is not None:
-            s0[k] = -r.z1 * b2.angle / (2 * math.pi)
-            ref = first_central.get(b2.name)
-            if ref is None:
-                first_central[b2.name] = m
-            else:
-                s0[k] += _relative_phase(ref, m, resolved)
-        s0[k] -= math.floor(s0[k])
-        if min(s0[k], 1.0 - s0[k]) < 1e-9:  # exact integers from the assembly condition
-            s0[k] = 0.0
         mesh_meta.append({
             "name": m.name, "gear1": m.gear1, "gear2": m.gear2,
             "z1": r.z1, "z2": r.z2,
@@ -288,11 +280,17 @@ def assemble(gs: GearSet, *, n_table: int = N_TABLE) -> AssembledModel:
             "base_helix_angle_deg": math.degrees(r.base_helix_angle),
             "centre_distance": r.centre_distance,
             "contact_ratio": r.contact_ratio,
-            "mesh_position_at_assembly": float(s0[k]),
-            "phase_lag": float((1.0 - s0[k]) % 1.0),
             "backlash": m.backlash,
             "stiffness": m.stiffness.to_dict(),
         })
+
+    s0[:] = _mesh_positions(gs, resolved, bodies, centre)
+    for k, meta_k in enumerate(mesh_meta):
+        s0[k] -= math.floor(s0[k])
+        if min(s0[k], 1.0 - s0[k]) < 1e-9:  # exact integers from the assembly condition
+            s0[k] = 0.0
+        meta_k["mesh_position_at_assembly"] = float(s0[k])
+        meta_k["phase_lag"] = float((1.0 - s0[k]) % 1.0)
 
     # ---- supports, bearings, couplings, constraints ------------------------------------------
     k_full = np.zeros((n, n))
@@ -468,14 +466,174 @@ def assemble(gs: GearSet, *, n_table: int = N_TABLE) -> AssembledModel:
     )
 
 
-def _relative_phase(ref: Mesh, mesh: Mesh, resolved: dict[str, ResolvedMesh]) -> float:
-    """Mesh-position offset of ``mesh`` relative to ``ref`` at the same planet (geometry)."""
-    r_ref, r = resolved[ref.name], resolved[mesh.name]
-    g_ref, g = r_ref.geometry, r.geometry
+PHASE_TOLERANCE = 2e-3
+"""Largest mismatch [mesh cycles] between the two ways a mesh position follows from the
+assembly (from the central gear and from the planet's teeth) before the set is refused; it
+admits planet angles rounded to 1e-3 of the smallest assembly step."""
+
+
+def _mesh_positions(gs: GearSet, resolved: dict[str, ResolvedMesh], bodies: dict[str, Body],
+                    centre: dict[str, np.ndarray]) -> np.ndarray:
+    """Mesh position of every contact in the reference configuration ``q = 0`` [cycles].
+
+    Every gear has one orientation at assembly. A central gear is described by the constant
+    ``c`` of ``s = -z psi / 2 pi + c`` (rotational symmetry: the mesh with a planet at ``psi``
+    sees the gear turned by ``-psi``; one ``c`` per central gear and planet geometry), a planet
+    by the direction of its reference tooth (:func:`gearvib.geometry.planet_tooth_angle`;
+    further toothings of a stepped planet are turned by their ``tooth_offset``). The positions
+    follow by propagation through the meshes, starting from ``c = 0`` for the first central gear
+    (the paper's ``s0 = -z psi / 2 pi``) and again for any gear not reached through tooth
+    geometry (lumped meshes). A mesh reached both ways must agree within
+    :data:`PHASE_TOLERANCE`, otherwise the gears cannot be assembled there (ValueError naming
+    the mesh). A mesh with a given ``phase`` keeps it; the propagation uses its derived value,
+    so an override changes that mesh only.
+    Meshes without tooth numbers get 0 (constant stiffness: the position does not matter).
+    """
+    meshes = gs.meshes
+    n_mesh = len(meshes)
+    s0 = np.zeros(n_mesh)
+    done = np.zeros(n_mesh, dtype=bool)
+    c: dict[tuple, float] = {}
+    tooth: dict[str, float] = {}  # planet -> direction of its reference tooth [rad]
+    ref_mesh: dict[str, int] = {}  # planet -> mesh its reference tooth came from
+
+    def central_key(m: Mesh) -> tuple:
+        r = resolved[m.name]
+        g = r.geometry
+        return (m.gear1, g.gear2 if g is not None else r.z2, round(r.centre_distance, 12))
+
+    def planet_geometry(m: Mesh, planet: str):
+        """(geometry, planet_is_gear1, mate direction, tooth offset) or None."""
+        g = resolved[m.name].geometry
+        if g is None:
+            return None
+        is1 = m.gear1 == planet
+        toothing = g.gear1 if is1 else g.gear2
+        if toothing.internal:
+            return None
+        mate = m.gear2 if is1 else m.gear1
+        d = centre[mate] - centre[planet]
+        offset = m.tooth_offset1 if is1 else m.tooth_offset2
+        return g, is1, math.atan2(d[1], d[0]), offset
+
+    def from_planet(k: int, planet: str) -> float | None:
+        pg = planet_geometry(meshes[k], planet)
+        if pg is None or planet not in tooth:
+            return None
+        g, is1, mate, offset = pg
+        ref = ref_mesh[planet]
+        if (meshes[k].gear1 != planet and bodies[meshes[ref].gear1].role == "central"
+                and bodies[meshes[k].gear1].role == "central"):
+            rel = _relative_phase(meshes[ref], meshes[k], resolved)
+            if rel is not None:  # sun and ring on one planet toothing: the closed form
+                return s0[ref] + rel
+        return planet_mesh_position(g, planet_is_gear1=is1, mate_direction=mate,
+                                    tooth_angle=tooth[planet] + offset)
+
+    def set_planet(k: int, planet: str) -> None:
+        pg = planet_geometry(meshes[k], planet)
+        if pg is None or planet in tooth:
+            return
+        g, is1, mate, offset = pg
+        tooth[planet] = planet_tooth_angle(g, planet_is_gear1=is1, mate_direction=mate,
+                                           position=s0[k]) - offset
+        ref_mesh[planet] = k
+
+    def check(k: int, planet: str) -> None:
+        other = from_planet(k, planet)
+        if other is None or ref_mesh.get(planet) == k:
+            return
+        ref = meshes[ref_mesh[planet]]
+        mismatch = abs((s0[k] - other + 0.5) % 1.0 - 0.5)
+        pg, pr = planet_geometry(meshes[k], planet), planet_geometry(ref, planet)
+        ref_toothing = pr[0].gear1 if pr[1] else pr[0].gear2
+        if (pg[0].gear1 if pg[1] else pg[0].gear2) != ref_toothing:
+            # another toothing of a stepped planet: the planet may be inserted turned by any
+            # number of teeth of its reference toothing
+            g, is1, mate, offset = pg
+            for turn in range(1, abs(ref_toothing.z)):
+                alt = planet_mesh_position(
+                    g, planet_is_gear1=is1, mate_direction=mate,
+                    tooth_angle=tooth[planet] + offset + 2 * math.pi * turn / ref_toothing.z)
+                mismatch = min(mismatch, abs((s0[k] - alt + 0.5) % 1.0 - 0.5))
+        if mismatch > PHASE_TOLERANCE:
+            m = meshes[k]
+            raise ValueError(
+                f"mesh {m.name!r} cannot be assembled: the teeth of {planet!r} put it at mesh "
+                f"position {other % 1.0:.4f} (from mesh {ref.name!r}), the other gear at "
+                f"{s0[k] % 1.0:.4f} ({mismatch:.3g} cycles apart); identical planets do not fit "
+                "at these angles with these tooth numbers"
+            )
+
+    def assign(k: int) -> bool:
+        m = meshes[k]
+        r = resolved[m.name]
+        b1, b2 = bodies[m.gear1], bodies[m.gear2]
+        if r.z1 is None or r.z2 is None:
+            s0[k] = 0.0
+            return True
+        if b1.role == "central":
+            key = central_key(m)
+            if key in c:
+                s0[k] = -r.z1 * b2.angle / (2 * math.pi)
+                s0[k] += c[key]
+                if b2.name in tooth:
+                    check(k, b2.name)
+                else:
+                    set_planet(k, b2.name)
+                return True
+            value = from_planet(k, b2.name)
+            if value is None:
+                return False
+            s0[k] = value
+            c[key] = value + r.z1 * b2.angle / (2 * math.pi)
+            return True
+        # planet-planet mesh
+        for known, other in ((b1.name, b2.name), (b2.name, b1.name)):
+            value = from_planet(k, known)
+            if value is not None:
+                s0[k] = value
+                if other in tooth:
+                    check(k, other)
+                else:
+                    set_planet(k, other)
+                return True
+        return False
+
+    while not done.all():
+        progress = False
+        for k in np.flatnonzero(~done):
+            if assign(int(k)):
+                done[k] = progress = True
+        if progress:
+            continue
+        # nothing follows from what is known: fix the orientation of the next gear
+        k = int(np.flatnonzero(~done)[0])
+        m = meshes[k]
+        if bodies[m.gear1].role == "central":
+            c[central_key(m)] = 0.0
+        else:
+            s0[k] = 0.0
+            done[k] = True
+            set_planet(k, m.gear1)
+            set_planet(k, m.gear2)
+    for k, m in enumerate(meshes):
+        if m.phase is not None:
+            s0[k] = m.phase
+    return s0
+
+
+def _relative_phase(ref: Mesh, mesh: Mesh, resolved: dict[str, ResolvedMesh]) -> float | None:
+    """Closed-form mesh-position offset of ``mesh`` relative to ``ref`` at the same planet.
+
+    Sun and ring meshing one planet toothing (:func:`gearvib.geometry.sun_ring_phase`); None
+    for every other pair of meshes.
+    """
+    g_ref, g = resolved[ref.name].geometry, resolved[mesh.name].geometry
     if g_ref is None or g is None or g_ref.gear2 != g.gear2:
-        return 0.0  # different planet toothings (stepped planet) or lumped: no relation known
+        return None
     if g_ref.gear1.z > 0 > g.gear1.z:
         return sun_ring_phase(g_ref, g)
     if g.gear1.z > 0 > g_ref.gear1.z:
         return -sun_ring_phase(g, g_ref)
-    return 0.0
+    return None

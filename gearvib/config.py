@@ -72,9 +72,10 @@ _GEOMETRY = {
                "z_ring", "z_planet", "profile_shift_sun", "profile_shift_ring",
                "profile_shift_planet", "planet_angles_deg", "n_planets"},
     "wolfrom": {"module", "module2", "pressure_angle_deg", "face_width", "z_sun", "z_ring1",
-                "z_ring2", "z_planet1", "z_planet2", "n_planets"},
+                "z_ring2", "z_planet1", "z_planet2", "n_planets", "planet_step_offset_deg"},
     "ravigneaux": {"module", "pressure_angle_deg", "face_width", "z_sun_small", "z_sun_large",
-                   "z_ring", "z_planet_short", "z_planet_long", "n_pairs"},
+                   "z_ring", "z_planet_short", "z_planet_long", "n_pairs",
+                   "planet_mesh_phases"},
 }
 _BODIES = {
     "simple": ("sun", "ring", "carrier", "planet"),
@@ -83,7 +84,7 @@ _BODIES = {
 }
 _MESHES = {
     "simple": ("sun", "ring"),
-    "wolfrom": ("sun", "ring"),
+    "wolfrom": ("sun", "ring", "ring1", "ring2"),
     "ravigneaux": ("sun", "ring", "planet"),
 }
 
@@ -221,6 +222,42 @@ def _operation(cfg: dict) -> dict:
             "output": _require(op, "output", "[operation]")}
 
 
+def _integer(value: Any, where: str, *, low: int | None = None) -> int:
+    """An integer key (a float with a fraction, a bool or a string is refused)."""
+    if isinstance(value, bool) or not isinstance(value, int | float) or (
+            isinstance(value, float) and not value.is_integer()):
+        raise ConfigError(f"{where} must be an integer, got {value!r}")
+    v = int(value)
+    if low is not None and v < low:
+        raise ConfigError(f"{where} = {v} is not admissible (admissible: >= {low})")
+    return v
+
+
+def _builder_meshes(kind: str, meshes_t: dict, base: Path | None) -> dict[str, _MeshSpec]:
+    """The mesh families of a builder; Wolfrom's two rings may share ``[meshes.ring]``."""
+    def spec(key: str) -> _MeshSpec:
+        return _mesh_spec(_require(meshes_t, key, "[meshes]"), f"[meshes.{key}]", base,
+                          deferred=True)
+
+    if kind != "wolfrom":
+        return {k: spec(k) for k in _MESHES[kind]}
+    out = {"sun": spec("sun")}
+    if "ring" in meshes_t:
+        both = [k for k in ("ring1", "ring2") if k in meshes_t]
+        if both:
+            raise ConfigError(f"[meshes.ring] describes both rings; remove it or [meshes."
+                              f"{both[0]}] (give [meshes.ring] or [meshes.ring1] and "
+                              "[meshes.ring2])")
+        out["ring1"] = out["ring2"] = spec("ring")
+    else:
+        missing = [k for k in ("ring1", "ring2") if k not in meshes_t]
+        if missing:
+            raise ConfigError(f"missing key {missing[0]!r} in [meshes] (give [meshes.ring] for "
+                              "both rings, or [meshes.ring1] and [meshes.ring2])")
+        out["ring1"], out["ring2"] = spec("ring1"), spec("ring2")
+    return out
+
+
 def _builder_set(kind: str, cfg: dict, base: Path | None) -> GearSet:
     geo = check_keys(_require(cfg, "geometry", "the description"), _GEOMETRY[kind],
                       "[geometry]")
@@ -235,9 +272,7 @@ def _builder_set(kind: str, cfg: dict, base: Path | None) -> GearSet:
         t = _require(bodies_t, bname, "[bodies]")
         body = _body(bname, t, role, f"[bodies.{bname}]")
         bodies[bname] = body
-    specs = {k: _mesh_spec(_require(meshes_t, k, "[meshes]"), f"[meshes.{k}]", base,
-                           deferred=True)
-             for k in _MESHES[kind]}
+    specs = _builder_meshes(kind, meshes_t, base)
     op = _operation(cfg)
     g = {k: v for k, v in geo.items()}
     common: dict[str, Any] = {}
@@ -252,19 +287,33 @@ def _builder_set(kind: str, cfg: dict, base: Path | None) -> GearSet:
     if "face_width" in g:
         common["face_width"] = _number(g.pop("face_width"), "[geometry].face_width")
     name = str(cfg.get("name", kind))
+
+    def z(key: str) -> int:
+        return _integer(_require(g, key, "[geometry]"), f"[geometry].{key}")
+
+    def count(key: str, default: int) -> int:
+        return _integer(g.get(key, default), f"[geometry].{key}", low=1)
+
+    if len(op["fixed"]) != 1 and kind != "simple":
+        raise ConfigError(f"[operation].fixed must name one member for type = {kind!r}, got "
+                          f"{op['fixed']!r}")
     try:
         if kind == "simple":
             angles = g.pop("planet_angles_deg", None)
+            if angles is not None and not isinstance(angles, list):
+                raise ConfigError("[geometry].planet_angles_deg must be a list of angles")
             return simple_planetary(
-                z_sun=int(_require(g, "z_sun", "[geometry]")),
-                z_ring=int(_require(g, "z_ring", "[geometry]")),
-                z_planet=int(g["z_planet"]) if "z_planet" in g else None,
-                n_planets=int(g["n_planets"]) if "n_planets" in g else None,
+                z_sun=z("z_sun"), z_ring=z("z_ring"),
+                z_planet=z("z_planet") if "z_planet" in g else None,
+                n_planets=count("n_planets", 1) if "n_planets" in g else None,
                 planet_angles=[math.radians(_number(a, "[geometry].planet_angles_deg"))
                                for a in angles] if angles is not None else None,
-                profile_shift_sun=float(g.get("profile_shift_sun", 0.0)),
-                profile_shift_ring=float(g.get("profile_shift_ring", 0.0)),
-                profile_shift_planet=float(g["profile_shift_planet"])
+                profile_shift_sun=_number(g.get("profile_shift_sun", 0.0),
+                                          "[geometry].profile_shift_sun"),
+                profile_shift_ring=_number(g.get("profile_shift_ring", 0.0),
+                                           "[geometry].profile_shift_ring"),
+                profile_shift_planet=_number(g["profile_shift_planet"],
+                                             "[geometry].profile_shift_planet")
                 if "profile_shift_planet" in g else None,
                 sun=bodies["sun"], ring=bodies["ring"], carrier=bodies["carrier"],
                 planet=bodies["planet"], sun_mesh=specs["sun"], ring_mesh=specs["ring"],
@@ -272,17 +321,26 @@ def _builder_set(kind: str, cfg: dict, base: Path | None) -> GearSet:
                 output=op["output"], name=name, config=cfg, **common)
         if kind == "wolfrom":
             return wolfrom(
-                z_sun=int(g["z_sun"]), z_ring1=int(g["z_ring1"]), z_ring2=int(g["z_ring2"]),
-                z_planet1=int(g["z_planet1"]), z_planet2=int(g["z_planet2"]),
-                module2=float(g["module2"]) if "module2" in g else None,
-                n_planets=int(g.get("n_planets", 3)), sun=bodies["sun"], ring1=bodies["ring1"],
+                z_sun=z("z_sun"), z_ring1=z("z_ring1"), z_ring2=z("z_ring2"),
+                z_planet1=z("z_planet1"), z_planet2=z("z_planet2"),
+                module2=_number(g["module2"], "[geometry].module2") if "module2" in g else None,
+                step_offset=math.radians(_number(g.get("planet_step_offset_deg", 0.0),
+                                                 "[geometry].planet_step_offset_deg")),
+                n_planets=count("n_planets", 3), sun=bodies["sun"], ring1=bodies["ring1"],
                 ring2=bodies["ring2"], carrier=bodies["carrier"], planet=bodies["planet"],
-                sun_mesh=specs["sun"], ring_mesh=specs["ring"], fixed=op["fixed"][0],
-                input=op["input"], output=op["output"], name=name, config=cfg, **common)
+                sun_mesh=specs["sun"], ring1_mesh=specs["ring1"], ring2_mesh=specs["ring2"],
+                fixed=op["fixed"][0], input=op["input"], output=op["output"], name=name,
+                config=cfg, **common)
+        phases = g.get("planet_mesh_phases")
+        if phases is not None:
+            if not isinstance(phases, list):
+                raise ConfigError("[geometry].planet_mesh_phases must be a list (one mesh "
+                                  "position per planet pair, cycles)")
+            phases = [_number(p, "[geometry].planet_mesh_phases") for p in phases]
         return ravigneaux(
-            z_sun_small=int(g["z_sun_small"]), z_sun_large=int(g["z_sun_large"]),
-            z_ring=int(g["z_ring"]), z_planet_short=int(g["z_planet_short"]),
-            z_planet_long=int(g["z_planet_long"]), n_pairs=int(g.get("n_pairs", 3)),
+            z_sun_small=z("z_sun_small"), z_sun_large=z("z_sun_large"), z_ring=z("z_ring"),
+            z_planet_short=z("z_planet_short"), z_planet_long=z("z_planet_long"),
+            n_pairs=count("n_pairs", 3), planet_mesh_phases=phases,
             sun_small=bodies["sun_small"], sun_large=bodies["sun_large"], ring=bodies["ring"],
             carrier=bodies["carrier"], planet_short=bodies["planet_short"],
             planet_long=bodies["planet_long"], sun_mesh=specs["sun"], ring_mesh=specs["ring"],

@@ -1,0 +1,246 @@
+"""Ravigneaux, Wolfrom and two-stage sets: assembly conditions, mesh phases, speed ratios."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from gearvib.assembly import assemble
+from gearvib.stiffness import ConstantStiffness
+from gearvib.structure import Body, MeshSpec, Support, ravigneaux, wolfrom
+
+SPEC = MeshSpec(ConstantStiffness(3e8))
+
+
+def _central(name: str) -> Body:
+    return Body(name, "central", 2.0, 1e-2, Support())
+
+
+def ravigneaux_set(z_s1=30, z_s2=36, z_r=-84, z_ps=18, z_pl=24, n_pairs=3, elastic=False,
+                   **kw):
+    """Ravigneaux builder set (module 2 mm); ``elastic`` planet bearings expose the lines of
+    action in the mesh vectors."""
+    sup = Support(radial=1e8, tangential=1e8) if elastic else Support()
+    car = Body("carrier", "carrier", 3.0, 2e-2, Support())
+    ps = Body("short", "planet", 0.3, 1e-4, sup, carrier="carrier")
+    pl = Body("long", "planet", 0.5, 2e-4, sup, carrier="carrier")
+    return ravigneaux(z_sun_small=z_s1, z_sun_large=z_s2, z_ring=z_r, z_planet_short=z_ps,
+                      z_planet_long=z_pl, module=2e-3, n_pairs=n_pairs,
+                      sun_small=_central("sun_small"), sun_large=_central("sun_large"),
+                      ring=_central("ring"), carrier=car, planet_short=ps, planet_long=pl,
+                      sun_mesh=SPEC, ring_mesh=SPEC, planet_mesh=SPEC, **kw)
+
+
+def wolfrom_set(z_s=18, z_r1=-72, z_r2=-69, z_p1=27, z_p2=24, n=3, **kw):
+    """Wolfrom builder set; ``module2`` keeps both steps on one centre distance."""
+    car = Body("carrier", "carrier", 3.0, 2e-2, Support())
+    pl = Body("planet", "planet", 0.5, 2e-4, Support(), carrier="carrier")
+    kw.setdefault("module2", 2e-3 * (z_r1 + z_p1) / (z_r2 + z_p2))
+    return wolfrom(z_sun=z_s, z_ring1=z_r1, z_ring2=z_r2, z_planet1=z_p1, z_planet2=z_p2,
+                   module=2e-3, n_planets=n, sun=_central("sun"), ring1=_central("ring1"),
+                   ring2=_central("ring2"), carrier=car, planet=pl, sun_mesh=SPEC,
+                   ring_mesh=SPEC, **kw)
+
+
+# --------------------------------------------------------------------------- assembly checks
+
+
+def test_ravigneaux_assembly_conditions(monkeypatch):
+    """Hand derivation (tooth phases at the contacts, pair n = pair 1 turned by dpsi): the long
+    planet between large sun and ring needs (z_s2 + |z_r|) dpsi / 2 pi integer; going round
+    small sun -> short planet -> long planet -> large sun, the two planet spins must agree,
+    which needs (z_s1 + z_s2) dpsi / 2 pi integer."""
+    assemble(ravigneaux_set())  # 66/3, 120/3
+    with pytest.raises(ValueError, match=r"\(z_sun_small \+ z_sun_large\)/n_pairs = 67/3"):
+        ravigneaux_set(z_s1=31)
+    with pytest.raises(ValueError, match=r"z_sun_large \+ \|z_ring\|\)/n_pairs = 121/3"):
+        ravigneaux_set(z_r=-85, z_pl=24)
+    # the tooth-by-tooth assembly (builder check switched off) agrees with the condition,
+    # also where (z_s1 - z_s2) / N would say the opposite: with 4 pairs z_s1 = 29 fits
+    # (64/4; -6/4) and z_s1 = 31 does not (66/4; -4/4)
+    import gearvib.structure as st
+
+    monkeypatch.setattr(st, "check_ravigneaux_pairs", lambda *a: None)
+    assemble(ravigneaux_set(z_s1=29, z_s2=35, z_r=-85, z_pl=25, n_pairs=4))
+    with pytest.raises(ValueError, match=r"mesh 'sun_large-long2' cannot be assembled"):
+        assemble(ravigneaux_set(z_s1=31, z_s2=35, z_r=-85, z_pl=25, n_pairs=4))
+
+
+@pytest.mark.parametrize(
+    ("z_s", "z_r1", "z_r2", "z_p1", "z_p2", "n"),
+    [(18, -72, -69, 27, 24, 3), (18, -72, -70, 27, 24, 3), (16, -68, -64, 26, 22, 4),
+     (16, -68, -67, 26, 25, 4), (16, -68, -69, 26, 25, 4), (16, -68, -66, 26, 24, 4)],
+)
+def test_wolfrom_stepped_planet_condition_matches_tooth_assembly(z_s, z_r1, z_r2, z_p1, z_p2, n,
+                                                                 monkeypatch):
+    """(z_s z_p2 + |z_r2| z_p1) / (N gcd(z_p1, z_p2)) integer <=> identical stepped planets fit
+    (checked against the tooth-by-tooth propagation of the assembly, builder check bypassed)."""
+    g = math.gcd(z_p1, z_p2)
+    fits = (z_s * z_p2 - z_r2 * z_p1) % (n * g) == 0
+    if fits:
+        assemble(wolfrom_set(z_s, z_r1, z_r2, z_p1, z_p2, n))
+    else:
+        with pytest.raises(ValueError, match=r"identical stepped planets cannot be assembled"):
+            wolfrom_set(z_s, z_r1, z_r2, z_p1, z_p2, n)
+    # the assembly's own geometric check, without the builder's closed form
+    import gearvib.structure as st
+
+    monkeypatch.setattr(st, "check_stepped_planet_angles", lambda *a, **k: None)
+    gs = wolfrom_set(z_s, z_r1, z_r2, z_p1, z_p2, n)
+    if fits:
+        assemble(gs)
+    else:
+        with pytest.raises(ValueError, match=r"mesh 'ring2-planet\d' cannot be assembled"):
+            assemble(gs)
+
+
+# --------------------------------------------------------------------------- mesh phases
+
+
+def _flank_positions(model, gs, mesh_name: str, planet: str, tooth_angle: float) -> np.ndarray:
+    """Mesh positions [cycles] of the planet's flank crossings with the mesh's line of action.
+
+    Independent of :mod:`gearvib.geometry`'s involute bookkeeping: the line is read from the
+    assembled mesh vector (elastic planet bearings: ``n`` from the zeta/eta entries, the moment
+    arm from the rotation entry: ``X x n = v_theta``); the planet's flanks are polylines from the
+    DIN tooth-thickness half angle at every radius; a contact is a crossing where the flank
+    normal lies along the line. ``u`` is measured from the foot of gear2's centre towards the
+    pitch point (where the line cuts the line of centres), and
+    ``s = forward (u - path_start) / p_bt``.
+    """
+    k = model.mesh_names.index(mesh_name)
+    mesh = next(m for m in gs.meshes if m.name == mesh_name)
+    g = mesh.geometry
+    body = gs.body(planet)
+    v = model.mesh_vectors[k]
+    idx = {name: i for i, name in enumerate(model.dof_names)}
+    e_r = np.array([math.cos(body.angle), math.sin(body.angle)])
+    e_t = np.array([-e_r[1], e_r[0]])
+    n_vec = v[idx[f"{planet}.zeta"]] * e_r + v[idx[f"{planet}.eta"]] * e_t
+    arm = v[idx[f"{planet}.theta"]]
+    scale = np.hypot(*n_vec)
+    n_vec, arm = n_vec / scale, arm / scale
+    centres = {b.name: (np.zeros(2) if b.role != "planet" else
+                        body_radius(model, b.name) * np.array([math.cos(b.angle),
+                                                               math.sin(b.angle)]))
+               for b in gs.bodies}
+    cp = centres[planet]
+    toothing = g.gear1 if mesh.gear1 == planet else g.gear2
+    rb = abs(toothing.base_radius)
+    assert abs(arm) == pytest.approx(rb, rel=1e-9)  # the line is tangent to the base circle
+    r = np.linspace(rb * (1 + 1e-12), toothing.tip_radius, 4001)
+    psi = np.array([toothing.thickness_half_angle(x) for x in r])
+    found = []
+    for tooth in range(toothing.z):
+        gam = tooth_angle + 2 * math.pi * tooth / toothing.z
+        for sgn in (1.0, -1.0):
+            ang = gam + sgn * psi
+            pts = cp + r[:, None] * np.stack([np.cos(ang), np.sin(ang)], axis=1)
+            rel = pts - cp
+            dist = rel[:, 0] * n_vec[1] - rel[:, 1] * n_vec[0] - arm
+            for i in np.flatnonzero(np.sign(dist[:-1]) * np.sign(dist[1:]) < 0):
+                w = dist[i] / (dist[i] - dist[i + 1])
+                x = pts[i] + w * (pts[i + 1] - pts[i])
+                tangent = (pts[i + 1] - pts[i]) / np.hypot(*(pts[i + 1] - pts[i]))
+                if abs(tangent @ n_vec) < 1e-3:  # flank normal along the line of action
+                    found.append(x)
+    c2, c1 = centres[mesh.gear2], centres[mesh.gear1]
+    # the planet's foot on the line, gear2's foot, and the pitch point (the line cuts the line
+    # of centres there)
+    p0 = cp + arm * np.array([n_vec[1], -n_vec[0]])
+    foot2 = p0 + ((c2 - p0) @ n_vec) * n_vec
+    t_pitch = np.linalg.solve(np.column_stack([n_vec, -(c2 - c1)]), c1 - p0)[0]
+    pitch = p0 + t_pitch * n_vec
+    # the flanks of the other side generate the line beyond the foot: keep the contact side
+    found = [x for x in found if (x - p0) @ (pitch - p0) > 0]
+    direction = (pitch - foot2) / np.hypot(*(pitch - foot2))
+    u = np.array([(x - foot2) @ direction for x in found])
+    assert np.hypot(*(pitch - foot2)) == pytest.approx(g.pitch_point, rel=1e-9)
+    s = (g.forward_direction * (u - g.path_start) / g.base_pitch) % 1.0
+    return s
+
+
+def body_radius(model, planet: str) -> float:
+    return next(p["radius"] for p in model.meta["planets"] if p["name"] == planet)
+
+
+def _circular_spread(s: np.ndarray) -> float:
+    return float(np.abs((s - s[0] + 0.5) % 1.0 - 0.5).max())
+
+
+def _tooth_angle_for(model, gs, mesh_name: str, planet: str, position: float) -> float:
+    """Planet tooth direction at which the brute-force position of ``mesh_name`` is ``position``
+    (bisection over one tooth pitch on a fine scan)."""
+    mesh = next(m for m in gs.meshes if m.name == mesh_name)
+    z = abs(mesh.geometry.gear2.z if mesh.gear2 == planet else mesh.geometry.gear1.z)
+
+    def err(angle: float) -> float:
+        s = _flank_positions(model, gs, mesh_name, planet, angle)
+        return (s[0] - position + 0.5) % 1.0 - 0.5
+
+    grid = np.linspace(0.0, 2 * math.pi / z, 25)
+    e = [err(a) for a in grid]
+    for a0, a1, e0, e1 in zip(grid[:-1], grid[1:], e[:-1], e[1:], strict=True):
+        if e0 == 0.0:
+            return a0
+        if e0 * e1 < 0 and abs(e0 - e1) < 0.5:  # a true zero, not the wrap-around
+            for _ in range(50):
+                am = 0.5 * (a0 + a1)
+                em = err(am)
+                if em * e0 <= 0:
+                    a1 = am
+                else:
+                    a0, e0 = am, em
+            return 0.5 * (a0 + a1)
+    raise AssertionError("no tooth direction found")
+
+
+def test_planet_planet_phases_against_tooth_profiles():
+    """Within a pair: from the small-sun mesh position of the assembly, find the short planet's
+    tooth direction on its real flanks, predict the short-long mesh from the same flanks; from
+    that, the long planet's direction and its large-sun and ring meshes. Between pairs (hand
+    derivation): pair n is pair 1 turned by dpsi; with the small sun kept, the short planet rolls
+    back by z_s1 dpsi / z_ps, and the planet-planet position (which runs backwards in the
+    forward motion, gear1 = short planet) grows by z_s1 dpsi / 2 pi: with 4 pairs at 90 deg and
+    z_s1 = 29, +7.25 = +0.25 cycles per pair."""
+    gs = ravigneaux_set(z_s1=29, z_s2=35, z_r=-85, z_pl=25, n_pairs=4, elastic=True)
+    model = assemble(gs)
+    s0 = dict(zip(model.mesh_names, model.mesh_position_offsets, strict=True))
+    gamma_s = _tooth_angle_for(model, gs, "sun_small-short1", "short1", s0["sun_small-short1"])
+    assert _circular_spread(np.array([*_flank_positions(model, gs, "sun_small-short1", "short1",
+                                                        gamma_s), s0["sun_small-short1"]])) < 1e-6
+    pp = _flank_positions(model, gs, "short1-long1", "short1", gamma_s)
+    assert _circular_spread(np.append(pp, s0["short1-long1"])) < 1e-6
+    gamma_l = _tooth_angle_for(model, gs, "short1-long1", "long1", s0["short1-long1"])
+    for mesh in ("sun_large-long1", "ring-long1"):
+        got = _flank_positions(model, gs, mesh, "long1", gamma_l)
+        assert _circular_spread(np.append(got, s0[mesh])) < 1e-6, mesh
+    # between pairs
+    for i in range(2, 5):
+        dpsi = math.pi / 2 * (i - 1)
+        expected = (s0["short1-long1"] + 29 * dpsi / (2 * math.pi)) % 1.0
+        assert (s0[f"short{i}-long{i}"] - expected + 0.5) % 1.0 - 0.5 == pytest.approx(0.0,
+                                                                                   abs=1e-9)
+        assert (s0[f"short{i}-long{i}"] - s0["short1-long1"]) % 1.0 == pytest.approx(
+            0.25 * (i - 1) % 1.0, abs=1e-9)
+    # a user phase overrides the derived one and leaves the others alone
+    user = assemble(ravigneaux_set(z_s1=29, z_s2=35, z_r=-85, z_pl=25, n_pairs=4,
+                                   planet_mesh_phases=[0.1, 0.2, 0.3, 0.4]))
+    s1 = dict(zip(user.mesh_names, user.mesh_position_offsets, strict=True))
+    assert [s1[f"short{i}-long{i}"] for i in range(1, 5)] == pytest.approx([0.1, 0.2, 0.3, 0.4])
+    assert s1["ring-long3"] == pytest.approx(s0["ring-long3"], abs=1e-12)
+
+
+def test_wolfrom_step_offset_turns_the_ring2_phases():
+    """Turning the second toothing by w against the first moves every ring-2 contact by
+    -z_p2 w / 2 pi (the planet is gear2: its mesh position falls as it turns forward) and
+    leaves the sun and ring-1 contacts alone."""
+    base = assemble(wolfrom_set())
+    w = math.radians(2.0)
+    turned = assemble(wolfrom_set(step_offset=w))
+    for name, a, b in zip(base.mesh_names, base.mesh_position_offsets,
+                          turned.mesh_position_offsets, strict=True):
+        shift = -24 * w / (2 * math.pi) if name.startswith("ring2") else 0.0
+        assert (b - a - shift + 0.5) % 1.0 - 0.5 == pytest.approx(0.0, abs=1e-9), name
