@@ -8,11 +8,21 @@ rigid-body kinematics (the speed of every member per unit input speed).
 Mesh deflection (Lin & Parker 1999, generalised with signed base radii)::
 
     delta = cos(beta_b) [ sigma (r_b1 theta_1 + r_b2 theta_2) + (d_1 - d_2) . n ]
-            + sin(beta_b) h (z_1 - z_2)
+            - sin(beta_b) h (z_1 - z_2)
 
 with ``sigma = -1`` for an internal pair, ``n = cos(alpha) t + sigma sin(alpha) e`` the line
 of action (``e`` the unit vector from gear 1 to gear 2, ``t`` = ``e`` turned by +90°), ``d`` the
 in-plane displacement of each gear centre and ``h`` the helix hand of gear 1.
+
+Axial sign convention: ``z`` runs along the main axis so that positive rotations are
+counter-clockwise seen from ``+z`` (right-hand rule); a positive helix angle is a right-hand
+helix (ISO 21771); an internal gear has the hand of its planet. The flank of a right-hand gear
+that faces its positive rotation has the outward normal ``theta_hat - tan(beta) z_hat``, so a
+right-hand gear1 that drives (loaded left flank) is pushed towards ``+z`` and gear2 towards
+``-z``: the axial term of ``delta`` is ``-sin(beta_b) h (z_1 - z_2)``. In a simple set with a
+right-hand sun the sun is pushed towards ``+z`` by ``T_s tan(beta_b) / r_bs``, the ring towards
+``-z`` by as much, and each planet gets equal and opposite axial forces from its two meshes
+(a tilting couple, no net force).
 
 Mesh position (paper eq. (3), both gears' angles)::
 
@@ -253,9 +263,11 @@ def assemble(gs: GearSet, *, n_table: int = N_TABLE) -> AssembledModel:
         _add_displacement(v, coords, b1, nvec, cb)
         _add_displacement(v, coords, b2, nvec, -cb)
         if axial and r.base_helix_angle:
+            # axial part of the contact normal: a right-hand gear1 (h = +1) driving in the
+            # positive sense is pushed towards +z (see the module docstring)
             sb = math.sin(r.base_helix_angle) * r.helix_hand
-            v[coords.get(b1.name, "z")] += sb
-            v[coords.get(b2.name, "z")] -= sb
+            v[coords.get(b1.name, "z")] -= sb
+            v[coords.get(b2.name, "z")] += sb
         v_mesh[k] = v
 
         varying = not math.isclose(m.stiffness.min, m.stiffness.max, rel_tol=1e-12)

@@ -283,7 +283,7 @@ class MeshGeometry:
     internal : bool
         True for an internal pair.
     base_helix_angle : float
-        ``beta_b`` [rad].
+        ``beta_b`` [rad] (>= 0; the hands are in the toothings).
     face_width : float
         Common face width ``min(b1, b2)`` [m].
     backlash_free_centre_distance : float
@@ -375,6 +375,15 @@ def _check_pair(gear1: Toothing, gear2: Toothing) -> None:
             f"helix_angle magnitudes differ: {_deg(gear1.helix_angle):.6g}° vs "
             f"{_deg(gear2.helix_angle):.6g}° (must be equal)"
         )
+    if gear1.helix_angle != 0.0:
+        same_hand = math.copysign(1.0, gear1.helix_angle) == math.copysign(1.0, gear2.helix_angle)
+        internal = gear1.internal or gear2.internal
+        if same_hand != internal:
+            raise ValueError(
+                f"helix hands do not mesh: helix_angle {_deg(gear1.helix_angle):.6g}° and "
+                f"{_deg(gear2.helix_angle):.6g}° (an external pair needs opposite hands, an "
+                "internal pair the same hand: the ring has the planet's hand)"
+            )
     if gear1.internal or gear2.internal:
         ext, ring = (gear2, gear1) if gear1.internal else (gear1, gear2)
         if abs(ring.z) - ext.z < 1:
@@ -510,7 +519,7 @@ def mesh_geometry(
         total_contact_ratio=eps_a + eps_b,
         base_pitch=gear1.base_pitch,
         internal=internal,
-        base_helix_angle=gear1.base_helix_angle,
+        base_helix_angle=abs(gear1.base_helix_angle),
         face_width=b,
         backlash_free_centre_distance=a_free,
         tangency1=t1,

@@ -163,7 +163,8 @@ class Mesh:
     pressure_angle : float, optional
         Working transverse pressure angle [rad], for lumped models.
     helix_angle : float
-        Base helix angle [rad] for lumped models (0: spur).
+        Base helix angle [rad] for lumped models (0: spur), signed with the hand of gear1
+        (> 0 right hand; an internal gear has the hand of its planet).
     z1, z2 : int, optional
         Signed tooth numbers for the mesh position and phasing of lumped models.
     back_stiffness : MeshStiffness, optional
@@ -526,7 +527,8 @@ def simple_planetary(*, z_sun: int, z_ring: int, module: float, sun: Body, ring:
     angles = _planet_angles(z_sun, z_ring, n_planets, planet_angles)
     common = dict(module=module, pressure_angle=pressure_angle, face_width=face_width)
     t_sun = Toothing(z=z_sun, helix_angle=helix_angle, profile_shift=profile_shift_sun, **common)
-    t_ring = Toothing(z=z_ring, helix_angle=helix_angle, profile_shift=profile_shift_ring,
+    # an internal gear meshes with the hand of its planet: the ring has the planet's hand
+    t_ring = Toothing(z=z_ring, helix_angle=-helix_angle, profile_shift=profile_shift_ring,
                       **common)
     if profile_shift_planet is None:
         profile_shift_planet = planet_profile_shift(t_sun, t_ring, z_planet)

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from gearvib.assembly import assemble
+from gearvib.geometry import Toothing
 from gearvib.stiffness import ConstantStiffness
 from gearvib.structure import Body, MeshSpec, Support, ravigneaux, wolfrom
 
@@ -244,3 +245,62 @@ def test_wolfrom_step_offset_turns_the_ring2_phases():
                           turned.mesh_position_offsets, strict=True):
         shift = -24 * w / (2 * math.pi) if name.startswith("ring2") else 0.0
         assert (b - a - shift + 0.5) % 1.0 - 0.5 == pytest.approx(0.0, abs=1e-9), name
+
+
+# --------------------------------------------------------------------------- helical gears
+
+
+def test_helical_axial_force_balance():
+    """Right-hand sun (beta = 15 deg), ring with the planet's hand, axial bearings everywhere.
+    Statics under T_s = 100 N m: every planet's two meshes push it axially by equal and
+    opposite amounts (net ~0, so its axial bearing and the carrier's carry ~0); the sun takes
+    N F_t tan(beta_w) = T_s tan(beta_b) / r_bs towards +z (the thrust of a right-hand driver
+    points along its rotation vector), the ring as much towards -z."""
+    from gearvib.simulate import SpeedRamp, prepare_run, static_equilibrium
+    from gearvib.structure import simple_planetary
+
+    beta = math.radians(15.0)
+    ax = Support(radial=1e9, axial=5e8)
+    sun = Body("sun", "central", 1.0, 1e-3, ax)
+    ring = Body("ring", "central", 4.0, 0.1, ax)
+    car = Body("carrier", "carrier", 3.0, 2e-2, ax)
+    pl = Body("planet", "planet", 0.5, 2e-4, Support(radial=1e9, tangential=1e9, axial=3e8),
+              carrier="carrier")
+    gs = simple_planetary(z_sun=21, z_ring=-75, z_planet=27, module=2e-3, sun=sun, ring=ring,
+                          carrier=car, planet=pl, sun_mesh=SPEC, ring_mesh=SPEC, n_planets=3,
+                          helix_angle=beta)
+    sun_t, ring_t = gs.meshes[0].toothing1, gs.meshes[3].toothing1
+    planet_t = gs.meshes[0].toothing2
+    assert sun_t.helix_angle > 0 and planet_t.helix_angle < 0 and ring_t.helix_angle < 0
+    model = assemble(gs)
+    torque = 100.0
+    setup = prepare_run(model, SpeedRamp(0.0, 0.0, 1.0, input_torque=torque), False)
+    q0, _ = static_equilibrium(setup.system, setup.mass, setup.rigid, np.zeros(model.n_dof))
+    bv = model.bearing_vectors
+    force = dict(zip(model.bearing_names, model.bearing_stiffness * (bv @ q0), strict=True))
+    beta_b = gs.meshes[0].geometry.base_helix_angle
+    g = gs.meshes[0].geometry
+    f_t = torque / (3 * g.working_pitch_radius2 * 21 / 27)  # at the sun's working pitch circle
+    tan_bw = math.tan(beta_b) / math.cos(g.working_pressure_angle)
+    expected = 3 * f_t * tan_bw
+    assert expected == pytest.approx(torque * math.tan(beta_b) / abs(sun_t.base_radius),
+                                     rel=1e-9)
+    assert force["sun.axial"] == pytest.approx(expected, rel=1e-6)
+    assert force["ring.axial"] == pytest.approx(-expected, rel=1e-6)
+    for name in ("planet1.axial", "planet2.axial", "planet3.axial", "carrier.axial"):
+        assert abs(force[name]) < 1e-6 * expected, (name, force[name])
+    # each planet: the two meshes' axial forces are equal and opposite (about 1/3 each)
+    k_mesh = 3e8
+    d = model.mesh_vectors @ q0
+    iz = model.dof_names.index("planet1.z")
+    f_sun, f_ring = k_mesh * d[0] * model.mesh_vectors[0, iz], k_mesh * d[3] * \
+        model.mesh_vectors[3, iz]
+    assert f_sun == pytest.approx(-f_ring, rel=1e-6)
+    assert abs(f_sun) == pytest.approx(expected / 3, rel=1e-6)
+    # mismatched hands are refused
+    from gearvib.geometry import mesh_geometry
+
+    with pytest.raises(ValueError, match="helix hands do not mesh"):  # ring with the sun's hand
+        mesh_geometry(Toothing(-75, 2e-3, helix_angle=beta), planet_t)
+    with pytest.raises(ValueError, match="helix hands do not mesh"):
+        mesh_geometry(sun_t, Toothing(27, 2e-3, helix_angle=beta))
