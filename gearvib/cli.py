@@ -57,44 +57,33 @@ def _positive(text: str) -> float:
 
 
 def run_settings(cfg: dict, args: argparse.Namespace | None = None) -> dict:
-    """Run-up settings: the description's ``[simulation]`` table, overridden by CLI options."""
-    sim = dict(cfg.get("simulation", {}))
-    run = {
-        "speed_start_rpm": float(sim.get("speed_start_rpm", 0.0)),
-        "speed_end_rpm": float(sim.get("speed_end_rpm", 4000.0)),
-        "duration": float(sim.get("duration", 1.0)),
-        "input_torque": sim.get("input_torque"),
-        "load_torque": sim.get("load_torque"),
-        "fs_out": sim.get("fs_out"),
-        "dt": sim.get("dt"),
-        "gyroscopic": bool(sim.get("gyroscopic", False)),
-    }
+    """Run settings: the description's ``[simulation]`` table, overridden by CLI options.
+
+    Checked by :func:`gearvib.simulation.settings.read_run_settings` (an error names the key).
+    """
+    from gearvib.simulation.settings import read_run_settings
+
+    overrides: dict = {}
     if args is not None:
         if getattr(args, "speed", None):
-            run["speed_start_rpm"], run["speed_end_rpm"] = args.speed
+            overrides["speed_start_rpm"], overrides["speed_end_rpm"] = args.speed
         for key in ("duration", "fs_out", "dt", "input_torque"):
-            value = getattr(args, key, None)
-            if value is not None:
-                run[key] = value
-    if run["input_torque"] is None and run["load_torque"] is None:
-        run["input_torque"] = 0.0
-    return run
+            overrides[key] = getattr(args, key, None)
+    return read_run_settings(cfg.get("simulation", {}), overrides)
 
 
 def _cmd_simulate(args: argparse.Namespace) -> int:
     from gearvib.assembly import assemble
     from gearvib.config import gearset_from_dict, load_config
     from gearvib.io import write_netcdf
-    from gearvib.simulate import SpeedRamp, simulate
+    from gearvib.simulate import simulate
+    from gearvib.simulation.settings import conditions_from_settings
 
     cfg, base = load_config(args.config)
     out = _check_output_file(args.output)
     run = run_settings(cfg, args)
     model = assemble(gearset_from_dict(cfg, base=base))
-    cond = SpeedRamp(run["speed_start_rpm"], run["speed_end_rpm"], run["duration"],
-                     load_torque=float(run["load_torque"] or 0.0),
-                     input_torque=None if run["load_torque"] is not None
-                     else float(run["input_torque"]))
+    cond = conditions_from_settings(run)
     result = simulate(model, cond, dt=run["dt"], fs_out=run["fs_out"],
                       gyroscopic=run["gyroscopic"], progress=None if not args.quiet else False,
                       config={"gearset": cfg, "run": run})

@@ -16,6 +16,7 @@ import hashlib
 import json
 import math
 import tomllib
+from dataclasses import replace
 from importlib import resources
 from pathlib import Path
 from typing import Any
@@ -53,6 +54,17 @@ class ConfigError(ValueError):
 
 _TOP = {"name", "title", "description", "type", "operation", "geometry", "bodies", "meshes",
         "body", "mesh", "coupling", "stage1", "stage2", "shaft", "simulation", "references"}
+_COMMON_TOP = {"name", "title", "description", "type", "simulation", "references", "body",
+               "coupling", "operation"}
+_TYPE_KEYS = {
+    "simple": {"geometry", "bodies", "meshes"},
+    "wolfrom": {"geometry", "bodies", "meshes"},
+    "ravigneaux": {"geometry", "bodies", "meshes"},
+    "general": {"mesh"},
+    "two-stage": {"stage1", "stage2", "shaft"},
+}
+"""Top-level keys per ``type`` besides the common ones (``[[body]]`` and ``[[coupling]]``
+join adjacent drive components to any type; ``[[mesh]]`` is for ``general`` only)."""
 _OPERATION = {"fixed", "input", "output"}
 _SUPPORT = {"radial", "tangential", "axial", "torsional", "radial_damping",
             "tangential_damping", "axial_damping", "torsional_damping"}
@@ -65,8 +77,10 @@ _MESH_GENERAL = _MESH_SPEC | {"name", "gear1", "gear2", "toothing1", "toothing2"
 _TOOTHING = {"z", "module", "pressure_angle_deg", "helix_angle_deg", "profile_shift",
              "face_width", "addendum", "dedendum"}
 _COUPLING = {"body1", "body2", "stiffness", "damping"}
-_SIMULATION = {"speed_start_rpm", "speed_end_rpm", "duration", "input_torque", "load_torque",
-               "fs_out", "dt", "drive_stiffness", "drive_damping", "gyroscopic"}
+_SIMULATION = {"drive", "speed_start_rpm", "speed_end_rpm", "duration", "input_torque",
+               "load_torque", "load_inertia", "drive_stiffness", "drive_damping", "motor",
+               "fs_out", "dt", "gyroscopic"}
+"""Keys of ``[simulation]``; their values are checked by :mod:`gearvib.simulation.settings`."""
 _GEOMETRY = {
     "simple": {"module", "pressure_angle_deg", "helix_angle_deg", "face_width", "z_sun",
                "z_ring", "z_planet", "profile_shift_sun", "profile_shift_ring",
@@ -81,6 +95,11 @@ _BODIES = {
     "simple": ("sun", "ring", "carrier", "planet"),
     "wolfrom": ("sun", "ring1", "ring2", "carrier", "planet"),
     "ravigneaux": ("sun_small", "sun_large", "ring", "carrier", "planet_short", "planet_long"),
+}
+_DEFAULT_ROLES = {
+    "simple": ("ring", "sun", "carrier"),
+    "wolfrom": ("ring1", "sun", "ring2"),
+    "ravigneaux": ("sun_large", "sun_small", "ring"),
 }
 _MESHES = {
     "simple": ("sun", "ring"),
@@ -274,6 +293,14 @@ def _builder_set(kind: str, cfg: dict, base: Path | None) -> GearSet:
         bodies[bname] = body
     specs = _builder_meshes(kind, meshes_t, base)
     op = _operation(cfg)
+    # roles naming an added [[body]] (a motor, a load) are set after the build
+    own = set(_BODIES[kind])
+    default = dict(zip(("fixed", "input", "output"), _DEFAULT_ROLES[kind], strict=True))
+    for key in ("input", "output"):
+        if op[key] not in own:
+            op[key] = default[key]
+    if any(f not in own for f in op["fixed"]):
+        op["fixed"] = [default["fixed"]]
     g = {k: v for k, v in geo.items()}
     common: dict[str, Any] = {}
     if "module" in g:
@@ -354,24 +381,83 @@ def _builder_set(kind: str, cfg: dict, base: Path | None) -> GearSet:
         raise ConfigError(str(exc)) from None
 
 
-def _general_set(cfg: dict, base: Path | None) -> GearSet:
+def _extra_bodies(cfg: dict, required: bool) -> list[Body]:
+    """The ``[[body]]`` list (keys checked; every value type- and range-checked)."""
+    table = _require(cfg, "body", "the description") if required else cfg.get("body", [])
+    if not isinstance(table, list):
+        raise ConfigError("[[body]] must be an array of tables")
     bodies = []
-    for i, t in enumerate(_require(cfg, "body", "the description")):
+    for i, t in enumerate(table):
         where = f"[[body]] #{i + 1}"
         check_keys(t, _BODY_GENERAL, where)
+        name = _require(t, "name", where)
+        if not isinstance(name, str) or not name:
+            raise ConfigError(f"{where}.name must be a non-empty string, got {name!r}")
+        where = f"[[body]] {name!r}"
+        role = _require(t, "role", where)
+        carrier = t.get("carrier")
+        if carrier is not None and not isinstance(carrier, str):
+            raise ConfigError(f"{where}.carrier must be the name of a carrier body")
         try:
             bodies.append(Body(
-                name=str(_require(t, "name", where)), role=_require(t, "role", where),
+                name=name, role=role,
                 mass=_number(_require(t, "mass", where), f"{where}.mass"),
                 inertia=_number(_require(t, "inertia", where), f"{where}.inertia"),
                 support=_support(t.get("support"), f"{where}.support"),
-                carrier=t.get("carrier"),
+                carrier=carrier,
                 angle=math.radians(_number(t.get("angle_deg", 0.0), f"{where}.angle_deg")),
                 radius=_number(t["radius"], f"{where}.radius") if "radius" in t else None))
         except ValueError as exc:
             if isinstance(exc, ConfigError):
                 raise
             raise ConfigError(f"{where}: {exc}") from None
+    return bodies
+
+
+def _couplings(cfg: dict) -> list[Coupling]:
+    """The ``[[coupling]]`` list."""
+    table = cfg.get("coupling", [])
+    if not isinstance(table, list):
+        raise ConfigError("[[coupling]] must be an array of tables")
+    couplings = []
+    for i, t in enumerate(table):
+        where = f"[[coupling]] #{i + 1}"
+        check_keys(t, _COUPLING, where)
+        names = []
+        for key in ("body1", "body2"):
+            v = _require(t, key, where)
+            if not isinstance(v, str):
+                raise ConfigError(f"{where}.{key} must be a body name, got {v!r}")
+            names.append(v)
+        try:
+            couplings.append(Coupling(
+                names[0], names[1],
+                _stiffness_value(t.get("stiffness", "rigid"), f"{where}.stiffness"),
+                _number(t.get("damping", 0.0), f"{where}.damping")))
+        except ValueError as exc:
+            if isinstance(exc, ConfigError):
+                raise
+            raise ConfigError(f"{where}: {exc}") from None
+    return couplings
+
+
+def _with_extras(gs: GearSet, cfg: dict, op: dict | None) -> GearSet:
+    """Add the ``[[body]]`` and ``[[coupling]]`` entries and the operating roles."""
+    bodies = _extra_bodies(cfg, required=False)
+    couplings = _couplings(cfg)
+    if not bodies and not couplings and op is None:
+        return gs
+    op = op or {"fixed": list(gs.fixed), "input": gs.input, "output": gs.output}
+    try:
+        return replace(gs, bodies=gs.bodies + tuple(bodies),
+                       couplings=gs.couplings + tuple(couplings), fixed=tuple(op["fixed"]),
+                       input=op["input"], output=op["output"])
+    except ValueError as exc:
+        raise ConfigError(str(exc)) from None
+
+
+def _general_set(cfg: dict, base: Path | None) -> GearSet:
+    bodies = _extra_bodies(cfg, required=True)
     meshes = []
     for i, t in enumerate(_require(cfg, "mesh", "the description")):
         where = f"[[mesh]] #{i + 1}"
@@ -399,14 +485,7 @@ def _general_set(cfg: dict, base: Path | None) -> GearSet:
                 damping=spec.damping, damping_ratio=spec.damping_ratio, **kw))
         except ValueError as exc:
             raise ConfigError(f"{where}: {exc}") from None
-    couplings = []
-    for i, t in enumerate(cfg.get("coupling", [])):
-        where = f"[[coupling]] #{i + 1}"
-        check_keys(t, _COUPLING, where)
-        couplings.append(Coupling(
-            str(_require(t, "body1", where)), str(_require(t, "body2", where)),
-            _stiffness_value(t.get("stiffness", "rigid"), f"{where}.stiffness"),
-            _number(t.get("damping", 0.0), f"{where}.damping")))
+    couplings = _couplings(cfg)
     op = _operation(cfg)
     try:
         return GearSet(name=str(cfg.get("name", "general")), bodies=tuple(bodies),
@@ -436,22 +515,32 @@ def gearset_from_dict(cfg: dict, *, base: Path | None = None) -> GearSet:
     if "simulation" in cfg:
         check_keys(cfg["simulation"], _SIMULATION, "[simulation]")
     kind = cfg.get("type", "simple")
+    if kind not in _TYPE_KEYS:
+        raise ConfigError(f"unknown type {kind!r} (admissible: simple, wolfrom, ravigneaux, "
+                          "two-stage, general)")
+    check_keys(cfg, _COMMON_TOP | _TYPE_KEYS[kind], f"a description of type = {kind!r}")
     if kind in _GEOMETRY:
-        return _builder_set(kind, cfg, base)
+        return _with_extras(_builder_set(kind, cfg, base), cfg, _operation(cfg))
     if kind == "general":
         return _general_set(cfg, base)
-    if kind == "two-stage":
-        s1 = gearset_from_dict({**_require(cfg, "stage1", "the description"),
-                                "name": "stage1"}, base=base)
-        s2 = gearset_from_dict({**_require(cfg, "stage2", "the description"),
-                                "name": "stage2"}, base=base)
-        shaft = check_keys(cfg.get("shaft", {}), {"stiffness", "damping"}, "[shaft]")
-        return two_stage(s1, s2, shaft_stiffness=_stiffness_value(
-            shaft.get("stiffness", "rigid"), "[shaft].stiffness"),
-                         shaft_damping=_number(shaft.get("damping", 0.0), "[shaft].damping"),
-                         name=str(cfg.get("name", "two-stage")), config=cfg)
-    raise ConfigError(f"unknown type {kind!r} (admissible: simple, wolfrom, ravigneaux, "
-                      "two-stage, general)")
+    stages = []
+    for key in ("stage1", "stage2"):
+        stage = _require(cfg, key, "the description")
+        if not isinstance(stage, dict):
+            raise ConfigError(f"[{key}] must be a table (a gear-set description)")
+        if "simulation" in stage:
+            raise ConfigError(f"[{key}.simulation] is not admissible: give [simulation] once, "
+                              "at the top level")
+        try:
+            stages.append(gearset_from_dict({**stage, "name": key}, base=base))
+        except ConfigError as exc:
+            raise ConfigError(f"[{key}]: {exc}") from None
+    shaft = check_keys(cfg.get("shaft", {}), {"stiffness", "damping"}, "[shaft]")
+    gs = two_stage(stages[0], stages[1], shaft_stiffness=_stiffness_value(
+        shaft.get("stiffness", "rigid"), "[shaft].stiffness"),
+                   shaft_damping=_number(shaft.get("damping", 0.0), "[shaft].damping"),
+                   name=str(cfg.get("name", "two-stage")), config=cfg)
+    return _with_extras(gs, cfg, _operation(cfg) if "operation" in cfg else None)
 
 
 def list_presets() -> list[str]:

@@ -258,7 +258,7 @@ def static_equilibrium(
     rigid_acceleration : float
         Prescribed input acceleration [rad/s^2] (ignored with ``free_rigid``).
     free_rigid : bool
-        The rigid-body mode is free (torque-driven run).
+        The rigid-body mode is free (torque- or motor-driven run).
     max_iter : int
         Maximum number of contact-set updates.
     mesh_names : sequence of str, optional
@@ -296,10 +296,13 @@ def static_equilibrium(
         f[k_in] += fpar[kn.FP_KC] * phi[0] + fpar[kn.FP_CC] * (w[0] - qd0[k_in])
     elif mode == kn.DRIVE_TORQUE:
         f[k_in] += float(np.interp(0.0, system.torque_table[0], system.torque_table[1]))
+    elif mode == kn.DRIVE_MOTOR:
+        f[k_in] += float(np.interp(qd0[k_in], system.torque_table[0], system.torque_table[1]))
     k_out = int(ipar[kn.IP_OUTPUT])
     load_text = f"load torque {float(fpar[kn.FP_T0]):.4g} N m at the output"
-    if mode == kn.DRIVE_TORQUE:
-        t_in = float(np.interp(0.0, system.torque_table[0], system.torque_table[1]))
+    if mode in (kn.DRIVE_TORQUE, kn.DRIVE_MOTOR):
+        t_in = float(np.interp(0.0 if mode == kn.DRIVE_TORQUE else qd0[k_in],
+                               system.torque_table[0], system.torque_table[1]))
         load_text = f"input torque {t_in:.4g} N m, " + load_text
     if k_out >= 0:
         e = fpar[kn.FP_OUTDIR]

@@ -98,7 +98,8 @@ class RunUpResult:
         Prescribed input speed [min^-1] and angle [rad] (speed-driven), or the simulated ones of
         the input member (torque-driven).
     drive_torque : ndarray, shape (n_time,)
-        Torque applied to the input member by the coupling or the torque table [N m].
+        Torque applied to the input member by the coupling, the torque table or the motor
+        characteristic at the input speed [N m].
     mesh_frequency : ndarray, shape (n_time,)
         ``|mesh_frequency_per_rpm * input_speed|`` [Hz].
     natural_frequencies : ndarray, shape (n_mode,)
@@ -112,7 +113,7 @@ class RunUpResult:
     config_json : str
         Full configuration, JSON with sorted keys.
     drive : str
-        ``"speed"`` or ``"torque"``.
+        ``"speed"``, ``"torque"`` or ``"motor"``.
     gyroscopic : bool
         Gyroscopic/centripetal terms included.
     coupling : DriveCoupling or None
@@ -347,7 +348,8 @@ def build_result(
     else:
         angle = q[:, k_in].copy()
         input_speed = qd[:, k_in] / RAD_S_PER_RPM
-        drive_torque = np.interp(time, system.torque_table[0], system.torque_table[1])
+        at = time if setup.drive == "torque" else qd[:, k_in]  # motor: its characteristic
+        drive_torque = np.interp(at, system.torque_table[0], system.torque_table[1])
     if natural_frequencies is None:
         nat = elastic_frequencies(undamped_frequencies(model.mass, model.mean_stiffness_matrix()))
     else:
