@@ -49,10 +49,18 @@ from gearvib.geometry import (
 from gearvib.model import AssembledModel
 from gearvib.structure import RIGID, Body, GearSet, Mesh
 
-__all__ = ["N_TABLE", "ResolvedMesh", "assemble", "resolve_mesh"]
+__all__ = ["LUMPED_RADIUS_TOLERANCE", "N_TABLE", "ResolvedMesh", "assemble", "resolve_mesh"]
 
 N_TABLE = 2048
 """Samples per mesh cycle of the stiffness tables handed to the kernels."""
+LUMPED_RADIUS_TOLERANCE = 0.1
+"""Largest relative difference between the planet radii that the lumped meshes of one planet
+imply (``|r_b1 +- r_b2| / cos(alpha)``, or their ``centre_distance``) and the planet radius.
+
+A lumped model in ``u = r theta`` coordinates does not need them to agree: the planet radius
+(the carrier radius ``r_c`` of Lin & Parker) enters only through the planet bearings, and
+published parameter sets differ by a few per cent. A larger difference is taken as an input
+error (a wrong base radius, pressure angle or unit)."""
 
 
 @dataclass(frozen=True)
@@ -98,6 +106,15 @@ def resolve_mesh(mesh: Mesh) -> ResolvedMesh:
     else:
         a = abs(sigma * rb1 + rb2) / math.cos(alpha) if sigma > 0 else \
             abs(abs(rb1) - abs(rb2)) / math.cos(alpha)
+        if mesh.centre_distance is not None:  # a lumped mesh's given centre distance is used
+            if not math.isclose(mesh.centre_distance, a, rel_tol=LUMPED_RADIUS_TOLERANCE):
+                raise ValueError(
+                    f"mesh {mesh.name!r}: centre_distance {mesh.centre_distance * 1e3:.4f} mm "
+                    f"differs by {abs(mesh.centre_distance - a) / a:.1%} from "
+                    f"|r_b1 {'+' if sigma > 0 else '-'} r_b2| / cos(alpha) = {a * 1e3:.4f} mm "
+                    f"(admissible: within {LUMPED_RADIUS_TOLERANCE:.0%}; check the units)"
+                )
+            a = float(mesh.centre_distance)
     return ResolvedMesh(rb1, rb2, alpha, beta_b, hand, z1, z2, a,
                         g.contact_ratio if g is not None else None, g)
 
@@ -146,29 +163,49 @@ def _add_displacement(v: np.ndarray, coords: _Coordinates, body: Body, direction
 
 
 def _planet_radius(gs: GearSet, body: Body, resolved: dict[str, ResolvedMesh]) -> float:
-    """Planet axis radius: given, or the centre distance of its central-gear meshes.
+    """Planet axis radius: given (``Body.radius``), or the first central-gear mesh's centre
+    distance.
 
-    Every central-gear mesh of the planet must agree with it (a lumped description whose base
-    radii and pressure angles imply different centre distances would lock the gear set).
+    Meshes with tooth geometry must agree with it to 1e-6 (the teeth need one centre
+    distance); lumped meshes to :data:`LUMPED_RADIUS_TOLERANCE`.
     """
     a = body.radius
-    first = None
+    first, first_exact = None, False
     for m in gs.meshes:
         if m.gear2 != body.name or gs.body(m.gear1).role != "central":
             continue
-        am = resolved[m.name].centre_distance
+        r = resolved[m.name]
+        am = r.centre_distance
+        exact = r.geometry is not None and m.base_radius1 is None
         if a is None:
-            a, first = am, m.name
-        elif not math.isclose(a, am, rel_tol=1e-6):
+            a, first, first_exact = am, m.name, exact
+            continue
+        tol = 1e-6 if exact and (first_exact or first is None) else LUMPED_RADIUS_TOLERANCE
+        if not math.isclose(a, am, rel_tol=tol):
             source = f"mesh {first!r}" if first else "the given radius"
+            if tol < LUMPED_RADIUS_TOLERANCE:
+                hint = ("the teeth need one centre distance: make the profile shifts or the "
+                        "given radius consistent")
+            else:
+                hint = (f"a lumped model accepts up to {LUMPED_RADIUS_TOLERANCE:.0%} (base radii "
+                        "and pressure angles of a publication rarely agree exactly); more is "
+                        "taken as an input error: check the base radii, pressure angles and "
+                        "units, or give the planet's radius")
             raise ValueError(
-                f"planet {body.name!r}: mesh {m.name!r} needs a planet radius of "
-                f"{am * 1e3:.4f} mm, {source} gives {a * 1e3:.4f} mm; make the base radii and "
-                "pressure angles consistent"
+                f"planet {body.name!r}: mesh {m.name!r} implies a planet radius of "
+                f"{am * 1e3:.4f} mm, {source} gives {a * 1e3:.4f} mm "
+                f"({abs(am - a) / a:.2%} apart); {hint}"
             )
     if a is None:
         raise ValueError(f"planet {body.name!r}: give its radius (no central-gear mesh)")
     return a
+
+
+def _null_space(a: np.ndarray) -> np.ndarray:
+    """Null space of ``a`` with every row scaled to a unit maximum (mixed units)."""
+    scale = np.abs(a).max(axis=1, keepdims=True)
+    scale[scale == 0] = 1.0
+    return scipy.linalg.null_space(a / scale, rcond=1e-9)
 
 
 def _constraint_matrix(n: int, rows: list[np.ndarray], dependents: list[int],
@@ -401,7 +438,13 @@ def assemble(gs: GearSet, *, n_table: int = N_TABLE) -> AssembledModel:
 
     # ---- rigid-body kinematics -----------------------------------------------------------------
     # undeformed meshes and bearings, fixed members at rest, shafts turning as one piece;
-    # torsional supports of the other members are drive/load stiffness and do not count
+    # torsional supports of the other members are drive/load stiffness and do not count, unless
+    # the set would otherwise have several degrees of freedom: then members held by a torsional
+    # support that are neither input nor output are the reaction members, at rest
+    i_in = rotation_dofs[gs.input]
+    if i_in < 0:
+        raise ValueError(f"input member {gs.input!r} has no free rotation (it is held rigidly "
+                         "or joined rigidly to a fixed member)")
     kin_rows = [v_mesh]
     if bearings:
         kin_rows.append(np.array([u for _, u, _, _ in bearings]))
@@ -409,26 +452,46 @@ def assemble(gs: GearSet, *, n_table: int = N_TABLE) -> AssembledModel:
         kin_rows.append(coords.unit(f, "theta")[None, :])
     for cp in gs.couplings:
         kin_rows.append((coords.unit(cp.body1, "theta") - coords.unit(cp.body2, "theta"))[None])
-    a_kin = np.vstack(kin_rows) @ tmat
-    scale = np.abs(a_kin).max(axis=1, keepdims=True)
-    scale[scale == 0] = 1.0
-    null = scipy.linalg.null_space(a_kin / scale, rcond=1e-9)
-    i_in = rotation_dofs[gs.input]
-    if i_in < 0:
-        raise ValueError(f"input member {gs.input!r} has no free rotation")
+    null = _null_space(np.vstack(kin_rows) @ tmat)
+    supported = [b.name for b in gs.bodies if b.role != "planet" and b.name not in gs.fixed
+                 and 0 < b.support.torsional < math.inf]
+    reaction = [b for b in supported if b not in (gs.input, gs.output)]
+    held: list[str] = []
+    if null.shape[1] > 1 and reaction:
+        rows = [coords.unit(b, "theta")[None, :] for b in reaction]
+        null_held = _null_space(np.vstack([*kin_rows, *rows]) @ tmat)
+        if null_held.shape[1] == 0:
+            raise ValueError(
+                f"gear set {gs.name!r}: members {reaction} are held by torsional supports; "
+                "with all of them at rest nothing can turn, so the kinematics (speeds, mesh "
+                "frequency) are not defined: name the reaction member in operation.fixed (a "
+                "fixed member with a finite torsional stiffness is held through it)"
+            )
+        null, held = null_held, reaction
     if null.shape[1] == 0:
-        raise ValueError(f"gear set {gs.name!r} is locked: no rigid-body motion is possible "
-                         f"with fixed members {list(gs.fixed)}")
-    if null.shape[1] > 1:
+        rigid_shafts = [f"{c.body1}-{c.body2}" for c in gs.couplings if math.isinf(c.stiffness)]
         raise ValueError(
-            f"gear set {gs.name!r} has {null.shape[1]} rigid-body degrees of freedom; fix or "
-            f"support members so that one remains (fixed: {list(gs.fixed)})"
+            f"gear set {gs.name!r} is locked: with the meshes undeformed, fixed members "
+            f"{list(gs.fixed)} at rest and the rigid couplings {rigid_shafts}, nothing can turn "
+            "(too many members fixed or rigidly joined)"
+        )
+    if null.shape[1] > 1:
+        free = [b.name for b in gs.bodies if b.role != "planet" and b.name not in gs.fixed
+                and b.name not in held]
+        raise ValueError(
+            f"gear set {gs.name!r} has {null.shape[1]} rigid-body degrees of freedom with fixed "
+            f"members {list(gs.fixed)}: {free} can turn independently (torsional supports "
+            f"of the input and output, {[b for b in supported if b not in reaction]}, are "
+            "drive/load stiffness and do not count); fix one more member (operation.fixed) or "
+            "hold a reaction member by a torsional support"
         )
     mode = null[:, 0] / null[i_in, 0]
     ratios = {}
     full_mode = tmat @ mode
     for b in gs.bodies:
         ratios[b.name] = float(full_mode[coords.get(b.name, "theta")])
+    for b in (*gs.fixed, *held):
+        ratios[b] = 0.0  # exactly at rest (the null space gives it to rounding)
 
     f_per_rpm = math.nan
     if n_mesh and resolved[gs.meshes[0].name].z1 is not None:
@@ -447,6 +510,8 @@ def assemble(gs: GearSet, *, n_table: int = N_TABLE) -> AssembledModel:
         "bodies": [{"name": b.name, "role": b.role} for b in gs.bodies],
         "config": gs.config,
     }
+    if held:  # members at rest in the kinematics through their torsional supports
+        meta["kinematics_at_rest"] = list(gs.fixed) + held
     return AssembledModel(
         dof_names=dof_names,
         dof_units=tuple("rad" if d.endswith(".theta") else "m" for d in dof_names),

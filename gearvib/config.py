@@ -73,7 +73,8 @@ _BODY_GENERAL = _BODY | {"name", "role", "carrier", "angle_deg", "radius"}
 _MESH_SPEC = {"stiffness", "back_stiffness", "backlash", "damping", "damping_ratio", "comment"}
 _MESH_GENERAL = _MESH_SPEC | {"name", "gear1", "gear2", "toothing1", "toothing2",
                               "base_radius1", "base_radius2", "pressure_angle_deg",
-                              "helix_angle_deg", "z1", "z2", "phase", "centre_distance"}
+                              "helix_angle_deg", "z1", "z2", "phase", "centre_distance",
+                              "tooth_offset1_deg", "tooth_offset2_deg"}
 _TOOTHING = {"z", "module", "pressure_angle_deg", "helix_angle_deg", "profile_shift",
              "face_width", "addendum", "dedendum"}
 _COUPLING = {"body1", "body2", "stiffness", "damping"}
@@ -218,12 +219,14 @@ def _mesh_spec(table: dict, where: str, base: Path | None,
 
 def _toothing(table: dict, where: str) -> Toothing:
     check_keys(table, _TOOTHING, where)
-    kw: dict[str, Any] = {"z": int(_require(table, "z", where)),
+    kw: dict[str, Any] = {"z": _integer(_require(table, "z", where), f"{where}.z"),
                           "module": _number(_require(table, "module", where), f"{where}.module")}
     if "pressure_angle_deg" in table:
-        kw["pressure_angle"] = math.radians(_number(table["pressure_angle_deg"], where))
+        kw["pressure_angle"] = math.radians(_number(table["pressure_angle_deg"],
+                                                    f"{where}.pressure_angle_deg"))
     if "helix_angle_deg" in table:
-        kw["helix_angle"] = math.radians(_number(table["helix_angle_deg"], where))
+        kw["helix_angle"] = math.radians(_number(table["helix_angle_deg"],
+                                                 f"{where}.helix_angle_deg"))
     for k in ("profile_shift", "face_width", "addendum", "dedendum"):
         if k in table:
             kw[k] = _number(table[k], f"{where}.{k}")
@@ -469,11 +472,19 @@ def _general_set(cfg: dict, base: Path | None) -> GearSet:
                 kw[k] = _number(t[k], f"{where}.{k}")
         for k in ("z1", "z2"):
             if k in t:
-                kw[k] = int(t[k])
+                kw[k] = _integer(t[k], f"{where}.{k}")
+                if kw[k] == 0:
+                    raise ConfigError(f"{where}.{k} = 0 is not admissible (signed tooth number, "
+                                      "negative for an internal gear)")
+        for k in ("tooth_offset1_deg", "tooth_offset2_deg"):
+            if k in t:
+                kw[k[:-4]] = math.radians(_number(t[k], f"{where}.{k}"))
         if "pressure_angle_deg" in t:
-            kw["pressure_angle"] = math.radians(_number(t["pressure_angle_deg"], where))
+            kw["pressure_angle"] = math.radians(_number(t["pressure_angle_deg"],
+                                                        f"{where}.pressure_angle_deg"))
         if "helix_angle_deg" in t:
-            kw["helix_angle"] = math.radians(_number(t["helix_angle_deg"], where))
+            kw["helix_angle"] = math.radians(_number(t["helix_angle_deg"],
+                                                     f"{where}.helix_angle_deg"))
         for k in ("toothing1", "toothing2"):
             if k in t:
                 kw[k] = _toothing(t[k], f"{where}.{k}")

@@ -225,6 +225,27 @@ class Mesh:
             )
         if not math.isfinite(self.backlash):
             raise ValueError(f"mesh {self.name!r}: backlash must be finite")
+        for key in ("base_radius1", "base_radius2"):
+            v = getattr(self, key)
+            if v is not None and not (math.isfinite(v) and v != 0.0):
+                raise ValueError(f"mesh {self.name!r}: {key} = {v!r} m is not admissible "
+                                 "(admissible: finite, non-zero; negative for an internal gear)")
+        for key in ("z1", "z2"):
+            v = getattr(self, key)
+            if v is not None and (isinstance(v, bool) or not isinstance(v, int) or v == 0):
+                raise ValueError(f"mesh {self.name!r}: {key} = {v!r} is not admissible "
+                                 "(admissible: a non-zero signed tooth number)")
+        if not (math.isfinite(self.helix_angle) and abs(self.helix_angle) < math.radians(45)):
+            raise ValueError(f"mesh {self.name!r}: helix_angle {math.degrees(self.helix_angle):.4g}"
+                             "° is not admissible (|beta_b| < 45°)")
+        if self.centre_distance is not None and not (math.isfinite(self.centre_distance)
+                                                     and self.centre_distance > 0):
+            raise ValueError(f"mesh {self.name!r}: centre_distance = {self.centre_distance!r} m "
+                             "is not admissible (admissible: > 0)")
+        for key in ("phase", "tooth_offset1", "tooth_offset2"):
+            v = getattr(self, key)
+            if v is not None and not math.isfinite(v):
+                raise ValueError(f"mesh {self.name!r}: {key} = {v!r} must be finite")
         if self.damping is not None:
             _check_value(self.damping, f"damping of mesh {self.name!r}")
         if self.damping_ratio is not None:
