@@ -1,4 +1,4 @@
-"""Command-line interface: ``gearvib demo | modes | simulate | report``.
+"""Command-line interface: ``gearvib demo | modes | simulate | preset | report``.
 
 Every subcommand has ``--help``. Errors are printed as one line on stderr with exit code 2
 (bad input) or 1 (a failed computation); nothing is written half.
@@ -106,6 +106,20 @@ def _check_output_file(path: str):
     return p
 
 
+def _cmd_preset(args: argparse.Namespace) -> int:
+    from gearvib.config import preset_text, preset_titles
+
+    if args.name is None:
+        titles = preset_titles()
+        width = max(len(n) for n in titles)
+        for name, title in titles.items():
+            print(f"{name:<{width}}  {title}")
+        print("\n`gearvib preset NAME > my-set.toml` writes one to start your own file from.")
+        return 0
+    sys.stdout.write(preset_text(args.name))
+    return 0
+
+
 def _cmd_report(args: argparse.Namespace) -> int:
     from pathlib import Path
 
@@ -179,6 +193,13 @@ def _parser() -> argparse.ArgumentParser:
                    help="input torque [N m] (default from the description)")
     s.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     s.set_defaults(func=_cmd_simulate)
+
+    pr = sub.add_parser("preset", help="list the built-in gear sets, or print one's TOML",
+                        description="Without NAME: list the presets with their titles. With "
+                        "NAME: print the preset's TOML (comments included) to start a file "
+                        "from, e.g. `gearvib preset wolfrom-example > my-set.toml`.")
+    pr.add_argument("name", nargs="?", metavar="NAME", help="preset name")
+    pr.set_defaults(func=_cmd_preset)
 
     r = sub.add_parser("report", help="order-analysis report (HTML + PDF)",
                        description="Render a study recipe (TOML: simulates its cases) or "

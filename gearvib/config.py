@@ -45,6 +45,8 @@ __all__ = [
     "list_presets",
     "load_config",
     "load_gearset",
+    "preset_text",
+    "preset_titles",
 ]
 
 
@@ -560,6 +562,25 @@ def list_presets() -> list[str]:
     return sorted(f.name[:-5] for f in files if f.name.endswith(".toml"))
 
 
+def preset_text(name: str) -> str:
+    """The TOML text of a built-in preset (comments included), to start a file from.
+
+    Raises
+    ------
+    ConfigError
+        For an unknown preset (the message lists the available ones).
+    """
+    if name not in list_presets():
+        raise ConfigError(f"unknown preset {name!r} (available: {', '.join(list_presets())})")
+    return resources.files("gearvib.presets").joinpath(f"{name}.toml").read_text("utf-8")
+
+
+def preset_titles() -> dict[str, str]:
+    """``{name: title}`` of every built-in preset (its ``title`` key)."""
+    return {name: str(tomllib.loads(preset_text(name)).get("title", "")) for name in
+            list_presets()}
+
+
 def load_config(name_or_path: str | Path) -> tuple[dict, Path | None]:
     """Read a description from a TOML file or a preset name.
 
@@ -582,8 +603,7 @@ def load_config(name_or_path: str | Path) -> tuple[dict, Path | None]:
             f"unknown preset {name!r} (available: {', '.join(list_presets())}; or give a "
             "path to a .toml file)"
         )
-    text = resources.files("gearvib.presets").joinpath(f"{name}.toml").read_text("utf-8")
-    return tomllib.loads(text), None
+    return tomllib.loads(preset_text(name)), None
 
 
 def load_gearset(name_or_path: str | Path) -> GearSet:

@@ -176,3 +176,23 @@ def test_extra_bodies_and_couplings_on_every_type():
     bad["body"][0]["inertia"] = -1.0
     with pytest.raises(ConfigError, match=r"\[\[body\]\] 'motor'.*inertia"):
         gearset_from_dict(bad)
+
+
+def test_motor_and_load_on_a_two_stage_and_a_ravigneaux_set():
+    cfg, _ = load_config("two-stage-example")
+    cfg = copy.deepcopy(cfg)
+    cfg["body"] = [{"name": "motor", "role": "central", "mass": 15.0, "inertia": 0.03}]
+    cfg["coupling"] = [{"body1": "motor", "body2": "s1.sun", "stiffness": 3e3, "damping": 1.0}]
+    cfg["operation"] = {"fixed": ["s1.ring", "s2.ring"], "input": "motor",
+                        "output": "s2.carrier"}
+    model = assemble(gearset_from_dict(cfg))
+    assert model.kinematic_ratios["s2.carrier"] == pytest.approx(21 / 96 * 24 / 102, rel=1e-12)
+    assert "motor.theta" in model.dof_names
+    rav, _ = load_config("ravigneaux-example")
+    rav = copy.deepcopy(rav)
+    rav["body"] = [{"name": "drum", "role": "central", "mass": 5.0, "inertia": 0.05}]
+    rav["coupling"] = [{"body1": "ring", "body2": "drum", "stiffness": 5e4}]
+    rav["operation"]["output"] = "drum"
+    model = assemble(gearset_from_dict(rav))
+    assert model.output_member == "drum"
+    assert model.kinematic_ratios["drum"] == pytest.approx(model.kinematic_ratios["ring"])

@@ -304,3 +304,125 @@ def test_helical_axial_force_balance():
         mesh_geometry(Toothing(-75, 2e-3, helix_angle=beta), planet_t)
     with pytest.raises(ValueError, match="helix hands do not mesh"):
         mesh_geometry(sun_t, Toothing(27, 2e-3, helix_angle=beta))
+
+
+# --------------------------------------------------------------------------- presets
+
+
+def preset_model(name: str):
+    from gearvib.config import load_gearset
+
+    return assemble(load_gearset(name))
+
+
+def test_speed_ratios_against_willis():
+    """Willis (z_i (n_i - n_c) = -z_p (n_p - n_c) per mesh, signed z), worked by hand."""
+    # Ravigneaux, small sun in (1), large sun held: the long planet rolls on the held large sun,
+    # n_pl - n_c = (z_s2 / z_pl) n_c; the chain small sun -> short -> long gives
+    # n_pl - n_c = (z_s1 / z_pl)(n_s1 - n_c); so n_c = z_s1 / (z_s1 + z_s2) = 30/66 and the ring
+    # (internal, same sense as the long planet): n_r - n_c = (z_pl / |z_r|)(n_pl - n_c).
+    r = preset_model("ravigneaux-example").kinematic_ratios
+    n_c = 30 / 66
+    assert r["carrier"] == pytest.approx(n_c, rel=1e-12)
+    assert r["planet_short1"] == pytest.approx(n_c - (30 / 18) * (1 - n_c), rel=1e-12)
+    assert r["planet_long2"] == pytest.approx(n_c + (36 / 24) * n_c, rel=1e-12)
+    assert r["ring"] == pytest.approx(n_c * (1 + 36 / 84), rel=1e-12)
+    assert 1 / r["ring"] == pytest.approx(1.54, abs=5e-3)
+    # Wolfrom, ring 1 held: n_c = z_s / (z_s + |z_r1|) = 0.2; stepped planet
+    # n_p - n_c = -(z_s / z_p1)(1 - n_c); ring 2: n_r2 - n_c = (z_p2 / |z_r2|)(n_p - n_c)
+    r = preset_model("wolfrom-example").kinematic_ratios
+    n_c = 18 / 90
+    n_p = n_c - (18 / 27) * (1 - n_c)
+    assert r["carrier"] == pytest.approx(n_c, rel=1e-12)
+    assert r["planet3"] == pytest.approx(n_p, rel=1e-12)
+    assert r["ring2"] == pytest.approx(n_c + (24 / 69) * (n_p - n_c), rel=1e-9)
+    assert 1 / r["ring2"] == pytest.approx(69.0, rel=1e-9)
+    # two stages: each z_s / (z_s + |z_r|), the product at the output
+    r = preset_model("two-stage-example").kinematic_ratios
+    i1, i2 = 21 / 96, 24 / 102
+    assert r["s1.carrier"] == pytest.approx(i1, rel=1e-12)
+    assert r["s2.sun"] == pytest.approx(i1, rel=1e-12)
+    assert r["s2.planet1"] == pytest.approx(i1 * (i2 - (24 / 27) * (1 - i2)), rel=1e-9)
+    assert r["s2.carrier"] == pytest.approx(i1 * i2, rel=1e-12)
+
+
+def _static_forces(model, torque):
+    """Left and right flank forces of the static equilibrium at constant speed."""
+    from gearvib.simulate import SpeedRamp, prepare_run, static_equilibrium
+
+    setup = prepare_run(model, SpeedRamp(300.0, 300.0, 0.01, input_torque=torque), False)
+    sy = setup.system
+    q0, _ = static_equilibrium(sy, setup.mass, setup.rigid, setup.rigid * setup.omega0,
+                               mesh_names=model.mesh_names)
+    d = sy.mesh_vectors @ q0
+    pos = sy.mesh_position_offsets + sy.mesh_position_vectors @ q0
+    kl, kr = model.mesh_stiffness_at(pos), model.mesh_stiffness_at(pos, back=True)
+    j = sy.backlash
+    return (dict(zip(model.mesh_names, kl * np.maximum(d - j / 2, 0.0), strict=True)),
+            dict(zip(model.mesh_names, kr * np.maximum(-d - j / 2, 0.0), strict=True)))
+
+
+def _base_radius(model, mesh: str, which: int) -> float:
+    m = next(x for x in model.meta["meshes"] if x["name"] == mesh)
+    return abs(m[f"base_radius{which}"])
+
+
+@pytest.mark.parametrize("torque", [1.5, 150.0])
+def test_ravigneaux_statics_by_hand(torque):
+    """Light (1 %) and heavy (the preset's 150 N m) load, positive backlash. Small-sun meshes
+    T/(3 r_bs1); short planet torque balance: the planet-planet mesh carries the same force
+    (on its right flank: the short planet drives the long one backwards in the mesh's own
+    convention); ring meshes from the ring torque T / i, i = 1 / 0.6494; large-sun meshes from
+    the remaining torque."""
+    model = preset_model("ravigneaux-example")
+    assert np.all(model.mesh_backlash > 0)
+    left, right = _static_forces(model, torque)
+    f_s1 = torque / (3 * _base_radius(model, "sun_small-planet_short1", 1))
+    t_ring = torque / model.kinematic_ratios["ring"]
+    f_r = t_ring / (3 * _base_radius(model, "ring-planet_long1", 1))
+    f_s2 = (t_ring - torque) / (3 * _base_radius(model, "sun_large-planet_long1", 1))
+    for i in (1, 2, 3):
+        assert left[f"sun_small-planet_short{i}"] == pytest.approx(f_s1, rel=1e-6)
+        assert right[f"planet_short{i}-planet_long{i}"] == pytest.approx(f_s1, rel=1e-6)
+        assert right[f"ring-planet_long{i}"] == pytest.approx(f_r, rel=1e-6)
+        assert left[f"sun_large-planet_long{i}"] == pytest.approx(f_s2, rel=1e-6)
+
+
+@pytest.mark.parametrize("torque", [0.5, 5.0, 20.0])
+def test_wolfrom_statics_by_hand(torque):
+    """0.5 and 5 N m (light: the 5 N m case stopped before) and the preset's 20 N m. Sun
+    meshes T/(3 r_bs); ring 2 carries T / i with i = 69; ring 1 the difference."""
+    model = preset_model("wolfrom-example")
+    left, right = _static_forces(model, torque)
+    t_r2 = torque / model.kinematic_ratios["ring2"]
+    for i in (1, 2, 3):
+        assert left[f"sun-planet{i}"] == pytest.approx(
+            torque / (3 * _base_radius(model, "sun-planet1", 1)), rel=1e-6)
+        assert right[f"ring2-planet{i}"] == pytest.approx(
+            t_r2 / (3 * _base_radius(model, "ring2-planet1", 1)), rel=1e-6)
+        assert left[f"ring1-planet{i}"] == pytest.approx(
+            (t_r2 - torque) / (3 * _base_radius(model, "ring1-planet1", 1)), rel=1e-6)
+
+
+@pytest.mark.parametrize(("name", "light", "heavy"),
+                         [("ravigneaux-example", 1.5, 150.0), ("wolfrom-example", 0.5, 20.0)])
+def test_run_ups_with_backlash_at_light_and_heavy_load(name, light, heavy):
+    """0 -> 1500 min^-1 in 0.05 s (alpha = 3142 rad/s^2). The drive coupling then carries
+    the input torque plus the inertia torque of the rigid-body motion, J_eff alpha with
+    J_eff = r.M.r reduced to the input: checked on the second half of the run."""
+    from gearvib.simulate import SpeedRamp, simulate
+
+    model = preset_model(name)
+    rigid = model.rigid_body_velocity()
+    j_eff = float(rigid @ model.mass @ rigid)
+    alpha = 1500 * 2 * math.pi / 60 / 0.05
+    for torque in (light, heavy):
+        res = simulate(model, SpeedRamp(0.0, 1500.0, 0.05, input_torque=torque))
+        assert np.all(np.isfinite(res.normal_force))
+        late = res.time > 0.025
+        expected = torque + j_eff * alpha
+        assert res.drive_torque[late].mean() == pytest.approx(expected, rel=0.03), torque
+        out = res.speed[res.members.index(model.output_member), late].mean()
+        inp = res.speed[res.members.index(model.input_member), late].mean()
+        assert out / inp == pytest.approx(model.kinematic_ratios[model.output_member],
+                                          rel=0.01)
