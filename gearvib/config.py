@@ -138,6 +138,13 @@ def _number(value: Any, where: str) -> float:
     return v
 
 
+def _finite(value: Any, where: str) -> float:
+    v = _number(value, where)
+    if not math.isfinite(v):
+        raise ConfigError(f"{where} = {v!r} is not admissible (admissible: a finite number)")
+    return v
+
+
 def _stiffness_value(value: Any, where: str) -> float:
     if isinstance(value, str):
         if value == "rigid":
@@ -356,7 +363,7 @@ def _builder_set(kind: str, cfg: dict, base: Path | None) -> GearSet:
                 z_sun=z("z_sun"), z_ring1=z("z_ring1"), z_ring2=z("z_ring2"),
                 z_planet1=z("z_planet1"), z_planet2=z("z_planet2"),
                 module2=_number(g["module2"], "[geometry].module2") if "module2" in g else None,
-                step_offset=math.radians(_number(g.get("planet_step_offset_deg", 0.0),
+                step_offset=math.radians(_finite(g.get("planet_step_offset_deg", 0.0),
                                                  "[geometry].planet_step_offset_deg")),
                 n_planets=count("n_planets", 3), sun=bodies["sun"], ring1=bodies["ring1"],
                 ring2=bodies["ring2"], carrier=bodies["carrier"], planet=bodies["planet"],
@@ -368,7 +375,7 @@ def _builder_set(kind: str, cfg: dict, base: Path | None) -> GearSet:
             if not isinstance(phases, list):
                 raise ConfigError("[geometry].planet_mesh_phases must be a list (one mesh "
                                   "position per planet pair, cycles)")
-            phases = [_number(p, "[geometry].planet_mesh_phases") for p in phases]
+            phases = [_finite(p, "[geometry].planet_mesh_phases") for p in phases]
         return ravigneaux(
             z_sun_small=z("z_sun_small"), z_sun_large=z("z_sun_large"), z_ring=z("z_ring"),
             z_planet_short=z("z_planet_short"), z_planet_long=z("z_planet_long"),
@@ -480,7 +487,7 @@ def _general_set(cfg: dict, base: Path | None) -> GearSet:
                                       "negative for an internal gear)")
         for k in ("tooth_offset1_deg", "tooth_offset2_deg"):
             if k in t:
-                kw[k[:-4]] = math.radians(_number(t[k], f"{where}.{k}"))
+                kw[k[:-4]] = math.radians(_finite(t[k], f"{where}.{k}"))
         if "pressure_angle_deg" in t:
             kw["pressure_angle"] = math.radians(_number(t["pressure_angle_deg"],
                                                         f"{where}.pressure_angle_deg"))

@@ -426,3 +426,44 @@ def test_run_ups_with_backlash_at_light_and_heavy_load(name, light, heavy):
         inp = res.speed[res.members.index(model.input_member), late].mean()
         assert out / inp == pytest.approx(model.kinematic_ratios[model.output_member],
                                           rel=0.01)
+
+
+@pytest.mark.parametrize(
+    ("name", "edit", "match"),
+    [
+        ("wolfrom-example", ("geometry", "planet_step_offset_deg", "2"),
+         r"\[geometry\].planet_step_offset_deg must be a number"),
+        ("wolfrom-example", ("geometry", "planet_step_offset_deg", float("inf")),
+         r"planet_step_offset_deg = inf is not admissible"),
+        ("wolfrom-example", ("geometry", "z_planet2", 24.5), r"\[geometry\].z_planet2 must be an "
+                                                             r"integer"),
+        ("wolfrom-example", ("geometry", "n_planets", 0), r"n_planets = 0 is not admissible"),
+        ("wolfrom-example", ("geometry", "n_planets", 2), r"identical stepped planets cannot be "
+                                                          r"assembled at 180°"),
+        ("wolfrom-example", ("meshes", "ring", {"stiffness": {"model": "constant", "k": 1e8}}),
+         r"\[meshes.ring\] describes both rings"),
+        ("ravigneaux-example", ("geometry", "planet_mesh_phases", [0.1, 0.2]),
+         r"planet_mesh_phases needs 3 finite values"),
+        ("ravigneaux-example", ("geometry", "planet_mesh_phases", 0.1),
+         r"planet_mesh_phases must be a list"),
+        ("ravigneaux-example", ("geometry", "n_pairs", 4),
+         r"\(z_sun_small \+ z_sun_large\)/n_pairs = 66/4 = 16.5 must be an integer"),
+        ("ravigneaux-example", ("geometry", "z_sun_small", 31), r"= 67/3"),
+        ("ravigneaux-example", ("operation", "fixed", ["sun_large", "ring"]),
+         r"\[operation\].fixed must name one member"),
+        ("two-stage-example", ("stage1", "simulation", {"duration": 1.0}),
+         r"\[stage1.simulation\] is not admissible"),
+        ("two-stage-example", (None, "geometry", {}), r"unknown key 'geometry' in a description "
+                                                      r"of type = 'two-stage'"),
+    ],
+)
+def test_bad_new_keys_name_the_key(name, edit, match):
+    import copy
+
+    from gearvib.config import ConfigError, gearset_from_dict, load_config
+
+    cfg = copy.deepcopy(load_config(name)[0])
+    section, key, value = edit
+    (cfg if section is None else cfg[section])[key] = value
+    with pytest.raises(ConfigError, match=match):
+        gearset_from_dict(cfg)
