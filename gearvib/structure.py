@@ -777,14 +777,17 @@ def two_stage(stage1: GearSet, stage2: GearSet, *, shaft_stiffness: float = RIGI
               config: dict | None = None) -> GearSet:
     """Two planetary stages in series: the output of stage 1 drives the input of stage 2.
 
-    Bodies and meshes are renamed with the prefixes ``s1.`` and ``s2.``; a torsional shaft
-    (rigid by default) joins ``stage1.output`` and ``stage2.input``.
+    Bodies, meshes and the stages' own couplings are renamed with the prefixes ``s1.`` and
+    ``s2.``; a torsional shaft (rigid by default) joins ``stage1.output`` and ``stage2.input``.
     """
     b1, m1 = _prefixed(stage1, "s1.")
     b2, m2 = _prefixed(stage2, "s2.")
     fixed = tuple(f"s1.{f}" for f in stage1.fixed) + tuple(f"s2.{f}" for f in stage2.fixed)
     coupling = Coupling(f"s1.{stage1.output}", f"s2.{stage2.input}", shaft_stiffness,
                         shaft_damping)
+    own = tuple(replace(c, body1=f"{prefix}{c.body1}", body2=f"{prefix}{c.body2}")
+                for prefix, stage in (("s1.", stage1), ("s2.", stage2))
+                for c in stage.couplings)
     return GearSet(name=name, bodies=tuple(b1 + b2), meshes=tuple(m1 + m2), fixed=fixed,
                    input=f"s1.{stage1.input}", output=f"s2.{stage2.output}",
-                   couplings=(coupling,), config=dict(config or {}))
+                   couplings=(*own, coupling), config=dict(config or {}))

@@ -196,3 +196,16 @@ def test_motor_and_load_on_a_two_stage_and_a_ravigneaux_set():
     model = assemble(gearset_from_dict(rav))
     assert model.output_member == "drum"
     assert model.kinematic_ratios["drum"] == pytest.approx(model.kinematic_ratios["ring"])
+
+
+def test_a_stage_keeps_its_own_bodies_and_couplings():
+    cfg, _ = load_config("two-stage-example")
+    cfg = copy.deepcopy(cfg)
+    cfg["stage2"]["body"] = [{"name": "drum", "role": "central", "mass": 5.0, "inertia": 0.5}]
+    cfg["stage2"]["coupling"] = [{"body1": "carrier", "body2": "drum", "stiffness": 1e5}]
+    cfg["stage2"]["operation"]["output"] = "drum"
+    gs = gearset_from_dict(cfg)
+    assert ("s2.carrier", "s2.drum") in [(c.body1, c.body2) for c in gs.couplings]
+    model = assemble(gs)
+    assert model.output_member == "s2.drum"
+    assert model.kinematic_ratios["s2.drum"] == pytest.approx(21 / 96 * 24 / 102, rel=1e-12)

@@ -131,11 +131,14 @@ def _flank_positions(model, gs, mesh_name: str, planet: str, tooth_angle: float)
     toothing = g.gear1 if mesh.gear1 == planet else g.gear2
     rb = abs(toothing.base_radius)
     assert abs(arm) == pytest.approx(rb, rel=1e-9)  # the line is tangent to the base circle
-    r = np.linspace(rb * (1 + 1e-12), toothing.tip_radius, 4001)
+    r = np.linspace(rb * (1 + 1e-12), toothing.tip_radius, 2001)
     psi = np.array([toothing.thickness_half_angle(x) for x in r])
+    foot = arm * np.array([n_vec[1], -n_vec[0]])  # the planet's foot, relative to its centre
     found = []
     for tooth in range(toothing.z):
         gam = tooth_angle + 2 * math.pi * tooth / toothing.z
+        if math.cos(gam - math.atan2(foot[1], foot[0])) < 0.0:
+            continue  # a tooth on the far side cannot reach the line near the foot
         for sgn in (1.0, -1.0):
             ang = gam + sgn * psi
             pts = cp + r[:, None] * np.stack([np.cos(ang), np.sin(ang)], axis=1)
