@@ -288,7 +288,8 @@ class AssembledModel:
         Raises
         ------
         ValueError
-            If the kinematic ratios do not describe a rigid-body motion of the model.
+            If the kinematic ratios do not describe a rigid-body motion of the model (the
+            message names members held by torsional supports to ground).
         """
         n = self.n_dof
         r = np.zeros(n)
@@ -306,10 +307,18 @@ class AssembledModel:
             rhs = -k[np.ix_(free, known)] @ r[known]
             r[free] = np.linalg.lstsq(kff, rhs, rcond=None)[0]
         scale = np.abs(k).max() * np.abs(r).max() + 1e-300
-        if np.abs(k @ r).max() > 1e-8 * scale:
+        resisted = np.abs(k @ r) > 1e-8 * scale
+        if resisted.any():
+            members = sorted(m for m, d in self.rotation_dofs.items()
+                             if d >= 0 and resisted[d] and r[d] != 0.0)
             raise ValueError(
-                "model.kinematic_ratios are not a rigid-body motion of the model "
-                f"(max |K r| = {np.abs(k @ r).max():.3g}); check the assembly"
+                "the kinematic motion of the model is resisted "
+                f"(max |K r| = {np.abs(k @ r).max():.3g}): "
+                + (f"members {members} turn in it but are held by torsional supports to ground "
+                   "(drive and load stiffness of a modal model); a run needs them free: remove "
+                   "those supports, or join motor and load by [[coupling]]"
+                   if members else "the meshes or bearings are strained by it; check the "
+                   "assembly")
             )
         return r
 
