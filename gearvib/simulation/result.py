@@ -47,6 +47,11 @@ def model_sha256(model: AssembledModel) -> str:
         h.update(name.encode())
         h.update(str(a.shape).encode())
         h.update(a.tobytes())
+    if model.mesh_back_vectors is not None:  # distinct back-flank lines of action
+        a = np.ascontiguousarray(model.mesh_back_vectors, dtype=np.float64)
+        h.update(b"mesh_back_vectors")
+        h.update(str(a.shape).encode())
+        h.update(a.tobytes())
     names = [
         model.dof_names,
         model.mesh_names,
@@ -356,7 +361,8 @@ def build_result(
         at = time if setup.drive == "torque" else qd[:, k_in]  # motor: its characteristic
         drive_torque = np.interp(at, system.torque_table[0], system.torque_table[1])
     if natural_frequencies is None:
-        nat = elastic_frequencies(undamped_frequencies(model.mass, model.mean_stiffness_matrix()))
+        k_mean = model.mean_stiffness_matrix(setup.torque_sign)  # the loaded flanks
+        nat = elastic_frequencies(undamped_frequencies(model.mass, k_mean), model.mass, k_mean)
     else:
         nat = np.asarray(natural_frequencies, dtype=float)
     if isinstance(config, str):
