@@ -45,6 +45,10 @@ def check_model(model: AssembledModel) -> None:
         a = np.asarray(getattr(model, name))
         if a.shape != (n, n) or not np.all(np.isfinite(a)):
             raise ValueError(f"model.{name} must be a finite ({n}, {n}) array")
+    for name in ("mesh_vectors", "back_vectors"):
+        vec = np.asarray(getattr(model, name), dtype=float)
+        if vec.shape != (model.n_mesh, n) or not np.all(np.isfinite(vec)):
+            raise ValueError(f"model.{name} must be a finite ({model.n_mesh}, {n}) array")
     for name in ("mesh_stiffness_tables", "mesh_back_tables"):
         tab = np.asarray(getattr(model, name), dtype=float)
         if tab.ndim != 2 or tab.shape[0] != model.n_mesh or tab.shape[1] < 1:
