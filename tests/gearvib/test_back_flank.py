@@ -210,8 +210,9 @@ def hand_pair_vectors(model, internal: bool) -> tuple[np.ndarray, np.ndarray]:
 @pytest.mark.parametrize("internal", [False, True])
 def test_preloaded_pair_modes_use_both_lines_of_action(internal):
     """Negative backlash: the mean system is K + k_L v_L v_L^T + k_R v_R v_R^T with the hand
-    vectors; modal_analysis, the run's natural frequencies and the default drive coupling
-    agree with it (1e-9), and differ from the single-line (k_L + k_R) v_L v_L^T system."""
+    vectors; modal_analysis (frequencies and translational mode shapes), the run's natural
+    frequencies and the default drive coupling agree with it (1e-9), and differ from the
+    single-line (k_L + k_R) v_L v_L^T system by more than 1 %."""
     k_back = 1.5 * K_MESH  # unequal flanks: the pairing of stiffness and line is checked too
     model = assemble(pair(internal, backlash=-10e-6, k_back=k_back))
     vl, vr = hand_pair_vectors(model, internal)
@@ -224,6 +225,10 @@ def test_preloaded_pair_modes_use_both_lines_of_action(internal):
     assert res.loaded_flanks == ("both",)
     assert res.kinds[0] == "rigid-body" and res.kinds.count("rigid-body") == 1
     np.testing.assert_allclose(res.frequencies_hz[1:], f_hand[1:], rtol=1e-9)
+    for i in range(1, res.n_modes):  # the mode shapes solve the hand-built eigenproblem
+        w = 2 * math.pi * res.frequencies_hz[i]
+        resid = (k_hand - w**2 * model.mass) @ res.shapes[:, i]
+        assert np.abs(resid).max() < 1e-9 * np.abs(k_hand).max() * np.abs(res.shapes[:, i]).max()
     one_line = model.stiffness + (K_MESH + k_back) * np.outer(vl, vl)
     w2_one = scipy.linalg.eigh(one_line, model.mass, eigvals_only=True)
     assert np.abs(np.sqrt(w2_one[1:]) / (2 * math.pi) / f_hand[1:] - 1).max() > 0.01
