@@ -28,7 +28,9 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import xarray as xr
 
+from analysis.identification import peak_half_widths
 from analysis.instability import (
+    UNEXPLAINED,
     Candidates,
     PeakLabels,
     Resonances,
@@ -44,7 +46,7 @@ from gearvib.config import config_hash, gearset_from_dict
 from gearvib.modal import ModalResult, modal_analysis
 from gearvib.model import AssembledModel
 from gearvib.report.study import AnalysisSettings
-from gearvib.stability import first_order_regions, stability_over_speed
+from gearvib.stability import first_order_regions, mesh_phasing, stability_over_speed
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -73,6 +75,8 @@ PAPER_SPEEDS_RPM = (1500.0, 2600.0, 3100.0)
 
 _STIFFNESS_CYCLES = 3
 _SPOT_RANGE_DB = 30.0  # spots more than this below the map maximum are background clutter
+_NATURAL_UNCERTAINTY = 0.05  # resonances of a run sit up to ~5 % below the modal frequencies
+# (contact loss softens the meshes near resonance; measured on paper-case1, see README)
 _MIN_SPOT_FRACTION = 0.15  # spots below 0.15 x the lowest natural frequency: near-DC content
 _REGION_GAP = 0.03  # spots closer than 3 % of the top speed belong to one resonance region
 _RPM_MIN_FRACTION = 0.02  # order tracking needs rpm > 0: skip the first 2 % of the speed range
@@ -153,25 +157,7 @@ class ResonanceRegion:
     @property
     def classified(self) -> bool:
         """True if at least one spot is a forced resonance or a parametric instability."""
-        return any(not m.startswith("unclassified") for m in self.mechanisms)
-
-
-def _above_floor(res: Resonances, map_ds: xr.Dataset, range_db: float, f_min: float
-                 ) -> Resonances:
-    """Spots within ``range_db`` of the map maximum and at ``f_min`` [Hz] or above."""
-    if not len(res):
-        return res
-    amp = map_ds["amplitude"].transpose("time", "frequency").values
-    it = np.clip(np.searchsorted(map_ds["time"].values, res.time), 0, amp.shape[0] - 1)
-    jf = np.clip(np.searchsorted(map_ds["frequency"].values, res.frequency), 0,
-                 amp.shape[1] - 1)
-    level = amp[it, jf]
-    keep = (level >= float(amp.max()) * 10 ** (-range_db / 20.0)) & (res.frequency >= f_min)
-    return Resonances(time=res.time[keep], rpm=res.rpm[keep], frequency=res.frequency[keep],
-                      f_mesh=res.f_mesh[keep], order=res.order[keep],
-                      mechanism=res.mechanism[keep], mode=res.mode[keep],
-                      strength_db=res.strength_db[keep], note=res.note[keep],
-                      mesh_frequency_per_rpm=res.mesh_frequency_per_rpm)
+        return any(not m.startswith(UNEXPLAINED) for m in self.mechanisms)
 
 
 def resonance_regions(res: Resonances, *, rpm_gap: float) -> list[ResonanceRegion]:
@@ -208,7 +194,7 @@ def resonance_regions(res: Resonances, *, rpm_gap: float) -> list[ResonanceRegio
         best = int(idx[np.argmax(res.strength_db[idx])])
         mech = []
         for i in idx[np.argsort(res.strength_db[idx])[::-1]]:
-            m = str(res.mechanism[i]) + (f" ({res.mode[i]})" if res.mode[i] else "")
+            m = str(res.mechanism[i]) + (f" ({res.cause[i]})" if res.cause[i] else "")
             if m not in mech:
                 mech.append(m)
         out.append(ResonanceRegion(
@@ -341,10 +327,41 @@ class CaseAnalysis:
     def resonance_rows(self) -> list[tuple[str, ...]]:
         """Rows of the resonance table (formatted strings)."""
         r = self.resonances
-        return [(f"{r.rpm[i]:.0f}", f"{r.f_mesh[i]:.0f}", f"{r.frequency[i]:.0f}",
-                 str(r.order[i]) if r.order[i] else "–", str(r.mode[i]) or "–",
-                 f"{r.strength_db[i]:.1f}", str(r.mechanism[i]), str(r.note[i]))
+        return [(f"{r.rpm[i]:.0f}", f"{r.frequency[i]:.0f}",
+                 str(r.order[i]) if r.order[i] else str(r.feature[i]),
+                 f"{r.strength_db[i]:.1f}", str(r.mechanism[i]), str(r.cause[i]) or "–",
+                 f"{100 * r.coincidence[i]:.0f} %", str(r.note[i]))
                 for i in range(len(r))]
+
+    def peak_rows(self) -> list[tuple[str, ...]]:
+        """Rows of the identified-peak table (formatted strings)."""
+        rows = []
+        for fsp in self.spectra:
+            lab = fsp.labels
+            for i in range(len(lab)):
+                best = lab.matches[i][0] if lab.matches[i] else None
+                rows.append((fsp.mesh, lab.label(i),
+                             f"{best.deviation:+.0f}" if best else "–",
+                             f"± {best.tolerance:.0f}" if best else "–",
+                             f"{100 * lab.coincidence[i]:.0f} %"))
+        return rows
+
+    def crossing_rows(self) -> list[tuple[str, ...]]:
+        """Predicted crossings of the mesh orders with the natural frequencies."""
+        return [(f"{c.harmonic} × f_mesh = {c.mode}", f"{c.frequency_hz:.0f}", f"{c.rpm:.0f}",
+                 c.status + (f" ({c.strength_db:.1f} dB)" if c.status == "rise" else ""))
+                for c in self.resonances.crossings]
+
+    def growth_rows(self) -> list[tuple[str, ...]]:
+        """Growth of every Floquet-unstable band during this run."""
+        g = self.resonances.growth
+        if g is None:
+            return []
+        return [(f"{g.lower_rpm[i]:.0f}–{g.upper_rpm[i]:.0f}", str(g.label[i]) or "–",
+                 f"{1e3 * g.time_in_band[i]:.1f}", f"{g.peak_growth_rate[i]:.3g}",
+                 f"{g.growth_db[i]:.1f}",
+                 "develops" if g.can_grow[i] else f"too fast: {g.advice[i]}")
+                for i in range(len(g))]
 
     def region_rows(self) -> list[tuple[str, ...]]:
         """Rows of the Floquet region table (formatted strings)."""
@@ -674,6 +691,13 @@ def analyse_case(ds: xr.Dataset, *, name: str | None = None,
                                             0.5 * fs)
     fmax = min(fmax, 0.5 * fs)
 
+    # theory candidates in the run-up range (with the mesh-phasing selection rule)
+    candidates, cnote = _candidates(model, modal, fn, names, f_per_rpm,
+                                    (float(run["speed_start_rpm"]),
+                                     float(run["speed_end_rpm"])), settings.n_max)
+    if cnote:
+        notes.append(cnote)
+
     # (c) spectra of the planet-tooth forces over the whole run-up, labelled peaks
     spectra = []
     seg = int(min(ds.sizes["time"], round(fs / max(settings.map_resolution_hz / 4, 1.0))))
@@ -690,11 +714,16 @@ def analyse_case(ds: xr.Dataset, *, name: str | None = None,
         sel = np.sort(np.flatnonzero(keep)[order])
         pk = Peaks(pk.frequency[sel], pk.amplitude[sel], pk.bin_frequency[sel],
                    pk.bin_value[sel], pk.scaling, pk.units, pk.window)
-        labels = label_peaks(pk.frequency, fn, n_max=6, tolerance=settings.tolerance,
-                             names=names) if len(pk) and fn.size else label_peaks(
-            np.array([1.0]), np.array([1.0]))
-        if not (len(pk) and fn.size):
-            labels = PeakLabels(np.zeros(0), (), settings.tolerance)
+        if len(pk) and fn.size:
+            # a run-up spectrum has broad humps: each peak is uncertain by its -3 dB half-width
+            widths = peak_half_widths(sp.frequency, to_db(sp.values, sp.scaling), pk.frequency)
+            labels = label_peaks(pk.frequency, fn, resolution_hz=sp.enbw_hz,
+                                 peak_widths_hz=widths, candidates=candidates, names=names,
+                                 natural_uncertainty=_NATURAL_UNCERTAINTY,
+                                 band=(0.5 * settings.map_resolution_hz, fmax))
+        else:
+            labels = PeakLabels(peaks=np.zeros(0), matches=(), coincidence=np.zeros(0),
+                                peak_uncertainty=np.zeros(0))
         spectra.append(ForceSpectrum(mesh, sp, pk, labels))
 
     # (d) summed sun-mesh stiffness
@@ -725,30 +754,28 @@ def analyse_case(ds: xr.Dataset, *, name: str | None = None,
         except ValueError as exc:
             notes.append(f"rpm-order map not available: {exc}")
 
-    # (f) resonances in the map, against the theory candidates
-    candidates, cnote = _candidates(model, modal, fn, names, f_per_rpm,
-                                    (float(run["speed_start_rpm"]),
-                                     float(run["speed_end_rpm"])), settings.n_max)
-    if cnote:
-        notes.append(cnote)
-    map_ds = fmap.to_dataset().sel(frequency=slice(0.0, fmax))
-    resonances = detect_resonances(
-        map_ds, natural_frequencies_hz=fn, mesh_frequency_per_rpm=f_per_rpm,
-        orders=range(1, settings.orders + 1), candidates=candidates,
-        threshold_db=settings.threshold_db, tolerance=settings.tolerance,
-        n_max=settings.n_max, names=names)
-    resonances = _above_floor(resonances, map_ds, _SPOT_RANGE_DB,
-                              _MIN_SPOT_FRACTION * float(fn.min()) if fn.size else 0.0)
-    regions = resonance_regions(resonances, rpm_gap=_REGION_GAP * float(run["speed_end_rpm"]))
-
-    # (g) Floquet stability over the run-up speed range
+    # (f) Floquet stability over the run-up speed range
     chart = None
     first_order: list[tuple[str, ...]] = []
+    rule, families = None, None
     if model is not None:
         chart, why = _stability(model, run, settings)
         if why:
             notes.append(why)
         first_order = _first_order_rows(model, run, settings)
+        rule, families = mesh_phasing(model, modal)
+
+    # (g) resonances of the map: forced (rays x natural frequencies), parametric (growing
+    # Floquet bands), unexplained
+    map_ds = fmap.to_dataset().sel(frequency=slice(0.0, fmax))
+    resonances = detect_resonances(
+        map_ds, natural_frequencies_hz=fn, mesh_frequency_per_rpm=f_per_rpm,
+        orders=range(1, settings.orders + 1), names=names, candidates=candidates,
+        chart=chart, mode_families=families, mesh_harmonic_rule=rule,
+        speed_profile=(t, rpm), threshold_db=settings.threshold_db,
+        natural_uncertainty=_NATURAL_UNCERTAINTY, dynamic_range_db=_SPOT_RANGE_DB,
+        frequency_range=(_MIN_SPOT_FRACTION * float(fn.min()) if fn.size else 0.0, fmax))
+    regions = resonance_regions(resonances, rpm_gap=_REGION_GAP * float(run["speed_end_rpm"]))
 
     # (h) provenance (no dates: same input, same report)
     gs_cfg = caller.get("gearset")
@@ -854,13 +881,17 @@ def spectra_figure(ca: CaseAnalysis, *, figsize: tuple[float, float] = (8.0, 6.5
             y = to_db(fsp.peaks.amplitude, sp.scaling)
             ax.plot(fsp.peaks.frequency, y, "v", color="C3", ms=4)
             for i, (f, v) in enumerate(zip(fsp.peaks.frequency, y, strict=True)):
+                st = fsp.labels.status[i] if i < len(fsp.labels) else "unexplained"
                 m = fsp.labels.matches[i] if i < len(fsp.labels) else ()
-                text = f"{f:.0f}" + (f"\n≈ {m[0].expression}" if m else "")
+                text = f"{f:.0f}" + (f"\n≈ {m[0].expression}" if st == "explained" else
+                                     "\n?" if st == "unexplained" else "\n~")
                 ax.annotate(text, (f, v), xytext=(0, 4), textcoords="offset points",
                             ha="center", fontsize=6.5)
         for fn in ca.natural_frequencies_hz:
             ax.axvline(fn, color="C1", lw=0.7, ls=":")
         ax.set_xlim(0, ca.frequency_max_hz)
+        lo, hi = ax.get_ylim()
+        ax.set_ylim(lo, hi + 0.25 * (hi - lo))  # room for the peak labels below the title
         ax.set_ylabel("peak amplitude\n[dB re 1 N]")
         ax.set_title(f"{fsp.mesh}: {sp.window}, Δf = {sp.resolution_hz:.3g} Hz, "
                      f"{sp.n_averages} averages", fontsize=9)
@@ -899,8 +930,9 @@ def sonogram_figure(ca: CaseAnalysis, *, figsize: tuple[float, float] = (7.5, 6.
     """Rpm-frequency map of a tooth force with mesh orders and natural frequencies (Fig. 11).
 
     Speed is on the vertical axis; the inclined dashed lines are the orders 1..N of the mesh
-    frequency, the dotted vertical lines the natural frequencies; circles mark the detected
-    resonances and red bands the speed ranges the Floquet analysis finds unstable.
+    frequency, the dotted vertical lines the natural frequencies; circles mark forced
+    resonances, squares parametric instabilities, grey crosses unexplained rises, and red bands
+    the speed ranges the Floquet analysis finds unstable.
     """
     orders = list(range(1, ca.settings.orders + 1))
     fig = rpm_frequency_map_figure(
@@ -910,9 +942,14 @@ def sonogram_figure(ca: CaseAnalysis, *, figsize: tuple[float, float] = (7.5, 6.
         frequency_max=ca.frequency_max_hz, figsize=figsize)
     ax = fig.axes[0]
     r = ca.resonances
-    if len(r):
-        ax.plot(r.frequency, r.rpm, "o", mfc="none", mec="r", ms=9, lw=0,
-                label="detected resonance")
+    for key, (marker, color, text) in {
+            "forced": ("o", "r", "forced resonance"),
+            "parametric": ("s", "m", "parametric instability"),
+            "unexplained": ("x", "0.85", "unexplained rise")}.items():
+        m = np.asarray([str(x).startswith(key) for x in r.mechanism], dtype=bool)
+        if m.any():
+            ax.plot(r.frequency[m], r.rpm[m], marker, mfc="none", mec=color, mew=1.4, ms=9,
+                    lw=0, label=f"{text} ({int(m.sum())})")
     if ca.chart is not None:
         for k, reg in enumerate(ca.chart.region_table):
             ax.axhspan(reg["lower"] / ca.mesh_frequency_per_rpm,
@@ -1087,11 +1124,16 @@ def report_sections(cases: Sequence[CaseAnalysis], comparisons: Sequence[Any] = 
                                     figure=lambda ca=ca: tooth_force_figure(ca))]
         s["spectra"] += [
             Block("figure", f"{ca.name}: spectra of the planet-tooth forces over the whole "
-                  "run-up; peaks labelled with natural-frequency combinations.",
+                  "run-up; peaks labelled with their best theory candidate ('?': "
+                  "unexplained; '~': ambiguous, the peak is so broad that a random peak would "
+                  "match as easily).",
                   figure=lambda ca=ca: spectra_figure(ca)),
-            _table(f"Labelled peaks of {ca.name} (paper style, tolerance "
-                   f"{100 * ca.settings.tolerance:g} %)", ("mesh", "peak"),
-                   [(fsp.mesh, lab) for fsp in ca.spectra for lab in fsp.labels.labels])]
+            _table(f"Identified peaks of {ca.name} (paper style; window = the peak's -3 dB "
+                   f"half-width + {100 * _NATURAL_UNCERTAINTY:g} % of the theory value; "
+                   "'chance' = how often a random peak there would get a label; candidates: "
+                   "natural frequencies, 2 f_i/n and (f_i + f_j)/n allowed by the mesh phasing)",
+                   ("mesh", "peak", "deviation of the best [Hz]", "window [Hz]", "chance"),
+                   ca.peak_rows())]
         s["sonograms"] += [
             Block("heading", ca.name),
             Block("text", f"{ca.name}: f_mesh = {ca.mesh_frequency_per_rpm:.5g} Hz per min⁻¹ × "
@@ -1103,28 +1145,43 @@ def report_sections(cases: Sequence[CaseAnalysis], comparisons: Sequence[Any] = 
             Block("figure", f"{ca.name}: sonogram (rpm-frequency map) of the tooth force "
                   f"{ca.force_mesh}; speed vertical, inclined lines = mesh orders 1–"
                   f"{ca.settings.orders}, dotted vertical lines = natural frequencies, circles "
-                  "= detected resonances.", figure=lambda ca=ca: sonogram_figure(ca)),
+                  "= forced resonances, squares = parametric instabilities, crosses = "
+                  "unexplained rises.", figure=lambda ca=ca: sonogram_figure(ca)),
             Block("figure", f"{ca.name}: rpm-order map of the same force.",
                   figure=lambda ca=ca: order_map_figure(ca))]
+        res = ca.resonances
         s["resonances"] += [
             Block("heading", ca.name),
-            Block("text", f"{ca.name}: {len(ca.resonances)} resonance spots (rise ≥ "
-                  f"{ca.settings.threshold_db:g} dB above the background, within "
-                  f"{_SPOT_RANGE_DB:g} dB of the map maximum, above "
-                  f"{_MIN_SPOT_FRACTION:g} × the lowest natural frequency) in "
-                  f"{len(ca.regions)} speed regions; "
-                  f"{sum(r.classified for r in ca.regions)} regions contain a classified "
-                  "spot (forced resonance or parametric instability)."),
+            Block("text", f"{ca.name}: {res.summary()}. Rises of at least "
+                  f"{ca.settings.threshold_db:g} dB along the mesh orders 1–{ca.settings.orders} "
+                  "(where the orders are resolved), along the natural frequencies and as "
+                  f"isolated spots within {_SPOT_RANGE_DB:g} dB of the map maximum; "
+                  f"{len(ca.regions)} speed regions. Explanations: a mesh order crossing a "
+                  "natural frequency (forced resonance; tolerance "
+                  f"{100 * _NATURAL_UNCERTAINTY:g} % of the natural frequency plus the rise "
+                  "width), a Floquet-unstable band that grows in this run (parametric "
+                  "instability); 'chance' is how often a random rise would get the same "
+                  "explanation."),
+            *[Block("text", f"{ca.name}: {n}") for n in res.notes
+              if not n.startswith("rays analysed")],
             _table(f"Identified resonance regions of {ca.name}",
-                   ("speed [min⁻¹]", "peak speed", "f [Hz]", "rise [dB]", "spots",
-                    "mechanisms (mode)"),
+                   ("speed [min⁻¹]", "peak speed", "f [Hz]", "rise [dB]", "rises",
+                    "mechanisms (cause)"),
                    [(f"{r.rpm_low:.0f}–{r.rpm_high:.0f}", f"{r.rpm_peak:.0f}",
                      f"{r.frequency_hz:.0f}", f"{r.strength_db:.1f}", str(r.n_spots),
                      "; ".join(r.mechanisms[:3])) for r in ca.regions]),
-            _table(f"Classified resonance spots of {ca.name}",
-                   ("speed", "f_mesh [Hz]", "f [Hz]", "order", "mode", "rise [dB]",
-                    "mechanism", "note"),
-                   [row for row in ca.resonance_rows() if row[6] != "unclassified"])]
+            _table(f"Rises of {ca.name}",
+                   ("speed", "f [Hz]", "order", "rise [dB]", "mechanism", "cause", "chance",
+                    "evidence"), ca.resonance_rows()),
+            _table(f"Mesh orders crossing natural frequencies ({ca.name}): predicted speed "
+                   "f_i / (k × f_mesh per min⁻¹) and what the map shows",
+                   ("crossing", "f_i [Hz]", "speed [min⁻¹]", "found"), ca.crossing_rows())]
+        if ca.growth_rows():
+            s["resonances"] += [_table(
+                f"Can the Floquet-unstable bands grow in this run? ({ca.name}; time in band × "
+                "growth rate; 'develops' = at least 20 dB of growth)",
+                ("band [min⁻¹]", "candidate", "time in band [ms]", "growth rate [1/s]",
+                 "growth [dB]", "verdict"), ca.growth_rows())]
         s["stability"] += [Block("heading", ca.name)]
         if ca.chart is not None:
             s["stability"] += [
