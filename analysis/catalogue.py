@@ -591,7 +591,9 @@ def kinematic_catalogue(
     for p in planets:
         partner_gears = tuple(sorted((_TRAILING_DIGITS.sub("", g), zg, zp)
                                      for g, zg, zp in gears_of[p]))
-        key = (carrier_of[p], round(sp[p] / scale, 9), partner_gears)
+        key = next((k for k in groups if k[0] == carrier_of[p] and k[2] == partner_gears
+                    and abs(k[1] - sp[p]) <= 1e-7 * scale),
+                   (carrier_of[p], sp[p], partner_gears))
         groups.setdefault(key, []).append(p)
     group_of = {p: _group_name(ps) for ps in groups.values() for p in ps}
     members_of_group = {_group_name(ps): ps for ps in groups.values()}
@@ -610,8 +612,11 @@ def kinematic_catalogue(
     # ---- meshes grouped by carrier and frequency ---------------------------------------------
     mgroups: dict[tuple, list[ToothMesh]] = {}
     for m in meshes:
-        rate = m.z_gear * (sp[m.gear] - sp[m.carrier])
-        key = (m.carrier, round(abs(rate) / scale, 9))
+        rate = abs(m.z_gear * (sp[m.gear] - sp[m.carrier]))
+        # meshes of one carrier whose frequencies agree to 1e-7 (speeds come from a numerical
+        # null space) are one line
+        key = next((k for k in mgroups if k[0] == m.carrier
+                    and abs(k[1] - rate) <= 1e-7 * max(rate, k[1], tiny)), (m.carrier, rate))
         mgroups.setdefault(key, []).append(m)
     central_gears = {m.gear for m in meshes if m.gear not in planet_set}
     for (carrier, _), ms in mgroups.items():
@@ -824,6 +829,13 @@ def simple_planetary_catalogue(z_sun: int, z_ring: int, z_planet: int, *,
     ang = [float(a) for a in planet_angles_deg]
     if not ang:
         raise ValueError("planet_angles_deg is empty: a planetary set has at least one planet")
+    for a in ang:
+        turns = (z_sun - z_ring) * a / 360.0
+        if not math.isfinite(turns) or abs(turns - round(turns)) > 0.02:
+            step = 360.0 / (z_sun - z_ring)
+            raise ValueError(f"planet_angles_deg: a planet at {a:g}° cannot be assembled: "
+                             f"(z_sun + |z_ring|) angle / 360° = {turns:.4g} is not an integer "
+                             f"(admissible angles are multiples of {step:.4g}°)")
     base = simple_planetary_speeds(z_sun, z_ring, z_planet, fixed=fixed, input=input)
     speeds = {"sun": base["sun"], "ring": base["ring"], "carrier": base["carrier"]}
     meshes = []

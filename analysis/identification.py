@@ -318,6 +318,38 @@ def covered_fraction(centres: np.ndarray, half_widths: np.ndarray, lo: float, hi
     return float(total / (hi - lo))
 
 
+class _Union:
+    """Union of intervals ``[c - w, c + w]`` with fast covered length over any ``[a, b]``."""
+
+    def __init__(self, centres: np.ndarray, half_widths: np.ndarray) -> None:
+        c = np.asarray(centres, dtype=float)
+        w = np.broadcast_to(np.asarray(half_widths, dtype=float), c.shape)
+        order = np.argsort(c - w)
+        lo, hi = (c - w)[order], (c + w)[order]
+        starts, ends = [], []
+        for x, y in zip(lo, hi, strict=True):
+            if starts and x <= ends[-1]:
+                ends[-1] = max(ends[-1], y)
+            else:
+                starts.append(x)
+                ends.append(y)
+        self.lo = np.asarray(starts)
+        self.hi = np.asarray(ends)
+        self.cum = np.concatenate([[0.0], np.cumsum(self.hi - self.lo)])
+
+    def _upto(self, x: float) -> float:
+        k = int(np.searchsorted(self.lo, x, side="right"))  # intervals starting <= x
+        if k == 0:
+            return 0.0
+        return float(self.cum[k - 1] + min(x, self.hi[k - 1]) - self.lo[k - 1])
+
+    def fraction(self, a: float, b: float) -> float:
+        """Covered fraction of ``[a, b]``."""
+        if b <= a or self.lo.size == 0:
+            return 0.0
+        return (self._upto(b) - self._upto(a)) / (b - a)
+
+
 def peak_half_widths(frequency: Any, level_db: Any, peaks: Any, *, drop_db: float = 3.0
                      ) -> np.ndarray:
     """Half-width of each peak at ``drop_db`` below its maximum (same unit as ``frequency``).
@@ -696,23 +728,29 @@ def identify_peaks(
     coverage = {f: covered_fraction(allc.value[allc.family == f], tol_typ[allc.family == f],
                                     lo, hi) for f in fams}
     coverage["all"] = covered_fraction(allc.value, tol_typ, lo, hi)
+    cache: dict[float, tuple[np.ndarray, _Union, dict[str, _Union]]] = {}
+
+    def unions(u: float) -> tuple[np.ndarray, _Union, dict[str, _Union]]:
+        if u not in cache:
+            tol = allc.tolerance(u)
+            cache[u] = (tol, _Union(allc.value, tol),
+                        {f: _Union(allc.value[allc.family == f], tol[allc.family == f])
+                         for f in fams})
+        return cache[u]
+
     matches, coinc = [], np.zeros(p.size)
     for i, pk in enumerate(p):
-        tol = allc.tolerance(u_peak[i])
+        tol, u_all, u_fam = unions(float(u_peak[i]))
         a, b = max(lo, pk * (1 - lw)), min(hi, pk * (1 + lw))
         if b <= a:
             a, b = pk * (1 - lw), pk * (1 + lw)
-        coinc[i] = covered_fraction(allc.value, tol, a, b)
+        coinc[i] = u_all.fraction(a, b)
         dev = pk - allc.value
         hit = np.flatnonzero(np.abs(dev) <= tol)
-        fam_cov: dict[str, float] = {}
         found = []
         for k in hit:
             f = str(allc.family[k])
-            if f not in fam_cov:
-                sel = allc.family == f
-                fam_cov[f] = max(covered_fraction(allc.value[sel], tol[sel], a, b), 1e-12)
-            c = fam_cov[f]
+            c = max(u_fam[f].fraction(a, b), 1e-12)
             score = float(np.exp(-2.0 * (dev[k] / tol[k]) ** 2) / c)
             found.append(LineMatch(str(allc.expression[k]), f, float(allc.value[k]),
                                    float(dev[k]), float(tol[k]), float(c), score))

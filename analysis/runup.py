@@ -81,15 +81,16 @@ class MapLevels:
     def ray_half_width(self, order: float | np.ndarray) -> np.ndarray:
         """Half-width of the ray of ``order`` in every frame (axis units).
 
-        On a frequency axis: half the resolution plus half the sweep of the ray inside one
-        frame, ``|o d(rpm)/dt| T_frame / 120``; on an order axis: half the resolution.
+        On a frequency axis: half the resolution plus a quarter of the sweep of the ray inside
+        one frame, ``|o d(rpm)/dt| T_frame / 240`` (the tapered window weights the middle half
+        of the frame); on an order axis: half the resolution.
         """
         o = np.asarray(order, dtype=float)
         if self.axis_name == "order":
             return np.broadcast_to(0.5 * self.resolution, np.broadcast(o[..., None],
                                                                        self.rpm).shape)
         sweep = np.abs(o[..., None] * self.rate) * self.frame_duration / 60.0
-        return 0.5 * self.resolution + 0.5 * sweep
+        return 0.5 * self.resolution + 0.25 * sweep
 
 
 def map_levels(map_ds: Any, *, variable: str = "amplitude", speed: str = "rpm") -> MapLevels:
@@ -279,15 +280,16 @@ def map_features(map_ds: Any, *, variable: str = "amplitude", speed: str = "rpm"
         Minimum prominence of a feature in its profile [dB].
     quantile : float
         Quantile over frames of the rise along a line (0.5: present in at least half of the
-        frames in which the line lies inside the map).
+        frames in which the line lies inside the map; orders inside the map for less than 30 %
+        of the frames are not evaluated).
     min_speed_ratio : float
         The largest analysed speed must be at least this multiple of the smallest; otherwise
         rays and vertical lines cannot be told apart (ValueError).
     frames : array_like of bool, optional
         Frames to analyse (default: all with speed > 2 % of the largest).
     max_order : float, optional
-        Largest order of the order profile (default: the top frequency over the 10th
-        percentile of the analysed speeds).
+        Largest order of the order profile (default: the top frequency over the median of the
+        analysed speeds, so that every order is inside the map for half of the run).
 
     Returns
     -------
@@ -320,8 +322,8 @@ def map_features(map_ds: Any, *, variable: str = "amplitude", speed: str = "rpm"
     f = lv.axis
     f_prof = np.quantile(rise, q, axis=0)
     # order profile: sample every frame along rays f = o rpm/60 on a common order grid
-    rpm_low = float(np.quantile(rpm, 0.1))
-    o_max = float(max_order) if max_order is not None else float(f[-1]) * 60.0 / rpm_low
+    rpm_mid = float(np.median(rpm))
+    o_max = float(max_order) if max_order is not None else float(f[-1]) * 60.0 / rpm_mid
     d_o = 0.25 * lv.resolution * 60.0 / hi
     n_o = int(np.ceil(o_max / d_o))
     if n_o > 2_000_000:
@@ -334,23 +336,26 @@ def map_features(map_ds: Any, *, variable: str = "amplitude", speed: str = "rpm"
         inside = (fo >= f[0]) & (fo <= f[-1])
         samples[i, inside] = np.interp(fo[inside], f, rise[i])
     counts = np.isfinite(samples).sum(axis=0)
-    valid = counts >= max(3, int(0.2 * rpm.size))
+    valid = counts >= max(5, int(0.3 * rpm.size))
     o_prof = np.full(orders.size, np.nan)
     if valid.any():
         o_prof[valid] = np.nanquantile(samples[:, valid], q, axis=0)
 
     def peaks(x: np.ndarray, prof: np.ndarray, cell: float) -> tuple[np.ndarray, ...]:
-        """Peaks standing ``prom`` above a running median, after smoothing over one cell."""
+        """Peaks standing ``prom`` above a running median over 101 cells (and half of it above
+        their neighbouring minima), after smoothing over one cell."""
         good = np.isfinite(prof)
         if good.sum() < 5:
             return np.zeros(0), np.zeros(0), np.zeros(0)
         y = np.where(good, prof, np.nanmin(prof[good]))
         k = max(1, round(cell / float(np.median(np.diff(x)))))
         smooth = scipy.ndimage.uniform_filter1d(y, k, mode="nearest")
-        base = scipy.ndimage.median_filter(smooth, size=max(21 * k, 5), mode="nearest")
+        base = scipy.ndimage.median_filter(smooth, size=max(101 * k, 5), mode="nearest")
         excess = smooth - base
-        idx, _ = scipy.signal.find_peaks(excess, height=prom, distance=2 * k)
-        idx = idx[good[idx]]
+        idx, _ = scipy.signal.find_peaks(excess, height=prom, prominence=0.5 * prom,
+                                         distance=2 * k)
+        ends = np.flatnonzero(good)
+        idx = idx[good[idx] & (idx >= ends[0] + 2 * k) & (idx <= ends[-1] - 2 * k)]
         ex = excess[idx]
         # the position from the unsmoothed profile within one cell of the smoothed peak
         idx = np.asarray([i - k + int(np.argmax(y[max(i - k, 0):i + k + 1]))

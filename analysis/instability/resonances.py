@@ -256,11 +256,11 @@ class Resonances:
         lines += [f"note: {n}" for n in self.notes]
         return "\n".join(lines)
 
-    def plot(self, map_ds=None, ax=None):
+    def plot(self, map_ds=None, ax=None, **kwargs: Any):
         """Rises over the rpm-frequency map (delegates to ``plots.plot_resonances``)."""
         from analysis.instability.plots import plot_resonances
 
-        return plot_resonances(self, map_ds, ax=ax)
+        return plot_resonances(self, map_ds, ax=ax, **kwargs)
 
 
 # ------------------------------------------------------------------------------ helpers
@@ -289,8 +289,17 @@ def _track(level: np.ndarray, axis: np.ndarray, centre: np.ndarray, half: np.nda
 
 
 def _rises(track: np.ndarray, threshold: float) -> list[tuple[int, float, int, int]]:
-    """Peaks of a track with prominence >= threshold: (index, prominence, -3 dB left, right)."""
+    """Peaks of a track with prominence >= threshold: (index, prominence, -3 dB left, right).
+
+    The threshold is raised to 4 x the noise of the track (the robust spread of its frame-to-
+    frame changes), so that a noisy track does not produce rises by chance.
+    """
     out = []
+    fin = track[np.isfinite(track)]
+    if fin.size > 8:
+        d = np.diff(fin)
+        noise = 1.4826 * float(np.median(np.abs(d - np.median(d)))) / np.sqrt(2.0)
+        threshold = max(threshold, 4.0 * noise)
     for a, b in _segments(np.isfinite(track)):
         if b - a < 3:
             continue
@@ -509,7 +518,8 @@ def detect_resonances(
         raise ValueError(f"orders = {orders!r} is not admissible: positive integers")
     k_track = max(k_all)
     k_top = max(k_track, k_max)  # every harmonic inside the map (masks of crossings and rays)
-    width = lv.ray_half_width(np.arange(1, k_top + 2, dtype=float))  # (k, frame)
+    # harmonic k is the shaft order 60 h k of the map's speed channel
+    width = lv.ray_half_width(60.0 * factor * np.arange(1, k_top + 2, dtype=float))
 
     def w(k: int) -> np.ndarray:
         return width[k - 1]
@@ -617,8 +627,12 @@ def detect_resonances(
     if thr_spot > thr:
         notes.append(f"isolated spots need {thr_spot:.1f} dB (5 x the spread of the map "
                      "background)")
+    # a maximum within one frame length of the first analysed frame is the tail of whatever
+    # happened before (a start transient), not a rise
+    first = float(t[frames_res].min()) if frames_res.any() else float(t[0])
+    inner = frames_res & (t >= first + lv.frame_duration)
     peaks = (rise == scipy.ndimage.maximum_filter(rise, size=nb, mode="nearest")) & (
-        rise >= thr_spot) & (level >= floor) & frames_res[:, None] & band[None, :]
+        rise >= thr_spot) & (level >= floor) & inner[:, None] & band[None, :]
     near = np.zeros_like(peaks)
     for k in range(1, k_top + 1):
         near |= np.abs(f[None, :] - k * fmesh[:, None]) <= 2 * w(k)[:, None] + lv.resolution
@@ -758,8 +772,10 @@ def detect_resonances(
             for q in range(len(candidates)):
                 if not candidates.allowed[q] or candidates.kind[q] not in ("principal", "sum"):
                     continue
-                err = abs(fm0 - candidates.f_mesh_hz[q]) / candidates.f_mesh_hz[q]
-                if err <= u_fn and (best is None or err < best[0]):
+                rc = float(candidates.f_mesh_hz[q]) / factor
+                dl = u_fn * rc + float(np.interp(rc, rpm, u_rate))
+                err = abs(rc - r0)
+                if row["r_lo"] - dl <= rc <= row["r_hi"] + dl and (best is None or err < best[0]):
                     best = (err, q)
             if best is not None:
                 q = best[1]
