@@ -403,17 +403,18 @@ class KinematicCatalogue:
             m = cat.family == fam
             vis = m & cat.visible
             y = len(fams) - j
-            ax.vlines(f[vis], 0, y, color=f"C{j % 10}", lw=1.0, label=fam)
+            ax.vlines(f[vis], y - 0.4, y + 0.4, color=f"C{j % 10}", lw=1.0, label=fam)
             hid = m & ~cat.visible
             if hid.any():
-                ax.vlines(f[hid], 0, y, color="0.7", lw=0.8, ls=":")
+                ax.vlines(f[hid], y - 0.4, y + 0.4, color="0.6", lw=0.8, ls=":")
         ax.set_yticks(range(1, len(fams) + 1), fams[::-1], fontsize=7)
+        ax.set_ylim(0.4, len(fams) + 0.6)
         ax.set_xlim(0, frequency_max or (float(f.max()) * 1.02 if f.size else 1.0))
         ax.set_xlabel("frequency [Hz]")
         sp = self.speed_rpm if speed_rpm is None else speed_rpm
-        ax.set_title(f"kinematic catalogue {self.name}: {self.reference} at {sp:g} min⁻¹ "
-                     f"(dotted grey: cancelled by planet phasing at a sensor on {self.sensor})",
-                     fontsize=9)
+        title = f"kinematic catalogue{' of ' + self.name if self.name else ''}"
+        ax.set_title(f"{title}: {self.reference} at {sp:g} min⁻¹ (dotted grey: cancelled by "
+                     f"the planet phasing at a sensor on the {self.sensor})", fontsize=9)
         ax.grid(True, axis="x", alpha=0.3)
         return fig
 

@@ -604,14 +604,16 @@ class PeakIdentification:
                    **{f"coverage_{k2}": float(v2) for k2, v2 in self.coverage.items()}},
         )
 
-    def plot(self, frequency: Any = None, amplitude: Any = None, ax: Any = None):
+    def plot(self, frequency: Any = None, amplitude: Any = None, ax: Any = None,
+             max_matches: int = 2):
         """Mark the peaks over an optional spectrum (delegates to :func:`plot_identification`)."""
-        return plot_identification(self, frequency, amplitude, ax=ax)
+        return plot_identification(self, frequency, amplitude, ax=ax, max_matches=max_matches)
 
 
 def plot_identification(ident: PeakIdentification, frequency: Any = None, amplitude: Any = None,
                         ax: Any = None, *, max_matches: int = 2):
-    """Peaks marked with their best candidates (explained: red; unexplained: grey, "?").
+    """Peaks marked with their best candidates (explained: red; unexplained "?" and ambiguous
+    "~": grey).
 
     Parameters
     ----------
@@ -636,20 +638,22 @@ def plot_identification(ident: PeakIdentification, frequency: Any = None, amplit
     top = 1.0
     if frequency is not None and amplitude is not None:
         ax.plot(frequency, amplitude, color="C0", lw=0.8)
-        top = float(np.max(amplitude))
+        lo, hi = float(np.min(amplitude)), float(np.max(amplitude))
+        ax.set_ylim(lo, hi + 0.6 * (hi - lo))  # the upper part holds the labels
+        top = hi + 0.58 * (hi - lo)
         ax.set_ylabel("amplitude")
     status = ident.status
     for i, p in enumerate(ident.peaks):
         ok = status[i] == "explained"
         ax.axvline(p, color="C3" if ok else "0.6", lw=0.6, alpha=0.7)
         text = (" ≈ ".join(m.expression for m in ident.matches[i][:max_matches]) if ok
-                else "? (unexplained)" if status[i] == "unexplained" else "~ (ambiguous)")
-        ax.annotate(text, (p, top), rotation=90, fontsize="x-small", va="top",
+                else "?" if status[i] == "unexplained" else "~")
+        ax.annotate(text, (p, top), rotation=90, fontsize=6, va="top", ha="right",
                     color="k" if ok else "0.4")
     ax.set_xlabel("frequency [Hz]" if ident.axis == "frequency" else "order")
-    ax.set_title(f"Peak identification ({int(ident.explained.sum())} of {len(ident)} explained; "
-                 f"random peaks matched at {100 * ident.coverage.get('all', 0.0):.0f} %)",
-                 fontsize=9)
+    ax.set_title(f"Peak identification: {int(ident.explained.sum())} of {len(ident)} explained "
+                 "('?' unexplained, '~' ambiguous); a random peak is matched at "
+                 f"{100 * ident.coverage.get('all', 0.0):.0f} %", fontsize=9)
     return fig
 
 

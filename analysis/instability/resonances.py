@@ -342,11 +342,12 @@ def _band_label(lo_hz: float, hi_hz: float, fn: np.ndarray, fnames: list[str],
                 rule: MeshPhasingRule | None, n_max: int = 12) -> str:
     """Theory candidate (``2 f_i/n`` or ``(f_i + f_j)/n``, ``n <= n_max``) of an unstable band.
 
-    The candidate whose centre is nearest to the band centre, within one band width; those the
-    mesh-phasing rule suppresses are skipped.
+    Among the candidates within one band width of the band centre, the one of lowest order
+    ``n`` (the widest region; higher orders are narrower by powers of the stiffness variation),
+    then the nearest; those the mesh-phasing rule suppresses are skipped.
     """
     centre, width = 0.5 * (lo_hz + hi_hz), max(hi_hz - lo_hz, 1e-12)
-    best: tuple[float, str] | None = None
+    best: tuple[tuple[int, float], str] | None = None
     for a in range(fn.size):
         for b in range(a, fn.size):
             for n in range(1, n_max + 1):
@@ -355,13 +356,13 @@ def _band_label(lo_hz: float, hi_hz: float, fn: np.ndarray, fnames: list[str],
                     continue
                 value = (fn[a] + fn[b]) / n
                 err = abs(value - centre)
-                if err > width or (best is not None and err >= best[0]):
+                if err > width or (best is not None and (n, err) >= best[0]):
                     continue
                 na = fnames[a] if "=" not in fnames[a] else f"({fnames[a]})"
                 nb = fnames[b] if "=" not in fnames[b] else f"({fnames[b]})"
                 lab = (f"2 {na}/{n}" if n > 1 else f"2 {na}") if a == b else (
                     f"({na} + {nb})/{n}" if n > 1 else f"{na} + {nb}")
-                best = (err, lab)
+                best = ((n, err), lab)
     return best[1] if best else ""
 
 
@@ -802,13 +803,13 @@ def detect_resonances(
             rc = fc / (k * factor)
             if not (r_min <= rc <= r_max):
                 continue
-            if k in analysed and analysed[k][0] <= rc <= analysed[k][1]:
+            if not excited(k, c):
+                crossings.append(Crossing(k, fnames[c], float(fc), float(rc),
+                                          "not forced (mesh phasing)", np.nan))
+            elif k in analysed and analysed[k][0] <= rc <= analysed[k][1]:
                 if (k, c) in direct_hits:
                     crossings.append(Crossing(k, fnames[c], float(fc), float(rc), "rise",
                                               direct_hits[(k, c)]))
-                elif not excited(k, c):
-                    crossings.append(Crossing(k, fnames[c], float(fc), float(rc),
-                                              "not forced (mesh phasing)", np.nan))
                 else:
                     crossings.append(Crossing(k, fnames[c], float(fc), float(rc), "no rise",
                                               np.nan))

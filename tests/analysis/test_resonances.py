@@ -134,7 +134,7 @@ def test_known_content_is_classified(run):
 
 
 def test_without_chart_theory_candidates_and_without_rule(run):
-    t, rpm, ds = run
+    _, _, ds = run
     cand = instability_candidates([FA, FB], n_max=4, mode_labels=NAMES)
     res = detect_resonances(ds, natural_frequencies_hz=[FA, FB], mesh_frequency_per_rpm=H,
                             names=NAMES, candidates=cand, natural_uncertainty=0.02,
