@@ -75,8 +75,6 @@ PAPER_SPEEDS_RPM = (1500.0, 2600.0, 3100.0)
 
 _STIFFNESS_CYCLES = 3
 _SPOT_RANGE_DB = 40.0  # rises more than this below the map maximum are background clutter
-_NATURAL_UNCERTAINTY = 0.05  # resonances of a run sit up to ~5 % below the modal frequencies
-# (contact loss softens the meshes near resonance; measured on paper-case1, see README)
 _MIN_SPOT_FRACTION = 0.15  # spots below 0.15 x the lowest natural frequency: near-DC content
 _REGION_GAP = 0.03  # spots closer than 3 % of the top speed belong to one resonance region
 _RPM_MIN_FRACTION = 0.02  # order tracking needs rpm > 0: skip the first 2 % of the speed range
@@ -725,7 +723,7 @@ def analyse_case(ds: xr.Dataset, *, name: str | None = None,
             widths = peak_half_widths(sp.frequency, to_db(sp.values, sp.scaling), pk.frequency)
             labels = label_peaks(pk.frequency, fn, resolution_hz=sp.enbw_hz,
                                  peak_widths_hz=widths, candidates=candidates, names=names,
-                                 natural_uncertainty=_NATURAL_UNCERTAINTY,
+                                 natural_uncertainty=settings.tolerance,
                                  band=(0.5 * settings.map_resolution_hz, fmax))
         else:
             labels = PeakLabels(peaks=np.zeros(0), matches=(), coincidence=np.zeros(0),
@@ -779,7 +777,7 @@ def analyse_case(ds: xr.Dataset, *, name: str | None = None,
         orders=range(1, settings.orders + 1), names=names, candidates=candidates,
         chart=chart, mode_families=families, mesh_harmonic_rule=rule,
         speed_profile=(t, rpm), threshold_db=settings.threshold_db,
-        natural_uncertainty=_NATURAL_UNCERTAINTY, dynamic_range_db=_SPOT_RANGE_DB,
+        natural_uncertainty=settings.tolerance, dynamic_range_db=_SPOT_RANGE_DB,
         frequency_range=(_MIN_SPOT_FRACTION * float(fn.min()) if fn.size else 0.0, fmax))
     regions = resonance_regions(resonances, rpm_gap=_REGION_GAP * float(run["speed_end_rpm"]))
     planet_res = None
@@ -797,7 +795,7 @@ def analyse_case(ds: xr.Dataset, *, name: str | None = None,
             mesh_frequency_per_rpm=f_per_rpm, orders=range(1, settings.orders + 1), names=names,
             candidates=candidates, chart=chart, mode_families=families,
             mesh_harmonic_rule=rule, speed_profile=(t, rpm),
-            threshold_db=settings.threshold_db, natural_uncertainty=_NATURAL_UNCERTAINTY,
+            threshold_db=settings.threshold_db, natural_uncertainty=settings.tolerance,
             dynamic_range_db=_SPOT_RANGE_DB,
             frequency_range=(_MIN_SPOT_FRACTION * float(fn.min()) if fn.size else 0.0, fmax))
 
@@ -1153,7 +1151,7 @@ def report_sections(cases: Sequence[CaseAnalysis], comparisons: Sequence[Any] = 
                   "match as easily).",
                   figure=lambda ca=ca: spectra_figure(ca)),
             _table(f"Identified peaks of {ca.name} (paper style; window = the peak's -3 dB "
-                   f"half-width + {100 * _NATURAL_UNCERTAINTY:g} % of the theory value; "
+                   f"half-width + {100 * ca.settings.tolerance:g} % of the theory value; "
                    "'chance' = how often a random peak there would get a label; candidates: "
                    "natural frequencies, 2 f_i/n and (f_i + f_j)/n allowed by the mesh phasing)",
                    ("mesh", "peak", "deviation of the best [Hz]", "window [Hz]", "chance"),
@@ -1182,7 +1180,7 @@ def report_sections(cases: Sequence[CaseAnalysis], comparisons: Sequence[Any] = 
                   f"isolated spots within {_SPOT_RANGE_DB:g} dB of the map maximum; "
                   f"{len(ca.regions)} speed regions. Explanations: a mesh order crossing a "
                   "natural frequency (forced resonance; tolerance "
-                  f"{100 * _NATURAL_UNCERTAINTY:g} % of the natural frequency plus the rise "
+                  f"{100 * ca.settings.tolerance:g} % of the natural frequency plus the rise "
                   "width), a Floquet-unstable band that grows in this run (parametric "
                   "instability); 'chance' is how often a random rise would get the same "
                   "explanation."),

@@ -54,7 +54,7 @@ def _analyse(case1, duration, channel):
     return detect_resonances(
         map_ds, natural_frequencies_hz=fn, mesh_frequency_per_rpm=H, orders=range(1, 8),
         names=case1["names"], chart=case1["chart"], mode_families=case1["families"],
-        mesh_harmonic_rule=case1["rule"], speed_profile=(t, rpm), natural_uncertainty=0.05,
+        mesh_harmonic_rule=case1["rule"], speed_profile=(t, rpm), natural_uncertainty=0.03,
         dynamic_range_db=40.0, frequency_range=(0.15 * fn.min(), 2.2 * fn.max()))
 
 
@@ -85,8 +85,13 @@ def test_slow_runup_forced_resonances_of_every_order(case1):
     for k, (mode, f) in expected.items():
         i = int(np.flatnonzero((res.order == k) & (res.mechanism == FORCED))[0])
         assert res.mode[i] == mode
-        assert res.predicted_rpm[i] == pytest.approx(f / (k * H), rel=1e-3)
-        assert res.rpm[i] == pytest.approx(f / (k * H), rel=0.2)
+        # the cause is this ray's own crossing, or (order 7) the 6 f_mesh = f5 resonance seen
+        # through the mesh-stiffness modulation at f5 + f_mesh
+        kk = int(res.cause[i].split()[0])
+        assert kk == k or (k, kk) == (7, 6), res.cause[i]
+        assert res.predicted_rpm[i] == pytest.approx(f / (kk * H), rel=1e-3)
+        assert res.rpm[i] == pytest.approx(f / (kk * H), rel=0.2)
+    assert np.prod(res.coincidence[res.mode == "f5"]) < 0.01  # six f5 rises: no coincidence
     # both planet-mode bands can grow in 8 s, the narrow 2 f2/7 band cannot
     g = res.growth
     assert sorted(np.round(g.lower_rpm[g.can_grow], -1)) == [2080.0, 2770.0]
