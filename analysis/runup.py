@@ -268,12 +268,13 @@ def map_features(map_ds: Any, *, variable: str = "amplitude", speed: str = "rpm"
                  prominence_db: float = 6.0, quantile: float = 0.5,
                  min_speed_ratio: float = 1.3, frames: Any = None,
                  max_order: float | None = None) -> MapFeatures:
-    """Separate order-locked rays from frequency-locked vertical lines in an rpm-frequency map.
+    """Separate order-locked rays from frequency-locked vertical lines of a run-up map.
 
     Parameters
     ----------
     map_ds : xarray.Dataset
-        An rpm-frequency map (see :func:`map_levels`).
+        An rpm-frequency or rpm-order map (see :func:`map_levels`). In an order map the roles
+        swap: orders are columns, natural frequencies follow ``o = 60 f / rpm``.
     variable, speed : str
         Level variable and speed coordinate.
     prominence_db : float
@@ -288,16 +289,15 @@ def map_features(map_ds: Any, *, variable: str = "amplitude", speed: str = "rpm"
     frames : array_like of bool, optional
         Frames to analyse (default: all with speed > 2 % of the largest).
     max_order : float, optional
-        Largest order of the order profile (default: the top frequency over the median of the
-        analysed speeds, so that every order is inside the map for half of the run).
+        Largest order of the order profile of a frequency map (default: the top frequency over
+        the median of the analysed speeds, so that every order is inside the map for half of
+        the run).
 
     Returns
     -------
     MapFeatures
     """
     lv = map_levels(map_ds, variable=variable, speed=speed)
-    if lv.axis_name != "frequency":
-        raise ValueError("map_features needs an rpm-frequency map (dims time, frequency)")
     prom = require_positive(prominence_db, "prominence_db")
     q = float(quantile)
     if not 0.0 < q < 1.0:
@@ -319,27 +319,41 @@ def map_features(map_ds: Any, *, variable: str = "amplitude", speed: str = "rpm"
                          f"{ratio:g}); use a run-up")
     level = lv.level[use]
     rise = level - np.median(level, axis=1, keepdims=True)
-    f = lv.axis
-    f_prof = np.quantile(rise, q, axis=0)
-    # order profile: sample every frame along rays f = o rpm/60 on a common order grid
-    rpm_mid = float(np.median(rpm))
-    o_max = float(max_order) if max_order is not None else float(f[-1]) * 60.0 / rpm_mid
-    d_o = 0.25 * lv.resolution * 60.0 / hi
-    n_o = int(np.ceil(o_max / d_o))
-    if n_o > 2_000_000:
-        raise ValueError(f"the order grid would have {n_o} points (max_order {o_max:.4g}, step "
-                         f"{d_o:.3g}); give max_order")
-    orders = (np.arange(n_o) + 1) * d_o
-    samples = np.full((rpm.size, orders.size), np.nan)
+    ax = lv.axis
+    # the native axis gives one profile directly; the other is sampled along its lines:
+    # rays f = o rpm/60 in a frequency map, vertical lines o = 60 f/rpm in an order map
+    native = np.quantile(rise, q, axis=0)
+    if lv.axis_name == "frequency":  # grid of orders, up to those inside half of the frames
+        top = float(ax[-1]) * 60.0 / float(np.median(rpm))
+        top = float(max_order) if max_order is not None else top
+        step = 0.25 * lv.resolution * 60.0 / hi
+        to_native = rpm / 60.0  # frequency of order o in frame i: o * rpm_i / 60
+    else:  # grid of frequencies [Hz]
+        top = float(ax[-1]) * float(np.median(rpm)) / 60.0
+        step = 0.25 * lv.resolution * lo / 60.0
+        to_native = 60.0 / rpm  # order of frequency f in frame i: f * 60 / rpm_i
+    n_g = int(np.ceil(top / step))
+    if n_g > 2_000_000:
+        raise ValueError(f"the {'order' if lv.axis_name == 'frequency' else 'frequency'} grid "
+                         f"would have {n_g} points (top {top:.4g}, step {step:.3g}); give "
+                         "max_order")
+    grid = (np.arange(n_g) + 1) * step
+    samples = np.full((rpm.size, grid.size), np.nan)
     for i in range(rpm.size):
-        fo = orders * rpm[i] / 60.0
-        inside = (fo >= f[0]) & (fo <= f[-1])
-        samples[i, inside] = np.interp(fo[inside], f, rise[i])
+        pos = grid * to_native[i]
+        inside = (pos >= ax[0]) & (pos <= ax[-1])
+        samples[i, inside] = np.interp(pos[inside], ax, rise[i])
     counts = np.isfinite(samples).sum(axis=0)
     valid = counts >= max(5, int(0.3 * rpm.size))
-    o_prof = np.full(orders.size, np.nan)
+    other = np.full(grid.size, np.nan)
     if valid.any():
-        o_prof[valid] = np.nanquantile(samples[:, valid], q, axis=0)
+        other[valid] = np.nanquantile(samples[:, valid], q, axis=0)
+    if lv.axis_name == "frequency":
+        f, f_prof, orders, o_prof = ax, native, grid, other
+        f_cell, o_cell = lv.resolution, lv.resolution * 60.0 / hi
+    else:
+        f, f_prof, orders, o_prof = grid, other, ax, native
+        f_cell, o_cell = lv.resolution * lo / 60.0, lv.resolution
 
     def peaks(x: np.ndarray, prof: np.ndarray, cell: float) -> tuple[np.ndarray, ...]:
         """Peaks standing ``prom`` above a running median over 101 cells (and half of it above
@@ -362,8 +376,8 @@ def map_features(map_ds: Any, *, variable: str = "amplitude", speed: str = "rpm"
                           + max(0, k - i) for i in idx], dtype=int)
         return x[idx], y[idx], ex
 
-    o_pk, o_val, o_pr = peaks(orders, o_prof, lv.resolution * 60.0 / hi)
-    f_pk, f_val, f_pr = peaks(f, f_prof, lv.resolution)
+    o_pk, o_val, o_pr = peaks(orders, o_prof, o_cell)
+    f_pk, f_val, f_pr = peaks(f, f_prof, f_cell)
     notes = [f"features from {rpm.size} frames at {lo:.0f}–{hi:.0f} min-1 (quantile {q:g} of "
              "the rise above each frame's median)"]
     return MapFeatures(orders=o_pk, order_strength_db=o_val, order_prominence_db=o_pr,

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 import scipy.signal
 
-from analysis.maps import rpm_frequency_map
+from analysis.maps import rpm_frequency_map, rpm_order_map
 from analysis.runup import map_features, map_levels
 
 FS = 8192.0
@@ -48,6 +48,22 @@ def test_only_what_is_there(rays, lines):
     feat = map_features(_runup(rays=rays, lines=lines, seed=5))
     assert feat.orders == pytest.approx(list(rays), abs=0.05)
     assert feat.frequencies == pytest.approx(list(lines), abs=4.0)
+
+
+def test_order_map_gives_the_same_features():
+    t = np.arange(int(FS * T)) / FS
+    speed = 600.0 + 2400.0 * t / T
+    phase = 2 * np.pi * np.cumsum(speed / 60.0) / FS
+    rng = np.random.default_rng(2)
+    x = np.sin(10.0 * phase) + 0.5 * np.sin(23.5 * phase + 1) + 0.05 * rng.normal(size=t.size)
+    for f0 in (800.0, 1500.0):
+        b, a = scipy.signal.iirpeak(f0, 60.0, FS)
+        x += 3.0 * scipy.signal.lfilter(b, a, rng.normal(size=t.size))
+    om = rpm_order_map(x, FS, speed, resolution=0.1, window="hann", overlap=0.5,
+                       max_order=60.0)
+    feat = map_features(om.to_dataset())
+    assert feat.orders == pytest.approx([10.0, 23.5], abs=0.05)
+    assert feat.frequencies == pytest.approx([800.0, 1500.0], abs=8.0)
 
 
 def test_constant_speed_cannot_separate_and_layout_errors():

@@ -18,7 +18,15 @@ from gearvib.catalogue import gear_set_catalogue
 from gearvib.cli import main
 from gearvib.config import load_gearset
 from gearvib.stiffness import ConstantStiffness, RectangularStiffness
-from gearvib.structure import Body, MeshSpec, Support, simple_planetary, two_stage, wolfrom
+from gearvib.structure import (
+    Body,
+    MeshSpec,
+    Support,
+    ravigneaux,
+    simple_planetary,
+    two_stage,
+    wolfrom,
+)
 
 
 def line(cat, family, harmonic=1, sideband=0, member=None):
@@ -134,6 +142,37 @@ def test_wolfrom_two_mesh_frequencies():
     # sidebands around both mesh frequencies
     assert set(cat.member[cat.family == "sideband"]) == {"sun-planet/ring1-planet",
                                                          "ring2-planet"}
+
+
+def test_ravigneaux_one_mesh_frequency_two_planet_groups():
+    s1, s2, ring = _central("sun_small", "sun_large", "ring")
+    car = Body("carrier", "carrier", 3.0, 2e-2, Support())
+    ps = Body("short", "planet", 0.3, 1e-4, Support(), carrier="carrier")
+    pl = Body("long", "planet", 0.5, 2e-4, Support(), carrier="carrier")
+    spec = MeshSpec(ConstantStiffness(3e8))
+    gs = ravigneaux(z_sun_small=30, z_sun_large=36, z_ring=-84, z_planet_short=18,
+                    z_planet_long=24, module=2e-3, sun_small=s1, sun_large=s2, ring=ring,
+                    carrier=car, planet_short=ps, planet_long=pl, sun_mesh=spec,
+                    ring_mesh=spec, planet_mesh=spec)
+    cat = gear_set_catalogue(gs, speed_rpm=1000.0)
+    # large sun fixed, small sun in: z_s1 (1 - n_c) = z_s2 n_c (both equal the mesh rate,
+    # through short and long planet), so n_c = 30/66 and every mesh has one frequency
+    n_c = 30 / 66
+    fm = 30 * (1 - n_c)
+    assert np.sum(cat.family == "mesh") == 7  # one line per harmonic for all four meshes
+    i = line(cat, "mesh")
+    assert cat.order[i] == pytest.approx(fm)
+    assert set(cat.member[i].split("/")) == {"sun_small-short", "sun_large-long", "ring-long",
+                                             "short-long"}
+    assert cat.order[line(cat, "planet_fault", member="short")] == pytest.approx(fm / 18)
+    assert cat.order[line(cat, "planet_fault", member="long")] == pytest.approx(fm / 24)
+    assert cat.order[line(cat, "sun_fault", member="sun_small")] == pytest.approx(3 * (1 - n_c))
+    assert cat.order[line(cat, "sun_fault", member="sun_large")] == pytest.approx(3 * n_c)
+    assert cat.order[line(cat, "ring_fault")] == pytest.approx(3 * fm / 84)
+    assert cat.order[line(cat, "planet_pass", member="long")] == pytest.approx(3 * n_c)
+    assert cat.sensor == "sun_large"
+    # equally spaced pairs, all tooth numbers divisible by 3: every mesh harmonic passes
+    assert np.all(cat.phasing[cat.family == "mesh"] == 1.0)
 
 
 def test_two_stage_stage1_and_stage2_meshes():
