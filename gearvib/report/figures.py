@@ -73,7 +73,13 @@ __all__ = [
 PAPER_SPEEDS_RPM = (1500.0, 2600.0, 3100.0)
 """Sun speeds at which the paper reads resonances off Figure 11 (case 1) [min^-1]."""
 
+RISE_HEADER = ("speed", "f [Hz]", "on", "rise [dB]", "mechanism: cause", "chance", "evidence")
+"""Columns of the tables of classified rises."""
+
 _STIFFNESS_CYCLES = 3
+# the planet-mode signal (difference of two planets' sun-mesh forces) of a symmetric simulation
+# starts at round-off; it is analysed only when a Floquet band lets it grow by this much
+_PLANET_SIGNAL_GROWTH_DB = 40.0
 _SPOT_RANGE_DB = 40.0  # rises more than this below the map maximum are background clutter
 _MIN_SPOT_FRACTION = 0.15  # spots below 0.15 x the lowest natural frequency: near-DC content
 _REGION_GAP = 0.03  # spots closer than 3 % of the top speed belong to one resonance region
@@ -269,7 +275,7 @@ class CaseAnalysis:
         Rises detected in ``fmap`` and their mechanisms.
     planet_resonances : Resonances or None
         Rises of the difference of the first two sun-mesh forces (only the planet modes), when
-        a Floquet-unstable band grows in the run.
+        a Floquet-unstable band grows by at least 40 dB in the run.
     regions : list of ResonanceRegion
         The spots grouped into speed regions.
     candidates : Candidates
@@ -326,12 +332,22 @@ class CaseAnalysis:
         """Mesh frequency at an input speed [Hz]."""
         return self.mesh_frequency_per_rpm * rpm
 
-    def resonance_rows(self) -> list[tuple[str, ...]]:
-        """Rows of the resonance table (formatted strings)."""
-        r = self.resonances
+    def resonance_rows(self, planet: bool = False) -> list[tuple[str, ...]]:
+        """Rows of the resonance table (formatted strings; see :data:`RISE_HEADER`).
+
+        Parameters
+        ----------
+        planet : bool
+            Rows of the planet-mode signal instead of the tooth force.
+        """
+        r = self.planet_resonances if planet else self.resonances
+        if r is None:
+            return []
+        feature = {"natural frequency": "f_i", "spot": "spot"}
         return [(f"{r.rpm[i]:.0f}", f"{r.frequency[i]:.0f}",
-                 str(r.order[i]) if r.order[i] else str(r.feature[i]),
-                 f"{r.strength_db[i]:.1f}", str(r.mechanism[i]), str(r.cause[i]) or "–",
+                 f"k={r.order[i]}" if r.order[i] else feature.get(str(r.feature[i]), "–"),
+                 f"{r.strength_db[i]:.1f}",
+                 str(r.mechanism[i]).split()[0] + (f": {r.cause[i]}" if r.cause[i] else ""),
                  f"{100 * r.coincidence[i]:.0f} %", str(r.note[i]))
                 for i in range(len(r))]
 
@@ -781,8 +797,9 @@ def analyse_case(ds: xr.Dataset, *, name: str | None = None,
         frequency_range=(_MIN_SPOT_FRACTION * float(fn.min()) if fn.size else 0.0, fmax))
     regions = resonance_regions(resonances, rpm_gap=_REGION_GAP * float(run["speed_end_rpm"]))
     planet_res = None
-    if (resonances.growth is not None and resonances.growth.can_grow.any() and len(sun) >= 2
-            and force_mesh == sun[0]):
+    if (resonances.growth is not None and len(resonances.growth)
+            and float(resonances.growth.growth_db.max()) >= _PLANET_SIGNAL_GROWTH_DB
+            and len(sun) >= 2 and force_mesh == sun[0]):
         # the planet modes cancel in one mesh force when the planets are in phase; the
         # difference of two planets' forces holds only them (their parametric growth)
         xd = _signed_force(ds, sun[0]) - _signed_force(ds, sun[1])
@@ -1150,10 +1167,12 @@ def report_sections(cases: Sequence[CaseAnalysis], comparisons: Sequence[Any] = 
                   "unexplained; '~': ambiguous, the peak is so broad that a random peak would "
                   "match as easily).",
                   figure=lambda ca=ca: spectra_figure(ca)),
-            _table(f"Identified peaks of {ca.name} (paper style; window = the peak's -3 dB "
-                   f"half-width + {100 * ca.settings.tolerance:g} % of the theory value; "
-                   "'chance' = how often a random peak there would get a label; candidates: "
-                   "natural frequencies, 2 f_i/n and (f_i + f_j)/n allowed by the mesh phasing)",
+            Block("text", f"{ca.name}: candidates are the natural frequencies, 2 f_i/n and "
+                  "(f_i + f_j)/n allowed by the mesh phasing; a candidate's window is the "
+                  f"peak's -3 dB half-width + {100 * ca.settings.tolerance:g} % of its value; "
+                  "'chance' is how often a random peak there would get a label. A peak is "
+                  "ambiguous when a random one would match as easily (broad run-up humps)."),
+            _table(f"Peaks of {ca.name}",
                    ("mesh", "peak", "deviation of the best [Hz]", "window [Hz]", "chance"),
                    ca.peak_rows())]
         s["sonograms"] += [
@@ -1183,7 +1202,8 @@ def report_sections(cases: Sequence[CaseAnalysis], comparisons: Sequence[Any] = 
                   f"{100 * ca.settings.tolerance:g} % of the natural frequency plus the rise "
                   "width), a Floquet-unstable band that grows in this run (parametric "
                   "instability); 'chance' is how often a random rise would get the same "
-                  "explanation."),
+                  "explanation. In the tables 'on' is the mesh order k of the ray or f_i (along "
+                  "a natural frequency)."),
             *[Block("text", f"{ca.name}: {n}") for n in res.notes
               if not n.startswith("rays analysed")],
             _table(f"Identified resonance regions of {ca.name}",
@@ -1192,34 +1212,30 @@ def report_sections(cases: Sequence[CaseAnalysis], comparisons: Sequence[Any] = 
                    [(f"{r.rpm_low:.0f}–{r.rpm_high:.0f}", f"{r.rpm_peak:.0f}",
                      f"{r.frequency_hz:.0f}", f"{r.strength_db:.1f}", str(r.n_spots),
                      "; ".join(r.mechanisms[:3])) for r in ca.regions]),
-            _table(f"Rises of {ca.name}",
-                   ("speed", "f [Hz]", "order", "rise [dB]", "mechanism", "cause", "chance",
-                    "evidence"), ca.resonance_rows()),
-            _table(f"Mesh orders crossing natural frequencies ({ca.name}): predicted speed "
-                   "f_i / (k × f_mesh per min⁻¹) and what the map shows",
+            _table(f"Rises of {ca.name}", RISE_HEADER, ca.resonance_rows()),
+            Block("text", f"{ca.name}: every crossing of a mesh order with a natural frequency "
+                  "in the run, at the speed f_i / (k × f_mesh per min⁻¹), and what the map "
+                  "shows there."),
+            _table(f"Crossings in {ca.name}",
                    ("crossing", "f_i [Hz]", "speed [min⁻¹]", "found"), ca.crossing_rows())]
         pr = ca.planet_resonances
         if pr is not None:
             s["resonances"] += [
-                Block("text", f"{ca.name}: planet modes. A Floquet-unstable band grows in this "
-                      f"run, so the difference of the tooth forces {ca.sun_meshes[0]} − "
+                Block("text", f"{ca.name}: planet modes. A Floquet-unstable band grows by "
+                      f"at least {_PLANET_SIGNAL_GROWTH_DB:g} dB in this run, so the difference of "
+                      f"the tooth forces {ca.sun_meshes[0]} − "
                       f"{ca.sun_meshes[1]} is analysed too: it holds only the planet modes, "
                       "which in-phase mesh harmonics do not force and whose growth is too small "
                       f"to show in a single mesh force. {pr.summary()}."),
-                _table(f"Rises of the planet-mode signal of {ca.name}",
-                       ("speed", "f [Hz]", "order", "rise [dB]", "mechanism", "cause",
-                        "chance", "evidence"),
-                       [(f"{pr.rpm[i]:.0f}", f"{pr.frequency[i]:.0f}",
-                         str(pr.order[i]) if pr.order[i] else str(pr.feature[i]),
-                         f"{pr.strength_db[i]:.1f}", str(pr.mechanism[i]),
-                         str(pr.cause[i]) or "–", f"{100 * pr.coincidence[i]:.0f} %",
-                         str(pr.note[i])) for i in range(len(pr))])]
+                _table(f"Planet-mode rises of {ca.name}", RISE_HEADER,
+                       ca.resonance_rows(planet=True))]
         if ca.growth_rows():
-            s["resonances"] += [_table(
-                f"Can the Floquet-unstable bands grow in this run? ({ca.name}; time in band × "
-                "growth rate; 'develops' = at least 20 dB of growth)",
-                ("band [min⁻¹]", "candidate", "time in band [ms]", "growth rate [1/s]",
-                 "growth [dB]", "verdict"), ca.growth_rows())]
+            s["resonances"] += [Block(
+                "text", f"{ca.name}: growth of every Floquet-unstable band during this run, "
+                "exp(time in band × growth rate); a band 'develops' with at least 20 dB."),
+                _table(f"Band growth in {ca.name}",
+                       ("band [min⁻¹]", "candidate", "time in band [ms]", "growth rate [1/s]",
+                        "growth [dB]", "verdict"), ca.growth_rows())]
         s["stability"] += [Block("heading", ca.name)]
         if ca.chart is not None:
             s["stability"] += [
