@@ -697,7 +697,9 @@ def identify_peaks(
     -------
     PeakIdentification
     """
-    p = require_finite(peaks, "peaks").ravel()
+    p = np.asarray(peaks, dtype=float).ravel()
+    if p.size:  # no peaks at all is a valid (empty) result
+        p = require_finite(p, "peaks")
     if np.any(p <= 0):
         raise ValueError("peaks must be > 0")
     if isinstance(lines, CandidateLines):

@@ -380,6 +380,7 @@ def detect_resonances(
     chart: Any = None,
     mode_families: Sequence[tuple[str, int]] | None = None,
     mesh_harmonic_rule: MeshPhasingRule | None = None,
+    features: Any = None,
     speed_profile: tuple[Any, Any] | None = None,
     threshold_db: float = 6.0,
     growth_threshold_db: float = 20.0,
@@ -420,6 +421,10 @@ def detect_resonances(
         Planetary mesh-phasing rule: harmonic ``k`` forces the family ``p`` only if
         ``k z_s = +-p (mod N)``. A rise at a crossing the rule forbids is not a forced
         resonance (parametric if it sits in a growing band, else unexplained).
+    features : MapFeatures, optional
+        Features of the same map (:func:`analysis.runup.map_features`): its frequency-locked
+        lines that no natural frequency explains (structural resonances outside the model) are
+        treated like natural frequencies named ``"line 2100 Hz"``.
     speed_profile : (array_like, array_like), optional
         ``(time [s], rpm [min-1])`` of the run for the growth (default: the map's frames).
     threshold_db : float
@@ -480,10 +485,21 @@ def detect_resonances(
             raise ValueError("mesh_harmonic_rule needs mode_families, one (kind, p) per natural "
                              "frequency")
         fam_p = [mesh_harmonic_rule.check_family(tuple(x)) for x in mode_families]
+    n_modal = fn.size
+    if features is not None:
+        # frequency-locked lines the map shows that no natural frequency explains (structural
+        # resonances outside the model): they get crossings and tracks of their own
+        res_hz = float(map_ds.attrs.get("resolution_hz", 0.0))
+        extra = [float(v) for v in np.atleast_1d(features.frequencies)
+                 if np.all(np.abs(v - fn) > u_fn * fn + res_hz)]
+        fn = np.concatenate([fn, extra])
+        fnames += [f"line {v:.0f} Hz" for v in extra]
+        clusters += [[] for _ in extra]
 
     def excited(k: int, c: int) -> bool:
-        """Does mesh harmonic ``k`` force cluster ``c`` (True without a rule)?"""
-        if fam_p is None or mesh_harmonic_rule is None:
+        """Does mesh harmonic ``k`` force cluster ``c`` (True without a rule, or for a line of
+        the map that is not a mode of the model)?"""
+        if fam_p is None or mesh_harmonic_rule is None or not clusters[c]:
             return True
         n_pl = mesh_harmonic_rule.n_planets
         forced = set(mesh_harmonic_rule.forced_harmonics(k))
@@ -544,8 +560,9 @@ def detect_resonances(
             tp, rp = t, rpm
         growth = runup_growth(chart, tp, rp, threshold_db=gthr)
         growth = dataclasses.replace(growth, label=np.asarray(
-            [_band_label(growth.lower_rpm[i] * factor, growth.upper_rpm[i] * factor, fn, fnames,
-                         clusters, fam_p, mesh_harmonic_rule) or str(growth.label[i])
+            [_band_label(growth.lower_rpm[i] * factor, growth.upper_rpm[i] * factor,
+                         fn[:n_modal], fnames[:n_modal], clusters[:n_modal], fam_p,
+                         mesh_harmonic_rule) or str(growth.label[i])
              for i in range(len(growth))], dtype=object))
         for i in range(len(growth)):
             state = (f"grows by {growth.growth_db[i]:.0f} dB (time in band "

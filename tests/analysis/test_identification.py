@@ -174,6 +174,16 @@ def test_order_axis_and_helpers():
     assert w[0] == pytest.approx(np.sqrt(6.0), rel=0.1)
 
 
+def test_no_peaks_and_no_lines():
+    empty = identify_peaks([], modal_lines([100.0]), resolution=1.0)
+    assert len(empty) == 0 and empty.unexplained_fraction == 0.0
+    assert empty.to_dataset().sizes["peak"] == 0
+    from analysis.identification import CandidateLines
+
+    none = identify_peaks([50.0], CandidateLines.empty(), resolution=1.0, band=(10.0, 100.0))
+    assert list(none.status) == ["unexplained"] and none.coverage["all"] == 0.0
+
+
 def test_bad_input():
     lines = modal_lines([100.0])
     with pytest.raises(ValueError, match="peaks"):
