@@ -40,6 +40,7 @@ from analysis.instability import (
 )
 from analysis.maps import RpmFrequencyMap, RpmOrderMap, rpm_frequency_map, rpm_order_map
 from analysis.plots import rpm_frequency_map_figure, rpm_order_map_figure
+from analysis.runup import MapFeatures, map_features
 from analysis.spectrum import Peaks, Spectrum, find_peaks, spectrum, to_db
 from gearvib.assembly import assemble
 from gearvib.config import config_hash, gearset_from_dict
@@ -276,6 +277,8 @@ class CaseAnalysis:
     planet_resonances : Resonances or None
         Rises of the difference of the first two sun-mesh forces (only the planet modes), when
         a Floquet-unstable band grows by at least 40 dB in the run.
+    features : MapFeatures or None
+        Order-locked rays and frequency-locked lines of the sonogram.
     regions : list of ResonanceRegion
         The spots grouped into speed regions.
     candidates : Candidates
@@ -321,6 +324,7 @@ class CaseAnalysis:
     provenance: list[tuple[str, str]] = field(default_factory=list)
     first_order: list[tuple[str, ...]] = field(default_factory=list)
     planet_resonances: Resonances | None = None
+    features: MapFeatures | None = None
 
     @property
     def speed_range(self) -> tuple[float, float]:
@@ -788,8 +792,15 @@ def analyse_case(ds: xr.Dataset, *, name: str | None = None,
     # (g) resonances of the map: forced (rays x natural frequencies), parametric (growing
     # Floquet bands), unexplained
     map_ds = fmap.to_dataset().sel(frequency=slice(0.0, fmax))
+    frame_rpm = np.asarray(map_ds["rpm"].values)
+    try:
+        features: MapFeatures | None = map_features(
+            map_ds, frames=frame_rpm > _RPM_MIN_FRACTION * float(frame_rpm.max()))
+    except ValueError as exc:  # e.g. a constant-speed run: rays and lines coincide
+        features = None
+        notes.append(f"rays and vertical lines not separated: {exc}")
     resonances = detect_resonances(
-        map_ds, natural_frequencies_hz=fn, mesh_frequency_per_rpm=f_per_rpm,
+        map_ds, natural_frequencies_hz=fn, mesh_frequency_per_rpm=f_per_rpm, features=features,
         orders=range(1, settings.orders + 1), names=names, candidates=candidates,
         chart=chart, mode_families=families, mesh_harmonic_rule=rule,
         speed_profile=(t, rpm), threshold_db=settings.threshold_db,
@@ -843,6 +854,7 @@ def analyse_case(ds: xr.Dataset, *, name: str | None = None,
         resonances=resonances, regions=regions, candidates=candidates, chart=chart, run=run,
         settings=settings,
         notes=notes, provenance=prov, first_order=first_order, planet_resonances=planet_res,
+        features=features,
     )
 
 
@@ -1206,6 +1218,13 @@ def report_sections(cases: Sequence[CaseAnalysis], comparisons: Sequence[Any] = 
                   "a natural frequency)."),
             *[Block("text", f"{ca.name}: {n}") for n in res.notes
               if not n.startswith("rays analysed")],
+            *([Block("text", f"{ca.name}: features of the map (median over the frames): "
+                     "order-locked rays (orders of the input; k = mesh harmonic): " + (", ".join(
+                         f"{o:.4g} (k = {o / (60 * ca.mesh_frequency_per_rpm):.2f})"
+                         for o in ca.features.orders) or "none") + "; frequency-locked "
+                     "vertical lines: " + (", ".join(
+                         f"{f:.0f} Hz" for f in ca.features.frequencies) or "none") + ".")]
+              if ca.features is not None else []),
             _table(f"Identified resonance regions of {ca.name}",
                    ("speed [min⁻¹]", "peak speed", "f [Hz]", "rise [dB]", "rises",
                     "mechanisms (cause)"),
