@@ -149,7 +149,8 @@ class AnalysisSettings:
     threshold_db : float
         Minimum rise above the background of a detected resonance [dB].
     tolerance : float
-        Relative tolerance of peak labels and resonance classification.
+        Relative uncertainty of the natural frequencies in the peak identification and the
+        resonance classification (their windows; see docs/catalogue-identification.md).
     frequency_max_hz : float
         Upper frequency of the sonogram and spectra [Hz] (0: automatic, 2.2 x the highest
         natural frequency, at most fs/2).
