@@ -44,6 +44,7 @@ from gearvib.config import config_hash, gearset_from_dict
 from gearvib.modal import ModalResult, modal_analysis
 from gearvib.model import AssembledModel
 from gearvib.report.study import AnalysisSettings
+from gearvib.report.wording import count
 from gearvib.stability import first_order_regions, stability_over_speed
 
 if TYPE_CHECKING:
@@ -64,7 +65,6 @@ __all__ = [
     "spectra_figure",
     "stability_figure",
     "summed_sun_stiffness",
-    "table_figure",
     "tooth_force_figure",
 ]
 
@@ -522,8 +522,9 @@ def _parameters(ds: xr.Dataset, caller: dict, model: AssembledModel | None, run:
                 rows.append((f"mesh {m['name']}",
                              f"contact ratio {m['contact_ratio']:.3f}, phase lag "
                              f"{m.get('phase_lag', 0.0):.4f} cycles"))
-        rows.append(("degrees of freedom", f"{model.n_dof} ({model.n_mesh} meshes, "
-                                           f"{len(model.bearing_names)} elastic bearings)"))
+        rows.append(("degrees of freedom",
+                     f"{model.n_dof} ({count(model.n_mesh, 'mesh', 'meshes')}, "
+                     f"{count(len(model.bearing_names), 'elastic bearing')})"))
     rows.append(("mesh frequency per input speed",
                  f"{f_per_rpm:.6g} Hz per min⁻¹ (paper eq. 5, {60 * f_per_rpm:.4g} mesh "
                  "cycles per input revolution)"))
@@ -658,9 +659,9 @@ def analyse_case(ds: xr.Dataset, *, name: str | None = None,
                      "assuming one rigid-body mode (f1)")
     gs_name = caller.get("gearset", {}).get("name", "") if isinstance(
         caller.get("gearset"), dict) else ""
-    case = name or str(caller.get("case", "")) or gs_name or str(ds.attrs.get("title", "run"))
-    label = str(caller.get("label", "")) or (
-        caller.get("gearset", {}).get("title", "") if gs_name else "") or case
+    gs_title = caller.get("gearset", {}).get("title", "") if gs_name else ""
+    case = name or str(caller.get("case", "")) or gs_name or "run"
+    label = str(caller.get("label", "")) or str(gs_title) or gs_name or case
     run = _run_settings(caller, ds)
     meshes = [str(m) for m in ds["mesh"].values]
     sun = tuple(m for m in meshes if m.startswith("sun"))
@@ -974,41 +975,6 @@ def stability_figure(ca: CaseAnalysis, *, figsize: tuple[float, float] = (8.0, 4
     return fig
 
 
-def table_figure(title: str, header: Sequence[str], rows: Sequence[Sequence[str]], *,
-                 notes: Sequence[str] = (), figsize: tuple[float, float] = (8.27, 11.69),
-                 fontsize: float = 7.0) -> list[Figure]:
-    """A table drawn as monospaced text, split over as many pages as needed (for the PDF).
-
-    Returns
-    -------
-    list of Figure
-        One A4 portrait figure per page.
-    """
-    import textwrap
-
-    cols = [list(map(str, header))] + [list(map(str, r)) for r in rows]
-    widths = [min(max(len(r[j]) for r in cols), 48) for j in range(len(header))]
-
-    def fmt(r: Sequence[str]) -> str:
-        return "  ".join(c[:w].ljust(w) for c, w in zip(r, widths, strict=True)).rstrip()
-
-    lines = [fmt(cols[0]), "-" * min(sum(widths) + 2 * len(widths), 160)]
-    lines += [fmt(r) for r in cols[1:]] or ["(none)"]
-    for n in notes:
-        lines += ["", *textwrap.wrap(n, 110)]
-    per_page = 78
-    pages = [lines[i:i + per_page] for i in range(0, len(lines), per_page)] or [[]]
-    figs = []
-    for p, chunk in enumerate(pages):
-        fig = _figure(figsize)
-        suffix = f" ({p + 1}/{len(pages)})" if len(pages) > 1 else ""
-        fig.text(0.05, 0.97, title + suffix, fontsize=11, weight="bold", va="top")
-        fig.text(0.05, 0.94, "\n".join(chunk), family="monospace", fontsize=fontsize,
-                 va="top")
-        figs.append(fig)
-    return figs
-
-
 # --------------------------------------------------------------------------- document
 
 
@@ -1073,7 +1039,8 @@ def report_sections(cases: Sequence[CaseAnalysis], comparisons: Sequence[Any] = 
     """
     s: dict[str, list[Block]] = {k: [] for k in SECTION_IDS}
     for ca in cases:
-        s["parameters"] += [Block("heading", f"{ca.name}: {ca.label}"),
+        s["parameters"] += [Block("heading", ca.name if ca.label in ("", ca.name)
+                                  else f"{ca.name}: {ca.label}"),
                             _table(f"Gear set and run of {ca.name}", ("parameter", "value"),
                                    ca.parameters)]
         s["parameters"] += [Block("text", f"Note ({ca.name}): {n}") for n in ca.notes]
@@ -1106,14 +1073,15 @@ def report_sections(cases: Sequence[CaseAnalysis], comparisons: Sequence[Any] = 
                   "= detected resonances.", figure=lambda ca=ca: sonogram_figure(ca)),
             Block("figure", f"{ca.name}: rpm-order map of the same force.",
                   figure=lambda ca=ca: order_map_figure(ca))]
+        n_classified = sum(r.classified for r in ca.regions)
         s["resonances"] += [
             Block("heading", ca.name),
-            Block("text", f"{ca.name}: {len(ca.resonances)} resonance spots (rise ≥ "
+            Block("text", f"{ca.name}: {count(len(ca.resonances), 'resonance spot')} (rise ≥ "
                   f"{ca.settings.threshold_db:g} dB above the background, within "
                   f"{_SPOT_RANGE_DB:g} dB of the map maximum, above "
                   f"{_MIN_SPOT_FRACTION:g} × the lowest natural frequency) in "
-                  f"{len(ca.regions)} speed regions; "
-                  f"{sum(r.classified for r in ca.regions)} regions contain a classified "
+                  f"{count(len(ca.regions), 'speed region')}; "
+                  f"{count(n_classified, 'region contains', 'regions contain')} a classified "
                   "spot (forced resonance or parametric instability)."),
             _table(f"Identified resonance regions of {ca.name}",
                    ("speed [min⁻¹]", "peak speed", "f [Hz]", "rise [dB]", "spots",
