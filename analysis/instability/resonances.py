@@ -180,8 +180,13 @@ class Resonances:
         c = self.counts()
         expl = self.mechanism != UNEXPLAINED
         chance = float(np.mean(self.coincidence[expl])) if expl.any() else 0.0
-        return (f"{len(self)} rises: {c[FORCED]} forced resonance, {c[PARAMETRIC]} parametric "
-                f"instability, {c[UNEXPLAINED]} unexplained "
+        def n(k: int, one: str, many: str) -> str:
+            return f"{k} {one if k == 1 else many}"
+
+        return (f"{n(len(self), 'rise', 'rises')}: "
+                f"{n(c[FORCED], 'forced resonance', 'forced resonances')}, "
+                f"{n(c[PARAMETRIC], 'parametric instability', 'parametric instabilities')}, "
+                f"{c[UNEXPLAINED]} unexplained "
                 f"({100 * self.unexplained_fraction:.0f} %); a random rise would get its "
                 f"explanation with a chance of {100 * chance:.0f} % on average")
 

@@ -53,6 +53,7 @@ from gearvib.config import config_hash, gearset_from_dict
 from gearvib.modal import ModalResult, modal_analysis
 from gearvib.model import AssembledModel
 from gearvib.report.study import AnalysisSettings
+from gearvib.report.wording import count
 from gearvib.stability import first_order_regions, mesh_phasing, stability_over_speed
 
 if TYPE_CHECKING:
@@ -73,7 +74,6 @@ __all__ = [
     "spectra_figure",
     "stability_figure",
     "summed_sun_stiffness",
-    "table_figure",
     "tooth_force_figure",
 ]
 
@@ -634,8 +634,9 @@ def _parameters(ds: xr.Dataset, caller: dict, model: AssembledModel | None, run:
                 rows.append((f"mesh {m['name']}",
                              f"contact ratio {m['contact_ratio']:.3f}, phase lag "
                              f"{m.get('phase_lag', 0.0):.4f} cycles"))
-        rows.append(("degrees of freedom", f"{model.n_dof} ({model.n_mesh} meshes, "
-                                           f"{len(model.bearing_names)} elastic bearings)"))
+        rows.append(("degrees of freedom",
+                     f"{model.n_dof} ({count(model.n_mesh, 'mesh', 'meshes')}, "
+                     f"{count(len(model.bearing_names), 'elastic bearing')})"))
     if len(mesh_freqs) > 1:
         groups = {g.name: g for g in model.mesh_frequency_groups()} if model is not None else {}
         for name, f in mesh_freqs:
@@ -800,9 +801,9 @@ def analyse_case(ds: xr.Dataset, *, name: str | None = None,
                      "assuming one rigid-body mode (f1)")
     gs_name = caller.get("gearset", {}).get("name", "") if isinstance(
         caller.get("gearset"), dict) else ""
-    case = name or str(caller.get("case", "")) or gs_name or str(ds.attrs.get("title", "run"))
-    label = str(caller.get("label", "")) or (
-        caller.get("gearset", {}).get("title", "") if gs_name else "") or case
+    gs_title = caller.get("gearset", {}).get("title", "") if gs_name else ""
+    case = name or str(caller.get("case", "")) or gs_name or "run"
+    label = str(caller.get("label", "")) or str(gs_title) or gs_name or case
     run = _run_settings(caller, ds)
     f_per_rpm = mesh_freqs[0][1]
     meshes = [str(m) for m in ds["mesh"].values]
@@ -1267,39 +1268,6 @@ def _short(name: str) -> str:
     return f"s{name[6:]}" if name.startswith("stage ") else name
 
 
-def table_figure(title: str, header: Sequence[str], rows: Sequence[Sequence[str]], *,
-                 notes: Sequence[str] = (), figsize: tuple[float, float] = (8.27, 11.69),
-                 fontsize: float = 7.0) -> list[Figure]:
-    """A table drawn as monospaced text, split over as many pages as needed (for the PDF).
-
-    Returns
-    -------
-    list of Figure
-        One A4 portrait figure per page.
-    """
-    cols = [list(map(str, header))] + [list(map(str, r)) for r in rows]
-    widths = [min(max(len(r[j]) for r in cols), 48) for j in range(len(header))]
-
-    def fmt(r: Sequence[str]) -> str:
-        return "  ".join(c[:w].ljust(w) for c, w in zip(r, widths, strict=True)).rstrip()
-
-    lines = [fmt(cols[0]), "-" * min(sum(widths) + 2 * len(widths), 160)]
-    lines += [fmt(r) for r in cols[1:]] or ["(none)"]
-    for n in notes:
-        lines += ["", *textwrap.wrap(n, 110)]
-    per_page = 78
-    pages = [lines[i:i + per_page] for i in range(0, len(lines), per_page)] or [[]]
-    figs = []
-    for p, chunk in enumerate(pages):
-        fig = _figure(figsize)
-        suffix = f" ({p + 1}/{len(pages)})" if len(pages) > 1 else ""
-        fig.text(0.05, 0.97, title + suffix, fontsize=11, weight="bold", va="top")
-        fig.text(0.05, 0.94, "\n".join(chunk), family="monospace", fontsize=fontsize,
-                 va="top")
-        figs.append(fig)
-    return figs
-
-
 # --------------------------------------------------------------------------- document
 
 
@@ -1364,7 +1332,8 @@ def report_sections(cases: Sequence[CaseAnalysis], comparisons: Sequence[Any] = 
     """
     s: dict[str, list[Block]] = {k: [] for k in SECTION_IDS}
     for ca in cases:
-        s["parameters"] += [Block("heading", f"{ca.name}: {ca.label}"),
+        s["parameters"] += [Block("heading", ca.name if ca.label in ("", ca.name)
+                                  else f"{ca.name}: {ca.label}"),
                             _table(f"Gear set and run of {ca.name}", ("parameter", "value"),
                                    ca.parameters)]
         s["parameters"] += [Block("text", f"Note ({ca.name}): {n}") for n in ca.notes]
@@ -1414,8 +1383,8 @@ def report_sections(cases: Sequence[CaseAnalysis], comparisons: Sequence[Any] = 
                   f"{ca.settings.threshold_db:g} dB along the mesh orders 1–{ca.settings.orders} "
                   "(where the orders are resolved), along the natural frequencies and as "
                   f"isolated spots within {_SPOT_RANGE_DB:g} dB of the map maximum; "
-                  f"{len(ca.regions)} speed regions. Explanations: a mesh order crossing a "
-                  "natural frequency (forced resonance; tolerance "
+                  f"{count(len(ca.regions), 'speed region')}. Explanations: a mesh order "
+                  "crossing a natural frequency (forced resonance; tolerance "
                   f"{100 * ca.settings.tolerance:g} % of the natural frequency plus the rise "
                   "width), a Floquet-unstable band that grows in this run (parametric "
                   "instability); 'chance' is how often a random rise would get the same "
