@@ -1,4 +1,4 @@
-"""Command-line interface: ``gearvib demo | modes | simulate | preset | report``.
+"""Command-line interface: ``gearvib demo | modes | catalogue | simulate | preset | report``.
 
 Every subcommand has ``--help``. Errors are printed as one line on stderr with exit code 2
 (bad input) or 1 (a failed computation); nothing is written half.
@@ -35,6 +35,32 @@ def _cmd_modes(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_catalogue(args: argparse.Namespace) -> int:
+    from gearvib.catalogue import gear_set_catalogue
+    from gearvib.config import load_gearset
+
+    cat = gear_set_catalogue(load_gearset(args.config), reference=args.reference,
+                             speed_rpm=args.speed, mesh_harmonics=args.mesh_harmonics,
+                             harmonics=args.harmonics, sidebands=args.sidebands)
+    if args.json:
+        print(cat.to_json(visible_only=True))
+    else:
+        print(f"gear set: {cat.name}; lines a sensor on {cat.sensor} can see "
+              f"({int(cat.visible.sum())} of {len(cat)})")
+        print(cat.table(visible_only=True))
+    return 0
+
+
+def _non_negative_int(text: str) -> int:
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not an integer") from None
+    if v < 0:
+        raise argparse.ArgumentTypeError(f"{text!r} must be >= 0")
+    return v
+
+
 def _speed_range(text: str) -> tuple[float, float]:
     try:
         lo, hi = (float(v) for v in text.split(":"))
@@ -53,6 +79,13 @@ def _positive(text: str) -> float:
         raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
     if not v > 0:
         raise argparse.ArgumentTypeError(f"{text!r} must be > 0")
+    return v
+
+
+def _positive_int(text: str) -> int:
+    v = _non_negative_int(text)
+    if v < 1:
+        raise argparse.ArgumentTypeError(f"{text!r} must be >= 1")
     return v
 
 
@@ -175,6 +208,28 @@ def _parser() -> argparse.ArgumentParser:
     m.add_argument("--carrier-speed", type=float, default=0.0, metavar="RPM",
                    help="carrier speed for gyroscopic/centripetal terms [min-1] (default 0)")
     m.set_defaults(func=_cmd_modes)
+
+    c = sub.add_parser("catalogue", help="kinematic frequency catalogue of a gear set",
+                       description="Every order-locked frequency of the gear set at one speed: "
+                       "shaft orders, mesh frequencies and harmonics, planet pass, sun/planet/"
+                       "ring fault frequencies, hunting-tooth and assembly-phase frequencies, "
+                       "planet-pass sidebands (only those the planet phasing lets through to a "
+                       "sensor on the fixed member). Families: see docs/catalogue.md.")
+    c.add_argument("config", help="TOML file or preset name")
+    c.add_argument("--speed", type=_positive, required=True, metavar="RPM",
+                   help="speed of the reference shaft [min-1]")
+    c.add_argument("--reference", metavar="MEMBER",
+                   help="reference shaft of the orders (default: the input member)")
+    c.add_argument("--mesh-harmonics", type=_positive_int, default=7, metavar="M",
+                   help="mesh harmonics listed, with their sidebands (default 7)")
+    c.add_argument("--harmonics", type=_positive_int, default=3, metavar="H",
+                   help="harmonics of shaft, planet-pass and fault lines (default 3)")
+    c.add_argument("--sidebands", type=_non_negative_int, default=2, metavar="K",
+                   help="sidebands up to K planet-pass frequencies (default 2)")
+    c.add_argument("--json", action="store_true",
+                   help='print {"reference": ..., "lines": [{"family", "harmonic", "sideband", '
+                   '"member", "frequency_hz", "order"}, ...]}')
+    c.set_defaults(func=_cmd_catalogue)
 
     s = sub.add_parser("simulate", help="simulate a run-up and write it as netCDF",
                        description="Simulate a run-up (speed ramp at the input, constant "

@@ -66,6 +66,7 @@ __all__ = [
     "common_period",
     "first_order_regions",
     "gear_set_candidates",
+    "mesh_phasing",
     "periodic_system",
     "stability_map",
     "stability_over_speed",
@@ -486,6 +487,33 @@ def _concatenate(tables: Sequence, order_by: str):
     return type(first)(**kw)
 
 
+def mesh_phasing(model: AssembledModel, modal: ModalResult | None = None
+                 ) -> tuple[MeshPhasingRule | None, list[tuple[str, int]] | None]:
+    """The planetary mesh-phasing rule of a gear set and the family of every elastic mode.
+
+    Returns ``(rule, families)``: for a simple set with equally spaced, identical planets the
+    :class:`~analysis.instability.MeshPhasingRule` and one ``(kind, p)`` per elastic mode
+    (rigid-body modes left out); ``(None, None)`` otherwise (unequal spacing, modes of no pure
+    family).
+    """
+    modal = modal or modal_analysis(_loaded(model))
+    keep = np.array([k != "rigid-body" for k in modal.kinds], dtype=bool)
+    planets = model.meta.get("planets", [])
+    meshes = model.meta.get("meshes", [])
+    z_sun = next((m["z1"] for m in meshes if m["z1"] and m["z1"] > 0), None)
+    z_ring = next((-m["z1"] for m in meshes if m["z1"] and m["z1"] < 0), None)
+    angles = [p["angle_deg"] for p in planets]
+    n = len(angles)
+    equal = n >= 2 and np.allclose(np.diff(np.sort(angles)), 360.0 / n, atol=1e-6)
+    if not (equal and z_sun):
+        return None, None
+    families = _mode_families(model, modal, keep)
+    if families is None:
+        return None, None
+    return MeshPhasingRule(n_planets=n, sun_teeth=int(z_sun),
+                           ring_teeth=int(z_ring) if z_ring else None), families
+
+
 def gear_set_candidates(model: AssembledModel, modal: ModalResult | None = None, *,
                         n_max: int = 4, speed_range: tuple[float, float] | None = None,
                         torque_sign: float = 1.0) -> Candidates:
@@ -520,20 +548,7 @@ def gear_set_candidates(model: AssembledModel, modal: ModalResult | None = None,
         merged = _concatenate(tables, "rpm")
         return dataclasses.replace(merged,
                                    mesh_frequency_per_rpm=groups[0].frequency_per_rpm)
-    rule = None
-    families = None
-    planets = model.meta.get("planets", [])
-    meshes = model.meta.get("meshes", [])
-    z_sun = next((m["z1"] for m in meshes if m["z1"] and m["z1"] > 0), None)
-    z_ring = next((-m["z1"] for m in meshes if m["z1"] and m["z1"] < 0), None)
-    angles = [p["angle_deg"] for p in planets]
-    n = len(angles)
-    equal = n >= 2 and np.allclose(np.diff(np.sort(angles)), 360.0 / n, atol=1e-6)
-    if equal and z_sun:
-        families = _mode_families(model, modal, keep)
-        if families is not None:
-            rule = MeshPhasingRule(n_planets=n, sun_teeth=int(z_sun),
-                                   ring_teeth=int(z_ring) if z_ring else None)
+    rule, families = mesh_phasing(model, modal)
     return instability_candidates(
         freqs, n_max=n_max,
         mesh_frequency_per_rpm=groups[0].frequency_per_rpm if groups else None,

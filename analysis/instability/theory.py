@@ -27,6 +27,7 @@ __all__ = [
     "MeshPhasingRule",
     "first_order_widths",
     "instability_candidates",
+    "natural_frequencies",
     "rectangular_wave_harmonics",
     "rectangular_wave_pieces",
 ]
@@ -66,6 +67,19 @@ def _positive_frequencies(values: Any, name: str) -> np.ndarray:
             "(remove rigid-body modes first)"
         )
     return f
+
+
+def natural_frequencies(values: Any, name: str = "natural_frequencies_hz") -> np.ndarray:
+    """Checked natural frequencies: a 1-D float array, every entry finite and > 0.
+
+    Parameters
+    ----------
+    values : array_like
+        Natural frequencies [Hz].
+    name : str
+        Parameter name for the error message.
+    """
+    return _positive_frequencies(values, name)
 
 
 @dataclass(frozen=True)
