@@ -487,16 +487,18 @@ def _concatenate(tables: Sequence, order_by: str):
     return type(first)(**kw)
 
 
-def mesh_phasing(model: AssembledModel, modal: ModalResult | None = None
+def mesh_phasing(model: AssembledModel, modal: ModalResult | None = None, *,
+                 torque_sign: float = 1.0
                  ) -> tuple[MeshPhasingRule | None, list[tuple[str, int]] | None]:
     """The planetary mesh-phasing rule of a gear set and the family of every elastic mode.
 
     Returns ``(rule, families)``: for a simple set with equally spaced, identical planets the
     :class:`~analysis.instability.MeshPhasingRule` and one ``(kind, p)`` per elastic mode
     (rigid-body modes left out); ``(None, None)`` otherwise (unequal spacing, modes of no pure
-    family).
+    family). The modes are those of the loaded mean system (:func:`modal_analysis` with
+    ``torque_sign``).
     """
-    modal = modal or modal_analysis(_loaded(model))
+    modal = modal or modal_analysis(model, torque_sign=torque_sign)
     keep = np.array([k != "rigid-body" for k in modal.kinds], dtype=bool)
     planets = model.meta.get("planets", [])
     meshes = model.meta.get("meshes", [])
