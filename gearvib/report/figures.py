@@ -679,12 +679,12 @@ def analyse_case(ds: xr.Dataset, *, name: str | None = None,
     seg = int(min(ds.sizes["time"], round(fs / max(settings.map_resolution_hz / 4, 1.0))))
     for mesh in [m for m in (sun[:1] + ring[:1]) if m] or [force_mesh]:
         x = _signed_force(ds, mesh)
-        sp = spectrum(x - x.mean(), fs, window="hann", scaling="peak", segment_length=seg,
+        sp = spectrum(x - x.mean(), fs, window="hann", amplitude="peak", segment_length=seg,
                       overlap=0.5, units="N", name=f"tooth force {mesh}")
         band = sp.frequency <= fmax
         floor = float(np.median(sp.values[band])) if band.any() else 0.0
         pk = find_peaks(sp, prominence_db=1.5, max_peaks=4 * settings.spectrum_peaks,
-                        min_distance_hz=max(3 * sp.resolution_hz, 20.0), threshold=2 * floor)
+                        min_distance_hz=max(3 * sp.bin_spacing_hz, 20.0), threshold=2 * floor)
         keep = (pk.frequency > 0.5 * settings.map_resolution_hz) & (pk.frequency <= fmax)
         order = np.argsort(pk.amplitude[keep])[::-1][: settings.spectrum_peaks]
         sel = np.sort(np.flatnonzero(keep)[order])
@@ -849,9 +849,9 @@ def spectra_figure(ca: CaseAnalysis, *, figsize: tuple[float, float] = (8.0, 6.5
     for ax, fsp in zip(axes, ca.spectra, strict=True):
         sp = fsp.spectrum
         band = sp.frequency <= ca.frequency_max_hz
-        ax.plot(sp.frequency[band], to_db(sp.values[band], sp.scaling), lw=0.7)
+        ax.plot(sp.frequency[band], to_db(sp.values[band], sp.amplitude), lw=0.7)
         if len(fsp.peaks):
-            y = to_db(fsp.peaks.amplitude, sp.scaling)
+            y = to_db(fsp.peaks.amplitude, sp.amplitude)
             ax.plot(fsp.peaks.frequency, y, "v", color="C3", ms=4)
             for i, (f, v) in enumerate(zip(fsp.peaks.frequency, y, strict=True)):
                 m = fsp.labels.matches[i] if i < len(fsp.labels) else ()
@@ -862,7 +862,7 @@ def spectra_figure(ca: CaseAnalysis, *, figsize: tuple[float, float] = (8.0, 6.5
             ax.axvline(fn, color="C1", lw=0.7, ls=":")
         ax.set_xlim(0, ca.frequency_max_hz)
         ax.set_ylabel("peak amplitude\n[dB re 1 N]")
-        ax.set_title(f"{fsp.mesh}: {sp.window}, Δf = {sp.resolution_hz:.3g} Hz, "
+        ax.set_title(f"{fsp.mesh}: {sp.window}, Δf = {sp.bin_spacing_hz:.3g} Hz, "
                      f"{sp.n_averages} averages", fontsize=9)
         ax.grid(True, alpha=0.3)
     axes[-1].set_xlabel("frequency [Hz]  (dotted: natural frequencies)")
