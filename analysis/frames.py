@@ -238,8 +238,10 @@ class FrequencyPlan(Plan):
 class OrderPlan(Plan):
     """Frames of an rpm-order map: the signal resampled to constant angle, block by block.
 
-    The speed of a frame is the speed interpolated at its centre time (rpm reference) or its
-    mean speed, the revolutions it spans over its duration (angle reference).
+    The speed of a frame is the speed interpolated at its centre time (rpm reference) or, for
+    an angle reference, the revolutions over the time they take, symmetric about the frame's
+    centre angle and over at most one revolution (which averages out tooth-to-tooth and
+    once-per-revolution ripple of a tacho angle).
     """
 
     def __init__(
@@ -267,10 +269,10 @@ class OrderPlan(Plan):
             tc = times[i - j0] * (1.0 - u) + times[i - j0 + 1] * u
             if rpm is not None:
                 speed = values_at((tc - self.t0) * self.fs, rpm)
-            else:
-                first = np.arange(k0, k1) * self.step - j0
-                span = times[first + self.seg - 1] - times[first]
-                speed = (self.seg - 1) / self.rate * 60.0 / span
+            else:  # revolutions over time, symmetric about the centre (up to one revolution)
+                q = max(1, min((self.seg - 1) // 2, int(self.rate) // 2))
+                span = values_at(centre - j0 + q, times) - values_at(centre - j0 - q, times)
+                speed = (2 * q / self.rate * 60.0) / span
             yield k0, k1, samples, tc, speed
 
 

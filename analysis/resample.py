@@ -12,7 +12,8 @@ aliasing at every speed of a run-up, not just at the top speed:
    interest;
 2. the angle grid is oversampled by an integer factor ``L`` chosen so that whatever survives
    step 1 at the *lowest* speed lies below the fine grid's Nyquist order and cannot alias
-   into ``[0, samples_per_rev / 2]``; a 24-tap Kaiser-windowed sinc interpolator (error
+   into ``[0, samples_per_rev / 2]``; a 24-tap Kaiser-windowed sinc interpolator (compiled,
+   :func:`analysis.sinc.interpolate`; error
    < 0.01 dB up to 0.4 ``fs``) evaluates the signal at the instants of the fine angle grid;
 3. a Kaiser-window FIR (80 dB stop band, pass band up to ``max_order``, stop band from
    ``samples_per_rev / 2``) removes everything above the final Nyquist order before
@@ -39,7 +40,6 @@ beyond their output they need a few MB whatever the record's length.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
@@ -64,6 +64,7 @@ from analysis.inputs import (
     reference_input,
     signal_input,
 )
+from analysis.sinc import HALF_TAPS, decimate, interpolate
 
 if TYPE_CHECKING:
     import xarray as xr
@@ -83,8 +84,6 @@ __all__ = [
 
 _MAX_OVERSAMPLING = 64
 _MIN_INTERVAL = 256  # smallest spacing of the time-domain checkpoints [samples]
-_INTERP_BLOCK = 1 << 11  # fine-grid samples per sinc-interpolation call (stays in cache)
-_SINC_HALF = 12
 
 
 def angle_from_speed(time: Any, rpm: Any) -> np.ndarray:
@@ -192,56 +191,6 @@ class AngleSignal:
             coords=coords,
             attrs=attrs,
         )
-
-
-# Power series of the Kaiser window: I0(beta sqrt(z)) = sum_k (beta^2 / 4)^k z^k / (k!)^2 for
-# beta = 7 and z = 1 - (tau / _SINC_HALF)^2 in [0, 1]; all terms are positive and the omitted
-# ones (k > 22) add less than 1e-19 relative, so Horner's rule in z evaluates it to rounding.
-_KAISER_SERIES = np.array([(49.0 / 4.0) ** k / math.factorial(k) ** 2 for k in range(23)])
-_SINC_TAPS = np.arange(-_SINC_HALF + 1, _SINC_HALF + 1)
-_SINC_SIGNS = np.where(_SINC_TAPS % 2 == 0, 1.0, -1.0)  # sin(pi (f - k)) = (-1)^k sin(pi f)
-
-
-def _sinc_at(
-    x: np.ndarray, pos: np.ndarray, start: int = 0, n_total: int | None = None
-) -> np.ndarray:
-    """Band-limited interpolation of a record at fractional sample indices ``pos``.
-
-    ``x`` holds the samples ``start, start + 1, ...`` (last axis) of a record of ``n_total``
-    samples (default: ``x`` is the whole record) and must cover every sample the kernel
-    reaches. Kaiser-windowed sinc with ``2 * _SINC_HALF`` taps (beta 7), rows normalised to
-    unit DC gain: amplitude error below 0.01 dB up to 0.4 ``fs`` (checked numerically; the
-    cubic Lagrange interpolator would lose 0.25 dB already at 0.17 ``fs``). Samples beyond
-    the ends of the record are taken equal to the end samples. The window is evaluated by
-    its power series and the sine once per row (both exact to rounding): half the cost of
-    ``numpy.sinc(tau) * numpy.i0(...)``.
-    """
-    n = start + x.shape[-1] if n_total is None else n_total
-    base = np.floor(pos).astype(np.int64)
-    frac = pos - base
-    tau = frac[:, None] - _SINC_TAPS[None, :]
-    z = tau / _SINC_HALF
-    z *= z
-    np.subtract(1.0, z, out=z)
-    np.maximum(z, 0.0, out=z)
-    h = np.full_like(z, _KAISER_SERIES[-1])
-    for c in _KAISER_SERIES[-2::-1]:
-        h *= z
-        h += c
-    sinc = np.multiply(np.pi, tau, out=tau)
-    with np.errstate(divide="ignore", invalid="ignore"):  # tau = 0 only where frac = 0
-        np.divide(_SINC_SIGNS, sinc, out=sinc)
-        sinc *= np.sin(np.pi * frac)[:, None]
-    on_sample = frac == 0.0
-    if on_sample.any():
-        sinc[on_sample] = _SINC_TAPS == 0
-    h *= sinc
-    h /= h.sum(axis=1, keepdims=True)
-    idx = base[:, None] + _SINC_TAPS[None, :]
-    np.clip(idx, 0, n - 1, out=idx)
-    if start:
-        idx -= start
-    return np.einsum("...mj,mj->...m", x[..., idx], h)
 
 
 class Track:
@@ -534,14 +483,11 @@ class AngleResampler:
         tq = np.interp(phi, th, t)
         pos = (tq - self.t_first) * self.fs
         n = self.signal.n
-        lo = max(0, int(np.floor(pos[0])) - _SINC_HALF + 1)
-        hi = min(n, int(np.floor(pos[-1])) + _SINC_HALF + 1)
+        lo = max(0, int(np.floor(pos[0])) - HALF_TAPS + 1)
+        hi = min(n, int(np.floor(pos[-1])) + HALF_TAPS + 1)
         data = self.signal.get(lo, hi)
-        out = np.empty((*self.lead, f1 - f0))
-        for s in range(0, f1 - f0, _INTERP_BLOCK):
-            sl = slice(s, s + _INTERP_BLOCK)
-            out[..., sl] = _sinc_at(data, pos[sl], lo, n)
-        return out, tq
+        out = interpolate(data.reshape(-1, data.shape[-1]), pos, lo, n)
+        return out.reshape(*self.lead, f1 - f0), tq
 
     def block(self, j0: int, j1: int) -> tuple[np.ndarray, np.ndarray]:
         """Output samples ``[j0, j1)`` (shape ``(..., j1 - j0)``) and their instants [s].
@@ -567,9 +513,8 @@ class AngleResampler:
         f0 = max(0, j0 - reach) * over
         f1 = min(self.n_fine, (j1 - 1) * over + self.fir.size // 2 + 1)
         fine, tq = self._fine(f0, f1)
-        dec = scipy.signal.resample_poly(fine, 1, over, axis=-1, window=self.fir)
-        first = j0 - f0 // over
-        return dec[..., first : first + j1 - j0], tq[j0 * over - f0 :: over][: j1 - j0]
+        dec = decimate(fine.reshape(-1, fine.shape[-1]), self.fir, over, j0 - f0 // over, j1 - j0)
+        return dec.reshape(*self.lead, j1 - j0), tq[j0 * over - f0 :: over][: j1 - j0]
 
 
 def check_sampling(samples_per_rev: Any, max_order: float | None) -> tuple[int, float]:
