@@ -237,6 +237,7 @@ class Track:
         self._angle = angle
         self._rpm = rpm
         self._checkpoints = np.empty(-(-n // interval))
+        self._cache: dict[int, np.ndarray] = {}
         d_min, d_max = np.inf, -np.inf
         th = np.zeros(1)
         for k in range(self._checkpoints.size):
@@ -274,7 +275,7 @@ class Track:
             return np.asarray(self._time[a:b], dtype=float)
         return self._t0 + np.arange(a, b) / self._fs
 
-    def _integrate(self, a: int, b: int, start: float) -> np.ndarray:
+    def _integrate(self, a: int, b: int, start: Any) -> np.ndarray:
         """Angle of samples ``[a, b)`` given the angle ``start`` of sample ``a``."""
         assert self._rpm is not None
         t = self.time(a, b)
@@ -284,13 +285,34 @@ class Track:
         inc[1:] = np.diff(t) * (w[1:] + w[:-1]) / 2.0
         return np.cumsum(inc, out=inc)
 
+    def _interval(self, k: int) -> np.ndarray:
+        """Angle of the samples ``[k iv, (k + 1) iv]`` (``iv`` = interval), integrated from
+        checkpoint ``k``; the last two are kept, since blocks progress through the record."""
+        hit = self._cache.get(k)
+        if hit is None:
+            a = k * self.interval
+            hit = self._integrate(a, min(self.n, a + self.interval + 1), self._checkpoints[k])
+            if len(self._cache) >= 2:
+                self._cache.pop(next(iter(self._cache)))
+            self._cache[k] = hit
+        return hit
+
     def angle(self, a: int, b: int) -> np.ndarray:
-        """Shaft angle of samples ``[a, b)`` [rad]."""
+        """Shaft angle of samples ``[a, b)`` [rad].
+
+        Integrated from the checkpoint before ``a``: the same additions in the same order as
+        the first pass, so the values equal an integration over the whole record bit for bit.
+        """
         if self._angle is not None:
             return np.asarray(self._angle[a:b], dtype=float)
-        k = a // self.interval
-        c = k * self.interval
-        return self._integrate(c, b, float(self._checkpoints[k]))[a - c :]
+        iv = self.interval
+        ka, kb = a // iv, (b - 1) // iv
+        if ka == kb:
+            return self._interval(ka)[a - ka * iv : b - ka * iv]
+        parts = [self._interval(ka)[a - ka * iv : iv]]
+        parts += [self._interval(k)[:iv] for k in range(ka + 1, kb)]
+        parts.append(self._interval(kb)[: b - kb * iv])
+        return np.concatenate(parts)
 
     def span(self, lo: float, hi: float) -> tuple[np.ndarray, np.ndarray]:
         """Angle and time of the shortest stretch of samples bracketing ``[lo, hi]``.

@@ -69,36 +69,43 @@ def _interpolate(x, start, n_total, pos, table, out):  # pragma: no cover - comp
     pieces = table.shape[0]
     n_taps = table.shape[2]
     w = np.empty(n_taps)
+    prod = np.empty(n_taps)
     for i in range(pos.size):
-        base = np.floor(pos[i])
-        frac = pos[i] - base
-        ib = int(base)
+        ib = int(pos[i])
+        if pos[i] < ib:  # floor for negative positions
+            ib -= 1
+        frac = pos[i] - ib
         p = int(frac * pieces)
         if p >= pieces:
             p = pieces - 1
         u = 2.0 * (frac * pieces - p) - 1.0
-        for k in range(n_taps):  # Horner, degree 4 (the table's), one pass over the taps
-            w[k] = (
-                ((table[p, 4, k] * u + table[p, 3, k]) * u + table[p, 2, k]) * u
-                + table[p, 1, k]
-            ) * u + table[p, 0, k]
+        tp = table[p]
+        c0 = tp[0]
+        c1 = tp[1]
+        c2 = tp[2]
+        c3 = tp[3]
+        c4 = tp[4]
+        for k in range(n_taps):  # Horner, degree 4 (the table's), vectorised over the taps
+            w[k] = (((c4[k] * u + c3[k]) * u + c2[k]) * u + c1[k]) * u + c0[k]
         first = ib - HALF_TAPS + 1
         if first >= 0 and first + n_taps <= n_total:
-            # unsigned indices (no negative-index wrap-around code) and four partial sums
+            # products in one vectorised pass, then four partial sums in a fixed order
             # (no serial chain of additions); n_taps is a multiple of 4
-            o = np.uint64(first - start)
+            o = first - start
             for c in range(n_ch):
-                xr = x[c]
+                seg = x[c, o : o + n_taps]
+                for k in range(n_taps):
+                    prod[k] = w[k] * seg[k]
                 a0 = 0.0
                 a1 = 0.0
                 a2 = 0.0
                 a3 = 0.0
                 for kk in range(n_taps // 4):
-                    k = np.uint64(4 * kk)
-                    a0 += w[k] * xr[o + k]
-                    a1 += w[k + np.uint64(1)] * xr[o + k + np.uint64(1)]
-                    a2 += w[k + np.uint64(2)] * xr[o + k + np.uint64(2)]
-                    a3 += w[k + np.uint64(3)] * xr[o + k + np.uint64(3)]
+                    k = 4 * kk
+                    a0 += prod[k]
+                    a1 += prod[k + 1]
+                    a2 += prod[k + 2]
+                    a3 += prod[k + 3]
                 out[c, i] = (a0 + a1) + (a2 + a3)
         else:  # near the ends of the record: samples beyond them equal the end samples
             for c in range(n_ch):
