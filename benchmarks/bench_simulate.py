@@ -36,7 +36,7 @@ from scipy.integrate import solve_ivp
 from gearvib import kernels as kn
 from gearvib.assembly import assemble
 from gearvib.config import load_gearset
-from gearvib.simulate import SpeedRamp, _setup, simulate, static_equilibrium
+from gearvib.simulate import SpeedRamp, prepare_run, simulate, static_equilibrium
 
 REPEAT = 3  # every wall time is the best of REPEAT runs
 
@@ -119,7 +119,7 @@ def versus_solve_ivp(model, window: float) -> dict:
     cond = SpeedRamp(1500, 1500, window, input_torque=60.0)
     probe = simulate(model, SpeedRamp(1500, 1500, 1e-3, input_torque=60.0))
     dt = probe.step.dt
-    setup = _setup(model, cond, False)
+    setup = prepare_run(model, cond, False)
     qd0 = setup.rigid * setup.omega0
     q0, _ = static_equilibrium(setup.system, setup.mass, setup.rigid, qd0)
     y0 = np.concatenate([q0, qd0])

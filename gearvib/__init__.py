@@ -3,7 +3,7 @@
 The package is layered, and imports flow one way only::
 
     geometry, kinematics, stiffness  ->  structure, config  ->  assembly  ->  modal
-    ->  kernels  ->  simulate, io  ->  report, cli
+    ->  kernels  ->  simulation/*  ->  simulate, io  ->  report, cli
 
 The separate top-level package :mod:`analysis` (spectra, orders, instability) never imports
 :mod:`gearvib`.

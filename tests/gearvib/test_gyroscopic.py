@@ -44,7 +44,7 @@ from gearvib.assembly import assemble
 from gearvib.config import gearset_from_dict, load_config
 from gearvib.modal import modal_analysis
 from gearvib.model import AssembledModel
-from gearvib.simulate import SpeedRamp, _setup, simulate, static_equilibrium
+from gearvib.simulate import SpeedRamp, prepare_run, simulate, static_equilibrium
 
 CARRIER_RPM = 3000.0
 INPUT_TORQUE = 60.0  # N m at the sun: ~15 um static mesh compression >> 0.1-1 um vibration
@@ -120,11 +120,11 @@ def speed_setup(model: AssembledModel, gyroscopic: bool = True, coupling_damping
 
     Returns
     -------
-    gearvib.simulate._Setup
+    gearvib.simulate.RunSetup
         Kernel system and kinematics of the run.
     """
     rpm = input_rpm(model)
-    setup = _setup(model, SpeedRamp(rpm, rpm, 1.0, input_torque=INPUT_TORQUE), gyroscopic)
+    setup = prepare_run(model, SpeedRamp(rpm, rpm, 1.0, input_torque=INPUT_TORQUE), gyroscopic)
     if not coupling_damping:
         setup.system.fpar[kn.FP_CC] = 0.0
     return setup
@@ -143,7 +143,7 @@ def referenced_system(setup, model: AssembledModel) -> kn.KernelSystem:
 
     Parameters
     ----------
-    setup : gearvib.simulate._Setup
+    setup : gearvib.simulate.RunSetup
         Production set-up (gyroscopic switch on).
     model : AssembledModel
         Source of ``G`` and ``K_Omega``.
@@ -191,7 +191,7 @@ def rotating_equilibrium(setup, model: AssembledModel, omega_c: float) -> np.nda
 
     Parameters
     ----------
-    setup : gearvib.simulate._Setup
+    setup : gearvib.simulate.RunSetup
         Production set-up.
     model : AssembledModel
         Source of ``K_Omega`` (as in :func:`referenced_system`).
@@ -218,7 +218,7 @@ def input_speed(setup) -> float:
 
     Parameters
     ----------
-    setup : gearvib.simulate._Setup
+    setup : gearvib.simulate.RunSetup
         Set-up of a constant-speed run.
 
     Returns

@@ -16,9 +16,9 @@ from gearvib.simulate import (
     SpeedRamp,
     SpeedTable,
     TorqueDriven,
-    _setup,
     choose_step,
     decimation_filter,
+    prepare_run,
     simulate,
     static_equilibrium,
 )
@@ -152,7 +152,7 @@ def test_static_load_sharing_paper_case1() -> None:
 
 def test_static_equilibrium_rejects_unbalanced_free_member() -> None:
     model = planetary()
-    setup = _setup(model, TorqueDriven(input_torque=10.0), False)
+    setup = prepare_run(model, TorqueDriven(input_torque=10.0), False)
     _q0, acc = static_equilibrium(setup.system, setup.mass, setup.rigid, np.zeros(5),
                                  free_rigid=True)
     j_eff = setup.rigid @ setup.mass @ setup.rigid
@@ -200,7 +200,7 @@ def test_free_vibration_frequencies_equal_modal_analysis(torque_step_run) -> Non
 def test_decimated_output_lines_up_with_internal_samples(torque_step_run) -> None:
     """Zero filter delay: output sample k equals the internal sample k D (passband content)."""
     model, res = torque_step_run
-    setup = _setup(model, step_conditions(model), False)
+    setup = prepare_run(model, step_conditions(model), False)
     q0, _ = static_equilibrium(setup.system, setup.mass, setup.rigid, np.zeros(5),
                                free_rigid=True)
     n_steps = 4000 * res.step.decimation

@@ -1,0 +1,406 @@
+"""The result of a run-up simulation and its CF-annotated Dataset."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from collections.abc import Mapping, Sequence
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+import xarray as xr
+
+from gearvib import __version__
+from gearvib import kernels as kn
+from gearvib.model import AssembledModel
+from gearvib.simulation.conditions import RAD_S_PER_RPM, Conditions, DriveCoupling
+from gearvib.simulation.frequencies import elastic_frequencies, undamped_frequencies
+from gearvib.simulation.run_setup import RunSetup
+from gearvib.simulation.step import StepChoice
+
+__all__ = ["INTEGRATOR", "RunUpResult", "build_result", "model_sha256"]
+
+INTEGRATOR = "classical Runge-Kutta 4, fixed step, sub-steps ending at stiffness jumps"
+
+
+def model_sha256(model: AssembledModel) -> str:
+    """SHA-256 of every array and name of the model (provenance of a run)."""
+    h = hashlib.sha256()
+    for name in (
+        "mass",
+        "stiffness",
+        "damping",
+        "gyroscopic",
+        "centripetal",
+        "mesh_vectors",
+        "mesh_position_vectors",
+        "mesh_position_offsets",
+        "mesh_stiffness_tables",
+        "mesh_back_tables",
+        "mesh_backlash",
+        "mesh_damping",
+        "bearing_vectors",
+        "bearing_stiffness",
+        "bearing_damping",
+    ):
+        a = np.ascontiguousarray(getattr(model, name), dtype=np.float64)
+        h.update(name.encode())
+        h.update(str(a.shape).encode())
+        h.update(a.tobytes())
+    names = [
+        model.dof_names,
+        model.mesh_names,
+        model.bearing_names,
+        sorted(model.rotation_dofs.items()),
+        model.input_member,
+        model.output_member,
+    ]
+    h.update(json.dumps(names, default=str).encode())
+    return h.hexdigest()
+
+
+def _jsonable(obj: object) -> object:
+    """Round-trip through JSON (tuples -> lists, numpy scalars -> numbers, others -> str)."""
+
+    def default(o: object) -> object:
+        if isinstance(o, np.ndarray):
+            return o.tolist()
+        if isinstance(o, np.generic):
+            return o.item()
+        return str(o)
+
+    return json.loads(json.dumps(obj, default=default, sort_keys=True))
+
+
+@dataclass
+class RunUpResult:
+    """Output of :func:`simulate`, sampled at ``fs_out`` (arrays are ``(channel, time)``).
+
+    Attributes
+    ----------
+    time : ndarray, shape (n_time,)
+        [s], ``k / fs_out``.
+    mesh_names, bearing_names, members, translation_dofs : tuple of str
+        Labels of the ``mesh``, ``bearing``, ``member`` and ``translation_dof`` dimensions.
+    normal_force : ndarray, shape (n_mesh, 2, n_time)
+        Compressive force on the left and right flank [N] (>= 0).
+    mesh_stiffness : ndarray, shape (n_mesh, n_time)
+        Effective mesh stiffness [N/m]: 0 in the backlash, sum of both flanks in double contact.
+    mesh_deflection : ndarray, shape (n_mesh, n_time)
+        ``v_m . q`` [m] (dynamic transmission error along the line of action).
+    bearing_force : ndarray, shape (n_bearing, n_time)
+        ``k_b (u_b . q) + c_b (u_b . qdot)`` [N or N m].
+    displacement : ndarray, shape (n_translation, n_time)
+        Translational coordinates [m].
+    rotation, speed : ndarray, shape (n_member, n_time)
+        Absolute rotation [rad] and speed [min^-1] of every rotating member.
+    input_speed, input_angle : ndarray, shape (n_time,)
+        Prescribed input speed [min^-1] and angle [rad] (speed-driven), or the simulated ones of
+        the input member (torque-driven).
+    drive_torque : ndarray, shape (n_time,)
+        Torque applied to the input member by the coupling or the torque table [N m].
+    mesh_frequency : ndarray, shape (n_time,)
+        ``|mesh_frequency_per_rpm * input_speed|`` [Hz].
+    natural_frequencies : ndarray, shape (n_mode,)
+        Elastic natural frequencies of the mean system [Hz].
+    flank_contact_changes : ndarray of int64, shape (n_mesh,)
+        Changes of the set of flanks in contact per mesh (internal steps up to the end).
+    step : StepChoice
+        Internal step, output rate and the frequencies they were chosen from.
+    fir_numtaps : int
+        Length of the decimation filter.
+    config_json : str
+        Full configuration, JSON with sorted keys.
+    drive : str
+        ``"speed"`` or ``"torque"``.
+    gyroscopic : bool
+        Gyroscopic/centripetal terms included.
+    coupling : DriveCoupling or None
+        Drive coupling of a speed-driven run.
+    title : str
+        Dataset title.
+    wall_time : float
+        Wall time of the call [s] (not stored in the dataset, which is deterministic).
+    """
+
+    time: np.ndarray
+    mesh_names: tuple[str, ...]
+    bearing_names: tuple[str, ...]
+    members: tuple[str, ...]
+    translation_dofs: tuple[str, ...]
+    normal_force: np.ndarray
+    mesh_stiffness: np.ndarray
+    mesh_deflection: np.ndarray
+    bearing_force: np.ndarray
+    displacement: np.ndarray
+    rotation: np.ndarray
+    speed: np.ndarray
+    input_speed: np.ndarray
+    input_angle: np.ndarray
+    drive_torque: np.ndarray
+    mesh_frequency: np.ndarray
+    natural_frequencies: np.ndarray
+    flank_contact_changes: np.ndarray
+    step: StepChoice
+    fir_numtaps: int
+    config_json: str
+    drive: str
+    gyroscopic: bool
+    coupling: DriveCoupling | None = None
+    title: str = "gearvib run-up simulation"
+    wall_time: float = field(default=0.0, compare=False)
+
+    @property
+    def config_sha256(self) -> str:
+        """SHA-256 of ``config_json``."""
+        return hashlib.sha256(self.config_json.encode()).hexdigest()
+
+    def to_dataset(self) -> xr.Dataset:
+        """CF-1.11 annotated dataset (float64 data, ``time`` in s, netCDF-safe attributes)."""
+
+        def var(
+            dims: tuple[str, ...], data: np.ndarray, units: str, long_name: str, quantity: str
+        ) -> xr.Variable:
+            return xr.Variable(
+                dims,
+                np.ascontiguousarray(data),
+                {"units": units, "long_name": long_name, "gearvib_quantity": quantity},
+            )
+
+        t = ("time",)
+        coords = {
+            "time": var(t, self.time, "s", "time since start of run", "time"),
+            "mesh": xr.Variable(
+                ("mesh",),
+                np.array(self.mesh_names, dtype=str),
+                {"long_name": "tooth contact (mesh)"},
+            ),
+            "flank": xr.Variable(
+                ("flank",),
+                np.array(["left", "right"]),
+                {"long_name": "tooth flank (left: loaded when the central gear drives the planet)"},
+            ),
+            "bearing": xr.Variable(
+                ("bearing",),
+                np.array(self.bearing_names, dtype=str),
+                {"long_name": "elastic bearing direction"},
+            ),
+            "member": xr.Variable(
+                ("member",), np.array(self.members, dtype=str), {"long_name": "rotating member"}
+            ),
+            "translation_dof": xr.Variable(
+                ("translation_dof",),
+                np.array(self.translation_dofs, dtype=str),
+                {"long_name": "translational coordinate"},
+            ),
+            "mode": var(
+                ("mode",),
+                np.arange(1, self.natural_frequencies.size + 1, dtype=np.int64),
+                "1",
+                "elastic mode number of the mean system",
+                "mode",
+            ),
+            "input_speed": var(
+                t, self.input_speed, "min-1", "input speed (revolutions per minute)", "input_speed"
+            ),
+            "input_angle": var(t, self.input_angle, "rad", "input rotation angle", "input_angle"),
+            "mesh_frequency": var(
+                t, self.mesh_frequency, "Hz", "gear mesh frequency", "mesh_frequency"
+            ),
+        }
+        data = {
+            "normal_force": var(
+                ("mesh", "flank", "time"),
+                self.normal_force,
+                "N",
+                "normal tooth force on the flank (compressive)",
+                "tooth_force",
+            ),
+            "mesh_stiffness": var(
+                ("mesh", "time"),
+                self.mesh_stiffness,
+                "N m-1",
+                "effective mesh stiffness (0 in the backlash)",
+                "mesh_stiffness",
+            ),
+            "mesh_deflection": var(
+                ("mesh", "time"),
+                self.mesh_deflection,
+                "m",
+                "mesh deflection along the line of action (dynamic transmission error)",
+                "mesh_deflection",
+            ),
+            "bearing_force": var(
+                ("bearing", "time"),
+                self.bearing_force,
+                "N",
+                "bearing force (N m for torsional supports)",
+                "bearing_force",
+            ),
+            "displacement": var(
+                ("translation_dof", "time"),
+                self.displacement,
+                "m",
+                "translational displacement",
+                "displacement",
+            ),
+            "rotation": var(
+                ("member", "time"), self.rotation, "rad", "absolute rotation angle", "rotation"
+            ),
+            "speed": var(
+                ("member", "time"),
+                self.speed,
+                "min-1",
+                "rotational speed (revolutions per minute)",
+                "speed",
+            ),
+            "drive_torque": var(
+                t, self.drive_torque, "N m", "torque applied to the input member", "drive_torque"
+            ),
+            "natural_frequency": var(
+                ("mode",),
+                self.natural_frequencies,
+                "Hz",
+                "natural frequency of the mean system",
+                "natural_frequency",
+            ),
+            "flank_contact_changes": var(
+                ("mesh",),
+                self.flank_contact_changes.astype(np.int64),
+                "1",
+                "number of flank-contact changes",
+                "flank_contact_changes",
+            ),
+        }
+        attrs = {
+            "Conventions": "CF-1.11",
+            "title": self.title,
+            "source": f"gearvib {__version__}",
+            "gearvib_version": __version__,
+            "integrator": INTEGRATOR,
+            "dt": float(self.step.dt),
+            "fs_out": float(self.step.fs_out),
+            "decimation_factor": int(self.step.decimation),
+            "fir_numtaps": int(self.fir_numtaps),
+            "anti_alias_filter": "Kaiser-window FIR, -6 dB at 0.4 fs_out, >= 80 dB from 0.5 fs_out,"
+            " zero phase (centred)",
+            "highest_natural_frequency": float(self.step.highest_natural_frequency),
+            "highest_mesh_frequency": float(self.step.highest_mesh_frequency),
+            "drive": self.drive,
+            "gyroscopic": np.int8(self.gyroscopic),
+            "config_json": self.config_json,
+            "config_sha256": self.config_sha256,
+        }
+        if self.coupling is not None:
+            attrs["drive_coupling_stiffness"] = float(self.coupling.stiffness)
+            attrs["drive_coupling_damping"] = float(self.coupling.damping)
+        return xr.Dataset(data, coords=coords, attrs=attrs)
+
+
+def build_result(
+    model: AssembledModel,
+    conditions: Conditions,
+    setup: RunSetup,
+    step: StepChoice,
+    taps: np.ndarray,
+    out: np.ndarray,
+    changes: np.ndarray,
+    duration: float,
+    gyroscopic: bool,
+    config: Mapping | str | None,
+    natural_frequencies: Sequence[float] | None,
+    wall: float,
+) -> RunUpResult:
+    """Turn the decimated state history of a run into a :class:`RunUpResult`.
+
+    ``out`` holds the decimated sample rows of the kernels (layout in :mod:`gearvib.kernels`);
+    forces, deflections, bearing forces and speeds are derived from them here.
+    """
+    n, nm = model.n_dof, model.n_mesh
+    system = setup.system
+    n_out = out.shape[0]
+    time = np.arange(n_out) * (step.decimation * step.dt)
+    q = out[:, :n]
+    qd = out[:, n : 2 * n]
+    f_left = np.clip(out[:, 2 * n : 2 * n + nm].T, 0.0, None)
+    f_right = np.clip(out[:, 2 * n + nm : 2 * n + 2 * nm].T, 0.0, None)
+    k_eff = np.clip(out[:, 2 * n + 2 * nm :].T, 0.0, None)
+    normal_force = np.ascontiguousarray(np.stack([f_left, f_right], axis=1))
+    deflection = system.mesh_vectors @ q.T
+    bv = np.asarray(model.bearing_vectors, dtype=float).reshape(len(model.bearing_names), n)
+    bearing = np.asarray(model.bearing_stiffness)[:, None] * (bv @ q.T) + np.asarray(
+        model.bearing_damping
+    )[:, None] * (bv @ qd.T)
+    trans = [i for i, u in enumerate(model.dof_units) if u == "m"]
+    rot = sorted((d, name) for name, d in model.rotation_dofs.items() if d >= 0)
+    members = tuple(name for _, name in rot)
+    rot_idx = [d for d, _ in rot]
+    k_in = int(system.ipar[kn.IP_INPUT])
+    if setup.drive == "speed":
+        angle = np.empty(n_out)
+        w = np.empty(n_out)
+        kn.speed_profile(system.speed_table, time, angle, w)
+        drive_torque = system.fpar[kn.FP_KC] * (angle - q[:, k_in]) + system.fpar[kn.FP_CC] * (
+            w - qd[:, k_in]
+        )
+        input_speed = w / RAD_S_PER_RPM
+    else:
+        angle = q[:, k_in].copy()
+        input_speed = qd[:, k_in] / RAD_S_PER_RPM
+        drive_torque = np.interp(time, system.torque_table[0], system.torque_table[1])
+    if natural_frequencies is None:
+        nat = elastic_frequencies(undamped_frequencies(model.mass, model.mean_stiffness_matrix()))
+    else:
+        nat = np.asarray(natural_frequencies, dtype=float)
+    if isinstance(config, str):
+        cfg_model: object = json.loads(config)
+    elif config is not None:
+        cfg_model = dict(config)
+    else:
+        cfg_model = {"meta": model.meta}
+    cfg = {
+        "gearvib_version": __version__,
+        "model": cfg_model,
+        "model_sha256": model_sha256(model),
+        "conditions": {"type": type(conditions).__name__, **asdict(conditions)},
+        "simulation": {
+            "dt": step.dt,
+            "fs_out": step.fs_out,
+            "decimation_factor": step.decimation,
+            "duration": duration,
+            "gyroscopic": bool(gyroscopic),
+            "integrator": INTEGRATOR,
+            "drive_coupling": None if setup.coupling is None else asdict(setup.coupling),
+            "load_torque": list(setup.load),
+        },
+    }
+    config_json = json.dumps(_jsonable(cfg), sort_keys=True)
+    name = model.meta.get("name") if isinstance(model.meta, Mapping) else None
+    return RunUpResult(
+        time=time,
+        mesh_names=tuple(model.mesh_names),
+        bearing_names=tuple(model.bearing_names),
+        members=members,
+        translation_dofs=tuple(model.dof_names[i] for i in trans),
+        normal_force=normal_force,
+        mesh_stiffness=np.ascontiguousarray(k_eff),
+        mesh_deflection=np.ascontiguousarray(deflection),
+        bearing_force=np.ascontiguousarray(bearing),
+        displacement=np.ascontiguousarray(q[:, trans].T),
+        rotation=np.ascontiguousarray(q[:, rot_idx].T),
+        speed=np.ascontiguousarray(qd[:, rot_idx].T / RAD_S_PER_RPM),
+        input_speed=input_speed,
+        input_angle=angle,
+        drive_torque=drive_torque,
+        mesh_frequency=np.abs(model.mesh_frequency_per_rpm * input_speed),
+        natural_frequencies=nat,
+        flank_contact_changes=changes.copy(),
+        step=step,
+        fir_numtaps=int(taps.size),
+        config_json=config_json,
+        drive=setup.drive,
+        gyroscopic=bool(gyroscopic),
+        coupling=setup.coupling,
+        title=f"gearvib run-up simulation of {name}" if name else "gearvib run-up simulation",
+        wall_time=wall,
+    )

@@ -1,0 +1,253 @@
+"""Model + operating conditions -> the kernel arrays of one run (:func:`prepare_run`)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from gearvib import kernels as kn
+from gearvib.model import AssembledModel
+from gearvib.simulation.conditions import (
+    RAD_S_PER_RPM,
+    Conditions,
+    DriveCoupling,
+    SpeedRamp,
+    SpeedTable,
+    TorqueDriven,
+)
+from gearvib.simulation.frequencies import elastic_frequencies, undamped_frequencies
+
+__all__ = [
+    "COUPLING_FREQUENCY_FRACTION",
+    "RunSetup",
+    "check_model",
+    "default_coupling",
+    "prepare_run",
+]
+
+COUPLING_FREQUENCY_FRACTION = 0.1
+"""Default drive-coupling frequency as a fraction of the lowest elastic natural frequency."""
+
+
+def check_model(model: AssembledModel) -> None:
+    """Reject models the kernels cannot integrate (negative or non-finite stiffness, shapes).
+
+    Raises
+    ------
+    ValueError
+        Naming the offending array (and mesh for a negative stiffness table).
+    """
+    n = model.n_dof
+    for name in ("mass", "stiffness", "damping", "gyroscopic", "centripetal"):
+        a = np.asarray(getattr(model, name))
+        if a.shape != (n, n) or not np.all(np.isfinite(a)):
+            raise ValueError(f"model.{name} must be a finite ({n}, {n}) array")
+    for name in ("mesh_stiffness_tables", "mesh_back_tables"):
+        tab = np.asarray(getattr(model, name), dtype=float)
+        if tab.ndim != 2 or tab.shape[0] != model.n_mesh or tab.shape[1] < 1:
+            raise ValueError(f"model.{name} must have shape (n_mesh, n_table)")
+        if not np.all(np.isfinite(tab)):
+            raise ValueError(f"model.{name} holds non-finite values")
+        bad = np.flatnonzero(tab.min(axis=1) < 0)
+        if bad.size:
+            m = int(bad[0])
+            raise ValueError(
+                f"negative stiffness in model.{name} for mesh {model.mesh_names[m]!r} "
+                f"(min {tab[m].min():.4g} N/m); a mesh stiffness table must be >= 0"
+            )
+    if np.any(np.asarray(model.mesh_damping) < 0) or np.any(np.asarray(model.bearing_damping) < 0):
+        raise ValueError("negative mesh or bearing damping")
+    if model.rotation_dofs.get(model.input_member, -1) < 0:
+        raise ValueError(f"input member {model.input_member!r} has no rotation coordinate")
+
+
+@dataclass
+class RunSetup:
+    """The kernel arrays and kinematics of one run (:func:`prepare_run`).
+
+    Attributes
+    ----------
+    system : KernelSystem
+        Arrays handed to the kernels (drive and load parameters included).
+    mass : ndarray, shape (n, n)
+        Mass matrix of the run (load inertia included).
+    rigid : ndarray, shape (n,)
+        Rigid-body velocity per unit input speed.
+    omega0, alpha0 : float
+        Input speed [rad/s] and prescribed input acceleration [rad/s^2] at ``t = 0``.
+    free_rigid : bool
+        The rigid-body mode is free (torque-driven run without a restoring support).
+    duration : float or None
+        Default simulated time of the conditions [s].
+    speed_max : float
+        Highest expected input speed [rad/s] (step choice, runaway guard).
+    coupling : DriveCoupling or None
+        Drive coupling of a speed-driven run.
+    load : (T0, c1, c2)
+        Load-torque coefficients at the output member.
+    drive : str
+        ``"speed"`` or ``"torque"``.
+    """
+
+    system: kn.KernelSystem
+    mass: np.ndarray
+    rigid: np.ndarray
+    omega0: float
+    alpha0: float
+    free_rigid: bool
+    duration: float | None
+    speed_max: float
+    coupling: DriveCoupling | None
+    load: tuple[float, float, float]
+    drive: str
+
+
+def default_coupling(model: AssembledModel) -> DriveCoupling:
+    """The default drive coupling of speed-driven runs.
+
+    Its rigid-body mode (all members turning on the coupling) lies at
+    :data:`COUPLING_FREQUENCY_FRACTION` x the lowest elastic natural frequency of the mean
+    system, critically damped: ``k = J_eff w_c**2``, ``c = 2 J_eff w_c`` with ``J_eff`` the
+    inertia of the kinematic motion reduced to the input member.
+    """
+    rigid = model.rigid_body_velocity()
+    k_in = int(model.rotation_dofs[model.input_member])
+    f_el = elastic_frequencies(
+        undamped_frequencies(np.asarray(model.mass, float), model.mean_stiffness_matrix())
+    )
+    if f_el.size == 0:
+        raise ValueError("the model has no elastic mode to choose a drive coupling from")
+    j_eff = float(rigid @ model.mass @ rigid) / rigid[k_in] ** 2
+    wc = 2.0 * math.pi * COUPLING_FREQUENCY_FRACTION * float(f_el[0])
+    return DriveCoupling(float(j_eff * wc * wc), float(2.0 * j_eff * wc))
+
+
+def prepare_run(
+    model: AssembledModel, conditions: Conditions, gyroscopic: bool
+) -> RunSetup:
+    """Translate a model and its operating conditions into the arrays of one run.
+
+    Parameters
+    ----------
+    model : AssembledModel
+        The gear set.
+    conditions : SpeedRamp, SpeedTable or TorqueDriven
+        Operating conditions.
+    gyroscopic : bool
+        Switch the gyroscopic and centripetal terms on.
+
+    Returns
+    -------
+    RunSetup
+
+    Raises
+    ------
+    ValueError
+        If the conditions need an output rotation the model does not have.
+    TypeError
+        For an unsupported conditions object.
+    """
+    n = model.n_dof
+    rigid = model.rigid_body_velocity()
+    mass = np.array(model.mass, dtype=float)
+    k_in = int(model.rotation_dofs[model.input_member])
+    k_out = int(model.rotation_dofs.get(model.output_member, -1))
+    ratio_out = float(model.kinematic_ratios.get(model.output_member, 0.0))
+    sense = 1.0 if ratio_out >= 0 else -1.0
+    ipar = np.array([kn.DRIVE_NONE, k_in, k_out, model.carrier_dof, int(bool(gyroscopic))])
+    fpar = np.zeros(kn.N_FPAR)
+    fpar[kn.FP_OUTDIR] = sense
+    speed_tab = np.zeros((3, 1))
+    torque_tab = np.zeros((2, 1))
+    coupling = None
+    free_rigid = False
+    if isinstance(conditions, SpeedRamp | SpeedTable):
+        ipar[kn.IP_MODE] = kn.DRIVE_SPEED
+        t_nodes, rpm = conditions.table()
+        w = rpm * RAD_S_PER_RPM
+        phi = np.concatenate([[0.0], np.cumsum(np.diff(t_nodes) * (w[1:] + w[:-1]) / 2)])
+        speed_tab = np.vstack([t_nodes, w, phi])
+        ang = np.zeros(1)
+        spd = np.zeros(1)
+        kn.speed_profile(speed_tab, np.zeros(1), ang, spd)
+        speed_tab[2] -= ang[0]  # phi(0) = 0
+        omega0 = float(spd[0])
+        seg = np.searchsorted(t_nodes, 0.0, side="right") - 1
+        alpha0 = 0.0
+        if 0 <= seg < len(t_nodes) - 1:
+            alpha0 = float((w[seg + 1] - w[seg]) / (t_nodes[seg + 1] - t_nodes[seg]))
+        if conditions.input_torque is not None:
+            if ratio_out == 0.0 or k_out < 0:
+                raise ValueError("input_torque needs a rotating output member")
+            t_load = float(conditions.input_torque) / abs(ratio_out)
+        else:
+            t_load = float(conditions.load_torque)
+        if t_load != 0.0 and k_out < 0:
+            raise ValueError(f"output member {model.output_member!r} has no rotation coordinate")
+        load = (t_load, 0.0, 0.0)
+        coupling = conditions.coupling or default_coupling(model)
+        fpar[kn.FP_KC] = coupling.stiffness
+        fpar[kn.FP_CC] = coupling.damping
+        speed_max = float(np.abs(w).max())
+        duration = float(conditions.duration)
+        drive = "speed"
+    elif isinstance(conditions, TorqueDriven):
+        ipar[kn.IP_MODE] = kn.DRIVE_TORQUE
+        tt, tv = conditions.input_torque
+        torque_tab = np.vstack([np.array(tt), np.array(tv)])
+        if k_out < 0 and (conditions.load_inertia or any(conditions.load_torque)):
+            raise ValueError(f"output member {model.output_member!r} has no rotation coordinate")
+        if k_out >= 0:
+            mass[k_out, k_out] += conditions.load_inertia
+        load = conditions.load_torque
+        omega0 = conditions.start_rpm * RAD_S_PER_RPM
+        alpha0 = 0.0
+        k_mean = model.mean_stiffness_matrix()
+        free_rigid = bool(
+            np.abs(k_mean @ rigid).max() <= 1e-9 * np.abs(k_mean).max() * np.abs(rigid).max()
+        )
+        speed_max = max(abs(conditions.max_rpm), abs(conditions.start_rpm)) * RAD_S_PER_RPM
+        duration = conditions.duration
+        drive = "torque"
+    else:
+        raise TypeError(f"unsupported operating conditions {type(conditions).__name__}")
+    fpar[kn.FP_T0], fpar[kn.FP_C1], fpar[kn.FP_C2] = load
+    fpar[kn.FP_SPEED_LIMIT] = 3.0 * speed_max + 100.0
+    gyro, centri = model.carrier_frame_operators()
+    system = kn.KernelSystem(
+        minv=np.linalg.inv(mass),
+        stiffness=model.stiffness,
+        damping=model.damping,
+        gyroscopic=gyro,
+        centripetal=centri,
+        mesh_vectors=np.asarray(model.mesh_vectors, dtype=float).reshape(model.n_mesh, n),
+        mesh_position_vectors=np.asarray(model.mesh_position_vectors, float).reshape(
+            model.n_mesh, n
+        ),
+        mesh_position_offsets=model.mesh_position_offsets,
+        left_tables=model.mesh_stiffness_tables,
+        right_tables=model.mesh_back_tables,
+        backlash=model.mesh_backlash,
+        mesh_damping=model.mesh_damping,
+        f_const=np.zeros(n),
+        ipar=ipar,
+        fpar=fpar,
+        speed_table=speed_tab,
+        torque_table=torque_tab,
+        deflection_limit=np.full(model.n_mesh, np.inf),
+    )
+    return RunSetup(
+        system,
+        mass,
+        rigid,
+        omega0,
+        alpha0,
+        free_rigid,
+        duration,
+        speed_max,
+        coupling,
+        tuple(float(x) for x in load),
+        drive,
+    )
