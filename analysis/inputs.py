@@ -28,6 +28,7 @@ from typing import Any
 
 import numpy as np
 
+from analysis.cf import elapsed_seconds
 from analysis.checks import (
     BLOCK_SAMPLES,
     require_finite_blocks,
@@ -308,7 +309,7 @@ def signal_input(
             raise ValueError(f"{where}: DataArray needs a 'time' coordinate in seconds")
         if axis is not None:
             raise ValueError("axis= is for plain arrays; a DataArray has its 'time' dimension")
-        t_coord = np.asarray(x["time"].values)
+        t_coord = elapsed_seconds(x["time"].values)  # decoded datetimes: since the first
         fs_t = uniform_rate(t_coord, f"{where}.time")
         if fs is not None and abs(float(fs) - fs_t) > 1e-6 * fs_t:
             raise ValueError(

@@ -25,6 +25,7 @@ import xarray as xr
 from scipy.interpolate import CubicSpline, PchipInterpolator, make_lsq_spline
 from scipy.ndimage import median_filter
 
+from analysis.cf import time_attrs
 from analysis.checks import require_finite, require_monotonic, require_positive
 
 __all__ = ["SpeedAccuracy", "SpeedReference", "from_angle", "from_rpm", "from_tacho"]
@@ -102,7 +103,11 @@ class SpeedReference:
     def to_dataset(self) -> xr.Dataset:
         """Return a Dataset with ``angle`` (units ``rad``) and ``rpm`` (units ``min-1``) along
         ``time`` (units ``s``); accuracy figures become global attributes."""
-        attrs: dict[str, object] = {"Conventions": "CF-1.11", "speed_method": self.method}
+        attrs: dict[str, object] = {
+            "Conventions": "CF-1.11",
+            "history": f"speed reference from {self.method} by analysis.speed",
+            "speed_method": self.method,
+        }
         attrs.update({f"speed_{k}": v for k, v in asdict(self.accuracy).items()})
         return xr.Dataset(
             {
@@ -117,7 +122,7 @@ class SpeedReference:
                     {"units": "min-1", "long_name": "shaft speed (revolutions per minute)"},
                 ),
             },
-            coords={"time": ("time", self.time, {"units": "s", "long_name": "time"})},
+            coords={"time": ("time", self.time, time_attrs("time"))},
             attrs=attrs,
         )
 
