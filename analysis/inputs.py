@@ -137,8 +137,8 @@ class Reference:
     """
 
     kind: str
-    values: np.ndarray
-    label: str
+    values: np.ndarray = field(repr=False)
+    label: str = ""
     variable: str | None = None
 
 

@@ -352,7 +352,7 @@ def order_cuts_figure(
         f"{cut.amplitude} level [dB re 1 {ref}]" if show_db else f"{cut.amplitude} level [{ref}]"
     )
     ax.set_xlabel("speed [min⁻¹]")
-    bw = f"{cut.bandwidth:g} {'orders' if cut.bandwidth_kind == 'order' else 'Hz'}"
+    bw = f"{cut.bandwidth:.4g} {'orders' if cut.bandwidth_kind == 'order' else 'Hz'}"
     ax.set_title(f"{cut.name}: order cuts, band {bw}, {cut.window}")
     ax.legend(fontsize=8)
     ax.grid(True, alpha=0.3)
