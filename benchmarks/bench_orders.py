@@ -110,7 +110,7 @@ def recording(minutes: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return np.arange(n) / FS, np.linspace(600.0, 6000.0, n), data
 
 
-def functions(minutes: float, old: Any) -> None:
+def functions(minutes: float, old: Any, only: set[str] | None = None) -> None:
     t, rpm, data = recording(minutes)
     x = data[0]
     n = x.size
@@ -145,6 +145,8 @@ def functions(minutes: float, old: Any) -> None:
     print(f"   {'':18}{'baseline, 1 ch':>22}{'today, 1 ch':>22}{'ratio':>7}"
           f"{'today, 4 ch':>22}{'4x baseline / today':>21}")
     for label, ours_fn, ref_fn in cases:
+        if only and label not in only:
+            continue
         m_ref, t_ref, r_ref = _traced(ref_fn)
         m_one, t_one, r_one = _traced(lambda f=ours_fn: f(x))
         m_four, t_four, r_four = _traced(lambda f=ours_fn: f(data, axis=-1))
@@ -159,13 +161,16 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--quick", action="store_true", help="short signals")
     parser.add_argument("--baseline", default="4dda194", help="git commit of the baseline")
+    parser.add_argument("--only", default="", help="comma-separated functions of part 2")
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         old = load_baseline(args.baseline, Path(tmp))
         importlib.import_module("analysis_baseline.orders")
         importlib.import_module("analysis_baseline.maps")
-        throughput(10.0 if args.quick else 60.0, old)
-        functions(1.0 if args.quick else 10.0, old)
+        only = {f for f in args.only.split(",") if f}
+        if not only:
+            throughput(10.0 if args.quick else 60.0, old)
+        functions(1.0 if args.quick else 10.0, old, only or None)
 
 
 if __name__ == "__main__":
