@@ -64,7 +64,7 @@ from analysis.inputs import (
     reference_input,
     signal_input,
 )
-from analysis.sinc import HALF_TAPS, decimate, interpolate
+from analysis.sinc import HALF_TAPS, decimate, interpolate, positions
 
 if TYPE_CHECKING:
     import xarray as xr
@@ -500,10 +500,9 @@ class AngleResampler:
 
     def _fine(self, f0: int, f1: int) -> tuple[np.ndarray, np.ndarray]:
         """Signal and time at the fine-grid angles ``[f0, f1)``."""
-        phi = self.track.first + self.dphi * np.arange(f0, f1)
-        th, t = self.track.span(float(phi[0]), float(phi[-1]))
-        tq = np.interp(phi, th, t)
-        pos = (tq - self.t_first) * self.fs
+        first, dphi = self.track.first, self.dphi
+        th, t = self.track.span(first + dphi * float(f0), first + dphi * float(f1 - 1))
+        pos, tq = positions(th, t, first, dphi, f0, f1 - f0, self.t_first, self.fs)
         n = self.signal.n
         lo = max(0, int(np.floor(pos[0])) - HALF_TAPS + 1)
         hi = min(n, int(np.floor(pos[-1])) + HALF_TAPS + 1)

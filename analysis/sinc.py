@@ -11,9 +11,10 @@ are computed once and applied to every channel. :func:`decimate` is the zero-pha
 polyphase FIR that low-passes the fine angle grid and keeps every ``over``-th sample (as
 ``scipy.signal.resample_poly(x, 1, over, window=fir)``).
 
-Both kernels are ``numba.njit(cache=True)``, without ``fastmath``, loop over channels in the
-outer loop and accumulate in a fixed order, so each channel's result is the same whether it is
-processed alone or with others, bit for bit.
+The kernels are ``numba.njit(cache=True, error_model="numpy")`` (no zero-division checks;
+none can occur), without ``fastmath``; they loop over channels in the outer loop and
+accumulate in a fixed order, so each channel's result is the same whether it is processed
+alone or with others, bit for bit.
 """
 
 from __future__ import annotations
@@ -25,7 +26,7 @@ from analysis.jit import prepare_cache
 
 prepare_cache(__file__)  # before the decorators below: numba resolves its cache folder there
 
-__all__ = ["HALF_TAPS", "decimate", "interpolate", "kernel_table"]
+__all__ = ["HALF_TAPS", "decimate", "interpolate", "kernel_table", "positions"]
 
 #: Half length of the interpolation kernel (taps -11 .. 12 around the position).
 HALF_TAPS = 12
@@ -63,7 +64,7 @@ def kernel_table(pieces: int = _PIECES, degree: int = _DEGREE) -> np.ndarray:
 _TABLE = kernel_table()
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")  # no zero-division checks (none can occur)
 def _interpolate(x, start, n_total, pos, table, out):  # pragma: no cover - compiled
     n_ch = x.shape[0]
     pieces = table.shape[0]
@@ -155,7 +156,52 @@ def interpolate(
     return out
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")  # no zero-division checks (none can occur)
+def _positions(th, t, first, dphi, f0, t_first, fs, pos, tq):  # pragma: no cover - compiled
+    # tq[i] = numpy.interp(first + dphi * (f0 + i), th, t), the same operations in the same
+    # order, found by one forward sweep (the angles increase); pos = (tq - t_first) * fs
+    m = th.size
+    j = 0
+    for i in range(pos.size):
+        phi = first + dphi * float(f0 + i)
+        if phi >= th[m - 1]:
+            v = t[m - 1]
+        elif phi < th[0]:
+            v = t[0]
+        else:
+            while th[j + 1] <= phi:
+                j += 1
+            slope = (t[j + 1] - t[j]) / (th[j + 1] - th[j])
+            v = slope * (phi - th[j]) + t[j]
+        tq[i] = v
+        pos[i] = (v - t_first) * fs
+
+
+def positions(
+    th: np.ndarray, t: np.ndarray, first: float, dphi: float, f0: int, count: int,
+    t_first: float, fs: float,
+) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    """Instants and fractional sample positions of the angles ``first + dphi * (f0 + i)``.
+
+    ``th`` (increasing) and ``t`` are the angle and time of the samples around them; the
+    instants are their linear interpolation (as :func:`numpy.interp`), the positions
+    ``(instant - t_first) * fs``.
+
+    Returns
+    -------
+    pos, tq : numpy.ndarray
+        Positions [samples] and instants [s], ``count`` each.
+    """
+    pos = np.empty(int(count))
+    tq = np.empty(int(count))
+    _positions(
+        np.ascontiguousarray(th, dtype=np.float64), np.ascontiguousarray(t, dtype=np.float64),
+        float(first), float(dphi), int(f0), float(t_first), float(fs), pos, tq,
+    )  # fmt: skip
+    return pos, tq
+
+
+@numba.njit(cache=True, error_model="numpy")  # no zero-division checks (none can occur)
 def _decimate(fine, fir, over, first, out):  # pragma: no cover - compiled
     # Output j is sum_k fir[k] fine[(first + j) over + half - k]. With half - k = q over + r
     # (0 <= r < over) that is sum_k fir[k] s_r[first + j + q], s_r[m] = fine[m over + r]: the
