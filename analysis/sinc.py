@@ -86,10 +86,27 @@ def _interpolate(x, start, n_total, pos, table, out):  # pragma: no cover - comp
         c2 = tp[2]
         c3 = tp[3]
         c4 = tp[4]
+        first = ib - HALF_TAPS + 1
+        inside = first >= 0 and first + n_taps <= n_total
+        if inside and n_ch == 1:  # one channel: weights and products in one pass
+            seg = x[0, first - start : first - start + n_taps]
+            for k in range(n_taps):
+                prod[k] = ((((c4[k] * u + c3[k]) * u + c2[k]) * u + c1[k]) * u + c0[k]) * seg[k]
+            a0 = 0.0
+            a1 = 0.0
+            a2 = 0.0
+            a3 = 0.0
+            for kk in range(n_taps // 4):
+                k = 4 * kk
+                a0 += prod[k]
+                a1 += prod[k + 1]
+                a2 += prod[k + 2]
+                a3 += prod[k + 3]
+            out[0, i] = (a0 + a1) + (a2 + a3)
+            continue
         for k in range(n_taps):  # Horner, degree 4 (the table's), vectorised over the taps
             w[k] = (((c4[k] * u + c3[k]) * u + c2[k]) * u + c1[k]) * u + c0[k]
-        first = ib - HALF_TAPS + 1
-        if first >= 0 and first + n_taps <= n_total:
+        if inside:
             # products in one vectorised pass, then four partial sums in a fixed order
             # (no serial chain of additions); n_taps is a multiple of 4
             o = first - start
