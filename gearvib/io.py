@@ -4,7 +4,9 @@ The files are NETCDF4 written with the netCDF4 engine (xarray's default engine h
 between releases), zlib-compressed and chunked along ``time``. Coordinates and data that hold no
 NaN get ``_FillValue = None`` (CF forbids missing values in coordinate variables). The write is
 atomic: a temporary file in the destination directory is written, flushed to disk and renamed
-over the destination, so a crash or Ctrl-C never leaves a partial file.
+over the destination, so a crash or Ctrl-C never leaves a partial file. String labels (mesh,
+flank, ... names) are written as CF label variables ``<dim>_label`` and restored by
+:func:`read_run`; ``time`` is read as float seconds (see :mod:`analysis.cf`).
 """
 
 from __future__ import annotations
@@ -19,6 +21,8 @@ from typing import TypeVar
 
 import numpy as np
 import xarray as xr
+
+from analysis.cf import labels_from_cf, labels_to_cf
 
 __all__ = [
     "GearvibFileError",
@@ -109,10 +113,10 @@ def write_netcdf(ds: xr.Dataset, path: str | os.PathLike) -> Path:
     ``KeyboardInterrupt``.
     """
     dest = Path(path)
-    out = ds.copy(deep=False)
+    out = labels_to_cf(ds.copy(deep=False))  # string labels: CF label variables, not coordinates
     out.attrs = sanitize_attrs(ds.attrs)
     for name in out.variables:
-        out[name].attrs = sanitize_attrs(ds[name].attrs)
+        out[name].attrs = sanitize_attrs(out[name].attrs)
     atomic_write(dest, lambda tmp: out.to_netcdf(tmp, engine="netcdf4", format="NETCDF4",
                                                  encoding=_encoding(out)))
     return dest
@@ -183,8 +187,8 @@ def read_run(path: str | os.PathLike) -> xr.Dataset:
     if not p.is_file():
         raise GearvibFileError(f"gearvib run file not found: {p}")
     try:
-        with xr.open_dataset(p, engine="netcdf4") as ds:
-            loaded = ds.load()
+        with xr.open_dataset(p, engine="netcdf4", decode_times=False) as ds:
+            loaded = labels_from_cf(ds.load())  # float seconds; labels as coordinates again
     except Exception as exc:
         raise GearvibFileError(f"cannot read {p} as netCDF: {exc}") from exc
     if not str(loaded.attrs.get("source", "")).startswith("gearvib"):

@@ -65,6 +65,10 @@ from dataclasses import dataclass, fields
 import numpy as np
 from numba import njit
 
+from analysis.jit import prepare_cache
+
+prepare_cache(__file__)  # a writable numba cache also in read-only installs (before @njit)
+
 __all__ = [
     "DRIVE_MOTOR",
     "DRIVE_NONE",

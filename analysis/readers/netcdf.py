@@ -8,6 +8,7 @@ from pathlib import Path
 
 import xarray as xr
 
+from analysis.cf import labels_from_cf
 from analysis.readers.layout import ReaderError, clean_attrs, validate_dataset
 
 __all__ = ["read_netcdf", "write_netcdf"]
@@ -37,8 +38,10 @@ def read_netcdf(path: str | os.PathLike[str]) -> xr.Dataset:
     if not p.is_file():
         raise FileNotFoundError(f"netCDF file not found: {p}")
     try:
-        with xr.open_dataset(p, engine="netcdf4", decode_timedelta=False) as ds:
-            ds = ds.load()
+        with xr.open_dataset(
+            p, engine="netcdf4", decode_times=False, decode_timedelta=False
+        ) as ds:
+            ds = labels_from_cf(ds.load())
     except (OSError, ValueError, RuntimeError) as exc:
         raise ReaderError(
             f"{p}: not a readable netCDF file (truncated or corrupt?): {exc}"

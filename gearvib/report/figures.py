@@ -837,13 +837,13 @@ def analyse_case(ds: xr.Dataset, *, name: str | None = None,
     seg = int(min(ds.sizes["time"], round(fs / max(settings.map_resolution_hz / 4, 1.0))))
     for mesh in [m for m in (sun[:1] + ring[:1]) if m] or [force_mesh]:
         x = _signed_force(ds, mesh)
-        sp = spectrum(x - x.mean(), fs, window="hann", scaling="peak", segment_length=seg,
+        sp = spectrum(x - x.mean(), fs, window="hann", amplitude="peak", segment_length=seg,
                       overlap=0.5, units="N", name=f"tooth force {mesh}")
         band = sp.frequency <= fmax
         floor = float(np.median(sp.values[band])) if band.any() else 0.0
         # humps of the run-up spectrum, not the ripple of the mesh harmonics sweeping by
         pk = find_peaks(sp, prominence_db=3.0, max_peaks=4 * settings.spectrum_peaks,
-                        min_distance_hz=max(3 * sp.resolution_hz, fmax / 40.0),
+                        min_distance_hz=max(3 * sp.bin_spacing_hz, fmax / 40.0),
                         threshold=2 * floor)
         keep = (pk.frequency > 0.5 * settings.map_resolution_hz) & (pk.frequency <= fmax)
         order = np.argsort(pk.amplitude[keep])[::-1][: settings.spectrum_peaks]
@@ -852,7 +852,7 @@ def analyse_case(ds: xr.Dataset, *, name: str | None = None,
                    pk.bin_value[sel], pk.scaling, pk.units, pk.window)
         if len(pk) and fn.size:
             # a run-up spectrum has broad humps: each peak is uncertain by its -3 dB half-width
-            widths = peak_half_widths(sp.frequency, to_db(sp.values, sp.scaling), pk.frequency)
+            widths = peak_half_widths(sp.frequency, to_db(sp.values, sp.amplitude), pk.frequency)
             labels = label_peaks(pk.frequency, fn, resolution_hz=sp.enbw_hz,
                                  peak_widths_hz=widths, candidates=candidates, names=names,
                                  natural_uncertainty=settings.tolerance,
@@ -1057,9 +1057,9 @@ def spectra_figure(ca: CaseAnalysis, *, figsize: tuple[float, float] = (8.0, 6.5
     for ax, fsp in zip(axes, ca.spectra, strict=True):
         sp = fsp.spectrum
         band = sp.frequency <= ca.frequency_max_hz
-        ax.plot(sp.frequency[band], to_db(sp.values[band], sp.scaling), lw=0.7)
+        ax.plot(sp.frequency[band], to_db(sp.values[band], sp.amplitude), lw=0.7)
         if len(fsp.peaks):
-            y = to_db(fsp.peaks.amplitude, sp.scaling)
+            y = to_db(fsp.peaks.amplitude, sp.amplitude)
             ax.plot(fsp.peaks.frequency, y, "v", color="C3", ms=4)
             for i, (f, v) in enumerate(zip(fsp.peaks.frequency, y, strict=True)):
                 st = fsp.labels.status[i] if i < len(fsp.labels) else "unexplained"
@@ -1074,7 +1074,7 @@ def spectra_figure(ca: CaseAnalysis, *, figsize: tuple[float, float] = (8.0, 6.5
         lo, hi = ax.get_ylim()
         ax.set_ylim(lo, hi + 0.25 * (hi - lo))  # room for the peak labels below the title
         ax.set_ylabel("peak amplitude\n[dB re 1 N]")
-        ax.set_title(f"{fsp.mesh}: {sp.window}, Δf = {sp.resolution_hz:.3g} Hz, "
+        ax.set_title(f"{fsp.mesh}: {sp.window}, Δf = {sp.bin_spacing_hz:.3g} Hz, "
                      f"{sp.n_averages} averages", fontsize=9)
         ax.grid(True, alpha=0.3)
     axes[-1].set_xlabel("frequency [Hz]  (dotted: natural frequencies)")

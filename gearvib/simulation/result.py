@@ -10,6 +10,7 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 import xarray as xr
 
+from analysis.cf import time_attrs
 from gearvib import __version__
 from gearvib import kernels as kn
 from gearvib.model import AssembledModel
@@ -163,7 +164,12 @@ class RunUpResult:
         return hashlib.sha256(self.config_json.encode()).hexdigest()
 
     def to_dataset(self) -> xr.Dataset:
-        """CF-1.11 annotated dataset (float64 data, ``time`` in s, netCDF-safe attributes)."""
+        """CF-1.11 annotated dataset (float64 data, netCDF-safe attributes).
+
+        ``time`` holds float seconds since the start of the run, as a CF time coordinate
+        (``units = "seconds since 1970-01-01T00:00:00Z"``, ``standard_name``, ``axis``; the
+        epoch is a conventional origin, see :mod:`analysis.cf`).
+        """
 
         def var(
             dims: tuple[str, ...], data: np.ndarray, units: str, long_name: str, quantity: str
@@ -176,7 +182,11 @@ class RunUpResult:
 
         t = ("time",)
         coords = {
-            "time": var(t, self.time, "s", "time since start of run", "time"),
+            "time": xr.Variable(
+                t,
+                np.ascontiguousarray(self.time),
+                {**time_attrs("time since start of run"), "gearvib_quantity": "time"},
+            ),
             "mesh": xr.Variable(
                 ("mesh",),
                 np.array(self.mesh_names, dtype=str),
@@ -286,6 +296,7 @@ class RunUpResult:
         attrs = {
             "Conventions": "CF-1.11",
             "title": self.title,
+            "history": f"run-up simulated by gearvib {__version__} (gearvib.simulate)",
             "source": f"gearvib {__version__}",
             "gearvib_version": __version__,
             "integrator": INTEGRATOR,

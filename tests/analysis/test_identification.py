@@ -74,7 +74,7 @@ def _synthetic(seed: int, n_random: int = 24):
 
 
 def _identify(cat, x):
-    sp = spectrum(x, FS, window="hann", scaling="peak", segment_length=16384, overlap=0.5)
+    sp = spectrum(x, FS, window="hann", amplitude="peak", segment_length=16384, overlap=0.5)
     floor = float(np.median(sp.values))
     pk = find_peaks(sp, prominence_db=10.0, threshold=30 * floor, min_distance_hz=2.0)
     widths = peak_half_widths(sp.frequency, to_db(sp.values, "peak"), pk.frequency)

@@ -67,7 +67,8 @@ def sample() -> xr.Dataset:
 def assert_layout(ds: xr.Dataset, fs: float) -> None:
     assert ds.attrs["Conventions"] == "CF-1.11"
     assert ds.attrs["sample_rate_hz"] == pytest.approx(fs, rel=1e-9)
-    assert ds.time.attrs["units"] == "s"
+    assert ds.time.attrs["units"].startswith("seconds since ")  # CF time (analysis.cf)
+    assert (ds.time.attrs["standard_name"], ds.time.attrs["axis"]) == ("time", "T")
     assert ds.time.dtype == np.float64
     np.testing.assert_allclose(np.diff(ds.time.values), 1.0 / fs, rtol=1e-9)
     for v in ds.data_vars:
