@@ -19,9 +19,11 @@ __all__ = [
     "require_finite",
     "require_finite_blocks",
     "require_int",
+    "require_mass_matrix",
     "require_monotonic",
     "require_positive",
     "require_same_length",
+    "require_square",
     "sample_rate",
     "time_or_rate",
     "uniform_rate",
@@ -220,3 +222,30 @@ def time_or_rate(fs: Any, time: Any, function: str) -> tuple[Any, Any]:
         )
         return None, fs
     return fs, time
+
+
+def require_square(a: Any, name: str, n: int | None = None) -> np.ndarray:
+    """A finite square matrix (a scalar is 1 x 1), of size ``n`` when given."""
+    arr = require_finite(a, name)
+    if arr.ndim == 0:
+        arr = arr.reshape(1, 1)
+    if arr.ndim != 2 or arr.shape[0] != arr.shape[1]:
+        raise ValueError(f"{name} must be a square (n, n) matrix; got shape {arr.shape}")
+    if n is not None and arr.shape[0] != n:
+        raise ValueError(
+            f"{name} has shape {arr.shape} but M is ({n}, {n}); all matrices must have the "
+            "same size"
+        )
+    return arr
+
+
+def require_mass_matrix(M: Any) -> np.ndarray:
+    """The mass matrix ``M``: finite, square, symmetric and positive definite."""
+    m = require_square(M, "M")
+    if not np.allclose(m, m.T, rtol=1e-10, atol=1e-14 * np.abs(m).max()):
+        raise ValueError("M must be symmetric (M == M.T within 1e-10 relative)")
+    try:
+        np.linalg.cholesky(m)
+    except np.linalg.LinAlgError:
+        raise ValueError("M must be positive definite (all eigenvalues > 0)") from None
+    return m

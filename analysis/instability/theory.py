@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 import scipy.linalg
 
-from analysis.checks import require_finite, require_positive
+from analysis.checks import require_finite, require_mass_matrix, require_positive, require_square
 
 __all__ = [
     "Candidates",
@@ -622,12 +622,11 @@ def first_order_widths(
     :func:`instability_candidates`). Higher-order regions (``n``-th region of one harmonic)
     need higher-order perturbation or :func:`analysis.instability.floquet.floquet`.
     """
-    from analysis.instability.floquet import _as_square, _check_mass
 
-    m = _check_mass(M)
+    m = require_mass_matrix(M)
     n = m.shape[0]
-    c = _as_square(C, "C", n)
-    k0 = _as_square(K_mean, "K_mean", n)
+    c = require_square(C, "C", n)
+    k0 = require_square(K_mean, "K_mean", n)
     if not np.allclose(k0, k0.T, rtol=1e-10, atol=1e-14 * np.abs(k0).max()):
         raise ValueError("K_mean must be symmetric")
     kh = np.asarray(K_harmonics, dtype=complex)
