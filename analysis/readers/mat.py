@@ -20,6 +20,7 @@ import numpy as np
 import xarray as xr
 
 from analysis.checks import sample_rate
+from analysis.readers.integrity import describe, reading
 from analysis.readers.layout import (
     ChannelData,
     ReaderError,
@@ -28,6 +29,7 @@ from analysis.readers.layout import (
     validate_dataset,
 )
 from analysis.readers.mat73 import is_mat73, load_mat73
+from analysis.readers.matcheck import check_mat
 
 __all__ = ["read_mat", "write_mat"]
 
@@ -35,18 +37,25 @@ _FS_NAMES = ("fs", "Fs", "FS", "sample_rate", "sample_rate_hz", "samplerate", "S
 
 
 def _load(p: Path) -> tuple[dict[str, Any], str]:
-    """Variables of the file (as ``loadmat(squeeze_me=True)`` gives them) and the format tag."""
+    """Variables of the file (as ``loadmat(squeeze_me=True)`` gives them) and the format tag.
+
+    v4-v7.2 files are walked by :func:`~analysis.readers.matcheck.check_mat` first, so that
+    scipy never sees a structure it could crash or over-allocate on; whatever scipy still
+    raises, and its warning about an unreadable variable (which it would otherwise return as
+    a string), become :class:`ReaderError`.
+    """
     from scipy.io import loadmat
 
     if is_mat73(p):
         return load_mat73(p), "mat73"
-    try:
-        return loadmat(p, squeeze_me=True, chars_as_strings=True), "mat"
-    except NotImplementedError:
-        # scipy saw the v7.3 version field under a header text that does not say so
+    if check_mat(p).version == "7.3":  # the version field says HDF5, the header text does not
         return load_mat73(p), "mat73"
-    except (ValueError, OSError, TypeError, EOFError) as exc:
-        raise ReaderError(f"{p}: not a readable MAT file (truncated or corrupt?): {exc}") from None
+    with reading(p, "MAT") as notes:
+        loaded = loadmat(p, squeeze_me=True, chars_as_strings=True, spmatrix=False)
+    damage = [n for n in notes if "nreadable variable" in n or "uplicate variable" in n]
+    if damage:
+        raise ReaderError(f"{p}: not a readable MAT file: {describe(Exception(damage[0]))}")
+    return loaded, "mat"
 
 
 def _units_struct(value: object) -> dict[str, str]:
