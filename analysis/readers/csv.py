@@ -29,7 +29,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from analysis.readers.integrity import file_size, require_memory
+from analysis.readers.integrity import file_size, reading, require_memory
 from analysis.readers.layout import (
     ChannelData,
     ReaderError,
@@ -288,7 +288,8 @@ def read_csv(
     if not p.is_file():
         raise FileNotFoundError(f"CSV file not found: {p}")
     size = file_size(p)
-    layout = _layout(p, delimiter)
+    with reading(p, "CSV"):
+        layout = _layout(p, delimiter)
     ncol = layout.ncol
     rows_est = (size - layout.offset) / layout.row_bytes + 1
     require_memory(
@@ -296,8 +297,9 @@ def read_csv(
         p,
         f"about {rows_est:.3g} rows x {ncol} columns",
     )
-    data = _parse(p, layout)
-    tail_rows = _tail(p, layout, size)
+    with reading(p, "CSV"):
+        data = _parse(p, layout)
+        tail_rows = _tail(p, layout, size)
     header = layout.header
     names, file_units = [], []
     for i in range(ncol):

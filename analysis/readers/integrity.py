@@ -23,11 +23,13 @@ import os
 import re
 import warnings
 from collections.abc import Iterator
+from dataclasses import dataclass, field
 
 from analysis.readers.layout import ReaderError
 
 __all__ = [
     "MEMORY_FRACTION",
+    "Notes",
     "available_memory",
     "describe",
     "file_size",
@@ -177,6 +179,14 @@ def describe(exc: BaseException) -> str:
     return f"{name}: {text}" if text else name
 
 
+@dataclass
+class Notes:
+    """What a library reported while :func:`reading` ran: Python warnings and log records."""
+
+    warnings: list[str] = field(default_factory=list)
+    log: list[str] = field(default_factory=list)
+
+
 class _LogToError(logging.Handler):
     """Collects warnings a library logs (npTDMS reports truncation through ``logging``)."""
 
@@ -191,7 +201,7 @@ class _LogToError(logging.Handler):
 @contextlib.contextmanager
 def reading(
     path: str | os.PathLike[str], format_name: str, *, logger: str | None = None
-) -> Iterator[list[str]]:
+) -> Iterator[Notes]:
     """Context in which every failure of a parser becomes a :class:`ReaderError`.
 
     ``ReaderError`` passes unchanged; ``ImportError`` (a missing optional library) and
@@ -200,8 +210,8 @@ def reading(
     damaged input -- is re-raised as ``ReaderError("<path>: not a readable <format> file
     (<cause>)")``. Python warnings raised inside are suppressed and, like the warnings of
     the ``logger`` given (a library that reports damage through :mod:`logging`), collected
-    in the list the context yields, so that the caller can decide which of them mean
-    damage.
+    in the :class:`Notes` the context yields, so that the caller can decide which of them
+    mean damage.
 
     Parameters
     ----------
@@ -212,20 +222,17 @@ def reading(
     logger : str, optional
         Name of a :mod:`logging` logger whose warnings are collected too.
     """
-    collected: list[str] = []
+    notes = Notes()
     handler = _LogToError()
-    log = logging.getLogger(logger) if logger else None
-    if log is not None:
-        log.addHandler(handler)
-        old_propagate, log.propagate = log.propagate, False
+    saved = _capture_logs(logger, handler) if logger else []
     try:
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
             try:
-                yield collected
+                yield notes
             finally:
-                collected.extend(str(w.message) for w in caught)
-                collected.extend(handler.messages)
+                notes.warnings.extend(str(w.message) for w in caught)
+                notes.log.extend(handler.messages)
     except (ReaderError, ImportError):
         raise
     except MemoryError:
@@ -238,6 +245,24 @@ def reading(
             f"{path}: not a readable {format_name} file (truncated or corrupt?): {describe(exc)}"
         ) from None
     finally:
-        if log is not None:
-            log.removeHandler(handler)
-            log.propagate = old_propagate
+        for log, handlers, propagate in saved:
+            log.handlers[:] = handlers
+            log.propagate = propagate
+
+
+def _capture_logs(
+    name: str, handler: logging.Handler
+) -> list[tuple[logging.Logger, list[logging.Handler], bool]]:
+    """Route the warnings of logger ``name`` and its children (some libraries give every
+    module a logger with its own console handler) to ``handler`` only; return what to
+    restore."""
+    names = [name] + [
+        k for k in list(logging.Logger.manager.loggerDict) if k.startswith(name + ".")
+    ]
+    saved = []
+    for n in names:
+        log = logging.getLogger(n)
+        saved.append((log, list(log.handlers), log.propagate))
+        log.handlers[:] = [handler]
+        log.propagate = False
+    return saved

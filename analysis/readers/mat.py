@@ -52,7 +52,7 @@ def _load(p: Path) -> tuple[dict[str, Any], str]:
         return load_mat73(p), "mat73"
     with reading(p, "MAT") as notes:
         loaded = loadmat(p, squeeze_me=True, chars_as_strings=True, spmatrix=False)
-    damage = [n for n in notes if "nreadable variable" in n or "uplicate variable" in n]
+    damage = [n for n in notes.warnings if "nreadable variable" in n or "uplicate variable" in n]
     if damage:
         raise ReaderError(f"{p}: not a readable MAT file: {describe(Exception(damage[0]))}")
     return loaded, "mat"

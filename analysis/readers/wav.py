@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
+from analysis.readers.integrity import reading
 from analysis.readers.layout import ChannelData, ReaderError, build_dataset, validate_dataset
 from analysis.readers.riff import WAVE_FORMAT_IEEE_FLOAT, read_samples, wav_layout
 
@@ -73,7 +74,8 @@ def read_wav(
     p = Path(path)
     if not p.is_file():
         raise FileNotFoundError(f"WAV file not found: {p}")
-    layout = wav_layout(p)
+    with reading(p, "WAV"):
+        layout = wav_layout(p)
     n_ch = layout.channels
     names = (
         list(channel_names) if channel_names is not None else [f"ch{i + 1}" for i in range(n_ch)]
@@ -89,7 +91,8 @@ def read_wav(
             raise ValueError(
                 f"calibration = {cal!r} for channel {names[i]!r}: must be finite and != 0"
             )
-    data = read_samples(p, layout)
+    with reading(p, "WAV"):
+        data = read_samples(p, layout)
     channels = []
     for i in range(n_ch):
         cal = float(cals[i])
