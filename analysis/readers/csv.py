@@ -42,7 +42,7 @@ from analysis.readers.timebase import grid_fits, print_precision, uniform_rate
 __all__ = ["read_csv", "write_csv"]
 
 _UNIT_IN_NAME = re.compile(r"^(.*?)\s*[\[(]([^\])]*)[\])]\s*$")
-_NUMBER = re.compile(r"[+-]?(\d*)(?:\.(\d*))?(?:[eE][+-]?(\d+))?")
+_NUMBER = re.compile(r"[+-]?(\d*)(?:\.(\d*))?(?:[eE][+-]?(\d+))?")  # whole, decimals, exp
 _BOM = b"\xef\xbb\xbf"
 _SAMPLE_ROWS = 1000  # rows read in Python at each end (print precision, truncation check)
 _TAIL_BYTES = 1 << 16
@@ -98,6 +98,20 @@ def _decode(raw: bytes) -> str:
         return raw.decode("latin-1")
 
 
+def _header_names(line: str, delimiter: str | None) -> list[str]:
+    """Column names of a header line; with whitespace as delimiter a bracketed unit
+    (``time [s] acc [m/s2]``) stays with the name before it."""
+    names: list[str] = []
+    for tok in _tokens(line, delimiter, False):
+        tok = tok.strip().strip('"')
+        unit = tok[:1] in "[(" and tok[-1:] in ")]"
+        if delimiter is None and unit and names:
+            names[-1] = f"{names[-1]} {tok}"
+        else:
+            names.append(tok)
+    return names
+
+
 def _layout(p: Path, delimiter: str | None) -> _Layout:
     """Header, delimiter, decimal comma and the first data rows, read line by line."""
     with open(p, "rb") as fh:
@@ -124,15 +138,25 @@ def _layout(p: Path, delimiter: str | None) -> _Layout:
         probe = content[1][2] if len(content) > 1 else first
         decimal_comma = delim == ";" and "," in probe.split("#", 1)[0]
         toks = _tokens(first, delim, decimal_comma)
-        header = None
+        header, ncol = None, len(toks)
         if not all(_is_number(t) for t in toks):
-            header = [t.strip().strip('"') for t in _tokens(first, delim, False)]
             if len(content) < 2:
                 raise ReaderError(f"{p}: header but no data lines")
+            header = _header_names(first, delim)
+            ncol = len(_tokens(content[1][2], delim, decimal_comma))
+            if len(header) != ncol:
+                if ncol == 1 and delim is None:  # one column whose name has blanks
+                    header = [first.split("#", 1)[0].strip().strip('"')]
+                else:
+                    raise ReaderError(
+                        f"{p}, line {first_no}: the header has {len(header)} names but line "
+                        f"{content[1][1]} has {ncol} columns; give delimiter= if it is not "
+                        f"{delim or 'whitespace'!r}"
+                    )
             body_offset, body_no = content[1][0], content[1][1]
         else:
             body_offset, body_no = first_offset, first_no
-        layout = _Layout(body_offset, body_no, delim, decimal_comma, len(toks), header)
+        layout = _Layout(body_offset, body_no, delim, decimal_comma, ncol, header)
         fh.seek(body_offset)
         nbytes = 0
         while len(layout.rows) < _SAMPLE_ROWS:
@@ -194,17 +218,28 @@ def _parse(p: Path, layout: _Layout) -> np.ndarray:
     return data
 
 
-def _digits(tok: str) -> tuple[int, int]:
-    """(mantissa digits, exponent digits or -1) of a printed number."""
+def _shape(tok: str) -> tuple[str, int, int]:
+    """How a number is printed: ("e", decimals, exponent digits) for exponent notation,
+    ("f", decimals) with a decimal point, ("i", digits) for an integer. Cutting a printed
+    number always changes its shape."""
     m = _NUMBER.fullmatch(tok)
     if m is None:
-        return -1, -1
-    mant = len(m.group(1)) + len(m.group(2) or "")
-    return mant, len(m.group(3)) if m.group(3) is not None else -1
+        return ("?", -1, -1)
+    if m.group(3) is not None:
+        return ("e", len(m.group(2) or ""), len(m.group(3)))
+    if m.group(2) is not None or "." in tok:
+        return ("f", len(m.group(2) or ""), 0)
+    return ("i", len(m.group(1)), 0)
 
 
 def _tail(p: Path, layout: _Layout, size: int) -> list[list[str]]:
-    """Tokens of the last rows; refuse a last line that looks cut (see module docstring)."""
+    """Tokens of the last rows; refuse a last line that may have been cut.
+
+    A file whose last line ends without end-of-line may have been cut inside its last
+    number, which still parses. The line is accepted only when its last number is printed
+    exactly like that column on every line before it (same notation, decimals and exponent
+    digits -- a fixed format, where every cut shows), else the file is refused as truncated.
+    """
     start = max(layout.offset, size - _TAIL_BYTES)
     with open(p, "rb") as fh:
         fh.seek(start)
@@ -213,24 +248,24 @@ def _tail(p: Path, layout: _Layout, size: int) -> list[list[str]]:
     if start > layout.offset:
         lines = lines[1:]  # the first line of the block may be partial
     rows = [r for r in (_tokens(ln, layout.delimiter, layout.decimal_comma) for ln in lines) if r]
-    if not rows or block.endswith((b"\n", b"\r")):
+    last_text = lines[-1].split("#", 1)[0] if lines else ""
+    if not rows or block.endswith((b"\n", b"\r")) or not last_text.strip():
         return rows
-    last, before = rows[-1], rows[-1 - _SAMPLE_ROWS : -1]
-    if len(last) != layout.ncol or not before:
-        return rows
-    for col, tok in enumerate(last):
-        shapes = [_digits(r[col]) for r in before if len(r) == layout.ncol]
-        mant, expo = _digits(tok)
-        short_mant = mant < min(s[0] for s in shapes)
-        short_expo = min(s[1] for s in shapes) >= 0 and expo < min(s[1] for s in shapes)
-        if short_mant or short_expo:
-            with open(p, "rb") as fh:
-                line_no = sum(chunk.count(b"\n") for chunk in iter(lambda: fh.read(1 << 24), b""))
-            raise ReaderError(
-                f"{p}, line {line_no + 1}: the last line has no end-of-line and its column "
-                f"{col + 1} has fewer digits than on the lines before: the file looks "
-                "truncated; if it is complete, end it with a newline"
-            )
+    before = [r[-1] for r in rows[-1 - _SAMPLE_ROWS : -1] if len(r) == layout.ncol]
+    shapes = {_shape(tok) for tok in before}
+    if len(shapes) != 1 or _shape(rows[-1][-1]) not in shapes:
+        with open(p, "rb") as fh:
+            line_no = sum(chunk.count(b"\n") for chunk in iter(lambda: fh.read(1 << 24), b""))
+        why = (
+            "its last number is printed with fewer digits than on the lines before"
+            if len(shapes) == 1
+            else "the last column is not printed with a fixed number of digits, so a cut "
+            "number cannot be told from a complete one"
+        )
+        raise ReaderError(
+            f"{p}, line {line_no + 1}: the file ends without end-of-line and {why}: it may be "
+            "truncated; if it is complete, end it with a newline"
+        )
     return rows
 
 
@@ -254,8 +289,8 @@ def read_csv(
         Name (from the header) or 0-based index of a column holding time in seconds; it must
         be uniformly sampled within the precision it is printed with (a column printed with
         8 decimals at 25.6 kHz is uniform; a missing sample is not). The rate is snapped to
-        integer Hz (or 0.1/0.01/0.001 Hz) when that grid fits the printed values. It becomes
-        the ``time`` coordinate, not a channel.
+        the roundest value (multiples of 1000, 100, 10, 1, ... 0.001 Hz) whose grid fits the
+        printed values. It becomes the ``time`` coordinate, not a channel.
     units : str, sequence or mapping, optional
         Channel units: one string for all, one per channel (in file order, time column
         excluded) or a mapping column name -> unit. Overrides units in the header;
@@ -354,7 +389,8 @@ def read_csv(
     for i, u in zip(chan_idx, chan_units, strict=True):
         ud, factor = to_udunits(u)
         attrs = {"source_units": u} if u is not None and (ud != u or factor != 1.0) else {}
-        values = data[:, i] * factor if factor != 1.0 else data[:, i]
+        with np.errstate(over="ignore", invalid="ignore"):  # inf/NaN: reported by channel
+            values = data[:, i] * factor if factor != 1.0 else data[:, i]
         channels.append(ChannelData(names[i], values, units=ud, attrs=attrs))
     assert fs is not None
     return build_dataset(channels, fs, source_format="csv", source_file=str(p), start_time=start)

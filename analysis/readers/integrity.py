@@ -34,6 +34,7 @@ __all__ = [
     "describe",
     "file_size",
     "format_bytes",
+    "memory_budget",
     "reading",
     "require_in_file",
     "require_memory",
@@ -117,6 +118,11 @@ def available_memory() -> int:
     return min(limits)
 
 
+def memory_budget() -> float:
+    """Bytes one read may plan to use: :data:`MEMORY_FRACTION` of :func:`available_memory`."""
+    return MEMORY_FRACTION * available_memory()
+
+
 def require_memory(nbytes: float, path: str | os.PathLike[str], what: str) -> None:
     """Raise :class:`ReaderError` unless ``nbytes`` fit into the memory a read may use.
 
@@ -129,7 +135,7 @@ def require_memory(nbytes: float, path: str | os.PathLike[str], what: str) -> No
     what : str
         What needs the memory (``"12 channels of 1e9 samples"``), for the message.
     """
-    budget = MEMORY_FRACTION * available_memory()
+    budget = memory_budget()
     if nbytes > budget:
         raise ReaderError(
             f"{path}: {what} needs {format_bytes(nbytes)} of memory, but only "
@@ -140,7 +146,13 @@ def require_memory(nbytes: float, path: str | os.PathLike[str], what: str) -> No
 
 
 def require_in_file(
-    end: int, size: int, path: str | os.PathLike[str], what: str, *, start: int | None = None
+    end: int,
+    size: int,
+    path: str | os.PathLike[str],
+    what: str,
+    *,
+    format_name: str,
+    start: int | None = None,
 ) -> None:
     """Raise :class:`ReaderError` if a declared region ends beyond the end of the file.
 
@@ -149,19 +161,22 @@ def require_in_file(
     end : int
         Offset (bytes) just after the last byte the header says belongs to the region.
     size : int
-        Size of the file (or of the decoded buffer) in bytes.
+        Size of the file in bytes.
     path : path-like
         The file, for the message.
     what : str
         The region (``"data chunk"``, ``"variable 'acc'"``), for the message.
+    format_name : str
+        The format, for the message (``"MAT"``).
     start : int, optional
         Offset where the region starts, to state the declared length.
     """
     if end > size:
-        declared = f" ({end - start} bytes from offset {start})" if start is not None else ""
+        declared = f" ({end - start} bytes from byte {start})" if start is not None else ""
         raise ReaderError(
-            f"{path}: {what} declares data up to byte {end}{declared}, but the file has only "
-            f"{size} bytes: the file is truncated or its header is corrupt"
+            f"{path}: not a readable {format_name} file: {what} declares data up to byte {end}"
+            f"{declared}, but the file has {size} bytes: it is truncated or its header is "
+            "corrupt"
         )
 
 

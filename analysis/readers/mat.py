@@ -1,7 +1,7 @@
 """MATLAB .mat reader and writer (v4 to v7.2 via :func:`scipy.io.loadmat`, v7.3 via h5py).
 
-Every numeric vector in the file is a channel; a numeric matrix gives one channel per column
-(samples along the longer dimension), named ``<variable>_1``, ``<variable>_2``, ... Numeric
+Every non-empty numeric vector in the file is a channel; a numeric matrix gives one channel per
+column (samples along the longer dimension), named ``<variable>_1``, ``<variable>_2``, ... Numeric
 scalars are metadata (one of them may be the sample rate). An optional struct variable
 ``units`` maps channel variable names to unit labels (written by :func:`write_mat`).
 MATLAB v7.3 files (HDF5; told apart by the ``MATLAB 7.3 MAT-file`` header text) are decoded
@@ -89,7 +89,7 @@ def read_mat(
     time_variable : str, optional
         Name of a uniformly sampled time vector [s]; it becomes the ``time`` coordinate.
     variables : sequence of str, optional
-        Variables to read as channels (default: every numeric vector/matrix).
+        Variables to read as channels (default: every non-empty numeric vector/matrix).
     units : str, sequence or mapping, optional
         One unit for all channels, one per channel, or variable name -> unit; default from a
         ``units`` struct in the file, else ``"1"``.
@@ -135,6 +135,9 @@ def read_mat(
     if isinstance(fs, str):
         if fs not in scalars:
             raise ReaderError(f"{p}: fs = {fs!r} is not a numeric scalar in the file")
+        if not (np.isfinite(scalars[fs]) and scalars[fs] > 0):
+            raise ReaderError(f"{p}: the sample rate {fs} = {scalars[fs]!r} in the file is "
+                              "not finite and > 0")  # fmt: skip
         fs = scalars[fs]
     if fs is not None:
         if rate is not None and abs(rate - fs) > 1e-6 * fs:
@@ -148,12 +151,19 @@ def read_mat(
                 f"time_variable='<time vector>' (variables: {sorted(content)})"
             )
         rate = scalars[found[0]]
+        if not (np.isfinite(rate) and rate > 0):
+            raise ReaderError(
+                f"{p}: the sample rate {found[0]} = {rate!r} in the file is not finite and > 0"
+            )
     skip = {time_variable, *_FS_NAMES}
     if variables is None:
         names = [
             k
             for k, v in content.items()
-            if k not in skip and np.ndim(v) in (1, 2) and np.asarray(v).dtype.kind in "iuf"
+            if k not in skip
+            and np.ndim(v) in (1, 2)
+            and np.asarray(v).dtype.kind in "iuf"
+            and np.size(v) > 0  # MATLAB's [] is not a recording
         ]
     else:
         missing = [v for v in variables if v not in content]
@@ -188,7 +198,8 @@ def read_mat(
         ud, factor = to_udunits(label)
         ch.units = ud
         if factor != 1.0:
-            ch.values = np.asarray(ch.values, dtype=float) * factor
+            with np.errstate(over="ignore", invalid="ignore"):  # NaN/inf: reported by channel
+                ch.values = np.asarray(ch.values, dtype=float) * factor
             ch.attrs["source_units"] = str(label)
     attrs = {"mat_scalar_" + k: v for k, v in scalars.items() if k not in _FS_NAMES}
     return build_dataset(

@@ -42,12 +42,7 @@ from pathlib import Path
 
 import numpy as np
 
-from analysis.readers.integrity import (
-    MEMORY_FRACTION,
-    available_memory,
-    require_in_file,
-    require_memory,
-)
+from analysis.readers.integrity import memory_budget, require_in_file, require_memory
 from analysis.readers.layout import ReaderError
 
 __all__ = ["MAX_DEPTH", "MatInfo", "check_mat"]
@@ -396,7 +391,7 @@ def _check_v5(path: Path, buf, size: int, info: MatInfo) -> None:
         raise _Damage(126, f"endian indicator {marker!r} is neither 'IM' nor 'MI'")
     endian = "<" if marker == b"IM" else ">"
     walker = _V5Walker(buf, endian, 0)
-    budget = MEMORY_FRACTION * available_memory()
+    budget = memory_budget()
     seen: set[str] = set()
     pos = 128
     index = 0
@@ -405,7 +400,9 @@ def _check_v5(path: Path, buf, size: int, info: MatInfo) -> None:
         start, end = pos + 8, pos + 8 + nbytes
         if nbytes == 0:
             raise _Damage(pos, f"variable {index}: element of 0 bytes")
-        require_in_file(end, size, path, f"variable {index} (at byte {pos})", start=start)
+        require_in_file(
+            end, size, path, f"variable {index} (at byte {pos})", format_name="MAT", start=start
+        )
         if mdtype == _MI_COMPRESSED:
             what = f"variable {index} (compressed, at byte {pos})"
             data = _decompress(buf, start, end, budget - info.decoded_bytes, path, what)
@@ -462,7 +459,14 @@ def _check_v4(path: Path, buf, size: int, info: MatInfo) -> None:
         nbytes = mrows * ncols * _V4_ITEMSIZE[precision] * (2 if imagf == 1 else 1)
         start = pos + 20
         end = start + namlen + nbytes
-        require_in_file(end, size, path, f"variable {index} ({mrows} x {ncols})", start=start)
+        require_in_file(
+            end,
+            size,
+            path,
+            f"variable {index} ({mrows} x {ncols})",
+            format_name="MAT",
+            start=start,
+        )
         if mtype == 2 and ncols not in (3, 4):
             raise _Damage(pos, f"variable {index}: sparse matrix with {ncols} columns (3 or 4)")
         name = bytes(buf[start : start + namlen]).strip(b"\0").decode("latin-1")

@@ -285,6 +285,8 @@ def read_samples(path: str | os.PathLike[str], layout: WavLayout) -> np.ndarray:
         values = raw.view(f"{e}f{c}").astype(np.float64)
     elif c == 1:  # unsigned, offset binary
         values = ((raw.astype(np.int16) - 128) >> (8 - bits)).astype(np.float64)
+    elif c in (2, 4, 8) and bits == 8 * c:  # the common case: no shift
+        values = raw.view(f"{e}i{c}").astype(np.float64)
     else:
         if c in (2, 4, 8):
             ints = raw.view(f"{e}i{c}").astype(np.int64)

@@ -168,7 +168,8 @@ def read_tdms(
             if key in props:
                 attrs[key] = props[key]
         if data.dtype.kind == "f" and factor != 1.0:
-            data = data * factor
+            with np.errstate(over="ignore", invalid="ignore"):  # NaN/inf: reported by channel
+                data = data * factor
         channels.append(ChannelData(name, data, ud, props.get("description") or None, attrs))
     if incs:
         values = list(incs.values())

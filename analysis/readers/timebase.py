@@ -9,10 +9,12 @@ column or lets real gaps through. Here the tolerance is derived from the print i
   unit of the last printed digit of fixed-notation values (``10**-decimals`` for the usual
   number of decimals) and the relative unit of values in exponent notation
   (``10**(1 - significant digits)``);
-* :func:`uniform_rate` accepts the column when every value lies within the rounding bound
-  ``0.5 * (abs_unit + rel_unit * |t|)`` (plus a few ulp) of a uniform grid through the first
-  and last value (twice the bound: both ends are rounded too), and snaps the rate to the
-  simplest number (integer Hz, then 0.1, 0.01, 0.001 Hz) whose grid still fits all values.
+* :func:`uniform_rate` accepts the column when every step is within the rounding of its two
+  ends of the typical (median) step -- a missing sample is named by the step it makes -- and
+  every value lies within the rounding bound ``0.5 * (abs_unit + rel_unit * |t|)`` (plus a
+  few ulp) of a uniform grid through the first and last value (twice the bound: both ends
+  are rounded too); the rate is snapped to the roundest number (1000 Hz, 100 Hz, 10 Hz,
+  1 Hz, ... 0.001 Hz steps) whose grid still fits all values.
 """
 
 from __future__ import annotations
@@ -57,27 +59,33 @@ def print_precision(tokens: Iterable[str]) -> PrintPrecision:
     -------
     PrintPrecision
         ``absolute = 10**-d`` with ``d`` the most frequent number of decimals among
-        fixed-notation tokens (``%.8f`` -> 1e-8; a lone ``0`` does not change it; ties go to
-        fewer decimals), 0 if there are none; ``relative = 10**(1 - s)`` with ``s`` the most
-        significant digits among tokens in exponent notation (``%.6e`` -> 1e-6), 0 if there
-        are none.
+        fixed-notation tokens with a decimal point (``%.8f`` -> 1e-8; ties go to fewer
+        decimals; integers such as the ``0`` that ``%g`` prints count only when the column
+        holds nothing else, then 1), 0 if there are none; ``relative = 10**(1 - s)`` with
+        ``s`` the most significant digits among tokens in exponent notation (``%.6e`` ->
+        1e-6), 0 if there are none.
     """
     decimals: Counter[int] = Counter()
+    integers = 0
     digits = 0
     for tok in tokens:
         t = tok.strip()
         m = _TOKEN.fullmatch(t)
         if m is None or not (m.group(1) or m.group(2)):
             continue
-        whole, frac = m.group(1), m.group(2) or ""
+        whole, frac = m.group(1), m.group(2)
         if "e" in t.lower():
-            digits = max(digits, len((whole + frac).lstrip("0")) or 1)
+            digits = max(digits, len((whole + (frac or "")).lstrip("0")) or 1)
+        elif frac is None and "." not in t:
+            integers += 1  # "0" or "2" from %g: exact, says nothing about the precision
         else:
-            decimals[len(frac)] += 1
+            decimals[len(frac or "")] += 1
     absolute = 0.0
     if decimals:
         top = max(decimals.values())
         absolute = 10.0 ** -min(d for d, k in decimals.items() if k == top)
+    elif integers and not digits:
+        absolute = 1.0  # a column of integers
     return PrintPrecision(absolute=absolute, relative=10.0 ** (1 - digits) if digits else 0.0)
 
 
@@ -104,8 +112,8 @@ def uniform_rate(
     Returns
     -------
     rate : float
-        Sample rate [Hz], snapped to integer Hz (or 0.1, 0.01, 0.001 Hz) when that grid fits
-        the printed values.
+        Sample rate [Hz], snapped to the roundest multiple of 1000, 100, 10, 1, ... 0.001 Hz
+        whose grid fits the printed values (a short column printed coarsely fits several).
     start : float
         The first time value [s].
 
@@ -135,6 +143,17 @@ def uniform_rate(
         raise ValueError(
             f"{name} does not increase between sample index {i} and {i + 1}{hint}"
         )
+    # a gap or a jump shows as one step off the typical (median) step; both ends of a step
+    # are rounded, and so may be the median step
+    typical = float(np.median(step))
+    off = np.abs(step - typical) > 2.0 * (bound[:-1] + bound[1:])
+    if off.any():
+        i = int(np.flatnonzero(off)[0])
+        raise ValueError(
+            f"{name} is not uniformly sampled: the step from sample index {i} to {i + 1} is "
+            f"{step[i]:.9g} s, the typical step {typical:.9g} s (allowed deviation from its "
+            f"printed precision {2.0 * (bound[i] + bound[i + 1]):.3g} s); resample or give fs="
+        )
     t0 = float(t[0])
     dt = (float(t[-1]) - t0) / (t.size - 1)
     allowed = bound + max(bound[0], bound[-1])
@@ -149,9 +168,12 @@ def uniform_rate(
         )
     rate = 1.0 / dt
     exact = bound + bound[0]
-    for decimals in range(4):
+    last = t.size - 1
+    for decimals in range(-3, 4):  # coarsest first: 25600 before 25602 when both fit
         snapped = round(rate, decimals)
-        if snapped > 0 and not _misfit(t, t0, 1.0 / snapped, exact).any():
+        if snapped <= 0 or abs(t[-1] - (t0 + last / snapped)) > exact[-1]:
+            continue
+        if not _misfit(t, t0, 1.0 / snapped, exact).any():
             return float(snapped), t0
     return rate, t0
 

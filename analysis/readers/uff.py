@@ -114,7 +114,9 @@ def _channel(
         attrs["source_units"] = units_lab
     axis = _clean(r.get("ordinate_axis_lab", ""))
     long_name = f"{label} ({axis})" if axis and axis != label else label
-    return ChannelData(label, data.astype(np.float64) * factor, ud, long_name, attrs)
+    with np.errstate(over="ignore", invalid="ignore"):  # NaN/inf: reported by channel
+        values = data.astype(np.float64) * factor
+    return ChannelData(label, values, ud, long_name, attrs)
 
 
 def _check_blocks(p: Path) -> None:

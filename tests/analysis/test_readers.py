@@ -265,7 +265,7 @@ def test_csv_errors(tmp_path):
         read_csv(path, time_column=0)
     assert "secret" not in str(err.value)  # the message never echoes file content
     path.write_text("t,a\n0.00,1\n0.10,2\n0.20,3\n0.40,4\n0.50,5\n")  # 0.30 is missing
-    with pytest.raises(ReaderError, match="not uniformly sampled: sample index 1"):
+    with pytest.raises(ReaderError, match="not uniformly sampled: the step from sample index 2"):
         read_csv(path, time_column="t")
     path.write_text("t,a\n0,1\n0.1\n")
     with pytest.raises(ReaderError, match="line 3: 1 columns, expected 2"):
