@@ -18,6 +18,7 @@ Run from the repository root::
     python -m tests.analysis.readers_campaign mat          # the MAT files, all five mutations
     python -m tests.analysis.readers_campaign all --hows xff
 
+(``--scipy``: the MAT files through ``scipy.io.loadmat`` alone, without the structure check),
 and it prints, per file, the number of mutations and of each outcome: ``accepted`` (read into
 a Dataset), ``ReaderError`` (a clear error), anything else (other exceptions, ``crash:<signal>``,
 ``hang``), which must be zero. ``tests/analysis/test_readers_fuzz.py`` runs a small part of it.
@@ -97,6 +98,9 @@ def write_base_files(folder: Path, kinds: set[str]) -> dict[str, tuple[Path, str
             name = f"v5_{'compressed' if comp else 'plain'}.mat"
             savemat(folder / name, content, do_compression=comp)
             out[name] = (folder / name, "mat")
+        small = {"acc": np.linspace(-1.0, 1.0, 16), "fs": 100.0}
+        savemat(folder / "v5_small.mat", small, do_compression=False)
+        out["v5_small.mat"] = (folder / "v5_small.mat", "mat")
         savemat(folder / "v4.mat", {"acc": rng.standard_normal(24), "fs": 1000.0}, format="4")
         out["v4.mat"] = (folder / "v4.mat", "mat")
         try:
@@ -150,6 +154,11 @@ def write_base_files(folder: Path, kinds: set[str]) -> dict[str, tuple[Path, str
 
 def _reader(kind: str) -> Callable[[Path], object]:
     from analysis import readers
+
+    if kind == "scipy-mat":  # scipy.io.loadmat alone: the crashes the structure check prevents
+        from scipy.io import loadmat
+
+        return lambda path: loadmat(path, squeeze_me=True, chars_as_strings=True)
 
     options = {"mat": {"fs": 1.0}, "csv": {"time_column": 0}}.get(kind, {})
     fn = {
@@ -259,6 +268,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--timeout", type=float, default=60.0)
     parser.add_argument("--memory-gb", type=float, default=6.0)
     parser.add_argument("--json", help="write the counts to this file")
+    parser.add_argument(
+        "--scipy", action="store_true", help="MAT files through scipy.io.loadmat alone (before)"
+    )
     parser.add_argument("--worker", nargs=5, help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.worker:
@@ -274,6 +286,8 @@ def main(argv: list[str] | None = None) -> int:
     with tempfile.TemporaryDirectory() as tmp:
         for name, (path, kind) in write_base_files(Path(tmp), kinds).items():
             t0 = time.perf_counter()
+            if args.scipy and kind == "mat":
+                kind = "scipy-mat"
             counts, findings = campaign(
                 path, kind, hows, timeout=args.timeout, memory_gb=args.memory_gb
             )
