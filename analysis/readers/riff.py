@@ -77,6 +77,7 @@ class WavLayout:
 
     @property
     def endian(self) -> str:
+        """``">"`` for big-endian RIFX files, else ``"<"``."""
         return ">" if self.container == "RIFX" else "<"
 
     @property

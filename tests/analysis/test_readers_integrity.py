@@ -627,3 +627,50 @@ def test_reader_error_is_a_value_error_and_missing_files_are_os_errors(tmp_path)
     for suffix in (".wav", ".csv", ".mat", ".nc", ".uff", ".tdms"):
         with pytest.raises(FileNotFoundError, match=r"missing\."):
             read(tmp_path / f"missing{suffix}", **({"fs": 1.0} if suffix == ".csv" else {}))
+
+
+# ----------------------------------------------------------------------------------------------
+# the printed time axis
+# ----------------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("fmt", "fs", "n", "start"),
+    [
+        ("%.8f", 25600.0, 100_000, 0.0),
+        ("%.8f", 51200.0, 50_000, 3600.0),
+        ("%.6e", 51200.0, 3_000, 0.0),
+        ("%.17g", 3000.0, 10_000, 0.25),
+        ("%.6g", 1000.0, 5_000, 0.0),
+        ("%.3f", 100.0, 1_000, 7.0),
+    ],
+)
+def test_uniform_rate_within_the_print(fmt, fs, n, start):
+    """A uniform grid printed with a given format is accepted at its exact rate; a missing
+    sample is named by the step it makes; a shift of 3 print units is refused."""
+    from analysis.readers.timebase import print_precision, uniform_rate
+
+    t = start + np.arange(n) / fs
+    tokens = [fmt % v for v in t]
+    printed = np.array([float(x) for x in tokens])
+    precision = print_precision(tokens[:1000] + tokens[-1000:])
+    rate, t0 = uniform_rate(printed, precision)
+    assert rate == fs and t0 == printed[0]
+    gap = np.delete(printed, n // 2)
+    with pytest.raises(ValueError, match=f"step from sample index {n // 2 - 1} to {n // 2}"):
+        uniform_rate(gap, precision)
+    shifted = printed.copy()
+    shifted[n // 3] += 3 * float(precision.bound(shifted[n // 3 : n // 3 + 1])[0]) * 2
+    with pytest.raises(ValueError, match=f"sample index {n // 3 - 1} to {n // 3}|index {n // 3}"):
+        uniform_rate(shifted, precision)
+
+
+def test_print_precision_of_common_formats():
+    from analysis.readers.timebase import print_precision
+
+    assert print_precision(["0.00000000", "0.00003906"]).absolute == 1e-8
+    dyadic = ["0", "0.5", "0.0009765625", "0.0029296875"]  # %.17g of i / 1024 s
+    assert print_precision(dyadic).absolute == pytest.approx(1e-10)
+    p = print_precision(["0.000000e+00", "3.906250e-05"])
+    assert (p.absolute, p.relative) == (0.0, pytest.approx(1e-6))
+    assert print_precision(["1", "2", "3"]).absolute == 1.0
