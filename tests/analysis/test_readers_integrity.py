@@ -674,3 +674,14 @@ def test_print_precision_of_common_formats():
     p = print_precision(["0.000000e+00", "3.906250e-05"])
     assert (p.absolute, p.relative) == (0.0, pytest.approx(1e-6))
     assert print_precision(["1", "2", "3"]).absolute == 1.0
+
+
+def test_uff_and_tdms_memory_guards(tmp_path, monkeypatch):
+    v = np.random.default_rng(8).uniform(-1, 1, (2, 4000))
+    uff = tmp_path / "m.uff"
+    uff.write_bytes(samples.uff_bytes(v, 1e-3, binary=0))
+    tdms = tmp_path / "m.tdms"
+    tdms.write_bytes(samples.tdms_bytes(v, 1e-3))
+    monkeypatch.setattr(integrity, "available_memory", lambda: 50_000)
+    _refused(uff, r"pyuff's parse of the file needs .* of memory")
+    _refused(tdms, r"group 'rig' .* needs .* of memory")
