@@ -12,7 +12,7 @@ of the file. Properties:
   boundary the format cannot tell from the end: a line, a UFF dataset, a TDMS segment, a MAT
   variable) -- never with changed samples.
 
-The number of examples per format is ``GEARVIB_FUZZ_EXAMPLES`` (default 100, about 25 s in
+The number of examples per format is ``GEARVIB_FUZZ_EXAMPLES`` (default 100, about 10 s in
 all). A long campaign, e.g. ``GEARVIB_FUZZ_EXAMPLES=10000``, runs with fresh random examples
 each time; with ``GEARVIB_FUZZ_REPORT=<file.json>`` the counts (tries, accepted, clear
 errors) per format are written there. Segmentation faults cannot be caught in-process: the
