@@ -296,10 +296,14 @@ def build_dataset(
     ------
     ReaderError
         No channels, an empty channel, a non-finite sample (naming channel and sample index),
-        channels of unequal length.
+        channels of unequal length, a sample rate that is not finite and > 0 or a time axis
+        that overflows.
     """
-    fs = require_positive(sample_rate_hz, "sample_rate_hz")
     where = f" in {source_file}" if source_file else ""
+    try:
+        fs = require_positive(sample_rate_hz, "sample_rate_hz")
+    except (TypeError, ValueError) as exc:
+        raise ReaderError(f"{exc}{where}") from None
     if not channels:
         raise ReaderError(f"no channels found{where}; a recording needs at least one channel")
     arrays = [_channel_array(ch, source_file) for ch in channels]
@@ -311,7 +315,13 @@ def build_dataset(
             "number of samples at the same sample rate"
         )
     n = arrays[0].size
-    time = float(start_time) + np.arange(n, dtype=np.float64) / fs
+    with np.errstate(over="ignore", invalid="ignore"):
+        time = float(start_time) + np.arange(n, dtype=np.float64) / fs
+    if not np.isfinite(time[-1]):
+        raise ReaderError(
+            f"sample rate {fs!r} Hz and start time {start_time!r} s{where} give a time axis "
+            "that is not finite"
+        )
     names = sanitize_names(ch.name for ch in channels)
     data_vars = {}
     for var, ch, arr in zip(names, channels, arrays, strict=True):
