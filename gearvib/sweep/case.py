@@ -1,0 +1,188 @@
+"""Running one case of a sweep: the function every worker executes.
+
+:func:`run_case` maps a :class:`CaseTask` (one case description, where its run file goes and
+what to summarise) to a :class:`CaseOutcome` (the case's summary Dataset). It is a plain,
+picklable top-level function, so any :class:`concurrent.futures.Executor` can run it: the
+in-process :class:`~gearvib.sweep.execution.SerialExecutor`, a local process pool or a Dask
+cluster. A different runner with the same signature (e.g. a batched kernel that advances several
+cases at once) can be handed to :func:`gearvib.sweep.run_sweep` instead.
+
+Resuming: a run file is *finished* when it opens as netCDF, was written by gearvib and carries
+the case's hash in its ``sweep_case_sha256`` attribute (:attr:`SweepCase.sha256`: the gear-set
+description, run settings, base directory and gearvib version). Run files are written
+atomically, so a file with the final name is complete; anything else (missing, unreadable, other
+hash) is simulated again and replaced.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+
+from analysis.fft import set_workers
+from gearvib.assembly import assemble
+from gearvib.config import ConfigError, gearset_from_dict
+from gearvib.io import read_run, write_netcdf
+from gearvib.model import AssembledModel
+from gearvib.simulate import DriveCoupling, SimulationError, SpeedRamp, simulate
+from gearvib.sweep.description import SweepCase
+from gearvib.sweep.summary import SummarySettings, summarise_run
+
+__all__ = ["CaseOutcome", "CaseTask", "build_case", "conditions_for", "finished_run",
+           "run_case"]
+
+
+@dataclass(frozen=True)
+class CaseTask:
+    """Everything a worker needs for one case.
+
+    Attributes
+    ----------
+    case : SweepCase
+        The case.
+    run_path : str
+        Where its run file is (or goes); absolute, on a file system the worker can reach.
+    summary : SummarySettings
+        What to summarise.
+    """
+
+    case: SweepCase
+    run_path: str
+    summary: SummarySettings
+
+
+@dataclass(frozen=True)
+class CaseOutcome:
+    """What a worker returns for one case.
+
+    Attributes
+    ----------
+    index : int
+        Case index.
+    status : str
+        ``"simulated"``, ``"reused"`` (a finished run file was found) or ``"failed"``.
+    message : str
+        Why a case failed (one line), else ``""``.
+    summary : xarray.Dataset or None
+        The case's summary (:func:`gearvib.sweep.summary.summarise_run`); None if failed.
+    wall_time : float
+        Wall time of the case in the worker [s] (not stored in the sweep Dataset).
+    """
+
+    index: int
+    status: str
+    message: str
+    summary: xr.Dataset | None
+    wall_time: float
+
+
+def build_case(case: SweepCase) -> AssembledModel:
+    """Assemble the gear set of a case.
+
+    Raises
+    ------
+    ConfigError
+        The description is invalid for this combination of values.
+    """
+    base = Path(case.base_dir) if case.base_dir else None
+    try:
+        return assemble(gearset_from_dict(case.description, base=base))
+    except ValueError as exc:
+        if isinstance(exc, ConfigError):
+            raise
+        raise ConfigError(str(exc)) from None
+
+
+def conditions_for(run: dict, model: AssembledModel) -> SpeedRamp:
+    """The speed ramp of a case's run settings.
+
+    A ``drive_stiffness`` without ``drive_damping`` gets critical damping of the drive's
+    rigid-body mode, ``c = 2 sqrt(k J_eff)`` with ``J_eff`` the inertia of the kinematic motion
+    reduced to the input member (as the default coupling of :func:`gearvib.simulate.simulate`).
+    """
+    coupling = None
+    if run.get("drive_stiffness") is not None:
+        k = float(run["drive_stiffness"])
+        c = run.get("drive_damping")
+        if c is None:
+            r = model.rigid_body_velocity()
+            k_in = int(model.rotation_dofs[model.input_member])
+            j_eff = float(r @ np.asarray(model.mass) @ r) / r[k_in] ** 2
+            c = 2.0 * math.sqrt(k * j_eff)
+        coupling = DriveCoupling(k, float(c))
+    load = run.get("load_torque")
+    return SpeedRamp(float(run["speed_start_rpm"]), float(run["speed_end_rpm"]),
+                     float(run["duration"]),
+                     load_torque=float(load) if load is not None else 0.0,
+                     input_torque=None if load is not None else float(run["input_torque"]),
+                     coupling=coupling)
+
+
+def finished_run(path: str | Path, sha256: str) -> xr.Dataset | None:
+    """The run in ``path`` if it is the finished run of the case with hash ``sha256``."""
+    p = Path(path)
+    if not p.is_file():
+        return None
+    try:
+        with xr.open_dataset(p, engine="netcdf4") as ds:
+            if ds.attrs.get("sweep_case_sha256") != sha256:
+                return None
+        return read_run(p)
+    except (OSError, ValueError, RuntimeError, KeyError):
+        return None
+
+
+_worker_ready = False
+
+
+def _prepare_worker() -> None:
+    """Once per process: one FFT thread (numba, BLAS: environment of the pool)."""
+    global _worker_ready
+    if not _worker_ready:
+        set_workers(1)
+        _worker_ready = True
+
+
+def run_case(task: CaseTask) -> CaseOutcome:
+    """Simulate (or reuse) one case, write its run file and summarise it.
+
+    Parameters
+    ----------
+    task : CaseTask
+
+    Returns
+    -------
+    CaseOutcome
+        ``status = "failed"`` with the message when the description is invalid for this
+        combination of values, the simulation blows up or the summary is impossible (e.g. an
+        empty window); other exceptions propagate.
+    """
+    _prepare_worker()
+    t0 = time.perf_counter()
+    case = task.case
+    try:
+        model = build_case(case)
+        conditions = conditions_for(case.run, model)
+        ds = finished_run(task.run_path, case.sha256)
+        status = "reused"
+        if ds is None:
+            status = "simulated"
+            res = simulate(model, conditions, dt=case.run.get("dt"), fs_out=case.run.get("fs_out"),
+                           gyroscopic=bool(case.run.get("gyroscopic")), progress=False,
+                           config={"gearset": case.description, "gearset_dir": case.base_dir,
+                                   "run": case.run})
+            ds = res.to_dataset()
+            ds.attrs["sweep_case_sha256"] = case.sha256
+            write_netcdf(ds, task.run_path)
+        summary = summarise_run(ds, model, conditions, task.summary,
+                                gyroscopic=bool(case.run.get("gyroscopic")))
+    except (ConfigError, SimulationError, ValueError) as exc:
+        text = str(exc).strip().splitlines()
+        return CaseOutcome(case.index, "failed", text[0] if text else type(exc).__name__, None,
+                           time.perf_counter() - t0)
+    return CaseOutcome(case.index, status, "", summary, time.perf_counter() - t0)
