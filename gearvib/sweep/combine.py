@@ -82,7 +82,11 @@ def _parameter_coords(sweep: Sweep, cases: Sequence[SweepCase]) -> tuple[dict, l
         info.append({"path": p.path, "kind": kind, "units": units or "",
                      "long_name": long_name, "labels": list(p.labels) if p.labels else None,
                      "values": list(p.values) if p.values is not None else None,
-                     "distribution": p.distribution, "has_values_coordinate": bool(numeric)})
+                     "distribution": p.distribution,
+                     "distribution_parameters": {k: getattr(p, k) for k in
+                                                 ("low", "high", "mean", "std")
+                                                 if getattr(p, k) is not None},
+                     "has_values_coordinate": bool(numeric)})
     return coords, info
 
 

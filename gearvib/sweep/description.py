@@ -491,33 +491,26 @@ class Sweep:
         """
         base, base_dir = self.load_base()
         for i, p in enumerate(self.parameters):
-            get_path(base, p.path)  # every table on the way exists
-            units = p.units or path_units(p.path)
+            exists, old = get_path(base, p.path)  # every table on the way exists
             probes: list[Any]
             if p.values is not None:
                 probes = list(p.values)
             else:
                 probes = [getattr(p, k) for k in ("low", "high", "mean")
                           if getattr(p, k) is not None]
-            kind = _coordinate_kind(probes)
-            if kind == "number" and p.values is not None and units is None:
-                raise ConfigError(f"parameter {p.path!r}: the units of this key are not known; "
-                                  "give units = \"...\" (UDUNITS, e.g. \"N m-1\", \"1\")")
-            if p.distribution is not None:
-                exists, old = get_path(base, p.path)
                 if exists and value_kind(old) not in ("number", "list", "string"):
                     raise ConfigError(f"parameter {p.path!r}: a distribution draws numbers, but "
                                       f"the base has {old!r} there")
-                if units is None:
-                    raise ConfigError(f"parameter {p.path!r}: the units of this key are not "
-                                      "known; give units = \"...\"")
-            for j, v in enumerate(probes):
+            for v in probes:
                 where = f"parameter #{i + 1} ({p.path!r}), value {value_label(v)!r}"
                 if p.distribution is not None:
                     v = np.asarray(v, dtype=float).tolist()
                 desc = self._apply(base, p, v, where)
                 self._check_description(desc, base_dir, where)
-                del j
+            numeric = p.distribution is not None or _coordinate_kind(probes) == "number"
+            if numeric and (p.units or path_units(p.path)) is None:
+                raise ConfigError(f"parameter {p.path!r}: the units of this key are not known; "
+                                  "give units = \"...\" (UDUNITS, e.g. \"N m-1\", \"1\")")
         out = []
         for idx, vals in enumerate(self._values()):
             desc = base

@@ -53,6 +53,9 @@ THREAD_VARIABLES = ("NUMBA_NUM_THREADS", "OMP_NUM_THREADS", "OPENBLAS_NUM_THREAD
 MAX_WORKERS = 512
 """Largest admissible number of local workers."""
 
+CONNECT_TIMEOUT_S = 30.0
+"""How long :func:`dask_executor` tries to reach the scheduler [s]."""
+
 
 class SerialExecutor(Executor):
     """Runs every submitted call at once, in this process (an Executor for ``workers = 1``)."""
@@ -161,7 +164,7 @@ def dask_executor(address: str) -> tuple[Executor, Any]:
         raise ImportError("a Dask scheduler needs dask.distributed: pip install "
                           "\"gearvib[dask]\"") from None
     try:
-        client = Client(address, timeout=30)
+        client = Client(address, timeout=CONNECT_TIMEOUT_S)
     except (OSError, TimeoutError) as exc:
         raise OSError(f"cannot connect to the Dask scheduler at {address!r}: {exc}") from None
     return client.get_executor(), client

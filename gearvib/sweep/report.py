@@ -73,8 +73,9 @@ def _axis(ds: xr.Dataset, p: dict) -> tuple[np.ndarray, list[str] | None, str]:
     """Positions along a parameter axis, tick labels for categories, axis label."""
     c = ds[p["path"]]
     if p["kind"] == "number":
-        units = str(c.attrs.get("units", ""))
-        return c.values.astype(float), None, f"{p['path']} [{units}]"
+        factor, units = _SCALE.get(str(c.attrs.get("units", "")),
+                                   (1.0, str(c.attrs.get("units", ""))))
+        return c.values.astype(float) * factor, None, f"{p['path']} [{units}]"
     cats = list(dict.fromkeys(str(v) for v in c.values))
     return np.array([cats.index(str(v)) for v in c.values], dtype=float), cats, p["path"]
 
@@ -235,27 +236,40 @@ def _scatter_figure(ds, da, name, params, ok) -> Figure:
     worst = np.nanmax(vals, axis=0) if vals.shape[0] > 1 else vals[0]
     axes_spec = []
     for p in params:
-        if p.get("has_values_coordinate"):
+        if p.get("has_values_coordinate") and p.get("distribution"):
             el = ds[f"{p['path']}.values"].values
+            factor, unit = _SCALE.get(p["units"] or "1", (1.0, p["units"] or "1"))
             for j in range(el.shape[1]):
                 if np.ptp(el[ok, j]) > 0:
-                    axes_spec.append((el[:, j], None,
-                                      f"{p['path']}[{j}] [{p['units'] or '1'}]"))
+                    axes_spec.append((el[:, j] * factor, None, f"{p['path']}[{j}] [{unit}]"))
         else:
             axes_spec.append(_axis(ds, p))
     axes_spec = axes_spec[:MAX_PANELS]
+    # colour the points by the first categorical parameter with a few values
+    groups: list[tuple[str, np.ndarray]] = [("", np.ones(ok.size, dtype=bool))]
+    for p in params:
+        if p["kind"] != "number":
+            labels = [str(v) for v in ds[p["path"]].values]
+            cats = list(dict.fromkeys(labels))
+            if 2 <= len(cats) <= 8:
+                groups = [(f"{p['path']} = {c}", np.array([lab == c for lab in labels]))
+                          for c in cats]
+                break
     scale, unit = _units(da)
     fig, axes = _new_figure(len(axes_spec))
     over = " (largest over the meshes)" if "mesh" in da.dims else ""
     for ax, (x, cats, label) in zip(axes, axes_spec, strict=True):
         for k, panel in enumerate(panels[:8]):
-            ax.plot(x[ok], worst[ok, k] * scale, "o", ms=3, alpha=0.7,
-                    label=_panel_title(panel, da) or None)
+            for glabel, member in groups:
+                sel = ok & member
+                text = " ".join(t for t in (_panel_title(panel, da), glabel) if t)
+                ax.plot(x[sel], worst[sel, k] * scale, "o", ms=3.5, alpha=0.75,
+                        label=text or None)
         ax.set_xlabel(label)
         ax.set_ylabel(f"{name} [{unit}]")
         ax.grid(True, alpha=0.3)
         _set_categories(ax, "x", cats)
-    if panels[0] is not None:
+    if panels[0] is not None or len(groups) > 1:
         axes[0].legend(fontsize=7)
     fig.suptitle(f"{name}{over}", fontsize=10)
     return fig
@@ -300,6 +314,30 @@ MAX_TABLE_ROWS = 200
 """Most cases listed in the page's case table."""
 
 
+def _values_text(p: dict) -> str:
+    if p["labels"]:
+        return ", ".join(p["labels"])
+    if p["values"] is not None:
+        return ", ".join(json.dumps(v) if not isinstance(v, str) else v for v in p["values"])
+    args = ", ".join(f"{k} = {v}" for k, v in p.get("distribution_parameters", {}).items())
+    return f"{p['distribution']} distribution ({args})"
+
+
+def _window_text(summary: dict) -> str:
+    parts = []
+    if "window_s" in summary:
+        parts.append("t = {:g} .. {:g} s".format(*summary["window_s"]))
+    if "window_rpm" in summary:
+        parts.append("input speed {:g} .. {:g} min-1".format(*summary["window_rpm"]))
+    return " and ".join(parts) or "the whole run"
+
+
+def _cell(value: Any) -> str:
+    if isinstance(value, float | np.floating):
+        return f"{float(value):.6g}"
+    return str(value)
+
+
 def build_sweep_report(ds: xr.Dataset, out_dir: str | Path) -> Path:
     """Write ``figures/<quantity>.png`` and ``sweep.html`` into ``out_dir``.
 
@@ -329,16 +367,13 @@ def build_sweep_report(ds: xr.Dataset, out_dir: str | Path) -> Path:
                      f"{escape(f.title)}</figcaption></figure>")
     n = int(ds.sizes["case"])
     n_failed = int(np.sum(ds["status"].values != "ok"))
-    prow = [[p["path"], p["kind"], p["units"] or "",
-             ", ".join(p["labels"]) if p["labels"] else
-             (", ".join(str(v) for v in p["values"]) if p["values"] is not None
-              else f"{p['distribution']} distribution")] for p in params]
+    prow = [[p["path"], p["kind"], p["units"] or "", _values_text(p)] for p in params]
     kv = ds.get("dynamic_factor")
     rows = []
     for i in range(min(n, MAX_TABLE_ROWS)):
         kvmax = float(np.nanmax(kv.values[i])) if kv is not None and \
             np.isfinite(kv.values[i]).any() else float("nan")
-        rows.append([str(i), *(str(ds[p["path"]].values[i]) for p in params),
+        rows.append([str(i), *(_cell(ds[p["path"]].values[i]) for p in params),
                      str(ds["status"].values[i]), f"{kvmax:.4g}",
                      str(ds["run_file"].values[i]), str(ds["failure"].values[i])])
     summary = json.loads(ds.attrs.get("summary_json", "{}"))
@@ -349,7 +384,8 @@ def build_sweep_report(ds: xr.Dataset, out_dir: str | Path) -> Path:
 <p>Base gear set <code>{escape(str(ds.attrs.get('sweep_base', '')))}</code>,
 mode <code>{escape(str(ds.attrs.get('sweep_mode', '')))}</code>: {n} cases, {n_failed} failed.
 Data: <a href="sweep.nc">sweep.nc</a> (dimension <code>case</code>, one coordinate per swept
-key path). Summary window and settings: <code>{escape(json.dumps(summary))}</code>.</p>
+key path). Summary window: {escape(_window_text(summary))}; settings:
+<code>{escape(json.dumps(summary))}</code>.</p>
 {_table(["key path", "kind", "units", "values"], prow, "Swept parameters")}
 <h2>Definitions</h2>
 <p><b>dynamic_factor</b> K<sub>v</sub> = maximum normal force of the loaded flank over the

@@ -193,9 +193,9 @@ class SummarySettings:
             kw["order_signals"] = parsed
         if "order_resolution" in table:
             r = table["order_resolution"]
-            if isinstance(r, bool) or not isinstance(r, int | float) or not 0 < r <= 1:
-                raise ConfigError(f"{where}.order_resolution = {r!r}; admissible: 0 < value <= 1 "
-                                  "(orders)")
+            if isinstance(r, bool) or not isinstance(r, int | float) or not 0 < r < math.inf:
+                raise ConfigError(f"{where}.order_resolution = {r!r}; admissible: a finite "
+                                  "number > 0 (orders)")
             kw["order_resolution"] = float(r)
         if "floquet_speed_rpm" in table:
             lo, hi = _pair(table["floquet_speed_rpm"], f"{where}.floquet_speed_rpm")
