@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import contextlib
 import math
+import multiprocessing
 import sys
 import time
 from dataclasses import dataclass
@@ -154,6 +155,7 @@ def _plain_file_locks() -> contextlib.AbstractContextManager:
 
 
 _worker_ready = False
+_interrupted = False  # a worker process got Ctrl-C: skip the calls still queued for it
 
 
 def _prepare_worker() -> None:
@@ -178,7 +180,19 @@ def run_case(task: CaseTask) -> CaseOutcome:
         combination of values, the simulation blows up or the summary is impossible (e.g. an
         empty window); other exceptions propagate.
     """
+    global _interrupted
+    if _interrupted:
+        raise KeyboardInterrupt
     _prepare_worker()
+    try:
+        return _run(task)
+    except KeyboardInterrupt:
+        if multiprocessing.parent_process() is not None:  # a pool worker, not the caller
+            _interrupted = True
+        raise
+
+
+def _run(task: CaseTask) -> CaseOutcome:
     t0 = time.perf_counter()
     case = task.case
     try:

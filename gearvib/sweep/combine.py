@@ -16,7 +16,8 @@ Layout
   for a failed case), ``case_sha256`` (the hash that identifies the finished run) and
   ``status`` (``"ok"`` or ``"failed"``), and the data variable ``failure`` (the message).
 * Attributes: CF ``Conventions``, ``title``, ``source``, the sweep description as JSON
-  (``sweep_json``) with its SHA-256, the parameters (``parameters_json``) and the summary
+  (``sweep_json``) with its SHA-256, the base gear-set description with the sweep's run
+  settings merged (``base_json``), the parameters (``parameters_json``) and the summary
   settings. No time stamp: the same sweep gives the same file whatever the scheduler.
 """
 
@@ -65,7 +66,7 @@ def _parameter_coords(sweep: Sweep, cases: Sequence[SweepCase]) -> tuple[dict, l
             attrs = {"units": units or "1", **attrs}
         elif kind == "bool":
             data = np.asarray(vals, dtype=np.int8)
-            attrs["comment"] = "1 = true, 0 = false"
+            attrs = {"units": "1", **attrs, "comment": "1 = true, 0 = false"}
         else:
             data = np.asarray([c.labels[i] for c in cases], dtype=str)
             if kind == "label":
@@ -179,6 +180,7 @@ def combine_summaries(sweep: Sweep, cases: Sequence[SweepCase],
         "sweep_sha256": hashlib.sha256(sweep_json.encode()).hexdigest(),
         "sweep_mode": sweep.mode,
         "sweep_base": sweep.base,
+        "base_json": json.dumps(sweep.load_base()[0], sort_keys=True, default=str),
         "parameters_json": json.dumps(info, sort_keys=True, default=str),
         "summary_json": json.dumps(sweep.summary.to_dict(), sort_keys=True),
         "n_cases": np.int64(n),

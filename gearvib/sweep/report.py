@@ -196,6 +196,12 @@ def _heat_figure(ds, da, name, params, ok) -> Figure:
         keys = [tuple(str(v) for v in row) for row in zip(*(ds[p["path"]].values
                                                             for p in rest), strict=True)]
         combos = list(dict.fromkeys(keys))
+
+    def shown(p: dict, v: str) -> str:
+        if p["kind"] == "number":
+            return f"{float(v):g} {ds[p['path']].attrs.get('units', '')}".strip()
+        return v
+
     jobs = [(c, k) for c in combos for k in range(len(panels))][:MAX_PANELS]
     scale, unit = _units(da)
     fig, axes = _new_figure(len(jobs))
@@ -214,11 +220,11 @@ def _heat_figure(ds, da, name, params, ok) -> Figure:
         if img.size <= 64:
             for (r, c), v in np.ndenumerate(img):
                 if np.isfinite(v):
-                    ax.text(c, r, f"{v:.3g}", ha="center", va="center", fontsize=8,
+                    ax.text(c, r, f"{v:.4g}", ha="center", va="center", fontsize=8,
                             color="w" if v < 0.5 * (vmin + vmax) else "k")
         ax.set_xlabel(xl)
         ax.set_ylabel(yl)
-        title = [f"{p['path']} = {v}" for p, v in zip(rest, combo, strict=True)]
+        title = [f"{p['path']} = {shown(p, v)}" for p, v in zip(rest, combo, strict=True)]
         if panels[k] is not None:
             title.append(_panel_title(panels[k], da))
         ax.set_title("\n".join(title), fontsize=9)
