@@ -357,3 +357,31 @@ def test_summary_window_and_reference(tiny_run):
     # (measured 1.2-1.6 %: the angular sampling of the two differs)
     np.testing.assert_allclose(by_member.normal_force_order_level.values,
                                by_mesh.normal_force_order_level.values, rtol=0.03)
+
+
+# ------------------------------------------------------------------- worker environment
+
+@pytest.mark.parametrize("method", ["fork", "spawn"])
+def test_local_workers_get_one_thread_each_and_the_numba_cache(method, monkeypatch):
+    import multiprocessing
+
+    import numba
+
+    from gearvib.sweep.execution import THREAD_VARIABLES, local_executor, worker_environment
+
+    if method not in multiprocessing.get_all_start_methods():
+        pytest.skip(f"no {method} start method here")
+    for v in THREAD_VARIABLES:
+        monkeypatch.setenv(v, "7")
+    with worker_environment() as env:
+        ex = local_executor(2, start_method=method)
+        try:
+            seen = {v: ex.submit(os.getenv, v).result(timeout=60) for v in env}
+        finally:
+            ex.shutdown()
+    assert {v: seen[v] for v in THREAD_VARIABLES} == dict.fromkeys(THREAD_VARIABLES, "1")
+    if numba.config.CACHE_DIR:
+        assert seen["NUMBA_CACHE_DIR"] == str(numba.config.CACHE_DIR)
+    assert all(os.environ[v] == "7" for v in THREAD_VARIABLES)  # this process: restored
+    with pytest.raises(ValueError, match="workers = 0"):
+        local_executor(0)
