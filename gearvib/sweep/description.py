@@ -79,6 +79,8 @@ _TOP = {"title", "description", "base", "mode", "samples", "seed", "max_cases", 
 _PARAM = {"path", "values", "labels", "distribution", "low", "high", "mean", "std", "units",
           "long_name"}
 _MODES = ("grid", "zip", "random")
+_RESERVED = {"case", "mesh", "order", "floquet_speed", "flank", "bearing", "member",
+             "translation_dof", "run_file", "case_sha256", "status", "failure"}
 _DISTRIBUTIONS = {"uniform": ({"low", "high"}, set()), "normal": ({"mean", "std"},
                                                                  {"low", "high"})}
 
@@ -361,6 +363,11 @@ class Sweep:
             raise ConfigError("a sweep needs at least one [[parameter]]")
         object.__setattr__(self, "parameters", params)
         paths = [p.path for p in params]
+        for p in paths:
+            if p in _RESERVED:
+                raise ConfigError(f"parameter path {p!r} is the name of a dimension or "
+                                  "coordinate of sweep.nc; vary its elements instead (e.g. "
+                                  f"'{p}.0.<key>')")
         dup = sorted({p for p in paths if paths.count(p) > 1})
         if dup:
             raise ConfigError(f"parameter path {dup[0]!r} is listed twice")
