@@ -411,9 +411,10 @@ class Sweep:
         n = self.n_cases
         if n > self.max_cases:
             sizes = " x ".join(str(len(p.values)) for p in params)  # type: ignore[arg-type]
-            raise ConfigError(f"the grid has {sizes} = {n} cases, more than max_cases = "
-                              f"{self.max_cases}; use fewer values or raise max_cases (at most "
-                              f"{HARD_MAX_CASES})")
+            what = f"the grid has {sizes} = {n} cases" if self.mode == "grid" else \
+                f"the sweep has {n} cases"
+            raise ConfigError(f"{what}, more than max_cases = {self.max_cases}; use fewer "
+                              f"values or raise max_cases (at most {HARD_MAX_CASES})")
         if not isinstance(self.simulation, dict):
             raise ConfigError("[simulation] must be a table")
         if not isinstance(self.summary, SummarySettings):
