@@ -20,6 +20,7 @@ tables) are placed at equal spacing in the order of their values.
 
 from __future__ import annotations
 
+import io
 import json
 import math
 from dataclasses import dataclass
@@ -33,7 +34,6 @@ from matplotlib.figure import Figure
 
 from gearvib import __version__
 from gearvib.io import atomic_write
-from gearvib.report.html import figure_png
 
 __all__ = ["MAX_PANELS", "SweepFigure", "build_sweep_report", "sweep_figures"]
 
@@ -63,6 +63,13 @@ class SweepFigure:
     name: str
     title: str
     figure: Figure
+
+
+def _png(fig: Figure) -> bytes:
+    """PNG bytes without the ``Software`` metadata (the same figure gives the same bytes)."""
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=100, metadata={"Software": None})
+    return buf.getvalue()
 
 
 def _params(ds: xr.Dataset) -> list[dict]:
@@ -366,7 +373,7 @@ def build_sweep_report(ds: xr.Dataset, out_dir: str | Path) -> Path:
     figs = sweep_figures(ds)
     parts = []
     for f in figs:
-        png = figure_png(f.figure)
+        png = _png(f.figure)
         atomic_write(figdir / f"{f.name}.png", lambda tmp, b=png: tmp.write_bytes(b))
         parts.append(f'<figure id="{escape(f.name)}"><img src="figures/{escape(f.name)}.png" '
                      f'alt="{escape(f.title)}"><figcaption>{escape(f.name)}: '
