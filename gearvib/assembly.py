@@ -8,11 +8,21 @@ rigid-body kinematics (the speed of every member per unit input speed).
 Mesh deflection (Lin & Parker 1999, generalised with signed base radii)::
 
     delta = cos(beta_b) [ sigma (r_b1 theta_1 + r_b2 theta_2) + (d_1 - d_2) . n ]
-            + sin(beta_b) h (z_1 - z_2)
+            - sin(beta_b) h (z_1 - z_2)
 
 with ``sigma = -1`` for an internal pair, ``n = cos(alpha) t + sigma sin(alpha) e`` the line
 of action (``e`` the unit vector from gear 1 to gear 2, ``t`` = ``e`` turned by +90°), ``d`` the
 in-plane displacement of each gear centre and ``h`` the helix hand of gear 1.
+
+Axial sign convention: ``z`` runs along the main axis so that positive rotations are
+counter-clockwise seen from ``+z`` (right-hand rule); a positive helix angle is a right-hand
+helix (ISO 21771); an internal gear has the hand of its planet. The flank of a right-hand gear
+that faces its positive rotation has the outward normal ``theta_hat - tan(beta) z_hat``, so a
+right-hand gear1 that drives (loaded left flank) is pushed towards ``+z`` and gear2 towards
+``-z``: the axial term of ``delta`` is ``-sin(beta_b) h (z_1 - z_2)``. In a simple set with a
+right-hand sun the sun is pushed towards ``+z`` by ``T_s tan(beta_b) / r_bs``, the ring towards
+``-z`` by as much, and each planet gets equal and opposite axial forces from its two meshes
+(a tilting couple, no net force).
 
 Mesh position (paper eq. (3), both gears' angles)::
 
@@ -30,14 +40,27 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg
 
-from gearvib.geometry import MeshGeometry, sun_ring_phase
+from gearvib.geometry import (
+    MeshGeometry,
+    planet_mesh_position,
+    planet_tooth_angle,
+    sun_ring_phase,
+)
 from gearvib.model import AssembledModel
 from gearvib.structure import RIGID, Body, GearSet, Mesh
 
-__all__ = ["N_TABLE", "ResolvedMesh", "assemble", "resolve_mesh"]
+__all__ = ["LUMPED_RADIUS_TOLERANCE", "N_TABLE", "ResolvedMesh", "assemble", "resolve_mesh"]
 
 N_TABLE = 2048
 """Samples per mesh cycle of the stiffness tables handed to the kernels."""
+LUMPED_RADIUS_TOLERANCE = 0.1
+"""Largest relative difference between the planet radii that the lumped meshes of one planet
+imply (``|r_b1 +- r_b2| / cos(alpha)``, or their ``centre_distance``) and the planet radius.
+
+A lumped model in ``u = r theta`` coordinates does not need them to agree: the planet radius
+(the carrier radius ``r_c`` of Lin & Parker) enters only through the planet bearings, and
+published parameter sets differ by a few per cent. A larger difference is taken as an input
+error (a wrong base radius, pressure angle or unit)."""
 
 
 @dataclass(frozen=True)
@@ -83,6 +106,15 @@ def resolve_mesh(mesh: Mesh) -> ResolvedMesh:
     else:
         a = abs(sigma * rb1 + rb2) / math.cos(alpha) if sigma > 0 else \
             abs(abs(rb1) - abs(rb2)) / math.cos(alpha)
+        if mesh.centre_distance is not None:  # a lumped mesh's given centre distance is used
+            if not math.isclose(mesh.centre_distance, a, rel_tol=LUMPED_RADIUS_TOLERANCE):
+                raise ValueError(
+                    f"mesh {mesh.name!r}: centre_distance {mesh.centre_distance * 1e3:.4f} mm "
+                    f"differs by {abs(mesh.centre_distance - a) / a:.1%} from "
+                    f"|r_b1 {'+' if sigma > 0 else '-'} r_b2| / cos(alpha) = {a * 1e3:.4f} mm "
+                    f"(admissible: within {LUMPED_RADIUS_TOLERANCE:.0%}; check the units)"
+                )
+            a = float(mesh.centre_distance)
     return ResolvedMesh(rb1, rb2, alpha, beta_b, hand, z1, z2, a,
                         g.contact_ratio if g is not None else None, g)
 
@@ -131,29 +163,49 @@ def _add_displacement(v: np.ndarray, coords: _Coordinates, body: Body, direction
 
 
 def _planet_radius(gs: GearSet, body: Body, resolved: dict[str, ResolvedMesh]) -> float:
-    """Planet axis radius: given, or the centre distance of its central-gear meshes.
+    """Planet axis radius: given (``Body.radius``), or the first central-gear mesh's centre
+    distance.
 
-    Every central-gear mesh of the planet must agree with it (a lumped description whose base
-    radii and pressure angles imply different centre distances would lock the gear set).
+    Meshes with tooth geometry must agree with it to 1e-6 (the teeth need one centre
+    distance); lumped meshes to :data:`LUMPED_RADIUS_TOLERANCE`.
     """
     a = body.radius
-    first = None
+    first, first_exact = None, False
     for m in gs.meshes:
         if m.gear2 != body.name or gs.body(m.gear1).role != "central":
             continue
-        am = resolved[m.name].centre_distance
+        r = resolved[m.name]
+        am = r.centre_distance
+        exact = r.geometry is not None and m.base_radius1 is None
         if a is None:
-            a, first = am, m.name
-        elif not math.isclose(a, am, rel_tol=1e-6):
+            a, first, first_exact = am, m.name, exact
+            continue
+        tol = 1e-6 if exact and (first_exact or first is None) else LUMPED_RADIUS_TOLERANCE
+        if not math.isclose(a, am, rel_tol=tol):
             source = f"mesh {first!r}" if first else "the given radius"
+            if tol < LUMPED_RADIUS_TOLERANCE:
+                hint = ("the teeth need one centre distance: make the profile shifts or the "
+                        "given radius consistent")
+            else:
+                hint = (f"a lumped model accepts up to {LUMPED_RADIUS_TOLERANCE:.0%} (base radii "
+                        "and pressure angles of a publication rarely agree exactly); more is "
+                        "taken as an input error: check the base radii, pressure angles and "
+                        "units, or give the planet's radius")
             raise ValueError(
-                f"planet {body.name!r}: mesh {m.name!r} needs a planet radius of "
-                f"{am * 1e3:.4f} mm, {source} gives {a * 1e3:.4f} mm; make the base radii and "
-                "pressure angles consistent"
+                f"planet {body.name!r}: mesh {m.name!r} implies a planet radius of "
+                f"{am * 1e3:.4f} mm, {source} gives {a * 1e3:.4f} mm "
+                f"({abs(am - a) / a:.2%} apart); {hint}"
             )
     if a is None:
         raise ValueError(f"planet {body.name!r}: give its radius (no central-gear mesh)")
     return a
+
+
+def _null_space(a: np.ndarray) -> np.ndarray:
+    """Null space of ``a`` with every row scaled to a unit maximum (mixed units)."""
+    scale = np.abs(a).max(axis=1, keepdims=True)
+    scale[scale == 0] = 1.0
+    return scipy.linalg.null_space(a / scale, rcond=1e-9)
 
 
 def _constraint_matrix(n: int, rows: list[np.ndarray], dependents: list[int],
@@ -223,7 +275,6 @@ def assemble(gs: GearSet, *, n_table: int = N_TABLE) -> AssembledModel:
     v_mesh = np.zeros((n_mesh, n))
     w_mesh = np.zeros((n_mesh, n))
     s0 = np.zeros(n_mesh)
-    first_central: dict[str, Mesh] = {}
     mesh_meta = []
     for k, m in enumerate(gs.meshes):
         r = resolved[m.name]
@@ -249,9 +300,11 @@ def assemble(gs: GearSet, *, n_table: int = N_TABLE) -> AssembledModel:
         _add_displacement(v, coords, b1, nvec, cb)
         _add_displacement(v, coords, b2, nvec, -cb)
         if axial and r.base_helix_angle:
+            # axial part of the contact normal: a right-hand gear1 (h = +1) driving in the
+            # positive sense is pushed towards +z (see the module docstring)
             sb = math.sin(r.base_helix_angle) * r.helix_hand
-            v[coords.get(b1.name, "z")] += sb
-            v[coords.get(b2.name, "z")] -= sb
+            v[coords.get(b1.name, "z")] -= sb
+            v[coords.get(b2.name, "z")] += sb
         v_mesh[k] = v
 
         varying = not math.isclose(m.stiffness.min, m.stiffness.max, rel_tol=1e-12)
@@ -268,18 +321,6 @@ def assemble(gs: GearSet, *, n_table: int = N_TABLE) -> AssembledModel:
             w[coords.get(b2.name, "theta")] -= r.z2
             w[ic] += -r.z1 + r.z2
             w_mesh[k] = w / (4 * math.pi)
-        if m.phase is not None:
-            s0[k] = m.phase
-        elif b1.role == "central" and r.z1 is not None:
-            s0[k] = -r.z1 * b2.angle / (2 * math.pi)
-            ref = first_central.get(b2.name)
-            if ref is None:
-                first_central[b2.name] = m
-            else:
-                s0[k] += _relative_phase(ref, m, resolved)
-        s0[k] -= math.floor(s0[k])
-        if min(s0[k], 1.0 - s0[k]) < 1e-9:  # exact integers from the assembly condition
-            s0[k] = 0.0
         mesh_meta.append({
             "name": m.name, "gear1": m.gear1, "gear2": m.gear2,
             "z1": r.z1, "z2": r.z2,
@@ -288,11 +329,17 @@ def assemble(gs: GearSet, *, n_table: int = N_TABLE) -> AssembledModel:
             "base_helix_angle_deg": math.degrees(r.base_helix_angle),
             "centre_distance": r.centre_distance,
             "contact_ratio": r.contact_ratio,
-            "mesh_position_at_assembly": float(s0[k]),
-            "phase_lag": float((1.0 - s0[k]) % 1.0),
             "backlash": m.backlash,
             "stiffness": m.stiffness.to_dict(),
         })
+
+    s0[:] = _mesh_positions(gs, resolved, bodies, centre)
+    for k, meta_k in enumerate(mesh_meta):
+        s0[k] -= math.floor(s0[k])
+        if min(s0[k], 1.0 - s0[k]) < 1e-9:  # exact integers from the assembly condition
+            s0[k] = 0.0
+        meta_k["mesh_position_at_assembly"] = float(s0[k])
+        meta_k["phase_lag"] = float((1.0 - s0[k]) % 1.0)
 
     # ---- supports, bearings, couplings, constraints ------------------------------------------
     k_full = np.zeros((n, n))
@@ -391,7 +438,13 @@ def assemble(gs: GearSet, *, n_table: int = N_TABLE) -> AssembledModel:
 
     # ---- rigid-body kinematics -----------------------------------------------------------------
     # undeformed meshes and bearings, fixed members at rest, shafts turning as one piece;
-    # torsional supports of the other members are drive/load stiffness and do not count
+    # torsional supports of the other members are drive/load stiffness and do not count, unless
+    # the set would otherwise have several degrees of freedom: then members held by a torsional
+    # support that are neither input nor output are the reaction members, at rest
+    i_in = rotation_dofs[gs.input]
+    if i_in < 0:
+        raise ValueError(f"input member {gs.input!r} has no free rotation (it is held rigidly "
+                         "or joined rigidly to a fixed member)")
     kin_rows = [v_mesh]
     if bearings:
         kin_rows.append(np.array([u for _, u, _, _ in bearings]))
@@ -399,32 +452,55 @@ def assemble(gs: GearSet, *, n_table: int = N_TABLE) -> AssembledModel:
         kin_rows.append(coords.unit(f, "theta")[None, :])
     for cp in gs.couplings:
         kin_rows.append((coords.unit(cp.body1, "theta") - coords.unit(cp.body2, "theta"))[None])
-    a_kin = np.vstack(kin_rows) @ tmat
-    scale = np.abs(a_kin).max(axis=1, keepdims=True)
-    scale[scale == 0] = 1.0
-    null = scipy.linalg.null_space(a_kin / scale, rcond=1e-9)
-    i_in = rotation_dofs[gs.input]
-    if i_in < 0:
-        raise ValueError(f"input member {gs.input!r} has no free rotation")
+    null = _null_space(np.vstack(kin_rows) @ tmat)
+    supported = [b.name for b in gs.bodies if b.role != "planet" and b.name not in gs.fixed
+                 and 0 < b.support.torsional < math.inf]
+    reaction = [b for b in supported if b not in (gs.input, gs.output)]
+    held: list[str] = []
+    if null.shape[1] > 1 and reaction:
+        rows = [coords.unit(b, "theta")[None, :] for b in reaction]
+        null_held = _null_space(np.vstack([*kin_rows, *rows]) @ tmat)
+        if null_held.shape[1] == 0:
+            raise ValueError(
+                f"gear set {gs.name!r}: members {reaction} are held by torsional supports; "
+                "with all of them at rest nothing can turn, so the kinematics (speeds, mesh "
+                "frequency) are not defined: name the reaction member in operation.fixed (a "
+                "fixed member with a finite torsional stiffness is held through it)"
+            )
+        null, held = null_held, reaction
     if null.shape[1] == 0:
-        raise ValueError(f"gear set {gs.name!r} is locked: no rigid-body motion is possible "
-                         f"with fixed members {list(gs.fixed)}")
-    if null.shape[1] > 1:
+        rigid_shafts = [f"{c.body1}-{c.body2}" for c in gs.couplings if math.isinf(c.stiffness)]
         raise ValueError(
-            f"gear set {gs.name!r} has {null.shape[1]} rigid-body degrees of freedom; fix or "
-            f"support members so that one remains (fixed: {list(gs.fixed)})"
+            f"gear set {gs.name!r} is locked: with the meshes undeformed, fixed members "
+            f"{list(gs.fixed)} at rest and the rigid couplings {rigid_shafts}, nothing can turn "
+            "(too many members fixed or rigidly joined)"
+        )
+    if null.shape[1] > 1:
+        free = [b.name for b in gs.bodies if b.role != "planet" and b.name not in gs.fixed
+                and b.name not in held]
+        raise ValueError(
+            f"gear set {gs.name!r} has {null.shape[1]} rigid-body degrees of freedom with fixed "
+            f"members {list(gs.fixed)}: {free} can turn independently (torsional supports "
+            f"of the input and output, {[b for b in supported if b not in reaction]}, are "
+            "drive/load stiffness and do not count); fix one more member (operation.fixed) or "
+            "hold a reaction member by a torsional support"
         )
     mode = null[:, 0] / null[i_in, 0]
     ratios = {}
     full_mode = tmat @ mode
     for b in gs.bodies:
         ratios[b.name] = float(full_mode[coords.get(b.name, "theta")])
+    for b in (*gs.fixed, *held):
+        ratios[b] = 0.0  # exactly at rest (the null space gives it to rounding)
 
-    f_per_rpm = math.nan
-    if n_mesh and resolved[gs.meshes[0].name].z1 is not None:
-        m0 = gs.meshes[0]
-        car = bodies[m0.gear2].carrier
-        f_per_rpm = abs(resolved[m0.name].z1 * (ratios[m0.gear1] - ratios[car])) / 60.0
+    # mesh frequency of every mesh per input speed, |z1 (n1 - n_c)| / 60 (paper eq. 5); NaN
+    # without tooth numbers. Stages and planet toothings may differ (two-stage, Wolfrom).
+    f_per_rpm = np.full(n_mesh, math.nan)
+    for k, m in enumerate(gs.meshes):
+        z1 = resolved[m.name].z1
+        if z1 is not None:
+            car = bodies[m.gear2].carrier
+            f_per_rpm[k] = abs(z1 * (ratios[m.gear1] - ratios[car])) / 60.0
 
     bearing_vectors = (np.array([u for _, u, _, _ in bearings]) @ tmat if bearings
                        else np.zeros((0, len(kept))))
@@ -437,6 +513,8 @@ def assemble(gs: GearSet, *, n_table: int = N_TABLE) -> AssembledModel:
         "bodies": [{"name": b.name, "role": b.role} for b in gs.bodies],
         "config": gs.config,
     }
+    if held:  # members at rest in the kinematics through their torsional supports
+        meta["kinematics_at_rest"] = list(gs.fixed) + held
     return AssembledModel(
         dof_names=dof_names,
         dof_units=tuple("rad" if d.endswith(".theta") else "m" for d in dof_names),
@@ -463,19 +541,179 @@ def assemble(gs: GearSet, *, n_table: int = N_TABLE) -> AssembledModel:
         output_member=gs.output,
         fixed_members=tuple(gs.fixed),
         kinematic_ratios=ratios,
-        mesh_frequency_per_rpm=f_per_rpm,
+        mesh_frequencies_per_rpm=f_per_rpm,
         meta=meta,
     )
 
 
-def _relative_phase(ref: Mesh, mesh: Mesh, resolved: dict[str, ResolvedMesh]) -> float:
-    """Mesh-position offset of ``mesh`` relative to ``ref`` at the same planet (geometry)."""
-    r_ref, r = resolved[ref.name], resolved[mesh.name]
-    g_ref, g = r_ref.geometry, r.geometry
+PHASE_TOLERANCE = 2e-3
+"""Largest mismatch [mesh cycles] between the two ways a mesh position follows from the
+assembly (from the central gear and from the planet's teeth) before the set is refused; it
+admits planet angles rounded to 1e-3 of the smallest assembly step."""
+
+
+def _mesh_positions(gs: GearSet, resolved: dict[str, ResolvedMesh], bodies: dict[str, Body],
+                    centre: dict[str, np.ndarray]) -> np.ndarray:
+    """Mesh position of every contact in the reference configuration ``q = 0`` [cycles].
+
+    Every gear has one orientation at assembly. A central gear is described by the constant
+    ``c`` of ``s = -z psi / 2 pi + c`` (rotational symmetry: the mesh with a planet at ``psi``
+    sees the gear turned by ``-psi``; one ``c`` per central gear and planet geometry), a planet
+    by the direction of its reference tooth (:func:`gearvib.geometry.planet_tooth_angle`;
+    further toothings of a stepped planet are turned by their ``tooth_offset``). The positions
+    follow by propagation through the meshes, starting from ``c = 0`` for the first central gear
+    (the paper's ``s0 = -z psi / 2 pi``) and again for any gear not reached through tooth
+    geometry (lumped meshes). A mesh reached both ways must agree within
+    :data:`PHASE_TOLERANCE`, otherwise the gears cannot be assembled there (ValueError naming
+    the mesh). A mesh with a given ``phase`` keeps it; the propagation uses its derived value,
+    so an override changes that mesh only.
+    Meshes without tooth numbers get 0 (constant stiffness: the position does not matter).
+    """
+    meshes = gs.meshes
+    n_mesh = len(meshes)
+    s0 = np.zeros(n_mesh)
+    done = np.zeros(n_mesh, dtype=bool)
+    c: dict[tuple, float] = {}
+    tooth: dict[str, float] = {}  # planet -> direction of its reference tooth [rad]
+    ref_mesh: dict[str, int] = {}  # planet -> mesh its reference tooth came from
+
+    def central_key(m: Mesh) -> tuple:
+        r = resolved[m.name]
+        g = r.geometry
+        return (m.gear1, g.gear2 if g is not None else r.z2, round(r.centre_distance, 12))
+
+    def planet_geometry(m: Mesh, planet: str):
+        """(geometry, planet_is_gear1, mate direction, tooth offset) or None."""
+        g = resolved[m.name].geometry
+        if g is None:
+            return None
+        is1 = m.gear1 == planet
+        toothing = g.gear1 if is1 else g.gear2
+        if toothing.internal:
+            return None
+        mate = m.gear2 if is1 else m.gear1
+        d = centre[mate] - centre[planet]
+        offset = m.tooth_offset1 if is1 else m.tooth_offset2
+        return g, is1, math.atan2(d[1], d[0]), offset
+
+    def from_planet(k: int, planet: str) -> float | None:
+        pg = planet_geometry(meshes[k], planet)
+        if pg is None or planet not in tooth:
+            return None
+        g, is1, mate, offset = pg
+        ref = ref_mesh[planet]
+        if (meshes[k].gear1 != planet and bodies[meshes[ref].gear1].role == "central"
+                and bodies[meshes[k].gear1].role == "central"):
+            rel = _relative_phase(meshes[ref], meshes[k], resolved)
+            if rel is not None:  # sun and ring on one planet toothing: the closed form
+                return s0[ref] + rel
+        return planet_mesh_position(g, planet_is_gear1=is1, mate_direction=mate,
+                                    tooth_angle=tooth[planet] + offset)
+
+    def set_planet(k: int, planet: str) -> None:
+        pg = planet_geometry(meshes[k], planet)
+        if pg is None or planet in tooth:
+            return
+        g, is1, mate, offset = pg
+        tooth[planet] = planet_tooth_angle(g, planet_is_gear1=is1, mate_direction=mate,
+                                           position=s0[k]) - offset
+        ref_mesh[planet] = k
+
+    def check(k: int, planet: str) -> None:
+        other = from_planet(k, planet)
+        if other is None or ref_mesh.get(planet) == k:
+            return
+        ref = meshes[ref_mesh[planet]]
+        mismatch = abs((s0[k] - other + 0.5) % 1.0 - 0.5)
+        pg, pr = planet_geometry(meshes[k], planet), planet_geometry(ref, planet)
+        ref_toothing = pr[0].gear1 if pr[1] else pr[0].gear2
+        if (pg[0].gear1 if pg[1] else pg[0].gear2) != ref_toothing:
+            # another toothing of a stepped planet: the planet may be inserted turned by any
+            # number of teeth of its reference toothing
+            g, is1, mate, offset = pg
+            for turn in range(1, abs(ref_toothing.z)):
+                alt = planet_mesh_position(
+                    g, planet_is_gear1=is1, mate_direction=mate,
+                    tooth_angle=tooth[planet] + offset + 2 * math.pi * turn / ref_toothing.z)
+                mismatch = min(mismatch, abs((s0[k] - alt + 0.5) % 1.0 - 0.5))
+        if mismatch > PHASE_TOLERANCE:
+            m = meshes[k]
+            raise ValueError(
+                f"mesh {m.name!r} cannot be assembled: the teeth of {planet!r} put it at mesh "
+                f"position {other % 1.0:.4f} (from mesh {ref.name!r}), the other gear at "
+                f"{s0[k] % 1.0:.4f} ({mismatch:.3g} cycles apart); identical planets do not fit "
+                "at these angles with these tooth numbers"
+            )
+
+    def assign(k: int) -> bool:
+        m = meshes[k]
+        r = resolved[m.name]
+        b1, b2 = bodies[m.gear1], bodies[m.gear2]
+        if r.z1 is None or r.z2 is None:
+            s0[k] = 0.0
+            return True
+        if b1.role == "central":
+            key = central_key(m)
+            if key in c:
+                s0[k] = -r.z1 * b2.angle / (2 * math.pi)
+                s0[k] += c[key]
+                if b2.name in tooth:
+                    check(k, b2.name)
+                else:
+                    set_planet(k, b2.name)
+                return True
+            value = from_planet(k, b2.name)
+            if value is None:
+                return False
+            s0[k] = value
+            c[key] = value + r.z1 * b2.angle / (2 * math.pi)
+            return True
+        # planet-planet mesh
+        for known, other in ((b1.name, b2.name), (b2.name, b1.name)):
+            value = from_planet(k, known)
+            if value is not None:
+                s0[k] = value
+                if other in tooth:
+                    check(k, other)
+                else:
+                    set_planet(k, other)
+                return True
+        return False
+
+    while not done.all():
+        progress = False
+        for k in np.flatnonzero(~done):
+            if assign(int(k)):
+                done[k] = progress = True
+        if progress:
+            continue
+        # nothing follows from what is known: fix the orientation of the next gear
+        k = int(np.flatnonzero(~done)[0])
+        m = meshes[k]
+        if bodies[m.gear1].role == "central":
+            c[central_key(m)] = 0.0
+        else:
+            s0[k] = 0.0
+            done[k] = True
+            set_planet(k, m.gear1)
+            set_planet(k, m.gear2)
+    for k, m in enumerate(meshes):
+        if m.phase is not None:
+            s0[k] = m.phase
+    return s0
+
+
+def _relative_phase(ref: Mesh, mesh: Mesh, resolved: dict[str, ResolvedMesh]) -> float | None:
+    """Closed-form mesh-position offset of ``mesh`` relative to ``ref`` at the same planet.
+
+    Sun and ring meshing one planet toothing (:func:`gearvib.geometry.sun_ring_phase`); None
+    for every other pair of meshes.
+    """
+    g_ref, g = resolved[ref.name].geometry, resolved[mesh.name].geometry
     if g_ref is None or g is None or g_ref.gear2 != g.gear2:
-        return 0.0  # different planet toothings (stepped planet) or lumped: no relation known
+        return None
     if g_ref.gear1.z > 0 > g.gear1.z:
         return sun_ring_phase(g_ref, g)
     if g.gear1.z > 0 > g_ref.gear1.z:
         return -sun_ring_phase(g, g_ref)
-    return 0.0
+    return None

@@ -1,4 +1,4 @@
-"""Command-line interface: ``gearvib demo | modes | simulate | report | sweep``.
+"""Command line: ``gearvib demo | modes | catalogue | simulate | preset | report | sweep``.
 
 Every subcommand has ``--help``. Errors are printed as one line on stderr with exit code 2
 (bad input) or 1 (a failed computation); nothing is written half.
@@ -35,6 +35,32 @@ def _cmd_modes(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_catalogue(args: argparse.Namespace) -> int:
+    from gearvib.catalogue import gear_set_catalogue
+    from gearvib.config import load_gearset
+
+    cat = gear_set_catalogue(load_gearset(args.config), reference=args.reference,
+                             speed_rpm=args.speed, mesh_harmonics=args.mesh_harmonics,
+                             harmonics=args.harmonics, sidebands=args.sidebands)
+    if args.json:
+        print(cat.to_json(visible_only=True))
+    else:
+        print(f"gear set: {cat.name}; lines a sensor on {cat.sensor} can see "
+              f"({int(cat.visible.sum())} of {len(cat)})")
+        print(cat.table(visible_only=True))
+    return 0
+
+
+def _non_negative_int(text: str) -> int:
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not an integer") from None
+    if v < 0:
+        raise argparse.ArgumentTypeError(f"{text!r} must be >= 0")
+    return v
+
+
 def _speed_range(text: str) -> tuple[float, float]:
     try:
         lo, hi = (float(v) for v in text.split(":"))
@@ -56,45 +82,41 @@ def _positive(text: str) -> float:
     return v
 
 
+def _positive_int(text: str) -> int:
+    v = _non_negative_int(text)
+    if v < 1:
+        raise argparse.ArgumentTypeError(f"{text!r} must be >= 1")
+    return v
+
+
 def run_settings(cfg: dict, args: argparse.Namespace | None = None) -> dict:
-    """Run-up settings: the description's ``[simulation]`` table, overridden by CLI options."""
-    sim = dict(cfg.get("simulation", {}))
-    run = {
-        "speed_start_rpm": float(sim.get("speed_start_rpm", 0.0)),
-        "speed_end_rpm": float(sim.get("speed_end_rpm", 4000.0)),
-        "duration": float(sim.get("duration", 1.0)),
-        "input_torque": sim.get("input_torque"),
-        "load_torque": sim.get("load_torque"),
-        "fs_out": sim.get("fs_out"),
-        "dt": sim.get("dt"),
-        "gyroscopic": bool(sim.get("gyroscopic", False)),
-    }
+    """Run settings: the description's ``[simulation]`` table, overridden by CLI options.
+
+    Checked by :func:`gearvib.simulation.settings.read_run_settings` (an error names the key).
+    """
+    from gearvib.simulation.settings import read_run_settings
+
+    overrides: dict = {}
     if args is not None:
         if getattr(args, "speed", None):
-            run["speed_start_rpm"], run["speed_end_rpm"] = args.speed
+            overrides["speed_start_rpm"], overrides["speed_end_rpm"] = args.speed
         for key in ("duration", "fs_out", "dt", "input_torque"):
-            value = getattr(args, key, None)
-            if value is not None:
-                run[key] = value
-    if run["input_torque"] is None and run["load_torque"] is None:
-        run["input_torque"] = 0.0
-    return run
+            overrides[key] = getattr(args, key, None)
+    return read_run_settings(cfg.get("simulation", {}), overrides)
 
 
 def _cmd_simulate(args: argparse.Namespace) -> int:
     from gearvib.assembly import assemble
     from gearvib.config import gearset_from_dict, load_config
     from gearvib.io import write_netcdf
-    from gearvib.simulate import SpeedRamp, simulate
+    from gearvib.simulate import simulate
+    from gearvib.simulation.settings import conditions_from_settings
 
     cfg, base = load_config(args.config)
     out = _check_output_file(args.output)
     run = run_settings(cfg, args)
     model = assemble(gearset_from_dict(cfg, base=base))
-    cond = SpeedRamp(run["speed_start_rpm"], run["speed_end_rpm"], run["duration"],
-                     load_torque=float(run["load_torque"] or 0.0),
-                     input_torque=None if run["load_torque"] is not None
-                     else float(run["input_torque"]))
+    cond = conditions_from_settings(run)
     result = simulate(model, cond, dt=run["dt"], fs_out=run["fs_out"],
                       gyroscopic=run["gyroscopic"], progress=None if not args.quiet else False,
                       config={"gearset": cfg, "run": run})
@@ -115,6 +137,20 @@ def _check_output_file(path: str):
     if not os.access(parent, os.W_OK):
         raise CliError(f"output folder {str(parent)!r} is not writable")
     return p
+
+
+def _cmd_preset(args: argparse.Namespace) -> int:
+    from gearvib.config import preset_text, preset_titles
+
+    if args.name is None:
+        titles = preset_titles()
+        width = max(len(n) for n in titles)
+        for name, title in titles.items():
+            print(f"{name:<{width}}  {title}")
+        print("\n`gearvib preset NAME > my-set.toml` writes one to start your own file from.")
+        return 0
+    sys.stdout.write(preset_text(args.name))
+    return 0
 
 
 def _cmd_report(args: argparse.Namespace) -> int:
@@ -224,6 +260,28 @@ def _parser() -> argparse.ArgumentParser:
                    help="carrier speed for gyroscopic/centripetal terms [min-1] (default 0)")
     m.set_defaults(func=_cmd_modes)
 
+    c = sub.add_parser("catalogue", help="kinematic frequency catalogue of a gear set",
+                       description="Every order-locked frequency of the gear set at one speed: "
+                       "shaft orders, mesh frequencies and harmonics, planet pass, sun/planet/"
+                       "ring fault frequencies, hunting-tooth and assembly-phase frequencies, "
+                       "planet-pass sidebands (only those the planet phasing lets through to a "
+                       "sensor on the fixed member). Families: see docs/catalogue.md.")
+    c.add_argument("config", help="TOML file or preset name")
+    c.add_argument("--speed", type=_positive, required=True, metavar="RPM",
+                   help="speed of the reference shaft [min-1]")
+    c.add_argument("--reference", metavar="MEMBER",
+                   help="reference shaft of the orders (default: the input member)")
+    c.add_argument("--mesh-harmonics", type=_positive_int, default=7, metavar="M",
+                   help="mesh harmonics listed, with their sidebands (default 7)")
+    c.add_argument("--harmonics", type=_positive_int, default=3, metavar="H",
+                   help="harmonics of shaft, planet-pass and fault lines (default 3)")
+    c.add_argument("--sidebands", type=_non_negative_int, default=2, metavar="K",
+                   help="sidebands up to K planet-pass frequencies (default 2)")
+    c.add_argument("--json", action="store_true",
+                   help='print {"reference": ..., "lines": [{"family", "harmonic", "sideband", '
+                   '"member", "frequency_hz", "order"}, ...]}')
+    c.set_defaults(func=_cmd_catalogue)
+
     s = sub.add_parser("simulate", help="simulate a run-up and write it as netCDF",
                        description="Simulate a run-up (speed ramp at the input, constant "
                        "torque) and write tooth forces, bearing forces, displacements and "
@@ -241,6 +299,13 @@ def _parser() -> argparse.ArgumentParser:
                    help="input torque [N m] (default from the description)")
     s.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     s.set_defaults(func=_cmd_simulate)
+
+    pr = sub.add_parser("preset", help="list the built-in gear sets, or print one's TOML",
+                        description="Without NAME: list the presets with their titles. With "
+                        "NAME: print the preset's TOML (comments included) to start a file "
+                        "from, e.g. `gearvib preset wolfrom-example > my-set.toml`.")
+    pr.add_argument("name", nargs="?", metavar="NAME", help="preset name")
+    pr.set_defaults(func=_cmd_preset)
 
     r = sub.add_parser("report", help="order-analysis report (HTML + PDF)",
                        description="Render a study recipe (TOML: simulates its cases) or "

@@ -16,6 +16,7 @@ import hashlib
 import json
 import math
 import tomllib
+from dataclasses import replace
 from importlib import resources
 from pathlib import Path
 from typing import Any
@@ -44,6 +45,8 @@ __all__ = [
     "list_presets",
     "load_config",
     "load_gearset",
+    "preset_text",
+    "preset_titles",
 ]
 
 
@@ -53,6 +56,17 @@ class ConfigError(ValueError):
 
 _TOP = {"name", "title", "description", "type", "operation", "geometry", "bodies", "meshes",
         "body", "mesh", "coupling", "stage1", "stage2", "shaft", "simulation", "references"}
+_COMMON_TOP = {"name", "title", "description", "type", "simulation", "references", "body",
+               "coupling", "operation"}
+_TYPE_KEYS = {
+    "simple": {"geometry", "bodies", "meshes"},
+    "wolfrom": {"geometry", "bodies", "meshes"},
+    "ravigneaux": {"geometry", "bodies", "meshes"},
+    "general": {"mesh"},
+    "two-stage": {"stage1", "stage2", "shaft"},
+}
+"""Top-level keys per ``type`` besides the common ones (``[[body]]`` and ``[[coupling]]``
+join adjacent drive components to any type; ``[[mesh]]`` is for ``general`` only)."""
 _OPERATION = {"fixed", "input", "output"}
 _SUPPORT = {"radial", "tangential", "axial", "torsional", "radial_damping",
             "tangential_damping", "axial_damping", "torsional_damping"}
@@ -61,29 +75,38 @@ _BODY_GENERAL = _BODY | {"name", "role", "carrier", "angle_deg", "radius"}
 _MESH_SPEC = {"stiffness", "back_stiffness", "backlash", "damping", "damping_ratio", "comment"}
 _MESH_GENERAL = _MESH_SPEC | {"name", "gear1", "gear2", "toothing1", "toothing2",
                               "base_radius1", "base_radius2", "pressure_angle_deg",
-                              "helix_angle_deg", "z1", "z2", "phase", "centre_distance"}
+                              "helix_angle_deg", "z1", "z2", "phase", "centre_distance",
+                              "tooth_offset1_deg", "tooth_offset2_deg"}
 _TOOTHING = {"z", "module", "pressure_angle_deg", "helix_angle_deg", "profile_shift",
              "face_width", "addendum", "dedendum"}
 _COUPLING = {"body1", "body2", "stiffness", "damping"}
-_SIMULATION = {"speed_start_rpm", "speed_end_rpm", "duration", "input_torque", "load_torque",
-               "fs_out", "dt", "drive_stiffness", "drive_damping", "gyroscopic"}
+_SIMULATION = {"drive", "speed_start_rpm", "speed_end_rpm", "duration", "input_torque",
+               "load_torque", "load_inertia", "drive_stiffness", "drive_damping", "motor",
+               "fs_out", "dt", "gyroscopic"}
+"""Keys of ``[simulation]``; their values are checked by :mod:`gearvib.simulation.settings`."""
 _GEOMETRY = {
     "simple": {"module", "pressure_angle_deg", "helix_angle_deg", "face_width", "z_sun",
                "z_ring", "z_planet", "profile_shift_sun", "profile_shift_ring",
                "profile_shift_planet", "planet_angles_deg", "n_planets"},
     "wolfrom": {"module", "module2", "pressure_angle_deg", "face_width", "z_sun", "z_ring1",
-                "z_ring2", "z_planet1", "z_planet2", "n_planets"},
+                "z_ring2", "z_planet1", "z_planet2", "n_planets", "planet_step_offset_deg"},
     "ravigneaux": {"module", "pressure_angle_deg", "face_width", "z_sun_small", "z_sun_large",
-                   "z_ring", "z_planet_short", "z_planet_long", "n_pairs"},
+                   "z_ring", "z_planet_short", "z_planet_long", "n_pairs",
+                   "planet_mesh_phases"},
 }
 _BODIES = {
     "simple": ("sun", "ring", "carrier", "planet"),
     "wolfrom": ("sun", "ring1", "ring2", "carrier", "planet"),
     "ravigneaux": ("sun_small", "sun_large", "ring", "carrier", "planet_short", "planet_long"),
 }
+_DEFAULT_ROLES = {
+    "simple": ("ring", "sun", "carrier"),
+    "wolfrom": ("ring1", "sun", "ring2"),
+    "ravigneaux": ("sun_large", "sun_small", "ring"),
+}
 _MESHES = {
     "simple": ("sun", "ring"),
-    "wolfrom": ("sun", "ring"),
+    "wolfrom": ("sun", "ring", "ring1", "ring2"),
     "ravigneaux": ("sun", "ring", "planet"),
 }
 
@@ -112,6 +135,13 @@ def _number(value: Any, where: str) -> float:
     v = float(value)
     if math.isnan(v):
         raise ConfigError(f"{where} is NaN; admissible: a finite number")
+    return v
+
+
+def _finite(value: Any, where: str) -> float:
+    v = _number(value, where)
+    if not math.isfinite(v):
+        raise ConfigError(f"{where} = {v!r} is not admissible (admissible: a finite number)")
     return v
 
 
@@ -198,12 +228,14 @@ def _mesh_spec(table: dict, where: str, base: Path | None,
 
 def _toothing(table: dict, where: str) -> Toothing:
     check_keys(table, _TOOTHING, where)
-    kw: dict[str, Any] = {"z": int(_require(table, "z", where)),
+    kw: dict[str, Any] = {"z": _integer(_require(table, "z", where), f"{where}.z"),
                           "module": _number(_require(table, "module", where), f"{where}.module")}
     if "pressure_angle_deg" in table:
-        kw["pressure_angle"] = math.radians(_number(table["pressure_angle_deg"], where))
+        kw["pressure_angle"] = math.radians(_number(table["pressure_angle_deg"],
+                                                    f"{where}.pressure_angle_deg"))
     if "helix_angle_deg" in table:
-        kw["helix_angle"] = math.radians(_number(table["helix_angle_deg"], where))
+        kw["helix_angle"] = math.radians(_number(table["helix_angle_deg"],
+                                                 f"{where}.helix_angle_deg"))
     for k in ("profile_shift", "face_width", "addendum", "dedendum"):
         if k in table:
             kw[k] = _number(table[k], f"{where}.{k}")
@@ -221,6 +253,42 @@ def _operation(cfg: dict) -> dict:
             "output": _require(op, "output", "[operation]")}
 
 
+def _integer(value: Any, where: str, *, low: int | None = None) -> int:
+    """An integer key (a float with a fraction, a bool or a string is refused)."""
+    if isinstance(value, bool) or not isinstance(value, int | float) or (
+            isinstance(value, float) and not value.is_integer()):
+        raise ConfigError(f"{where} must be an integer, got {value!r}")
+    v = int(value)
+    if low is not None and v < low:
+        raise ConfigError(f"{where} = {v} is not admissible (admissible: >= {low})")
+    return v
+
+
+def _builder_meshes(kind: str, meshes_t: dict, base: Path | None) -> dict[str, _MeshSpec]:
+    """The mesh families of a builder; Wolfrom's two rings may share ``[meshes.ring]``."""
+    def spec(key: str) -> _MeshSpec:
+        return _mesh_spec(_require(meshes_t, key, "[meshes]"), f"[meshes.{key}]", base,
+                          deferred=True)
+
+    if kind != "wolfrom":
+        return {k: spec(k) for k in _MESHES[kind]}
+    out = {"sun": spec("sun")}
+    if "ring" in meshes_t:
+        both = [k for k in ("ring1", "ring2") if k in meshes_t]
+        if both:
+            raise ConfigError(f"[meshes.ring] describes both rings; remove it or [meshes."
+                              f"{both[0]}] (give [meshes.ring] or [meshes.ring1] and "
+                              "[meshes.ring2])")
+        out["ring1"] = out["ring2"] = spec("ring")
+    else:
+        missing = [k for k in ("ring1", "ring2") if k not in meshes_t]
+        if missing:
+            raise ConfigError(f"missing key {missing[0]!r} in [meshes] (give [meshes.ring] for "
+                              "both rings, or [meshes.ring1] and [meshes.ring2])")
+        out["ring1"], out["ring2"] = spec("ring1"), spec("ring2")
+    return out
+
+
 def _builder_set(kind: str, cfg: dict, base: Path | None) -> GearSet:
     geo = check_keys(_require(cfg, "geometry", "the description"), _GEOMETRY[kind],
                       "[geometry]")
@@ -235,10 +303,16 @@ def _builder_set(kind: str, cfg: dict, base: Path | None) -> GearSet:
         t = _require(bodies_t, bname, "[bodies]")
         body = _body(bname, t, role, f"[bodies.{bname}]")
         bodies[bname] = body
-    specs = {k: _mesh_spec(_require(meshes_t, k, "[meshes]"), f"[meshes.{k}]", base,
-                           deferred=True)
-             for k in _MESHES[kind]}
+    specs = _builder_meshes(kind, meshes_t, base)
     op = _operation(cfg)
+    # roles naming an added [[body]] (a motor, a load) are set after the build
+    own = set(_BODIES[kind])
+    default = dict(zip(("fixed", "input", "output"), _DEFAULT_ROLES[kind], strict=True))
+    for key in ("input", "output"):
+        if op[key] not in own:
+            op[key] = default[key]
+    if any(f not in own for f in op["fixed"]):
+        op["fixed"] = [default["fixed"]]
     g = {k: v for k, v in geo.items()}
     common: dict[str, Any] = {}
     if "module" in g:
@@ -252,19 +326,33 @@ def _builder_set(kind: str, cfg: dict, base: Path | None) -> GearSet:
     if "face_width" in g:
         common["face_width"] = _number(g.pop("face_width"), "[geometry].face_width")
     name = str(cfg.get("name", kind))
+
+    def z(key: str) -> int:
+        return _integer(_require(g, key, "[geometry]"), f"[geometry].{key}")
+
+    def count(key: str, default: int) -> int:
+        return _integer(g.get(key, default), f"[geometry].{key}", low=1)
+
+    if len(op["fixed"]) != 1 and kind != "simple":
+        raise ConfigError(f"[operation].fixed must name one member for type = {kind!r}, got "
+                          f"{op['fixed']!r}")
     try:
         if kind == "simple":
             angles = g.pop("planet_angles_deg", None)
+            if angles is not None and not isinstance(angles, list):
+                raise ConfigError("[geometry].planet_angles_deg must be a list of angles")
             return simple_planetary(
-                z_sun=int(_require(g, "z_sun", "[geometry]")),
-                z_ring=int(_require(g, "z_ring", "[geometry]")),
-                z_planet=int(g["z_planet"]) if "z_planet" in g else None,
-                n_planets=int(g["n_planets"]) if "n_planets" in g else None,
+                z_sun=z("z_sun"), z_ring=z("z_ring"),
+                z_planet=z("z_planet") if "z_planet" in g else None,
+                n_planets=count("n_planets", 1) if "n_planets" in g else None,
                 planet_angles=[math.radians(_number(a, "[geometry].planet_angles_deg"))
                                for a in angles] if angles is not None else None,
-                profile_shift_sun=float(g.get("profile_shift_sun", 0.0)),
-                profile_shift_ring=float(g.get("profile_shift_ring", 0.0)),
-                profile_shift_planet=float(g["profile_shift_planet"])
+                profile_shift_sun=_number(g.get("profile_shift_sun", 0.0),
+                                          "[geometry].profile_shift_sun"),
+                profile_shift_ring=_number(g.get("profile_shift_ring", 0.0),
+                                           "[geometry].profile_shift_ring"),
+                profile_shift_planet=_number(g["profile_shift_planet"],
+                                             "[geometry].profile_shift_planet")
                 if "profile_shift_planet" in g else None,
                 sun=bodies["sun"], ring=bodies["ring"], carrier=bodies["carrier"],
                 planet=bodies["planet"], sun_mesh=specs["sun"], ring_mesh=specs["ring"],
@@ -272,17 +360,26 @@ def _builder_set(kind: str, cfg: dict, base: Path | None) -> GearSet:
                 output=op["output"], name=name, config=cfg, **common)
         if kind == "wolfrom":
             return wolfrom(
-                z_sun=int(g["z_sun"]), z_ring1=int(g["z_ring1"]), z_ring2=int(g["z_ring2"]),
-                z_planet1=int(g["z_planet1"]), z_planet2=int(g["z_planet2"]),
-                module2=float(g["module2"]) if "module2" in g else None,
-                n_planets=int(g.get("n_planets", 3)), sun=bodies["sun"], ring1=bodies["ring1"],
+                z_sun=z("z_sun"), z_ring1=z("z_ring1"), z_ring2=z("z_ring2"),
+                z_planet1=z("z_planet1"), z_planet2=z("z_planet2"),
+                module2=_number(g["module2"], "[geometry].module2") if "module2" in g else None,
+                step_offset=math.radians(_finite(g.get("planet_step_offset_deg", 0.0),
+                                                 "[geometry].planet_step_offset_deg")),
+                n_planets=count("n_planets", 3), sun=bodies["sun"], ring1=bodies["ring1"],
                 ring2=bodies["ring2"], carrier=bodies["carrier"], planet=bodies["planet"],
-                sun_mesh=specs["sun"], ring_mesh=specs["ring"], fixed=op["fixed"][0],
-                input=op["input"], output=op["output"], name=name, config=cfg, **common)
+                sun_mesh=specs["sun"], ring1_mesh=specs["ring1"], ring2_mesh=specs["ring2"],
+                fixed=op["fixed"][0], input=op["input"], output=op["output"], name=name,
+                config=cfg, **common)
+        phases = g.get("planet_mesh_phases")
+        if phases is not None:
+            if not isinstance(phases, list):
+                raise ConfigError("[geometry].planet_mesh_phases must be a list (one mesh "
+                                  "position per planet pair, cycles)")
+            phases = [_finite(p, "[geometry].planet_mesh_phases") for p in phases]
         return ravigneaux(
-            z_sun_small=int(g["z_sun_small"]), z_sun_large=int(g["z_sun_large"]),
-            z_ring=int(g["z_ring"]), z_planet_short=int(g["z_planet_short"]),
-            z_planet_long=int(g["z_planet_long"]), n_pairs=int(g.get("n_pairs", 3)),
+            z_sun_small=z("z_sun_small"), z_sun_large=z("z_sun_large"), z_ring=z("z_ring"),
+            z_planet_short=z("z_planet_short"), z_planet_long=z("z_planet_long"),
+            n_pairs=count("n_pairs", 3), planet_mesh_phases=phases,
             sun_small=bodies["sun_small"], sun_large=bodies["sun_large"], ring=bodies["ring"],
             carrier=bodies["carrier"], planet_short=bodies["planet_short"],
             planet_long=bodies["planet_long"], sun_mesh=specs["sun"], ring_mesh=specs["ring"],
@@ -296,24 +393,83 @@ def _builder_set(kind: str, cfg: dict, base: Path | None) -> GearSet:
         raise ConfigError(str(exc)) from None
 
 
-def _general_set(cfg: dict, base: Path | None) -> GearSet:
+def _extra_bodies(cfg: dict, required: bool) -> list[Body]:
+    """The ``[[body]]`` list (keys checked; every value type- and range-checked)."""
+    table = _require(cfg, "body", "the description") if required else cfg.get("body", [])
+    if not isinstance(table, list):
+        raise ConfigError("[[body]] must be an array of tables")
     bodies = []
-    for i, t in enumerate(_require(cfg, "body", "the description")):
+    for i, t in enumerate(table):
         where = f"[[body]] #{i + 1}"
         check_keys(t, _BODY_GENERAL, where)
+        name = _require(t, "name", where)
+        if not isinstance(name, str) or not name:
+            raise ConfigError(f"{where}.name must be a non-empty string, got {name!r}")
+        where = f"[[body]] {name!r}"
+        role = _require(t, "role", where)
+        carrier = t.get("carrier")
+        if carrier is not None and not isinstance(carrier, str):
+            raise ConfigError(f"{where}.carrier must be the name of a carrier body")
         try:
             bodies.append(Body(
-                name=str(_require(t, "name", where)), role=_require(t, "role", where),
+                name=name, role=role,
                 mass=_number(_require(t, "mass", where), f"{where}.mass"),
                 inertia=_number(_require(t, "inertia", where), f"{where}.inertia"),
                 support=_support(t.get("support"), f"{where}.support"),
-                carrier=t.get("carrier"),
+                carrier=carrier,
                 angle=math.radians(_number(t.get("angle_deg", 0.0), f"{where}.angle_deg")),
                 radius=_number(t["radius"], f"{where}.radius") if "radius" in t else None))
         except ValueError as exc:
             if isinstance(exc, ConfigError):
                 raise
             raise ConfigError(f"{where}: {exc}") from None
+    return bodies
+
+
+def _couplings(cfg: dict) -> list[Coupling]:
+    """The ``[[coupling]]`` list."""
+    table = cfg.get("coupling", [])
+    if not isinstance(table, list):
+        raise ConfigError("[[coupling]] must be an array of tables")
+    couplings = []
+    for i, t in enumerate(table):
+        where = f"[[coupling]] #{i + 1}"
+        check_keys(t, _COUPLING, where)
+        names = []
+        for key in ("body1", "body2"):
+            v = _require(t, key, where)
+            if not isinstance(v, str):
+                raise ConfigError(f"{where}.{key} must be a body name, got {v!r}")
+            names.append(v)
+        try:
+            couplings.append(Coupling(
+                names[0], names[1],
+                _stiffness_value(t.get("stiffness", "rigid"), f"{where}.stiffness"),
+                _number(t.get("damping", 0.0), f"{where}.damping")))
+        except ValueError as exc:
+            if isinstance(exc, ConfigError):
+                raise
+            raise ConfigError(f"{where}: {exc}") from None
+    return couplings
+
+
+def _with_extras(gs: GearSet, cfg: dict, op: dict | None) -> GearSet:
+    """Add the ``[[body]]`` and ``[[coupling]]`` entries and the operating roles."""
+    bodies = _extra_bodies(cfg, required=False)
+    couplings = _couplings(cfg)
+    if not bodies and not couplings and op is None:
+        return gs
+    op = op or {"fixed": list(gs.fixed), "input": gs.input, "output": gs.output}
+    try:
+        return replace(gs, bodies=gs.bodies + tuple(bodies),
+                       couplings=gs.couplings + tuple(couplings), fixed=tuple(op["fixed"]),
+                       input=op["input"], output=op["output"])
+    except ValueError as exc:
+        raise ConfigError(str(exc)) from None
+
+
+def _general_set(cfg: dict, base: Path | None) -> GearSet:
+    bodies = _extra_bodies(cfg, required=True)
     meshes = []
     for i, t in enumerate(_require(cfg, "mesh", "the description")):
         where = f"[[mesh]] #{i + 1}"
@@ -325,11 +481,19 @@ def _general_set(cfg: dict, base: Path | None) -> GearSet:
                 kw[k] = _number(t[k], f"{where}.{k}")
         for k in ("z1", "z2"):
             if k in t:
-                kw[k] = int(t[k])
+                kw[k] = _integer(t[k], f"{where}.{k}")
+                if kw[k] == 0:
+                    raise ConfigError(f"{where}.{k} = 0 is not admissible (signed tooth number, "
+                                      "negative for an internal gear)")
+        for k in ("tooth_offset1_deg", "tooth_offset2_deg"):
+            if k in t:
+                kw[k[:-4]] = math.radians(_finite(t[k], f"{where}.{k}"))
         if "pressure_angle_deg" in t:
-            kw["pressure_angle"] = math.radians(_number(t["pressure_angle_deg"], where))
+            kw["pressure_angle"] = math.radians(_number(t["pressure_angle_deg"],
+                                                        f"{where}.pressure_angle_deg"))
         if "helix_angle_deg" in t:
-            kw["helix_angle"] = math.radians(_number(t["helix_angle_deg"], where))
+            kw["helix_angle"] = math.radians(_number(t["helix_angle_deg"],
+                                                     f"{where}.helix_angle_deg"))
         for k in ("toothing1", "toothing2"):
             if k in t:
                 kw[k] = _toothing(t[k], f"{where}.{k}")
@@ -341,14 +505,7 @@ def _general_set(cfg: dict, base: Path | None) -> GearSet:
                 damping=spec.damping, damping_ratio=spec.damping_ratio, **kw))
         except ValueError as exc:
             raise ConfigError(f"{where}: {exc}") from None
-    couplings = []
-    for i, t in enumerate(cfg.get("coupling", [])):
-        where = f"[[coupling]] #{i + 1}"
-        check_keys(t, _COUPLING, where)
-        couplings.append(Coupling(
-            str(_require(t, "body1", where)), str(_require(t, "body2", where)),
-            _stiffness_value(t.get("stiffness", "rigid"), f"{where}.stiffness"),
-            _number(t.get("damping", 0.0), f"{where}.damping")))
+    couplings = _couplings(cfg)
     op = _operation(cfg)
     try:
         return GearSet(name=str(cfg.get("name", "general")), bodies=tuple(bodies),
@@ -378,28 +535,57 @@ def gearset_from_dict(cfg: dict, *, base: Path | None = None) -> GearSet:
     if "simulation" in cfg:
         check_keys(cfg["simulation"], _SIMULATION, "[simulation]")
     kind = cfg.get("type", "simple")
+    if kind not in _TYPE_KEYS:
+        raise ConfigError(f"unknown type {kind!r} (admissible: simple, wolfrom, ravigneaux, "
+                          "two-stage, general)")
+    check_keys(cfg, _COMMON_TOP | _TYPE_KEYS[kind], f"a description of type = {kind!r}")
     if kind in _GEOMETRY:
-        return _builder_set(kind, cfg, base)
+        return _with_extras(_builder_set(kind, cfg, base), cfg, _operation(cfg))
     if kind == "general":
         return _general_set(cfg, base)
-    if kind == "two-stage":
-        s1 = gearset_from_dict({**_require(cfg, "stage1", "the description"),
-                                "name": "stage1"}, base=base)
-        s2 = gearset_from_dict({**_require(cfg, "stage2", "the description"),
-                                "name": "stage2"}, base=base)
-        shaft = check_keys(cfg.get("shaft", {}), {"stiffness", "damping"}, "[shaft]")
-        return two_stage(s1, s2, shaft_stiffness=_stiffness_value(
-            shaft.get("stiffness", "rigid"), "[shaft].stiffness"),
-                         shaft_damping=_number(shaft.get("damping", 0.0), "[shaft].damping"),
-                         name=str(cfg.get("name", "two-stage")), config=cfg)
-    raise ConfigError(f"unknown type {kind!r} (admissible: simple, wolfrom, ravigneaux, "
-                      "two-stage, general)")
+    stages = []
+    for key in ("stage1", "stage2"):
+        stage = _require(cfg, key, "the description")
+        if not isinstance(stage, dict):
+            raise ConfigError(f"[{key}] must be a table (a gear-set description)")
+        if "simulation" in stage:
+            raise ConfigError(f"[{key}.simulation] is not admissible: give [simulation] once, "
+                              "at the top level")
+        try:
+            stages.append(gearset_from_dict({**stage, "name": key}, base=base))
+        except ConfigError as exc:
+            raise ConfigError(f"[{key}]: {exc}") from None
+    shaft = check_keys(cfg.get("shaft", {}), {"stiffness", "damping"}, "[shaft]")
+    gs = two_stage(stages[0], stages[1], shaft_stiffness=_stiffness_value(
+        shaft.get("stiffness", "rigid"), "[shaft].stiffness"),
+                   shaft_damping=_number(shaft.get("damping", 0.0), "[shaft].damping"),
+                   name=str(cfg.get("name", "two-stage")), config=cfg)
+    return _with_extras(gs, cfg, _operation(cfg) if "operation" in cfg else None)
 
 
 def list_presets() -> list[str]:
     """Names of the built-in presets."""
     files = resources.files("gearvib.presets").iterdir()
     return sorted(f.name[:-5] for f in files if f.name.endswith(".toml"))
+
+
+def preset_text(name: str) -> str:
+    """The TOML text of a built-in preset (comments included), to start a file from.
+
+    Raises
+    ------
+    ConfigError
+        For an unknown preset (the message lists the available ones).
+    """
+    if name not in list_presets():
+        raise ConfigError(f"unknown preset {name!r} (available: {', '.join(list_presets())})")
+    return resources.files("gearvib.presets").joinpath(f"{name}.toml").read_text("utf-8")
+
+
+def preset_titles() -> dict[str, str]:
+    """``{name: title}`` of every built-in preset (its ``title`` key)."""
+    return {name: str(tomllib.loads(preset_text(name)).get("title", "")) for name in
+            list_presets()}
 
 
 def load_config(name_or_path: str | Path) -> tuple[dict, Path | None]:
@@ -424,8 +610,7 @@ def load_config(name_or_path: str | Path) -> tuple[dict, Path | None]:
             f"unknown preset {name!r} (available: {', '.join(list_presets())}; or give a "
             "path to a .toml file)"
         )
-    text = resources.files("gearvib.presets").joinpath(f"{name}.toml").read_text("utf-8")
-    return tomllib.loads(text), None
+    return tomllib.loads(preset_text(name)), None
 
 
 def load_gearset(name_or_path: str | Path) -> GearSet:

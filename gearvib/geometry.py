@@ -41,7 +41,9 @@ __all__ = [
     "mesh_phases",
     "minimum_offset_angle",
     "planet_mesh_offsets",
+    "planet_mesh_position",
     "planet_profile_shift",
+    "planet_tooth_angle",
     "planet_tooth_number",
     "planetary_meshes",
     "sun_ring_phase",
@@ -281,7 +283,7 @@ class MeshGeometry:
     internal : bool
         True for an internal pair.
     base_helix_angle : float
-        ``beta_b`` [rad].
+        ``beta_b`` [rad] (>= 0; the hands are in the toothings).
     face_width : float
         Common face width ``min(b1, b2)`` [m].
     backlash_free_centre_distance : float
@@ -373,6 +375,15 @@ def _check_pair(gear1: Toothing, gear2: Toothing) -> None:
             f"helix_angle magnitudes differ: {_deg(gear1.helix_angle):.6g}° vs "
             f"{_deg(gear2.helix_angle):.6g}° (must be equal)"
         )
+    if gear1.helix_angle != 0.0:
+        same_hand = math.copysign(1.0, gear1.helix_angle) == math.copysign(1.0, gear2.helix_angle)
+        internal = gear1.internal or gear2.internal
+        if same_hand != internal:
+            raise ValueError(
+                f"helix hands do not mesh: helix_angle {_deg(gear1.helix_angle):.6g}° and "
+                f"{_deg(gear2.helix_angle):.6g}° (an external pair needs opposite hands, an "
+                "internal pair the same hand: the ring has the planet's hand)"
+            )
     if gear1.internal or gear2.internal:
         ext, ring = (gear2, gear1) if gear1.internal else (gear1, gear2)
         if abs(ring.z) - ext.z < 1:
@@ -508,7 +519,7 @@ def mesh_geometry(
         total_contact_ratio=eps_a + eps_b,
         base_pitch=gear1.base_pitch,
         internal=internal,
-        base_helix_angle=gear1.base_helix_angle,
+        base_helix_angle=abs(gear1.base_helix_angle),
         face_width=b,
         backlash_free_centre_distance=a_free,
         tangency1=t1,
@@ -883,6 +894,102 @@ def sun_ring_phase(sun_mesh: MeshGeometry, ring_mesh: MeshGeometry) -> float:
     total -= (sun_mesh.path_start + ring_mesh.path_start) / p1.base_pitch
     ph = total % 1.0
     return 0.0 if math.isclose(ph, 1.0, abs_tol=1e-12) else ph
+
+
+def _planet_line(mesh: MeshGeometry, planet_is_gear1: bool, mate_direction: float):
+    """Tangency angle ``tau``, base radius, half base thickness angle and flank side of the
+    planet on the loaded line of action (see :func:`planet_mesh_position`)."""
+    planet = mesh.gear1 if planet_is_gear1 else mesh.gear2
+    if planet.internal:
+        raise ValueError("planet_mesh_position needs an external planet (z > 0)")
+    sigma = -1.0 if mesh.internal else 1.0
+    alpha = mesh.working_pressure_angle
+    e_angle = mate_direction if planet_is_gear1 else mate_direction + math.pi
+    n_angle = e_angle + math.atan2(math.cos(alpha), sigma * math.sin(alpha))
+    k = -1.0 if planet_is_gear1 else sigma
+    tau = n_angle + 0.5 * math.pi + (0.0 if k > 0 else math.pi)
+    zone = 1.0 if planet_is_gear1 else -1.0  # contact zone along zone * n from T
+    counter_clockwise = zone == -k  # the counter-clockwise tangent at T is -k n
+    return tau, abs(planet.base_radius), _planet_base_half_angle(planet), counter_clockwise
+
+
+def planet_mesh_position(
+    mesh: MeshGeometry, *, planet_is_gear1: bool, mate_direction: float, tooth_angle: float
+) -> float:
+    """Mesh position [cycles, 0..1) of a mesh of an external planet, from the planet's teeth.
+
+    Parameters
+    ----------
+    mesh : MeshGeometry
+        The mesh; the planet is ``mesh.gear1`` (``planet_is_gear1``, a planet-planet mesh) or
+        ``mesh.gear2`` (a central-gear mesh, or the second planet of a planet-planet mesh).
+    planet_is_gear1 : bool
+        Which gear of ``mesh`` the planet is.
+    mate_direction : float
+        Direction [rad] from the planet centre to the centre of the mating gear (the main
+        axis for a sun or ring), in the frame of the carrier.
+    tooth_angle : float
+        Direction [rad] of the centre line of one planet tooth, same frame.
+
+    Returns
+    -------
+    float
+        ``s`` in ``[0, 1)``: 0 when a tooth pair enters contact at the start of the active path.
+
+    Notes
+    -----
+    The loaded ("left") flank of a mesh acts along ``n = cos(a) t + sigma sin(a) e``
+    (``e`` the unit vector from gear1 to gear2, ``t`` = ``e`` turned by +90°, ``a`` the
+    working pressure angle, ``sigma = -1`` for an internal pair), the line of action of
+    :mod:`gearvib.assembly`. A compressive force along it turns gear2 by ``-sigma`` and gear1
+    by ``-1`` (external gear1), which fixes on which side of the planet centre the line is
+    tangent to the planet's base circle: at ``T = r_b k n_perp`` with ``n_perp`` = ``n`` turned
+    by +90°, ``k = sigma`` for the planet as gear2 and ``k = -1`` as gear1 (external planet).
+    From ``T`` the contact zone lies along ``-n`` (gear2) or ``+n`` (gear1). Involute property:
+    the flank of a tooth whose involute starts on the base circle at angle ``beta`` meets the
+    line at the distance ``r_b (beta - tau)`` from ``T`` (``tau`` the angle of ``T``) if the
+    line leaves ``T`` counter-clockwise, and ``r_b (tau - beta)`` if it leaves clockwise; the
+    counter-clockwise flank of the tooth at ``gamma`` starts at ``gamma + psi_b``, the
+    clockwise one at ``gamma - psi_b`` (``psi_b`` half the base tooth-thickness angle). The
+    distance gives the coordinate ``u`` of :class:`MeshGeometry` and
+    ``s = forward_direction (u - path_start) / p_bt (mod 1)``. For the sun and ring meshes of
+    one planet this reproduces :func:`sun_ring_phase` (tested to 1e-12).
+    """
+    tau, rb, psi_b, counter_clockwise = _planet_line(mesh, planet_is_gear1, mate_direction)
+    if counter_clockwise:
+        dist = rb * (tooth_angle + psi_b - tau)
+    else:
+        dist = rb * (tau - tooth_angle + psi_b)
+    u = mesh.tangency1 - dist if planet_is_gear1 else dist
+    s = (mesh.forward_direction * (u - mesh.path_start) / mesh.base_pitch) % 1.0
+    return 0.0 if math.isclose(s, 1.0, abs_tol=1e-12) else s
+
+
+def planet_tooth_angle(
+    mesh: MeshGeometry, *, planet_is_gear1: bool, mate_direction: float, position: float
+) -> float:
+    """Inverse of :func:`planet_mesh_position`: the planet tooth that entered contact last.
+
+    Parameters
+    ----------
+    mesh, planet_is_gear1, mate_direction
+        As in :func:`planet_mesh_position`.
+    position : float
+        Mesh position ``s`` [cycles].
+
+    Returns
+    -------
+    float
+        Direction [rad] of the centre line of the planet tooth that entered contact ``frac(s)``
+        mesh cycles ago (its flank meets the line of action at
+        ``u = path_start + forward_direction frac(s) p_bt``).
+    """
+    tau, rb, psi_b, counter_clockwise = _planet_line(mesh, planet_is_gear1, mate_direction)
+    u = mesh.path_start + mesh.forward_direction * (position % 1.0) * mesh.base_pitch
+    dist = mesh.tangency1 - u if planet_is_gear1 else u
+    if counter_clockwise:
+        return dist / rb - psi_b + tau
+    return tau + psi_b - dist / rb
 
 
 def planet_mesh_offsets(

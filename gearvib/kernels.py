@@ -23,6 +23,9 @@ Drive (``ipar[IP_MODE]``):
   input coordinate, ``k_c (phi - q_in) + c_c (omega - qdot_in)``; ``phi`` is the exact integral of
   the piecewise-linear speed table.
 * ``DRIVE_TORQUE``: input torque from a piecewise-linear table of time (constant outside).
+* ``DRIVE_MOTOR``: input torque from the motor's torque-speed characteristic, a
+  piecewise-linear table of the input speed [rad/s] (constant outside), evaluated at the
+  current speed of the input coordinate.
 
 Load at the output coordinate, in every mode: ``-e (T0 + c1 w + c2 w |w|)`` with
 ``w = e qdot_out`` and ``e = +-1`` the forward sense of the output member.
@@ -54,6 +57,7 @@ import numpy as np
 from numba import njit
 
 __all__ = [
+    "DRIVE_MOTOR",
     "DRIVE_NONE",
     "DRIVE_SPEED",
     "DRIVE_TORQUE",
@@ -85,6 +89,7 @@ STATUS_SPEED = 3
 DRIVE_NONE = 0
 DRIVE_SPEED = 1
 DRIVE_TORQUE = 2
+DRIVE_MOTOR = 3
 
 # integer parameters
 IP_MODE = 0
@@ -133,7 +138,7 @@ class KernelSystem:
     speed_table : ndarray, shape (3, n_speed)
         Rows: time [s], input speed [rad/s], input angle [rad] at the nodes.
     torque_table : ndarray, shape (2, n_torque)
-        Rows: time [s], input torque [N m].
+        Rows: time [s] (``DRIVE_MOTOR``: input speed [rad/s]), input torque [N m].
     deflection_limit : ndarray, shape (n_mesh,)
         Blow-up threshold on ``|delta_m|`` [m].
     """
@@ -509,6 +514,8 @@ def _rhs(t, y, dy, mesh_out, ints, vals, tables, speed_tab, torque_tab):
         torque = vals[fpar + FP_KC] * (phi - y[k_in]) + vals[fpar + FP_CC] * (w - y[n + k_in])
     elif mode == DRIVE_TORQUE:
         torque = _table_at(torque_tab, t)
+    elif mode == DRIVE_MOTOR:
+        torque = _table_at(torque_tab, y[n + k_in])
     if torque != 0.0:
         ii = ints[H_II]
         iv = ints[H_IV]

@@ -36,9 +36,41 @@ periodically.
 
 from __future__ import annotations
 
+import math
+import re
 from dataclasses import dataclass, field
 
 import numpy as np
+
+MESH_FREQUENCY_RTOL = 1e-9
+"""Relative tolerance within which two meshes share one mesh frequency."""
+
+
+@dataclass(frozen=True)
+class MeshFrequencyGroup:
+    """Meshes that share one mesh frequency (one stage, one planet toothing).
+
+    Attributes
+    ----------
+    name : str
+        Display name, e.g. ``"stage 2"`` or ``"ring2"``.
+    frequency_per_rpm : float
+        Mesh frequency per input speed [Hz per min^-1].
+    meshes : tuple of int
+        Indices of the meshes in the model.
+    mesh_names : tuple of str
+        Their names.
+    """
+
+    name: str
+    frequency_per_rpm: float
+    meshes: tuple[int, ...]
+    mesh_names: tuple[str, ...]
+
+    @property
+    def order(self) -> float:
+        """Mesh order: mesh cycles per input revolution (``60 x frequency_per_rpm``)."""
+        return 60.0 * self.frequency_per_rpm
 
 
 @dataclass(frozen=True)
@@ -91,8 +123,12 @@ class AssembledModel:
         Operating roles from the gear-set description.
     kinematic_ratios : dict of str to float
         Speed of every member per unit input speed (rigid-body kinematics).
-    mesh_frequency_per_rpm : float
-        Mesh frequency [Hz] per input speed [min^-1] (paper eq. 5 for a simple set).
+    mesh_frequencies_per_rpm : ndarray, shape (n_mesh,)
+        Mesh frequency of every mesh [Hz] per input speed [min^-1], ``|z_1 (n_1 - n_c)| / 60``
+        per unit input speed (paper eq. 5 for a simple set); NaN for a mesh without tooth
+        numbers (lumped, constant stiffness). A two-stage or Wolfrom set has several distinct
+        values: see :meth:`mesh_frequency_groups`; :attr:`mesh_frequency_per_rpm` is the
+        single value of a one-frequency set.
     meta : dict
         Free-form description (gear-set name, configuration) for provenance.
     """
@@ -122,8 +158,90 @@ class AssembledModel:
     output_member: str
     fixed_members: tuple[str, ...]
     kinematic_ratios: dict[str, float]
-    mesh_frequency_per_rpm: float
+    mesh_frequencies_per_rpm: np.ndarray
     meta: dict = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        f = np.asarray(self.mesh_frequencies_per_rpm, dtype=float).reshape(-1)
+        if f.size != len(self.mesh_names):
+            raise ValueError(
+                f"mesh_frequencies_per_rpm has {f.size} values for {len(self.mesh_names)} "
+                "meshes; give one per mesh (NaN for a mesh without tooth numbers)"
+            )
+        if np.any(f[np.isfinite(f)] < 0) or np.any(np.isinf(f)):
+            raise ValueError("mesh_frequencies_per_rpm must be finite and >= 0 (or NaN)")
+        object.__setattr__(self, "mesh_frequencies_per_rpm", f)
+
+    @property
+    def mesh_frequency_per_rpm(self) -> float:
+        """The mesh frequency per input speed of a single-frequency set [Hz per min^-1].
+
+        Every simple planetary set (and a Ravigneaux set: its meshes all share the planets'
+        carrier and tooth cycle) has one mesh frequency. NaN when no mesh has tooth numbers.
+
+        Raises
+        ------
+        ValueError
+            When the meshes have several distinct frequencies (two-stage, Wolfrom sets); use
+            :attr:`mesh_frequencies_per_rpm` or :meth:`mesh_frequency_groups` there.
+        """
+        groups = self.mesh_frequency_groups()
+        if not groups:
+            return math.nan
+        if len(groups) > 1:
+            listed = ", ".join(f"{g.name} {g.frequency_per_rpm:.6g}" for g in groups)
+            raise ValueError(
+                f"the gear set has {len(groups)} mesh frequencies ({listed} Hz per min^-1); "
+                "use model.mesh_frequencies_per_rpm (per mesh) or model.mesh_frequency_groups()"
+            )
+        return groups[0].frequency_per_rpm
+
+    def mesh_frequency_groups(self, rtol: float = MESH_FREQUENCY_RTOL
+                              ) -> tuple[MeshFrequencyGroup, ...]:
+        """The distinct mesh frequencies and the meshes that share each one.
+
+        Meshes whose frequencies per speed agree within ``rtol`` form one group; groups are in
+        the order of their first mesh (for a two-stage set: stage 1, then stage 2). Meshes
+        without tooth numbers (NaN) belong to no group. A group is named after the stage
+        prefix its meshes share (``"s1.sun-planet1"`` ... -> ``"stage 1"``), else after its
+        central gears (``"sun, ring1"``, ``"ring2"``), else numbered (``"f_mesh,2"``).
+
+        Returns
+        -------
+        tuple of MeshFrequencyGroup
+        """
+        f = self.mesh_frequencies_per_rpm
+        members: list[list[int]] = []
+        for m in range(f.size):
+            if not np.isfinite(f[m]) or f[m] == 0.0:
+                continue
+            for g in members:
+                if abs(f[m] - f[g[0]]) <= rtol * max(f[m], f[g[0]]):
+                    g.append(m)
+                    break
+            else:
+                members.append([m])
+        names = _group_names(self, members)
+        return tuple(
+            MeshFrequencyGroup(name=names[i], frequency_per_rpm=float(np.mean(f[g])),
+                               meshes=tuple(g),
+                               mesh_names=tuple(self.mesh_names[m] for m in g))
+            for i, g in enumerate(members)
+        )
+
+    def mesh_position_rates_per_rpm(self) -> np.ndarray:
+        """Signed rate of every mesh position per input speed [mesh cycles/s per min^-1].
+
+        ``w_m . r`` with ``r`` the rigid-body rotation rates of the members
+        (:attr:`kinematic_ratios`) at 1 min^-1: the rate at which a steady rotation advances the
+        mesh position, i.e. the direction in which the stiffness table is traversed. Its
+        magnitude equals :attr:`mesh_frequencies_per_rpm` for a mesh with tooth numbers.
+        """
+        r = np.zeros(self.n_dof)
+        for member, dof in self.rotation_dofs.items():
+            if dof >= 0:
+                r[dof] = float(self.kinematic_ratios.get(member, 0.0))
+        return np.asarray(self.mesh_position_vectors, dtype=float) @ r * (2.0 * math.pi / 60.0)
 
     @property
     def n_dof(self) -> int:
@@ -170,7 +288,8 @@ class AssembledModel:
         Raises
         ------
         ValueError
-            If the kinematic ratios do not describe a rigid-body motion of the model.
+            If the kinematic ratios do not describe a rigid-body motion of the model (the
+            message names members held by torsional supports to ground).
         """
         n = self.n_dof
         r = np.zeros(n)
@@ -188,10 +307,18 @@ class AssembledModel:
             rhs = -k[np.ix_(free, known)] @ r[known]
             r[free] = np.linalg.lstsq(kff, rhs, rcond=None)[0]
         scale = np.abs(k).max() * np.abs(r).max() + 1e-300
-        if np.abs(k @ r).max() > 1e-8 * scale:
+        resisted = np.abs(k @ r) > 1e-8 * scale
+        if resisted.any():
+            members = sorted(m for m, d in self.rotation_dofs.items()
+                             if d >= 0 and resisted[d] and r[d] != 0.0)
             raise ValueError(
-                "model.kinematic_ratios are not a rigid-body motion of the model "
-                f"(max |K r| = {np.abs(k @ r).max():.3g}); check the assembly"
+                "the kinematic motion of the model is resisted "
+                f"(max |K r| = {np.abs(k @ r).max():.3g}): "
+                + (f"members {members} turn in it but are held by torsional supports to ground "
+                   "(drive and load stiffness of a modal model); a run needs them free: remove "
+                   "those supports, or join motor and load by [[coupling]]"
+                   if members else "the meshes or bearings are strained by it; check the "
+                   "assembly")
             )
         return r
 
@@ -262,3 +389,35 @@ class AssembledModel:
         w = u - np.floor(u)
         m = np.arange(tables.shape[0])
         return (1.0 - w) * tables[m, i0] + w * tables[m, i1]
+
+
+def _group_names(model: AssembledModel, members: list[list[int]]) -> list[str]:
+    """Display names of mesh-frequency groups (see :meth:`AssembledModel.mesh_frequency_groups`)."""
+    if len(members) <= 1:
+        return ["mesh"] * len(members)
+
+    def prefix(g: list[int]) -> str:
+        heads = {model.mesh_names[m].split(".", 1)[0] for m in g
+                 if "." in model.mesh_names[m]}
+        if len(heads) != 1 or any("." not in model.mesh_names[m] for m in g):
+            return ""
+        head = heads.pop()
+        hit = re.fullmatch(r"s(\d+)", head)
+        return f"stage {hit.group(1)}" if hit else head
+
+    gear1 = {d.get("name"): d.get("gear1") for d in model.meta.get("meshes", [])
+             if isinstance(d, dict)}
+
+    def centrals(g: list[int]) -> str:
+        seen: list[str] = []
+        for m in g:
+            c = gear1.get(model.mesh_names[m])
+            if c and c not in seen:
+                seen.append(c)
+        return ", ".join(seen)
+
+    for rule in (prefix, centrals):
+        names = [rule(g) for g in members]
+        if all(names) and len(set(names)) == len(names):
+            return names
+    return [f"f_mesh,{i + 1}" for i in range(len(members))]

@@ -32,6 +32,7 @@ from gearvib.simulation.conditions import (
     RAD_S_PER_RPM,
     Conditions,
     DriveCoupling,
+    MotorDriven,
     SpeedRamp,
     SpeedTable,
     TorqueDriven,
@@ -67,6 +68,7 @@ __all__ = [
     "STEPS_PER_NATURAL_PERIOD",
     "Conditions",
     "DriveCoupling",
+    "MotorDriven",
     "RunSetup",
     "RunUpResult",
     "SimulationError",
@@ -101,6 +103,9 @@ def _blow_up_message(t: float, code: int, setup: RunSetup, step: StepChoice, gyr
         )
     if setup.drive == "torque":
         causes.append("an unstable load/drive setting (input torque not balanced by the load)")
+    elif setup.drive == "motor":
+        causes.append("a motor characteristic that the load cannot balance (no stable working "
+                      "point below max_rpm)")
     else:
         causes.append("a drive coupling or load torque that destabilises the system")
     if gyro:
@@ -131,7 +136,7 @@ def simulate(
     ----------
     model : AssembledModel
         The gear set (:func:`gearvib.assembly.assemble`).
-    conditions : SpeedRamp, SpeedTable or TorqueDriven
+    conditions : SpeedRamp, SpeedTable, TorqueDriven or MotorDriven
         Operating conditions. Speed-driven runs prescribe the input angle ``phi(t)`` through a
         :class:`DriveCoupling`; by default its frequency (rigid-body mode on the coupling) is
         0.1x the lowest elastic natural frequency of the model, with critical damping.
@@ -180,7 +185,8 @@ def simulate(
         k_max[system.ipar[kn.IP_INPUT], system.ipar[kn.IP_INPUT]] += setup.coupling.stiffness
     f_nat = undamped_frequencies(setup.mass, k_max)
     f_nat_max = float(f_nat.max()) if f_nat.size else 0.0
-    f_mesh_max = abs(model.mesh_frequency_per_rpm) * setup.speed_max / RAD_S_PER_RPM
+    f_rpm = model.mesh_frequencies_per_rpm
+    f_mesh_max = float(np.nanmax(f_rpm, initial=0.0)) * setup.speed_max / RAD_S_PER_RPM
     step = choose_step(f_nat_max, f_mesh_max, dt=dt, fs_out=fs_out)
     taps = decimation_filter(step.decimation)
     half = (taps.size - 1) // 2
@@ -194,6 +200,7 @@ def simulate(
         qd0,
         rigid_acceleration=setup.alpha0,
         free_rigid=setup.free_rigid,
+        mesh_names=model.mesh_names,
     )
     delta0 = system.mesh_vectors @ q0
     system.deflection_limit[:] = np.maximum(

@@ -8,18 +8,43 @@ mesh-phasing rule of the gear set.
 
 The input member is held by the same drive coupling the run-up simulation uses, so the
 rigid-body mode is removed and the stability chart describes the simulated system.
+
+Several mesh frequencies
+------------------------
+A two-stage or Wolfrom set has meshes at different frequencies (``model.mesh_frequency_groups``):
+at constant input speed every group ``g`` runs at ``f_g = r_g f_1``, ``r_g`` a fixed kinematic
+ratio, and ``K(t)`` is periodic only if all ``r_g`` are rational. The analysis uses one common
+period of ``L`` reference mesh cycles (group 1) in which group ``g`` completes ``N_g`` cycles:
+
+* **common period** (exact): ``r_g = N_g / L`` with ``L + sum N_g <= max_cycles`` (two equal
+  stages of the paper's set: ``r_2 = 11/49``, 49 + 11 cycles);
+* **commensurate approximation** otherwise (hunting-tooth ratios such as 1771/8900): the best
+  ``N_g / L`` within the same cycle budget replaces ``r_g``, i.e. group ``g`` is detuned by
+  ``delta_g = |N_g / (r_g L) - 1|``. Every region that group ``g`` causes moves in speed by
+  that relative amount at most (its centres scale with ``1 / f_g``); the relative phase of the
+  groups is sampled on a grid of ``1 / L`` cycle instead of densely. ``delta_g`` is reported
+  (:attr:`PeriodicGearSystem.period`) and the analysis refuses a detuning above
+  ``max_detuning`` (default 1e-3) instead of answering wrongly.
+
+The cost of one Floquet evaluation is that of a single-frequency set times the number of mesh
+cycles ``L + sum N_g`` in the period (at most ``max_cycles``, default 256): the stiffness pieces
+of the common period are computed once per system, each evaluation is one product of matrix
+exponentials.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
 from analysis.instability import (
     Candidates,
+    FirstOrderWidths,
     MeshPhasingRule,
     PiecewiseConstant,
     StabilityChart,
@@ -28,17 +53,30 @@ from analysis.instability import (
     stability_chart,
 )
 from gearvib.modal import ModalResult, modal_analysis
-from gearvib.model import AssembledModel
+from gearvib.model import AssembledModel, MeshFrequencyGroup
 from gearvib.simulate import DriveCoupling, default_coupling
 
 __all__ = [
+    "MAX_CYCLES",
+    "MAX_DETUNING",
+    "CommonPeriod",
     "PeriodicGearSystem",
+    "common_period",
     "first_order_regions",
     "gear_set_candidates",
+    "mesh_phasing",
     "periodic_system",
     "stability_map",
     "stability_over_speed",
 ]
+
+MAX_CYCLES = 256
+"""Default budget of mesh cycles (all groups) in the common period of several mesh frequencies."""
+
+MAX_DETUNING = 1e-3
+"""Default largest admissible relative detuning of a mesh frequency (commensurate approximation)."""
+
+_EXACT_RTOL = 1e-9
 
 
 def _runs(table: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
@@ -53,6 +91,130 @@ def _runs(table: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
 
 
 @dataclass(frozen=True)
+class CommonPeriod:
+    """How a system with several mesh frequencies is made periodic.
+
+    Attributes
+    ----------
+    method : str
+        ``"single"`` (one mesh frequency), ``"common period"`` (exact) or
+        ``"commensurate approximation"``.
+    reference_cycles : int
+        ``L``: the period is ``L`` cycles of the reference (first) mesh frequency.
+    cycles : tuple of int
+        ``N_g``: cycles of every group in one period (``cycles[0] == L``).
+    ratios : tuple of float
+        ``r_g = f_g / f_1`` of the gear set (kinematics).
+    detuning : tuple of float
+        ``|N_g / (r_g L) - 1|`` per group (0 when exact).
+    """
+
+    method: str
+    reference_cycles: int
+    cycles: tuple[int, ...]
+    ratios: tuple[float, ...]
+    detuning: tuple[float, ...]
+
+    @property
+    def used_ratios(self) -> tuple[float, ...]:
+        """``N_g / L``: the ratios the analysis uses."""
+        return tuple(n / self.reference_cycles for n in self.cycles)
+
+    @property
+    def max_detuning(self) -> float:
+        """Largest relative detuning of a mesh frequency."""
+        return max(self.detuning, default=0.0)
+
+    def describe(self, names: Sequence[str] | None = None) -> str:
+        """One line for reports and chart metadata.
+
+        E.g. ``"common period (exact): 49 cycles of stage 1 = 11 of stage 2"``.
+        """
+        if self.method == "single":
+            return "one mesh frequency: period = one mesh cycle"
+        names = list(names) if names is not None else [f"f_mesh,{i + 1}"
+                                                       for i in range(len(self.cycles))]
+        first = f"{self.cycles[0]} cycles of {names[0]}"
+        rest = ", ".join(f"{n} of {name}" for n, name in zip(self.cycles[1:], names[1:],
+                                                             strict=True))
+        if self.method == "common period":
+            return f"common period (exact): {first} = {rest}"
+        return (f"commensurate approximation: {first} ≈ {rest}, largest detuning "
+                f"{self.max_detuning:.2g}")
+
+
+def common_period(ratios: Sequence[float], *, max_cycles: int = MAX_CYCLES,
+                  max_detuning: float = MAX_DETUNING) -> CommonPeriod:
+    """Common period of mesh frequencies ``f_g = r_g f_1`` (exact or approximated).
+
+    Parameters
+    ----------
+    ratios : sequence of float
+        ``r_g = f_g / f_1``, first entry 1 (the reference), all > 0.
+    max_cycles : int
+        Budget of mesh cycles ``L + sum_g N_g`` over all groups in the period (cost bound).
+    max_detuning : float
+        Largest admissible relative detuning ``|N_g / (r_g L) - 1|`` when no exact common
+        period fits the budget.
+
+    Returns
+    -------
+    CommonPeriod
+        The smallest exact common period within the budget, else the ``L`` whose largest
+        detuning is smallest.
+
+    Raises
+    ------
+    ValueError
+        Inadmissible ratios or budget, or no period within ``max_cycles`` detunes every mesh
+        frequency by at most ``max_detuning`` (the message names the detuning reached and how
+        to proceed).
+    """
+    r = np.asarray(ratios, dtype=float).ravel()
+    if r.size == 0 or not np.all(np.isfinite(r)) or np.any(r <= 0) or r[0] != 1.0:
+        raise ValueError(f"ratios = {list(r)} are not admissible: finite, > 0, first entry 1")
+    if int(max_cycles) != max_cycles or max_cycles < r.size:
+        raise ValueError(f"max_cycles = {max_cycles!r} is not admissible: an integer >= "
+                         f"{r.size} (one cycle per mesh frequency at least)")
+    if not max_detuning >= 0:
+        raise ValueError(f"max_detuning = {max_detuning!r} is not admissible: must be >= 0")
+    if r.size == 1:
+        return CommonPeriod("single", 1, (1,), (1.0,), (0.0,))
+    best: tuple[float, int, np.ndarray, np.ndarray] | None = None
+    for length in range(1, int(max_cycles) + 1):
+        n = np.maximum(1, np.rint(r * length)).astype(np.int64)
+        n[0] = length
+        if n.sum() > max_cycles:  # the total never falls with L
+            break
+        det = np.abs(n / (r * length) - 1.0)
+        if best is None or det.max() < best[0]:
+            best = (float(det.max()), length, n, det)
+        if det.max() <= _EXACT_RTOL:
+            break
+    assert best is not None
+    worst, length, n, det = best
+    if worst > max_detuning:
+        raise ValueError(
+            f"the mesh frequencies (ratios {', '.join(f'{x:.8g}' for x in r)} to the first) "
+            f"have no common period within max_cycles = {max_cycles} mesh cycles: the best "
+            f"commensurate approximation detunes them by {worst:.3g} > max_detuning = "
+            f"{max_detuning:g}; raise max_cycles (cost grows in proportion) or max_detuning"
+        )
+    exact = worst <= _EXACT_RTOL
+    return CommonPeriod("common period" if exact else "commensurate approximation", length,
+                        tuple(int(x) for x in n), tuple(float(x) for x in r),
+                        tuple(0.0 if exact else float(x) for x in det))
+
+
+def _varying(model: AssembledModel) -> np.ndarray:
+    """True for every mesh whose flank stiffness changes over the cycle."""
+    out = np.zeros(model.n_mesh, dtype=bool)
+    for t in (model.mesh_stiffness_tables, model.mesh_back_tables):
+        out |= np.ptp(t, axis=1) > 1e-12 * np.maximum(np.abs(t).max(axis=1), 1e-300)
+    return out
+
+
+@dataclass(frozen=True)
 class PeriodicGearSystem:
     """The linearised periodic system of a gear set (all flanks in contact).
 
@@ -64,6 +226,17 @@ class PeriodicGearSystem:
         ``M``, constant ``C`` (bearings, meshes, drive) and constant ``K`` (bearings, drive).
     coupling : DriveCoupling
         The drive coupling holding the input member.
+    groups : tuple of MeshFrequencyGroup
+        The mesh frequencies of the model (first: the reference of :meth:`at`).
+    period : CommonPeriod
+        How several mesh frequencies share one period.
+    mesh_rates : ndarray, shape (n_mesh,)
+        Mesh cycles per reference mesh cycle as analysed (signed: the direction in which the
+        stiffness table is traversed; ``N_g / L`` in magnitude, 0 for a mesh outside a group).
+    contact_tables : ndarray, shape (n_mesh, n_table)
+        Stiffness of the flanks in contact over one mesh cycle [N/m]: the left (loaded) flank,
+        plus the back flank for a negative backlash (both flanks loaded, as in the
+        simulation). Default: the left-flank tables.
     """
 
     model: AssembledModel
@@ -71,62 +244,122 @@ class PeriodicGearSystem:
     damping: np.ndarray
     stiffness: np.ndarray
     coupling: DriveCoupling
+    groups: tuple[MeshFrequencyGroup, ...] = ()
+    period: CommonPeriod = CommonPeriod("single", 1, (1,), (1.0,), (0.0,))
+    mesh_rates: np.ndarray | None = None
+    contact_tables: np.ndarray | None = None
+
+    @property
+    def tables(self) -> np.ndarray:
+        """:attr:`contact_tables`, or the model's left-flank tables when not given."""
+        if self.contact_tables is None:
+            return self.model.mesh_stiffness_tables
+        return self.contact_tables
+
+    @property
+    def rates(self) -> np.ndarray:
+        """:attr:`mesh_rates`, or +1 for every mesh when not given."""
+        if self.mesh_rates is None:
+            return np.ones(self.model.n_mesh)
+        return self.mesh_rates
+
+    @property
+    def reference_frequency_per_rpm(self) -> float:
+        """Reference (first) mesh frequency per input speed [Hz per min^-1]."""
+        return self.groups[0].frequency_per_rpm if self.groups else math.nan
 
     def mesh_stiffness_values(self, positions: np.ndarray) -> np.ndarray:
-        """Left-flank stiffness of every mesh at the given positions [N/m]."""
-        return self.model.mesh_stiffness_at(positions)
+        """Stiffness of the flanks in contact of every mesh at the given positions [N/m]."""
+        tables = self.tables
+        n_table = tables.shape[1]
+        s = np.asarray(positions, dtype=float)
+        u = (s - np.floor(s)) * n_table
+        i0 = np.floor(u).astype(np.int64) % n_table
+        i1 = (i0 + 1) % n_table
+        w = u - np.floor(u)
+        m = np.arange(tables.shape[0])
+        return (1.0 - w) * tables[m, i0] + w * tables[m, i1]
 
     def stiffness_at(self, t: float, mesh_frequency: float) -> np.ndarray:
-        """``K(t)`` at constant mesh frequency [Hz]."""
-        s = self.model.mesh_position_offsets + mesh_frequency * t
+        """``K(t)`` at constant reference mesh frequency [Hz]."""
+        s = self.model.mesh_position_offsets + self.rates * (mesh_frequency * t)
         return self.stiffness + self.model.mesh_stiffness_matrix(self.mesh_stiffness_values(s))
 
     def mean_stiffness(self) -> np.ndarray:
         """Cycle-mean stiffness matrix."""
-        return self.stiffness + self.model.mesh_stiffness_matrix()
+        return self.stiffness + self.model.mesh_stiffness_matrix(self.tables.mean(axis=1))
+
+    @cached_property
+    def _pieces(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """Piece lengths [reference mesh cycles] and stiffness matrices over one period."""
+        runs = [_runs(t) for t in self.tables]
+        if not all(r is not None for r in runs):
+            return None
+        length = self.period.reference_cycles
+        cuts = [np.array([0.0, float(length)])]
+        for r, s0, rate in zip(runs, self.model.mesh_position_offsets, self.rates, strict=True):
+            if r is None or r[0].size < 2 or rate == 0.0:  # constant table: no switching
+                continue
+            # s0 + rate u = b + k (mod 1) for u in [0, L)
+            k = np.arange(math.floor(min(s0, s0 + rate * length)) - 1,
+                          math.ceil(max(s0, s0 + rate * length)) + 1)
+            u = ((r[0][None, :] + k[:, None]) - s0) / rate
+            cuts.append(u[(u > 0) & (u < length)])
+        edges = np.unique(np.concatenate(cuts))
+        edges = edges[np.concatenate([[True], np.diff(edges) > 1e-12 * length])]
+        if edges[-1] != length:
+            edges[-1] = float(length)
+        mids = 0.5 * (edges[:-1] + edges[1:])
+        mats = np.array([self.stiffness_at(m, 1.0) for m in mids])
+        return np.diff(edges), mats
 
     def at(self, mesh_frequency: float):
         """``(M, C, K, period)`` for :func:`analysis.instability.floquet`.
 
-        Piecewise-constant tables (rectangular stiffness) give an exact
-        :class:`~analysis.instability.PiecewiseConstant`; otherwise ``K`` is a callable.
+        ``mesh_frequency`` is the reference (first) mesh frequency [Hz]; the period is
+        :attr:`period` ``.reference_cycles`` of its cycles. Piecewise-constant tables
+        (rectangular stiffness) give an exact :class:`~analysis.instability.PiecewiseConstant`
+        (pieces computed once per system); otherwise ``K`` is a callable.
         """
         if not mesh_frequency > 0:
             raise ValueError(f"mesh_frequency = {mesh_frequency} must be > 0")
-        period = 1.0 / mesh_frequency
-        runs = [_runs(t) for t in self.model.mesh_stiffness_tables]
-        if all(r is not None for r in runs):
-            cuts = {0.0}
-            for r, s0 in zip(runs, self.model.mesh_position_offsets, strict=True):
-                cuts.update(((r[0] - s0) % 1.0).tolist())
-            edges = np.array([*sorted(cuts), 1.0])
-            edges = edges[np.concatenate([[True], np.diff(edges) > 1e-12])]
-            mids = 0.5 * (edges[:-1] + edges[1:])
-            mats = np.array([self.stiffness_at(m * period, mesh_frequency) for m in mids])
-            durations = np.diff(edges) * period
+        period = self.period.reference_cycles / mesh_frequency
+        pieces = self._pieces
+        if pieces is not None:
+            lengths, mats = pieces
+            durations = lengths / mesh_frequency
             durations[-1] = period - durations[:-1].sum()
             return self.mass, self.damping, PiecewiseConstant(durations, mats), period
         return (self.mass, self.damping,
                 lambda t: self.stiffness_at(t, mesh_frequency), period)
 
-    def harmonics(self, l_max: int = 4) -> tuple[np.ndarray, np.ndarray]:
-        """``(K_mean, K_hat)``: Fourier coefficients of ``K`` over one mesh cycle.
+    def harmonics(self, l_max: int = 4, group: int = 0) -> tuple[np.ndarray, np.ndarray]:
+        """``(K_mean, K_hat)``: Fourier coefficients of ``K`` over one cycle of a mesh frequency.
 
-        ``K(t) = K_mean + sum_l (K_hat[l-1] exp(i l Omega t) + c.c.)``, computed from the
-        stiffness tables by FFT with every mesh at its phase.
+        ``K(t) = K_mean + sum_l (K_hat[l-1] exp(i l Omega_g t) + c.c.) + (other groups)``,
+        computed from the stiffness tables by FFT with every mesh of group ``group`` at its
+        phase and direction (the other groups enter the mean only; at first order the groups
+        do not interact).
         """
-        tables = self.model.mesh_stiffness_tables
+        tables = self.tables
         n_table = tables.shape[1]
         c = np.fft.rfft(tables, axis=1) / n_table  # coefficient of exp(+i 2 pi l s)
         v = self.model.mesh_vectors
+        members = np.zeros(self.model.n_mesh, dtype=bool)
+        if self.groups:
+            members[list(self.groups[group].meshes)] = True
+        else:
+            members[:] = True
         k_hat = np.zeros((l_max, *self.mass.shape), dtype=complex)
         for ell in range(1, l_max + 1):
             coef = c[:, ell] * np.exp(2j * math.pi * ell * self.model.mesh_position_offsets)
+            coef = np.where(self.rates < 0, np.conj(coef), coef) * members
             k_hat[ell - 1] = (v.T * coef) @ v
         return self.mean_stiffness(), k_hat
 
 
-def periodic_system(model: AssembledModel, *, coupling: DriveCoupling | None = None
+def periodic_system(model: AssembledModel, *, coupling: DriveCoupling | None = None,
+                    max_cycles: int = MAX_CYCLES, max_detuning: float = MAX_DETUNING
                     ) -> PeriodicGearSystem:
     """Build the periodic system of ``model`` held at the input by a drive coupling.
 
@@ -135,6 +368,9 @@ def periodic_system(model: AssembledModel, *, coupling: DriveCoupling | None = N
     model : AssembledModel
     coupling : DriveCoupling, optional
         Default: :func:`gearvib.simulate.default_coupling` (the run-up simulation's).
+    max_cycles, max_detuning
+        Budget and tolerance of the common period of several mesh frequencies (see
+        :func:`common_period` and the module docstring).
     """
     coupling = coupling or default_coupling(model)
     k_in = model.rotation_dofs[model.input_member]
@@ -142,8 +378,27 @@ def periodic_system(model: AssembledModel, *, coupling: DriveCoupling | None = N
     kd[k_in, k_in] = coupling.stiffness
     cd = np.zeros_like(model.stiffness)
     cd[k_in, k_in] = coupling.damping
-    damping = model.damping + model.mesh_damping_matrix() + cd
-    return PeriodicGearSystem(model, model.mass, damping, model.stiffness + kd, coupling)
+    # flanks in contact: the left one; both (stiffness and damping) with a negative backlash
+    both = np.asarray(model.mesh_backlash) < 0
+    tables = model.mesh_stiffness_tables + both[:, None] * model.mesh_back_tables
+    v = model.mesh_vectors
+    mesh_damping = (v.T * (model.mesh_damping * (1.0 + both))) @ v
+    damping = model.damping + mesh_damping + cd
+    varying = _varying(model)
+    groups = tuple(g for g in model.mesh_frequency_groups() if varying[list(g.meshes)].any())
+    rates = np.zeros(model.n_mesh)
+    if groups:
+        ref = groups[0].frequency_per_rpm
+        period = common_period([g.frequency_per_rpm / ref for g in groups],
+                               max_cycles=max_cycles, max_detuning=max_detuning)
+        sign = np.sign(model.mesh_position_rates_per_rpm())
+        sign[sign == 0] = 1.0
+        for g, used in zip(groups, period.used_ratios, strict=True):
+            rates[list(g.meshes)] = used * sign[list(g.meshes)]
+    else:  # no varying mesh: a time-invariant system, any period
+        period = common_period([1.0])
+    return PeriodicGearSystem(model, model.mass, damping, model.stiffness + kd, coupling,
+                              groups, period, rates, tables)
 
 
 def _circular_harmonic(model: AssembledModel, shape: np.ndarray, planets: list[str]) -> int:
@@ -174,6 +429,71 @@ def _mode_families(model: AssembledModel, modal: ModalResult, keep: np.ndarray
     return fam
 
 
+def _loaded(model: AssembledModel) -> AssembledModel:
+    """The model with the stiffness of the flanks in contact as its mean-system tables.
+
+    A negative backlash loads both flanks (stiffness ``k_L + k_R``), which the modes that
+    give the theory candidates must see, as the Floquet system does.
+    """
+    both = np.asarray(model.mesh_backlash) < 0
+    if not both.any():
+        return model
+    tables = model.mesh_stiffness_tables + both[:, None] * model.mesh_back_tables
+    return dataclasses.replace(model, mesh_stiffness_tables=tables)
+
+
+def _concatenate(tables: Sequence, order_by: str):
+    """Rows of several candidate or width tables (same dataclass) in one, sorted."""
+    first = tables[0]
+    if len(tables) == 1:
+        return first
+    kw = {}
+    for f in dataclasses.fields(first):
+        values = [getattr(t, f.name) for t in tables]
+        if f.name in ("notes",):
+            kw[f.name] = tuple(dict.fromkeys(x for v in values for x in v))
+        elif f.name == "natural_frequencies_hz":
+            kw[f.name] = values[0]
+        elif isinstance(values[0], np.ndarray):
+            kw[f.name] = np.concatenate(values)
+        else:
+            kw[f.name] = values[0]
+    order = np.argsort(kw[order_by], kind="stable")
+    for f in dataclasses.fields(first):
+        v = kw[f.name]
+        if isinstance(v, np.ndarray) and f.name != "natural_frequencies_hz" and \
+                v.shape[:1] == order.shape:
+            kw[f.name] = v[order]
+    return type(first)(**kw)
+
+
+def mesh_phasing(model: AssembledModel, modal: ModalResult | None = None
+                 ) -> tuple[MeshPhasingRule | None, list[tuple[str, int]] | None]:
+    """The planetary mesh-phasing rule of a gear set and the family of every elastic mode.
+
+    Returns ``(rule, families)``: for a simple set with equally spaced, identical planets the
+    :class:`~analysis.instability.MeshPhasingRule` and one ``(kind, p)`` per elastic mode
+    (rigid-body modes left out); ``(None, None)`` otherwise (unequal spacing, modes of no pure
+    family).
+    """
+    modal = modal or modal_analysis(_loaded(model))
+    keep = np.array([k != "rigid-body" for k in modal.kinds], dtype=bool)
+    planets = model.meta.get("planets", [])
+    meshes = model.meta.get("meshes", [])
+    z_sun = next((m["z1"] for m in meshes if m["z1"] and m["z1"] > 0), None)
+    z_ring = next((-m["z1"] for m in meshes if m["z1"] and m["z1"] < 0), None)
+    angles = [p["angle_deg"] for p in planets]
+    n = len(angles)
+    equal = n >= 2 and np.allclose(np.diff(np.sort(angles)), 360.0 / n, atol=1e-6)
+    if not (equal and z_sun):
+        return None, None
+    families = _mode_families(model, modal, keep)
+    if families is None:
+        return None, None
+    return MeshPhasingRule(n_planets=n, sun_teeth=int(z_sun),
+                           ring_teeth=int(z_ring) if z_ring else None), families
+
+
 def gear_set_candidates(model: AssembledModel, modal: ModalResult | None = None, *,
                         n_max: int = 4, speed_range: tuple[float, float] | None = None
                         ) -> Candidates:
@@ -183,35 +503,62 @@ def gear_set_candidates(model: AssembledModel, modal: ModalResult | None = None,
     selection rule (Parker 2000; physics notes 4.5) marks the candidates the phasing
     suppresses. Each mode's family is its classification with the dominant circular harmonic
     ``p`` of the planets' motion (0 rotational, 1 translational, ``j`` planet modes); the rule
-    is not applied when a mode is of no pure family (unequal spacing, ``other`` modes).
+    is not applied when a mode is of no pure family (unequal spacing, ``other`` modes). The
+    modes are those of the loaded mean system (both flanks for a negative backlash).
+
+    A set with several mesh frequencies (two-stage, Wolfrom) gets the candidates of every mesh
+    frequency ``f_g`` (``f_g = 2 f_i / n`` ...), each row naming its mesh frequency
+    (:attr:`Candidates.mesh_frequency`, e.g. ``"stage 2"``) with ``n`` its harmonic; rows are
+    sorted by speed. Combination frequencies of two groups (``l f_1 + m f_2``) are second order
+    in the stiffness variation and not listed; the Floquet chart contains them.
     """
-    modal = modal or modal_analysis(model)
+    modal = modal or modal_analysis(_loaded(model))
     keep = np.array([k != "rigid-body" for k in modal.kinds], dtype=bool)
     freqs = modal.frequencies_hz[keep]
     labels = [f"f{i + 1}" for i in np.flatnonzero(keep)]
-    rule = None
-    families = None
-    planets = model.meta.get("planets", [])
-    meshes = model.meta.get("meshes", [])
-    z_sun = next((m["z1"] for m in meshes if m["z1"] and m["z1"] > 0), None)
-    z_ring = next((-m["z1"] for m in meshes if m["z1"] and m["z1"] < 0), None)
-    angles = [p["angle_deg"] for p in planets]
-    n = len(angles)
-    equal = n >= 2 and np.allclose(np.diff(np.sort(angles)), 360.0 / n, atol=1e-6)
-    if equal and z_sun:
-        families = _mode_families(model, modal, keep)
-        if families is not None:
-            rule = MeshPhasingRule(n_planets=n, sun_teeth=int(z_sun),
-                                   ring_teeth=int(z_ring) if z_ring else None)
+    varying = _varying(model)
+    every = model.mesh_frequency_groups()
+    groups = tuple(g for g in every if varying[list(g.meshes)].any()) or every[:1]
+    if len(groups) > 1:
+        tables = [instability_candidates(
+            freqs, n_max=n_max, mesh_frequency_per_rpm=g.frequency_per_rpm,
+            speed_range=speed_range, mode_labels=labels, mesh_frequency_name=g.name)
+            for g in groups]
+        merged = _concatenate(tables, "rpm")
+        return dataclasses.replace(merged,
+                                   mesh_frequency_per_rpm=groups[0].frequency_per_rpm)
+    rule, families = mesh_phasing(model, modal)
     return instability_candidates(
-        freqs, n_max=n_max, mesh_frequency_per_rpm=model.mesh_frequency_per_rpm,
+        freqs, n_max=n_max,
+        mesh_frequency_per_rpm=groups[0].frequency_per_rpm if groups else None,
         speed_range=speed_range, mode_labels=labels,
-        mode_families=families if rule else None, mesh_harmonic_rule=rule)
+        mode_families=families if rule else None, mesh_harmonic_rule=rule,
+        mesh_frequency_name=groups[0].name if len(every) > 1 else None)
+
+
+def _chart_metadata(system: PeriodicGearSystem) -> dict:
+    if len(system.groups) < 2:
+        return {}
+    return {"mesh_frequency_names": tuple(g.name for g in system.groups),
+            "mesh_frequency_ratios": system.period.ratios,
+            "method": system.period.describe([g.name for g in system.groups])}
+
+
+def _reference_factor(model: AssembledModel, system: PeriodicGearSystem) -> float:
+    f = system.reference_frequency_per_rpm
+    if not np.isfinite(f):
+        groups = model.mesh_frequency_groups()
+        f = groups[0].frequency_per_rpm if groups else math.nan
+    if not (np.isfinite(f) and f > 0):
+        raise ValueError("the gear set has no mesh with tooth numbers: no mesh frequency to "
+                         "scan the speed with")
+    return f
 
 
 def stability_over_speed(model: AssembledModel, speeds_rpm: np.ndarray, *,
                          coupling: DriveCoupling | None = None, n_max: int = 4,
-                         refine: bool = True) -> StabilityChart:
+                         refine: bool = True, max_cycles: int = MAX_CYCLES,
+                         max_detuning: float = MAX_DETUNING) -> StabilityChart:
     """Floquet stability chart over input speed, with regions attributed to theory candidates.
 
     Parameters
@@ -225,16 +572,25 @@ def stability_over_speed(model: AssembledModel, speeds_rpm: np.ndarray, *,
         Highest order of the theory candidates.
     refine : bool
         Refine the region boundaries by root finding.
+    max_cycles, max_detuning
+        Common period of several mesh frequencies (module docstring).
+
+    Returns
+    -------
+    StabilityChart
+        Over the first mesh frequency (``mesh_frequency_per_rpm`` converts to speed); with
+        several mesh frequencies the chart names them, gives their ratios and the method.
     """
     speeds = np.asarray(speeds_rpm, dtype=float)
     if speeds.ndim != 1 or speeds.size < 2 or not (speeds > 0).all():
         raise ValueError("speeds_rpm must be an increasing 1-D array of positive speeds")
-    system = periodic_system(model, coupling=coupling)
-    f_per_rpm = model.mesh_frequency_per_rpm
+    system = periodic_system(model, coupling=coupling, max_cycles=max_cycles,
+                             max_detuning=max_detuning)
+    f_per_rpm = _reference_factor(model, system)
     cands = gear_set_candidates(model, n_max=n_max,
                                 speed_range=(float(speeds[0]), float(speeds[-1])))
     return stability_chart(system.at, speeds * f_per_rpm, mesh_frequency_per_rpm=f_per_rpm,
-                           candidates=cands, refine=refine)
+                           candidates=cands, refine=refine, **_chart_metadata(system))
 
 
 def stability_map(model_for: Callable[[float], AssembledModel], speeds_rpm: np.ndarray,
@@ -267,17 +623,43 @@ def stability_map(model_for: Callable[[float], AssembledModel], speeds_rpm: np.n
             systems[value] = periodic_system(model_for(value))
         return systems[value]
 
-    f_per_rpm = system(vals[0]).model.mesh_frequency_per_rpm
-    return stability_chart(lambda f, p: system(float(p)).at(f), speeds * f_per_rpm,
-                           parameter_values=vals, mesh_frequency_per_rpm=f_per_rpm,
-                           refine=refine, parameter_name=parameter_name,
-                           parameter_units=parameter_units)
+    first = system(vals[0])
+    f_per_rpm = _reference_factor(first.model, first)
+
+    def at(f: float, p: float):
+        s = system(float(p))
+        if not math.isclose(s.reference_frequency_per_rpm, f_per_rpm, rel_tol=1e-9):
+            raise ValueError(f"model_for({p}) changes the mesh frequency per speed "
+                             f"({s.reference_frequency_per_rpm:.6g} against {f_per_rpm:.6g} "
+                             "Hz per min^-1); the chart needs one speed axis")
+        return s.at(f)
+
+    return stability_chart(at, speeds * f_per_rpm, parameter_values=vals,
+                           mesh_frequency_per_rpm=f_per_rpm, refine=refine,
+                           parameter_name=parameter_name, parameter_units=parameter_units,
+                           **_chart_metadata(first))
 
 
 def first_order_regions(model: AssembledModel, *, coupling: DriveCoupling | None = None,
-                        l_max: int = 4):
-    """First-order perturbation widths of the principal and sum-type regions (Hsu 1963)."""
+                        l_max: int = 4) -> FirstOrderWidths:
+    """First-order perturbation widths of the principal and sum-type regions (Hsu 1963).
+
+    With several mesh frequencies every group's harmonics give their own rows (their
+    ``mesh_frequency`` names the group; widths in Hz of that mesh frequency, speeds from its
+    factor), sorted by the lower speed.
+    """
     system = periodic_system(model, coupling=coupling)
-    k_mean, k_hat = system.harmonics(l_max)
-    return first_order_widths(system.mass, system.damping, k_mean, k_hat,
-                              mesh_frequency_per_rpm=model.mesh_frequency_per_rpm)
+    groups = system.groups or model.mesh_frequency_groups()
+    if len(groups) < 2:
+        k_mean, k_hat = system.harmonics(l_max)
+        f = groups[0].frequency_per_rpm if groups else None
+        return first_order_widths(system.mass, system.damping, k_mean, k_hat,
+                                  mesh_frequency_per_rpm=f if f and np.isfinite(f) else None)
+    tables = []
+    for i, g in enumerate(groups):
+        k_mean, k_hat = system.harmonics(l_max, group=i)
+        w = first_order_widths(system.mass, system.damping, k_mean, k_hat,
+                               mesh_frequency_per_rpm=g.frequency_per_rpm)
+        tables.append(dataclasses.replace(
+            w, mesh_frequency=np.full(len(w), g.name, dtype=object)))
+    return _concatenate(tables, "lower_rpm")

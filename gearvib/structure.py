@@ -35,6 +35,8 @@ __all__ = [
     "GearSet",
     "Mesh",
     "Support",
+    "check_ravigneaux_pairs",
+    "check_stepped_planet_angles",
     "compose",
     "ravigneaux",
     "simple_planetary",
@@ -161,7 +163,8 @@ class Mesh:
     pressure_angle : float, optional
         Working transverse pressure angle [rad], for lumped models.
     helix_angle : float
-        Base helix angle [rad] for lumped models (0: spur).
+        Base helix angle [rad] for lumped models (0: spur), signed with the hand of gear1
+        (> 0 right hand; an internal gear has the hand of its planet).
     z1, z2 : int, optional
         Signed tooth numbers for the mesh position and phasing of lumped models.
     back_stiffness : MeshStiffness, optional
@@ -175,6 +178,13 @@ class Mesh:
         mode at the mean stiffness.
     phase : float, optional
         Mesh position at the assembly reference [cycles]; computed from geometry if omitted.
+    centre_distance : float, optional
+        Operating centre distance [m] of a geometric mesh (default: zero backlash).
+    tooth_offset1, tooth_offset2 : float
+        For planets with several toothings (stepped planets): angle [rad] from the planet's
+        reference tooth (a tooth of the toothing of its first central-gear mesh) to a tooth of
+        the toothing used in this mesh, in the planet's positive rotation sense. 0 for a
+        single toothing.
     """
 
     name: str
@@ -195,6 +205,8 @@ class Mesh:
     damping_ratio: float | None = None
     phase: float | None = None
     centre_distance: float | None = None
+    tooth_offset1: float = 0.0
+    tooth_offset2: float = 0.0
 
     def __post_init__(self) -> None:
         geometric = self.toothing1 is not None and self.toothing2 is not None
@@ -213,6 +225,27 @@ class Mesh:
             )
         if not math.isfinite(self.backlash):
             raise ValueError(f"mesh {self.name!r}: backlash must be finite")
+        for key in ("base_radius1", "base_radius2"):
+            v = getattr(self, key)
+            if v is not None and not (math.isfinite(v) and v != 0.0):
+                raise ValueError(f"mesh {self.name!r}: {key} = {v!r} m is not admissible "
+                                 "(admissible: finite, non-zero; negative for an internal gear)")
+        for key in ("z1", "z2"):
+            v = getattr(self, key)
+            if v is not None and (isinstance(v, bool) or not isinstance(v, int) or v == 0):
+                raise ValueError(f"mesh {self.name!r}: {key} = {v!r} is not admissible "
+                                 "(admissible: a non-zero signed tooth number)")
+        if not (math.isfinite(self.helix_angle) and abs(self.helix_angle) < math.radians(45)):
+            raise ValueError(f"mesh {self.name!r}: helix_angle {math.degrees(self.helix_angle):.4g}"
+                             "° is not admissible (|beta_b| < 45°)")
+        if self.centre_distance is not None and not (math.isfinite(self.centre_distance)
+                                                     and self.centre_distance > 0):
+            raise ValueError(f"mesh {self.name!r}: centre_distance = {self.centre_distance!r} m "
+                             "is not admissible (admissible: > 0)")
+        for key in ("phase", "tooth_offset1", "tooth_offset2"):
+            v = getattr(self, key)
+            if v is not None and not math.isfinite(v):
+                raise ValueError(f"mesh {self.name!r}: {key} = {v!r} must be finite")
         if self.damping is not None:
             _check_value(self.damping, f"damping of mesh {self.name!r}")
         if self.damping_ratio is not None:
@@ -515,7 +548,8 @@ def simple_planetary(*, z_sun: int, z_ring: int, module: float, sun: Body, ring:
     angles = _planet_angles(z_sun, z_ring, n_planets, planet_angles)
     common = dict(module=module, pressure_angle=pressure_angle, face_width=face_width)
     t_sun = Toothing(z=z_sun, helix_angle=helix_angle, profile_shift=profile_shift_sun, **common)
-    t_ring = Toothing(z=z_ring, helix_angle=helix_angle, profile_shift=profile_shift_ring,
+    # an internal gear meshes with the hand of its planet: the ring has the planet's hand
+    t_ring = Toothing(z=z_ring, helix_angle=-helix_angle, profile_shift=profile_shift_ring,
                       **common)
     if profile_shift_planet is None:
         profile_shift_planet = planet_profile_shift(t_sun, t_ring, z_planet)
@@ -548,16 +582,36 @@ def simple_planetary(*, z_sun: int, z_ring: int, module: float, sun: Body, ring:
 
 def wolfrom(*, z_sun: int, z_ring1: int, z_ring2: int, z_planet1: int, z_planet2: int,
             module: float, sun: Body, ring1: Body, ring2: Body, carrier: Body, planet: Body,
-            sun_mesh: MeshSpec, ring_mesh: MeshSpec, n_planets: int = 3,
-            pressure_angle: float = math.radians(20.0), face_width: float = 0.02,
-            module2: float | None = None, fixed: str = "ring1", input: str = "sun",
-            output: str = "ring2", name: str = "wolfrom", config: dict | None = None) -> GearSet:
+            sun_mesh: MeshSpec, ring_mesh: MeshSpec | None = None,
+            ring1_mesh: MeshSpec | None = None, ring2_mesh: MeshSpec | None = None,
+            n_planets: int = 3, pressure_angle: float = math.radians(20.0),
+            face_width: float = 0.02, module2: float | None = None, step_offset: float = 0.0,
+            fixed: str = "ring1", input: str = "sun", output: str = "ring2",
+            name: str = "wolfrom", config: dict | None = None) -> GearSet:
     """A Wolfrom set: sun, stepped planets (``z_planet1`` meshing sun and fixed ring 1,
     ``z_planet2`` meshing the output ring 2) and a free carrier.
 
     The second step may use its own module (``module2``) so that both steps share the centre
-    distance; profile shifts of the second step are solved for that.
+    distance. ``ring1_mesh`` and ``ring2_mesh`` describe the two ring meshes (``ring_mesh``
+    both when they are alike). ``step_offset`` [rad] is the angle from a tooth of the first
+    toothing to a tooth of the second (a manufacturing choice, measured in the planet's
+    positive rotation sense); every stepped planet is identical.
+
+    Raises
+    ------
+    ValueError
+        If the planets cannot be assembled: ``(z_s + |z_r1|) psi / 2 pi`` must be an integer
+        at every planet angle ``psi`` (step 1) and, for identical stepped planets,
+        ``(z_s z_p2 + |z_r2| z_p1) psi / (2 pi gcd(z_p1, z_p2))`` too (step 2; the planet may
+        be inserted turned by any number of step-1 teeth).
     """
+    if ring1_mesh is None or ring2_mesh is None:
+        if ring_mesh is None:
+            raise ValueError("wolfrom: give ring_mesh, or both ring1_mesh and ring2_mesh")
+        ring1_mesh = ring1_mesh or ring_mesh
+        ring2_mesh = ring2_mesh or ring_mesh
+    if not math.isfinite(step_offset):
+        raise ValueError(f"step_offset = {step_offset!r} must be finite")
     m2 = module if module2 is None else module2
     common = dict(pressure_angle=pressure_angle, face_width=face_width)
     t_s = Toothing(z=z_sun, module=module, **common)
@@ -571,16 +625,48 @@ def wolfrom(*, z_sun: int, z_ring1: int, z_ring2: int, z_planet1: int, z_planet2
     if g2.contact_ratio < 1:
         raise ValueError("ring2-planet contact ratio below 1 at the common centre distance")
     angles = _planet_angles(z_sun, z_ring1, n_planets, None)
+    check_stepped_planet_angles(z_sun, z_ring2, z_planet1, z_planet2, angles)
     sun_b, r1, r2 = (replace(b, role="central") for b in (sun, ring1, ring2))
     car_b = replace(carrier, role="carrier")
     structures = []
     for i, psi in enumerate(angles, start=1):
         p = _planet(planet, i, car_b, psi, a)
         structures.append(_base(sun_b, p, car_b, t_s, t_p1, sun_mesh, a))
-        structures.append(_base(r1, p, car_b, t_r1, t_p1, ring_mesh, a))
-        structures.append(_base(r2, p, car_b, t_r2, t_p2, ring_mesh, a))
+        structures.append(_base(r1, p, car_b, t_r1, t_p1, ring1_mesh, a))
+        bs2 = _base(r2, p, car_b, t_r2, t_p2, ring2_mesh, a)
+        structures.append(replace(bs2, mesh=replace(bs2.mesh, tooth_offset2=step_offset)))
     return compose(name, structures, fixed=(fixed,), input=input, output=output,
                    config=config)
+
+
+def check_stepped_planet_angles(z_sun: int, z_ring2: int, z_planet1: int, z_planet2: int,
+                                angles: Sequence[float], tol: float = 1e-6) -> None:
+    """Check that identical stepped planets fit the second ring at ``angles`` [rad].
+
+    With the first step assembled (sun and ring 1), planet ``n`` at ``psi_n`` fits ring 2 iff
+    ``(z_s z_p2 + |z_r2| z_p1) (psi_n - psi_1) / (2 pi g)`` is an integer, ``g =
+    gcd(z_p1, z_p2)``. Derivation: turning planet 1's configuration to ``psi_n`` and rolling
+    the planet back onto the sun turns it by ``(z_s + z_p1) dpsi / z_p1`` (mod one step-1
+    pitch, the ways the planet can be inserted); ring 2 needs ``(z_r2 + z_p2) dpsi / z_p2``
+    (signed ``z_r2``); both agree modulo ``2 pi / z_p2`` for some insertion iff the condition
+    holds. Verified against the tooth-by-tooth assembly of :mod:`gearvib.assembly`.
+
+    Raises
+    ------
+    ValueError
+        Naming the planet angle, the condition and its value.
+    """
+    g = math.gcd(int(z_planet1), int(z_planet2))
+    total = z_sun * z_planet2 - z_ring2 * z_planet1
+    for psi in angles[1:]:
+        k = total * ((psi - angles[0]) % (2 * math.pi)) / (2 * math.pi * g)
+        if abs(k - round(k)) > tol * max(1.0, abs(k)):
+            raise ValueError(
+                f"identical stepped planets cannot be assembled at {math.degrees(psi):.6g}°: "
+                f"(z_sun·z_planet2 + |z_ring2|·z_planet1)·psi/(360°·gcd(z_planet1, z_planet2)) "
+                f"= ({z_sun}·{z_planet2} + {-z_ring2}·{z_planet1})·psi/(360°·{g}) = {k:.4g} "
+                "must be an integer (change z_ring2 or z_planet2, or the number of planets)"
+            )
 
 
 def ravigneaux(*, z_sun_small: int, z_sun_large: int, z_ring: int, z_planet_short: int,
@@ -588,15 +674,32 @@ def ravigneaux(*, z_sun_small: int, z_sun_large: int, z_ring: int, z_planet_shor
                carrier: Body, planet_short: Body, planet_long: Body, sun_mesh: MeshSpec,
                ring_mesh: MeshSpec, planet_mesh: MeshSpec, n_pairs: int = 3,
                pressure_angle: float = math.radians(20.0), face_width: float = 0.02,
+               planet_mesh_phases: Sequence[float] | None = None,
                fixed: str = "sun_large", input: str = "sun_small", output: str = "ring",
                name: str = "ravigneaux", config: dict | None = None) -> GearSet:
     """A Ravigneaux set: small sun – short planets – long planets – ring, large sun – long
     planets, with planet-planet meshes (the paper's Figures 4 and 5).
 
     The long planet meshes the large sun, the ring and the short planet with one toothing;
-    the short-planet position follows from the three centre distances (law of cosines).
-    Planet-planet mesh phases default to 0 (give ``phase`` explicitly for other values).
+    the short-planet position follows from the three centre distances (law of cosines). All
+    mesh phases, the planet-planet ones included, follow from the tooth geometry in
+    :func:`gearvib.assembly.assemble`; ``planet_mesh_phases`` (one mesh position per pair,
+    cycles) overrides those of the planet-planet meshes.
+
+    Raises
+    ------
+    ValueError
+        If the short and long planets cannot mesh, or the ``n_pairs`` equally spaced pairs
+        cannot be assembled: ``(z_sun_large + |z_ring|) / n_pairs`` (long planets between
+        large sun and ring) and ``(z_sun_small + z_sun_large) / n_pairs`` (a pair turned by
+        one spacing must fit both suns through the short planet) must be integers.
     """
+    check_ravigneaux_pairs(z_sun_small, z_sun_large, z_ring, n_pairs)
+    if planet_mesh_phases is not None:
+        planet_mesh_phases = [float(p) for p in planet_mesh_phases]
+        if len(planet_mesh_phases) != n_pairs or not all(map(math.isfinite,
+                                                              planet_mesh_phases)):
+            raise ValueError(f"planet_mesh_phases needs {n_pairs} finite values (one per pair)")
     common = dict(module=module, pressure_angle=pressure_angle, face_width=face_width)
     t_s1 = Toothing(z=z_sun_small, **common)
     t_s2 = Toothing(z=z_sun_large, **common)
@@ -623,9 +726,41 @@ def ravigneaux(*, z_sun_small: int, z_sun_large: int, z_ring: int, z_planet_shor
         structures.append(_base(sun1, ps, car_b, t_s1, t_ps, sun_mesh, a_s))
         structures.append(_base(sun2, pl, car_b, t_s2, t_pl, sun_mesh, a_l))
         structures.append(_base(ring_b, pl, car_b, t_r, t_pl, ring_mesh, a_l))
-        pp.append(_mesh(f"{ps.name}-{pl.name}", ps.name, pl.name, t_ps, t_pl, planet_mesh, d))
+        mesh = _mesh(f"{ps.name}-{pl.name}", ps.name, pl.name, t_ps, t_pl, planet_mesh, d)
+        if planet_mesh_phases is not None:
+            mesh = replace(mesh, phase=planet_mesh_phases[i])
+        pp.append(mesh)
     return compose(name, structures, extra_meshes=pp, fixed=(fixed,), input=input,
                    output=output, config=config)
+
+
+def check_ravigneaux_pairs(z_sun_small: int, z_sun_large: int, z_ring: int,
+                           n_pairs: int) -> None:
+    """Check that ``n_pairs`` equally spaced Ravigneaux planet pairs can be assembled.
+
+    Pair ``n`` is pair 1 turned by ``dpsi = 2 pi n / N``. Following the tooth phases at the
+    contacts: the long planet between large sun and ring needs ``(z_s2 + |z_r|) dpsi / 2 pi``
+    integer (as in a simple set); the spins that the small sun imposes on the short planet and
+    the short planet on the long one must agree with the spin the large sun imposes on the
+    long planet, which needs ``(z_s1 + z_s2) dpsi / 2 pi`` integer. Verified against the
+    tooth-by-tooth assembly of :mod:`gearvib.assembly`.
+
+    Raises
+    ------
+    ValueError
+        Naming the failed condition and its value.
+    """
+    if isinstance(n_pairs, bool) or not isinstance(n_pairs, int) or n_pairs < 1:
+        raise ValueError(f"n_pairs = {n_pairs!r} is not admissible (admissible: integer >= 1)")
+    for label, total in (("z_sun_large + |z_ring|", z_sun_large - z_ring),
+                         ("z_sun_small + z_sun_large", z_sun_small + z_sun_large)):
+        if total % n_pairs:
+            raise ValueError(
+                f"Ravigneaux set cannot be assembled with {n_pairs} equally spaced planet "
+                f"pairs: ({label})/n_pairs = {total}/{n_pairs} = {total / n_pairs:.4g} must be "
+                "an integer (both conditions: (z_sun_large + |z_ring|)/n_pairs and "
+                "(z_sun_small + z_sun_large)/n_pairs)"
+            )
 
 
 def _prefixed(gs: GearSet, prefix: str) -> tuple[list[Body], list[Mesh]]:
@@ -642,14 +777,17 @@ def two_stage(stage1: GearSet, stage2: GearSet, *, shaft_stiffness: float = RIGI
               config: dict | None = None) -> GearSet:
     """Two planetary stages in series: the output of stage 1 drives the input of stage 2.
 
-    Bodies and meshes are renamed with the prefixes ``s1.`` and ``s2.``; a torsional shaft
-    (rigid by default) joins ``stage1.output`` and ``stage2.input``.
+    Bodies, meshes and the stages' own couplings are renamed with the prefixes ``s1.`` and
+    ``s2.``; a torsional shaft (rigid by default) joins ``stage1.output`` and ``stage2.input``.
     """
     b1, m1 = _prefixed(stage1, "s1.")
     b2, m2 = _prefixed(stage2, "s2.")
     fixed = tuple(f"s1.{f}" for f in stage1.fixed) + tuple(f"s2.{f}" for f in stage2.fixed)
     coupling = Coupling(f"s1.{stage1.output}", f"s2.{stage2.input}", shaft_stiffness,
                         shaft_damping)
+    own = tuple(replace(c, body1=f"{prefix}{c.body1}", body2=f"{prefix}{c.body2}")
+                for prefix, stage in (("s1.", stage1), ("s2.", stage2))
+                for c in stage.couplings)
     return GearSet(name=name, bodies=tuple(b1 + b2), meshes=tuple(m1 + m2), fixed=fixed,
                    input=f"s1.{stage1.input}", output=f"s2.{stage2.output}",
-                   couplings=(coupling,), config=dict(config or {}))
+                   couplings=(*own, coupling), config=dict(config or {}))

@@ -43,6 +43,13 @@ class StabilityChart:
         Mesh frequency per input speed [Hz/min-1].
     region_table : list of dict
         Unstable intervals (see :meth:`regions`).
+    mesh_frequency_names : tuple of str
+        Systems with several mesh frequencies (two-stage, Wolfrom): the name of each; the grid
+        ``mesh_frequencies_hz`` is the first one (the reference). Empty for one frequency.
+    mesh_frequency_ratios : tuple of float
+        Each mesh frequency divided by the reference (kinematic ratios).
+    method : str
+        How the system with several mesh frequencies was made periodic (see the caller).
     """
 
     mesh_frequencies_hz: np.ndarray
@@ -54,6 +61,9 @@ class StabilityChart:
     region_table: list[dict] = field(default_factory=list)
     parameter_name: str = "parameter"
     parameter_units: str = "1"
+    mesh_frequency_names: tuple[str, ...] = ()
+    mesh_frequency_ratios: tuple[float, ...] = ()
+    method: str = ""
 
     @property
     def unstable(self) -> np.ndarray:
@@ -67,8 +77,12 @@ class StabilityChart:
         (boundaries refined by root finding unless the interval touches the grid end, flagged by
         ``lower_open``/``upper_open``), ``lower_speed``/``upper_speed`` [min-1] (NaN without a
         speed factor), ``peak_growth_rate`` [1/s], ``peak_max_modulus``, ``candidate`` (label of
-        the nearest allowed theory candidate by centre, "" if none given), ``candidate_f_mesh``
-        [Hz], and ``parameter`` for two-parameter charts.
+        the nearest allowed theory candidate by centre, "" if none given; with several mesh
+        frequencies the label names the one it belongs to, ``"2 f3/4 [stage 2]"``),
+        ``candidate_f_mesh`` [Hz] (its centre on the grid's mesh frequency), and ``parameter``
+        for two-parameter charts. With several mesh frequencies, ``group_lower`` and
+        ``group_upper`` (dimensions ``region``, ``mesh_frequency_group``) give the boundaries
+        in every mesh frequency [Hz].
         """
         import xarray as xr
 
@@ -102,8 +116,21 @@ class StabilityChart:
         }
         if self.parameter_values is not None:
             data["parameter"] = v(col("parameter"), self.parameter_units, self.parameter_name)
-        return xr.Dataset(data, coords={"region": ("region", np.arange(len(t)),
-                                                   {"units": "1", "long_name": "region index"})})
+        coords: dict[str, Any] = {"region": ("region", np.arange(len(t)),
+                                             {"units": "1", "long_name": "region index"})}
+        if len(self.mesh_frequency_names) > 1:
+            ratios = np.asarray(self.mesh_frequency_ratios, dtype=float)
+            dims = ("region", "mesh_frequency_group")
+            data["group_lower"] = (dims, np.outer(lower, ratios).reshape(len(t), ratios.size),
+                                   {"units": "Hz", "long_name": "lower boundary in each mesh "
+                                                                "frequency"})
+            data["group_upper"] = (dims, np.outer(upper, ratios).reshape(len(t), ratios.size),
+                                   {"units": "Hz", "long_name": "upper boundary in each mesh "
+                                                                "frequency"})
+            coords["mesh_frequency_group"] = ("mesh_frequency_group",
+                                              np.array(self.mesh_frequency_names, dtype=str),
+                                              {"long_name": "mesh frequency (stage, toothing)"})
+        return xr.Dataset(data, coords=coords, attrs={"method": self.method})
 
     def to_dataset(self):
         """Grid results as :class:`xarray.Dataset` (CF attributes on every variable)."""
@@ -121,6 +148,15 @@ class StabilityChart:
         if self.mesh_frequency_per_rpm:
             coords["speed"] = ("f_mesh", self.mesh_frequencies_hz / self.mesh_frequency_per_rpm,
                                {"units": "min-1", "long_name": "input speed"})
+        if len(self.mesh_frequency_names) > 1:
+            ratios = np.asarray(self.mesh_frequency_ratios, dtype=float)
+            coords["mesh_frequency_group"] = ("mesh_frequency_group",
+                                              np.array(self.mesh_frequency_names, dtype=str),
+                                              {"long_name": "mesh frequency (stage, toothing)"})
+            coords["group_f_mesh"] = (("mesh_frequency_group", "f_mesh"),
+                                      np.outer(ratios, self.mesh_frequencies_hz),
+                                      {"units": "Hz", "long_name": "every mesh frequency on "
+                                                                  "the grid"})
         return xr.Dataset(
             {
                 "max_modulus": (dims, self.max_modulus,
@@ -131,7 +167,7 @@ class StabilityChart:
                              {"units": "1", "long_name": "1 where max|mu| > 1 + tol"}),
             },
             coords=coords,
-            attrs={"tol": self.tol},
+            attrs={"tol": self.tol, "method": self.method},
         )
 
     def plot(self, ax=None):
@@ -166,6 +202,9 @@ def stability_chart(
     parameter_name: str = "parameter",
     parameter_units: str = "1",
     floquet_options: dict | None = None,
+    mesh_frequency_names: Sequence[str] = (),
+    mesh_frequency_ratios: Sequence[float] = (),
+    method: str = "",
 ) -> StabilityChart:
     """Evaluate Floquet stability over a mesh-frequency grid.
 
@@ -193,6 +232,13 @@ def stability_chart(
         Metadata of the second parameter.
     floquet_options : dict, optional
         Extra keyword arguments for :func:`floquet` (``method``, ``n_steps``, ``rtol``).
+    mesh_frequency_names, mesh_frequency_ratios : sequence
+        For a system with several mesh frequencies: their names and their ratios to the grid's
+        (reference) mesh frequency, first entry the reference (ratio 1). The region table then
+        gives every region in every mesh frequency, and regions are attributed to candidates
+        by speed (needs ``mesh_frequency_per_rpm``).
+    method : str
+        Description of how ``system_at`` makes the system periodic (stored).
 
     Returns
     -------
@@ -223,6 +269,13 @@ def stability_chart(
     require_positive(tol, "tol", allow_zero=True)
     opts = dict(floquet_options or {})
     opts["tol"] = tol
+    names = tuple(str(x) for x in mesh_frequency_names)
+    ratios = tuple(float(x) for x in mesh_frequency_ratios)
+    if len(names) != len(ratios):
+        raise ValueError(f"mesh_frequency_names has {len(names)} entries, "
+                         f"mesh_frequency_ratios {len(ratios)}; give one ratio per name")
+    if ratios and not (ratios[0] == 1.0 and all(r > 0 for r in ratios)):
+        raise ValueError("mesh_frequency_ratios must be > 0 and start with 1 (the reference)")
 
     def evaluate(fm: float, p: Any) -> tuple[float, float]:
         M, C, K, T = _call(system_at, fm, p)
@@ -267,9 +320,13 @@ def stability_chart(
             centre = 0.5 * (lower + upper)
             lab, cf = "", np.nan
             if candidates is not None:
-                idx = candidates.nearest(centre)
+                by_speed = factor is not None and bool(np.isfinite(candidates.rpm).any())
+                idx = (candidates.nearest_speed(centre / factor) if by_speed
+                       else candidates.nearest(centre))
                 if idx is not None:
-                    lab, cf = str(candidates.label[idx]), float(candidates.f_mesh_hz[idx])
+                    lab = candidates.full_label(idx)
+                    cf = (float(candidates.rpm[idx]) * factor if by_speed
+                          else float(candidates.f_mesh_hz[idx]))
             table.append({
                 "lower": float(lower), "upper": float(upper), "lower_open": lower_open,
                 "upper_open": upper_open, "peak_growth_rate": float(gr[a, k]),
@@ -282,4 +339,5 @@ def stability_chart(
         max_modulus=mm[0] if squeeze else mm, growth_rate=gr[0] if squeeze else gr,
         tol=float(tol), mesh_frequency_per_rpm=factor, region_table=table,
         parameter_name=parameter_name, parameter_units=parameter_units,
+        mesh_frequency_names=names, mesh_frequency_ratios=ratios, method=str(method),
     )

@@ -27,6 +27,7 @@ __all__ = [
     "MeshPhasingRule",
     "first_order_widths",
     "instability_candidates",
+    "natural_frequencies",
     "rectangular_wave_harmonics",
     "rectangular_wave_pieces",
 ]
@@ -66,6 +67,19 @@ def _positive_frequencies(values: Any, name: str) -> np.ndarray:
             "(remove rigid-body modes first)"
         )
     return f
+
+
+def natural_frequencies(values: Any, name: str = "natural_frequencies_hz") -> np.ndarray:
+    """Checked natural frequencies: a 1-D float array, every entry finite and > 0.
+
+    Parameters
+    ----------
+    values : array_like
+        Natural frequencies [Hz].
+    name : str
+        Parameter name for the error message.
+    """
+    return _positive_frequencies(values, name)
 
 
 @dataclass(frozen=True)
@@ -198,6 +212,10 @@ class Candidates:
         E.g. ``"2 f2/3"`` or ``"(f2 + f3=f4)/2"``.
     notes : tuple of str
         General remarks (e.g. why difference-type regions are not listed).
+    mesh_frequency : ndarray of str, optional
+        Name of the mesh frequency each row belongs to (e.g. ``"stage 2"``) when a system has
+        several (two-stage, Wolfrom sets): the row's ``f_mesh_hz`` is that mesh frequency and
+        ``n`` its harmonic. None (or empty names) for a single mesh frequency.
     """
 
     kind: np.ndarray
@@ -212,6 +230,7 @@ class Candidates:
     notes: tuple[str, ...] = ()
     natural_frequencies_hz: np.ndarray = field(default_factory=lambda: np.zeros(0))
     mesh_frequency_per_rpm: float | None = None
+    mesh_frequency: np.ndarray | None = None
 
     def __len__(self) -> int:
         return int(self.f_mesh_hz.size)
@@ -223,7 +242,28 @@ class Candidates:
                                                "rpm", "allowed", "reason", "label")}
         return Candidates(**kw, notes=self.notes,
                           natural_frequencies_hz=self.natural_frequencies_hz,
-                          mesh_frequency_per_rpm=self.mesh_frequency_per_rpm)
+                          mesh_frequency_per_rpm=self.mesh_frequency_per_rpm,
+                          mesh_frequency=None if self.mesh_frequency is None
+                          else self.mesh_frequency[m])
+
+    def full_label(self, i: int) -> str:
+        """Label of row ``i`` with its mesh frequency, e.g. ``"2 f3/4 [stage 2]"``."""
+        name = "" if self.mesh_frequency is None else str(self.mesh_frequency[i])
+        return f"{self.label[i]} [{name}]" if name else str(self.label[i])
+
+    def nearest_speed(self, rpm: float, *, allowed_only: bool = True) -> int | None:
+        """Row index of the candidate whose centre speed is nearest to ``rpm`` (or None).
+
+        Use this when the rows belong to several mesh frequencies: their ``f_mesh_hz`` are then
+        in different units of speed, their ``rpm`` in the same.
+        """
+        ok = np.isfinite(self.rpm)
+        if allowed_only:
+            ok &= self.allowed.astype(bool)
+        idx = np.flatnonzero(ok)
+        if idx.size == 0:
+            return None
+        return int(idx[np.argmin(np.abs(self.rpm[idx] - rpm))])
 
     def nearest(self, f_mesh_hz: float, *, allowed_only: bool = True) -> int | None:
         """Row index of the candidate whose centre is nearest to ``f_mesh_hz`` (or None)."""
@@ -239,8 +279,13 @@ class Candidates:
         def v(x, units, long_name):
             return ("candidate", x, {"units": units, "long_name": long_name})
 
+        extra = {}
+        if self.mesh_frequency is not None:
+            extra["mesh_frequency"] = v(np.asarray(self.mesh_frequency).astype(str), "1",
+                                        "mesh frequency the candidate belongs to")
         return xr.Dataset(
             {
+                **extra,
                 "kind": v(self.kind.astype(str), "1", "region type (principal/sum/difference)"),
                 "mode_i": v(self.mode_i, "1", "zero-based index of first mode"),
                 "mode_j": v(self.mode_j, "1", "zero-based index of second mode"),
@@ -290,6 +335,7 @@ def instability_candidates(
     mesh_harmonic_rule: MeshPhasingRule | None = None,
     gyroscopic: bool = False,
     repeat_rtol: float = 1e-6,
+    mesh_frequency_name: str | None = None,
 ) -> Candidates:
     """List the mesh frequencies at which parametric instability regions can occur.
 
@@ -318,6 +364,10 @@ def instability_candidates(
         listed when requested.
     repeat_rtol : float
         Relative tolerance within which natural frequencies count as repeated (one cluster).
+    mesh_frequency_name : str, optional
+        Name of the mesh frequency the candidates belong to (systems with several mesh
+        frequencies: call once per mesh frequency with its ``mesh_frequency_per_rpm``); stored
+        in :attr:`Candidates.mesh_frequency`.
 
     Returns
     -------
@@ -409,6 +459,8 @@ def instability_candidates(
         f_mesh_hz=arr(4, float), rpm=arr(5, float), allowed=arr(6, bool), reason=arr(7, object),
         label=arr(8, object), notes=tuple(notes), natural_frequencies_hz=f,
         mesh_frequency_per_rpm=factor,
+        mesh_frequency=None if mesh_frequency_name is None
+        else np.full(len(rows), str(mesh_frequency_name), dtype=object),
     )
 
 
@@ -437,6 +489,9 @@ class FirstOrderWidths:
         Boundaries as input speed [min-1] (NaN without ``mesh_frequency_per_rpm``).
     label : ndarray of str
         Theory label.
+    mesh_frequency : ndarray of str, optional
+        Name of the mesh frequency whose harmonic ``l`` a row belongs to (systems with several
+        mesh frequencies), None for a single one.
     """
 
     kind: np.ndarray
@@ -453,6 +508,7 @@ class FirstOrderWidths:
     upper_rpm: np.ndarray
     label: np.ndarray
     natural_frequencies_hz: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    mesh_frequency: np.ndarray | None = None
 
     def __len__(self) -> int:
         return int(self.centre_hz.size)
@@ -472,8 +528,13 @@ class FirstOrderWidths:
         def v(x, units, long_name):
             return ("region", x, {"units": units, "long_name": long_name})
 
+        extra = {}
+        if self.mesh_frequency is not None:
+            extra["mesh_frequency"] = v(np.asarray(self.mesh_frequency).astype(str), "1",
+                                        "mesh frequency whose harmonic l the region belongs to")
         return xr.Dataset(
             {
+                **extra,
                 "kind": v(self.kind.astype(str), "1", "region type"),
                 "mode_i": v(self.mode_i, "1", "zero-based index of first mode"),
                 "mode_j": v(self.mode_j, "1", "zero-based index of second mode"),

@@ -9,6 +9,7 @@
 ``run_setup``       model + conditions -> the kernel arrays of one run (:func:`prepare_run`)
 ``equilibrium``     static equilibrium at the start of a run (:func:`static_equilibrium`)
 ``result``          :class:`RunUpResult` and its CF-annotated Dataset
+``settings``        the ``[simulation]`` table -> checked run settings -> conditions
 ==================  =========================================================================
 
 The driver :func:`gearvib.simulate.simulate` puts them together; ``gearvib.simulate`` also

@@ -20,6 +20,7 @@ __all__ = [
     "RAD_S_PER_RPM",
     "Conditions",
     "DriveCoupling",
+    "MotorDriven",
     "SpeedRamp",
     "SpeedTable",
     "TorqueDriven",
@@ -172,5 +173,115 @@ class TorqueDriven:
             object.__setattr__(self, "duration", tt[-1])
 
 
-Conditions = SpeedRamp | SpeedTable | TorqueDriven
+def _load_tuple(load_torque: Sequence[float]) -> tuple[float, float, float]:
+    lt = tuple(float(v) for v in load_torque)
+    if len(lt) != 3 or not all(math.isfinite(v) for v in lt):
+        raise ValueError("load_torque must be (T0, c1, c2), three finite numbers")
+    return lt
+
+
+@dataclass(frozen=True)
+class MotorDriven:
+    """A motor at the input member: its torque follows its torque-speed characteristic.
+
+    The drive torque is ``T(omega_in)``, linear in the table between its nodes and held
+    constant outside, evaluated at the current speed of the input member in the kernel (so the
+    motor's speed droop under load and its damping of torsional vibration are part of the
+    run). Load and load inertia at the output as in :class:`TorqueDriven`. A motor rotor with
+    its own inertia and shaft is a ``[[body]]`` joined by a ``[[coupling]]``, made the input.
+    :meth:`kloss` builds the characteristic of an induction motor.
+
+    Parameters
+    ----------
+    speed_rpm : sequence of float
+        Strictly increasing speeds of the characteristic [min^-1].
+    torque : sequence of float
+        Motor torque at those speeds [N m] (positive: driving forward).
+    load_inertia : float
+        Inertia added to the output member [kg m^2] (>= 0).
+    load_torque : (T0, c1, c2)
+        Resisting load ``T0 + c1 w + c2 w |w|`` [N m], ``w`` forward output speed [rad/s].
+    start_rpm : float
+        Input speed at ``t = 0`` [min^-1].
+    duration : float, optional
+        Default simulated duration [s].
+    max_rpm : float, optional
+        Expected highest input speed [min^-1] (step choice, runaway guard); default the highest
+        speed of the characteristic.
+    """
+
+    speed_rpm: Sequence[float]
+    torque: Sequence[float]
+    load_inertia: float = 0.0
+    load_torque: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    start_rpm: float = 0.0
+    duration: float | None = None
+    max_rpm: float | None = None
+
+    def __post_init__(self) -> None:
+        n = tuple(float(v) for v in np.asarray(self.speed_rpm, dtype=float).ravel())
+        t = tuple(float(v) for v in np.asarray(self.torque, dtype=float).ravel())
+        if len(n) != len(t) or len(n) < 2:
+            raise ValueError("MotorDriven: speed_rpm and torque need >= 2 values each, as many "
+                             f"torques as speeds (got {len(n)} and {len(t)})")
+        if not all(map(math.isfinite, n + t)) or np.any(np.diff(n) <= 0):
+            raise ValueError("MotorDriven: speed_rpm must be finite and strictly increasing, "
+                             "torque finite")
+        object.__setattr__(self, "speed_rpm", n)
+        object.__setattr__(self, "torque", t)
+        object.__setattr__(self, "load_torque", _load_tuple(self.load_torque))
+        if not (math.isfinite(self.load_inertia) and self.load_inertia >= 0):
+            raise ValueError(f"load_inertia = {self.load_inertia!r} must be >= 0 [kg m^2]")
+        if not math.isfinite(self.start_rpm):
+            raise ValueError(f"start_rpm = {self.start_rpm!r} must be finite [min^-1]")
+        if self.duration is not None and not self.duration > 0:
+            raise ValueError(f"duration = {self.duration!r} must be > 0 [s]")
+        if self.max_rpm is None:
+            object.__setattr__(self, "max_rpm", max(abs(n[0]), abs(n[-1])))
+        elif not (math.isfinite(self.max_rpm) and self.max_rpm > 0):
+            raise ValueError(f"max_rpm = {self.max_rpm!r} must be > 0 [min^-1]")
+
+    @classmethod
+    def kloss(cls, synchronous_rpm: float, breakdown_torque: float, breakdown_slip: float,
+              *, n_points: int = 2001, **kwargs) -> MotorDriven:
+        """Induction motor with the Kloss characteristic.
+
+        ``T(s) = 2 T_k / (s / s_k + s_k / s)`` with the slip ``s = (n_0 - n) / n_0``
+        (Kloss 1908; the simplified form that neglects the stator resistance). It is
+        tabulated from standstill to 1.5 ``n_0`` (generator above ``n_0``) with ``n_points``
+        speeds: with the default 2001 the linear interpolation is within 1e-4 ``T_k`` of
+        the formula for ``s_k >= 0.05``.
+
+        Parameters
+        ----------
+        synchronous_rpm : float
+            Synchronous speed ``n_0`` [min^-1] (> 0), e.g. 1500 for a 4-pole 50 Hz motor.
+        breakdown_torque : float
+            Breakdown (pull-out) torque ``T_k`` [N m] (> 0).
+        breakdown_slip : float
+            Slip at breakdown ``s_k`` (0 < s_k < 1).
+        n_points : int
+            Table size (>= 11).
+        **kwargs
+            The other parameters of :class:`MotorDriven`.
+        """
+        n0, tk, sk = float(synchronous_rpm), float(breakdown_torque), float(breakdown_slip)
+        if not (math.isfinite(n0) and n0 > 0):
+            raise ValueError(f"synchronous_rpm = {synchronous_rpm!r} must be > 0 [min^-1]")
+        if not (math.isfinite(tk) and tk > 0):
+            raise ValueError(f"breakdown_torque = {breakdown_torque!r} must be > 0 [N m]")
+        if not 0 < sk < 1:
+            raise ValueError(f"breakdown_slip = {breakdown_slip!r} is not admissible "
+                             "(admissible: 0 < s_k < 1)")
+        if isinstance(n_points, bool) or not isinstance(n_points, int) or n_points < 11:
+            raise ValueError(f"n_points = {n_points!r} must be an integer >= 11")
+        speed = np.linspace(0.0, 1.5 * n0, n_points)
+        slip = (n0 - speed) / n0
+        with np.errstate(divide="ignore", invalid="ignore"):
+            torque = np.where(slip == 0.0, 0.0, 2.0 * tk / (slip / sk + sk / slip))
+        kwargs.setdefault("max_rpm", n0)
+        return cls(tuple(speed), tuple(torque), **kwargs)
+
+
+Conditions = SpeedRamp | SpeedTable | TorqueDriven | MotorDriven
 """Any of the operating-condition classes."""

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 
 from gearvib import kernels as kn
@@ -10,39 +12,217 @@ from gearvib.simulation.errors import SimulationError
 __all__ = ["static_equilibrium"]
 
 
-def _contact_solve(a0, f, mr, v, j, kl, kr, k_in, free_rigid, max_iter):
-    """Active-set (Newton) solution of the piecewise-linear static problem at fixed stiffness."""
+MAX_NEWTON = 200
+"""Iterations of the damped Newton method on the potential energy (fallback solver)."""
+
+
+def _contact_state(d: np.ndarray, j: np.ndarray) -> np.ndarray:
+    """Flank-contact state per mesh: bit 0 left flank, bit 1 right flank (0: in the backlash)."""
+    return (d > j / 2).astype(np.int64) + 2 * (d < -j / 2).astype(np.int64)
+
+
+def _state_solve(a0, f, mr, v, j, kl, kr, k_in, free_rigid, state):
+    """Linear solution with the flanks of ``state`` in contact (one active-set step).
+
+    Returns ``q, acc, a, b, resid, new_state`` with ``a q + m_r acc = b`` the linear system of
+    ``state`` and ``new_state`` the contact state of its solution.
+    """
     n = a0.shape[0]
-    state = np.ones(v.shape[0], dtype=np.int64)
     acc = 0.0
+    a = a0.copy()
+    b = f.copy()
+    left = (state & 1).astype(bool)
+    right = (state & 2).astype(bool)
+    a += (v[left].T * kl[left]) @ v[left] + (v[right].T * kr[right]) @ v[right]
+    b += v[left].T @ (kl[left] * j[left] / 2) - v[right].T @ (kr[right] * j[right] / 2)
+    if free_rigid:
+        # equilibrated: acceleration column and pin row scaled to the stiffness
+        big = np.abs(a).max() + 1e-300
+        col = big / (np.abs(mr).max() + 1e-300)
+        aug = np.zeros((n + 1, n + 1))
+        aug[:n, :n] = a
+        aug[:n, n] = mr * col
+        aug[n, k_in] = big
+        rhs = np.append(b, 0.0)
+        sol = np.linalg.lstsq(aug, rhs, rcond=None)[0]
+        q, acc = sol[:n], float(sol[n] * col)
+        resid = aug @ sol - rhs
+    else:
+        q = np.linalg.lstsq(a, b, rcond=None)[0]
+        resid = a @ q - b
+    return q, acc, a, b, resid, _contact_state(v @ q, j)
+
+
+def _flank_forces(d, j, kl, kr):
+    """Left (>= 0) and right (<= 0) flank forces of the static contact law."""
+    return kl * np.maximum(d - j / 2, 0.0), -kr * np.maximum(-d - j / 2, 0.0)
+
+
+def _line_minimum(a0p, g0p, d, c, j, kl, kr) -> float:
+    """Exact minimiser ``t > 0`` of the energy along a descent direction ``p``.
+
+    ``phi'(t) = t p.A.p + g0.p + sum_m c_m F_m(d_m + t c_m)`` is piecewise linear and
+    non-decreasing (convex energy); its root is found between the breakpoints where a flank
+    opens or closes. ``inf`` if it stays negative (the energy is unbounded along ``p``).
+    """
+    mask = c != 0.0
+    cm, dm, jm, klm, krm = c[mask], d[mask], j[mask], kl[mask], kr[mask]
+    with np.errstate(divide="ignore"):
+        brk = np.concatenate([(jm / 2 - dm) / cm, (-jm / 2 - dm) / cm])
+    brk = np.unique(brk[brk > 0.0])
+
+    def slope_and_value(t: float) -> tuple[float, float]:
+        dd = dm + t * cm
+        fl, fr = _flank_forces(dd, jm, klm, krm)
+        val = t * a0p + g0p + float(cm @ (fl + fr))
+        stiff = a0p + float(np.sum(cm * cm * (klm * (dd > jm / 2) + krm * (dd < -jm / 2))))
+        return val, stiff
+
+    t0 = 0.0
+    for t1 in [*brk, np.inf]:
+        # phi' is linear on [t0, t1]: phi'(t) = val + stiff (t - tm)
+        tm = t0 + 1.0 if np.isinf(t1) else 0.5 * (t0 + t1)
+        val, stiff = slope_and_value(tm)
+        end_val = (np.inf if stiff > 0.0 else val) if np.isinf(t1) else val + stiff * (t1 - tm)
+        if end_val >= 0.0:
+            return max(t0, tm - val / stiff) if stiff > 0.0 else t0
+        t0 = t1
+    return np.inf
+
+
+def _energy_solve(a0, f, mr, rigid, v, j, kl, kr, k_in, free_rigid, max_iter):
+    """Damped Newton method on the potential energy (symmetric ``a0``).
+
+    The static problem is the minimum of the convex, piecewise-quadratic energy
+    ``E(q) = q.a0.q / 2 - f.q + sum_m [k_L (d_m - j/2)_+^2 + k_R (-d_m - j/2)_+^2] / 2``: its
+    gradient is the residual of the contact law. Newton steps use the flanks in contact at the
+    current iterate; meshes inside the backlash get a small regularising stiffness so that a
+    member that floats in its backlash does not make the step singular; every step is followed
+    by the exact line minimum of ``E``, so the energy decreases monotonically and the active
+    set cannot cycle. With a free rigid-body mode the acceleration is the torque balance
+    ``r.f / r.M.r`` and the input rotation is pinned.
+
+    Returns ``q, acc, history``: ``history`` is None when converged, else the last contact
+    states. Raises :class:`SimulationError` if ``E`` is unbounded (the load is not balanced).
+    """
+    n = a0.shape[0]
+    free = np.ones(n, dtype=bool)
+    acc = 0.0
+    f_eff = f.copy()
+    if free_rigid:
+        acc = float(rigid @ f) / float(rigid @ mr)
+        f_eff = f - mr * acc
+        free[k_in] = False
+    reg = 1e-3 * 0.5 * (kl + kr)
+    # start from the bonded solution: every mesh a bilateral spring without backlash
+    h0 = a0 + (v.T * (0.5 * (kl + kr))) @ v
+    q = np.zeros(n)
+    h0f = h0[np.ix_(free, free)]
+    q[free] = np.linalg.lstsq(h0f, f_eff[free], rcond=None)[0]
+    scale = np.abs(f_eff).max() + 1e-300
+    # a load component that no support, coupling or mesh resists (null space of the bonded
+    # system) makes the energy unbounded: no equilibrium exists
+    bonded_resid = np.abs(h0f @ q[free] - f_eff[free]).max()
+    if bonded_resid > 1e-8 * (scale + np.abs(h0f).max() * np.abs(q).max()):
+        raise SimulationError(
+            "no static equilibrium at t = 0: the initial load is not balanced (a member is "
+            "free, or the drive and load torques do not match); max residual "
+            f"{bonded_resid:.3g}"
+        )
+    history = []
     for _ in range(max_iter):
+        d = v @ q
+        fl, fr = _flank_forces(d, j, kl, kr)
+        g = a0 @ q - f_eff + v.T @ (fl + fr)
+        if np.abs(g[free]).max() <= 1e-12 * (scale + np.abs(v.T @ (fl - fr)).max()):
+            return q, acc, None
+        history.append(_contact_state(d, j))
+        on_l, on_r = d > j / 2, d < -j / 2
+        off = ~(on_l | on_r)
+        h = (a0 + (v[on_l].T * kl[on_l]) @ v[on_l] + (v[on_r].T * kr[on_r]) @ v[on_r]
+             + (v[off].T * reg[off]) @ v[off])
+        p = np.zeros(n)
+        p[free] = np.linalg.lstsq(h[np.ix_(free, free)], -g[free], rcond=None)[0]
+        c = v @ p
+        t = _line_minimum(float(p @ a0 @ p), float(p @ (a0 @ q - f_eff)), d, c, j, kl, kr)
+        if not np.isfinite(t):
+            raise SimulationError(
+                "no static equilibrium at t = 0: the initial load is not balanced (a member is "
+                "free, or the drive and load torques do not match)"
+            )
+        q = q + t * p
+    return q, acc, history[-10:]
+
+
+def _balanced(a: np.ndarray, b: np.ndarray, q: np.ndarray, resid: np.ndarray) -> bool:
+    """The residual of a linear solution is at rounding level (relative 1e-8)."""
+    scale = np.abs(b).max() + np.abs(a).max() * np.abs(q).max() + 1e-300
+    return bool(np.abs(resid).max() <= 1e-8 * scale)
+
+
+class _NoConvergence(Exception):
+    """The contact sets cycle; ``args[0]`` lists the indices of the meshes that switch."""
+
+
+def _active_set(a0, f, mr, v, j, kl, kr, k_in, free_rigid, state, max_iter):
+    """Active-set iterations (Newton's method on the piecewise-linear equations) from ``state``.
+
+    Returns the solution ``(q, acc, a, b, resid)`` or None (a contact state repeats, or a
+    consistent state leaves a member free), and the visited states.
+    """
+    seen = set()
+    history = []
+    for _ in range(max_iter):
+        q, acc, a, b, resid, new = _state_solve(a0, f, mr, v, j, kl, kr, k_in, free_rigid, state)
+        history.append(state)
+        if np.array_equal(new, state):
+            return ((q, acc, a, b, resid) if _balanced(a, b, q, resid) else None), history
+        seen.add(state.tobytes())
+        if new.tobytes() in seen:
+            return None, [*history, new]
+        state = new
+    return None, [*history, new]
+
+
+def _contact_solve(a0, f, mr, rigid, v, j, kl, kr, k_in, free_rigid, max_iter):
+    """Solution of the piecewise-linear static problem at fixed flank stiffness.
+
+    First the plain active-set iteration from every left flank in contact: exact and fast when
+    it converges. It cycles when a step closes or opens a mesh in the wrong direction: a mesh
+    whose loaded flank is the right one (e.g. a planet-planet mesh driven backwards) or one
+    that opens under a light load is predicted inside its backlash, is opened, a member becomes
+    free, the singular step throws the flanks back, and the same states repeat. A repeated
+    state (or a free member) switches to the damped Newton method on the potential energy
+    (:func:`_energy_solve`), which cannot cycle; its contact state then starts the active-set
+    iteration again, which ends in one step at the exact piecewise-linear solution. A member
+    that floats in its backlash (no exact linear solution) keeps the energy minimum.
+    """
+    n_mesh = v.shape[0]
+    sol, hist1 = _active_set(a0, f, mr, v, j, kl, kr, k_in, free_rigid,
+                             np.ones(n_mesh, dtype=np.int64), max_iter)
+    if sol is not None:
+        return sol
+    a_sym = 0.5 * (a0 + a0.T)
+    symmetric = np.allclose(a0, a_sym, rtol=0.0, atol=1e-12 * (np.abs(a0).max() + 1e-300))
+    q_e, acc_e, hist_e = _energy_solve(a_sym, f, mr, rigid, v, j, kl, kr, k_in, free_rigid,
+                                       MAX_NEWTON)
+    state = _contact_state(v @ q_e, j)
+    sol, hist2 = _active_set(a0, f, mr, v, j, kl, kr, k_in, free_rigid, state, max_iter)
+    if sol is not None:
+        return sol
+    if symmetric and hist_e is None:
         a = a0.copy()
         b = f.copy()
-        left = (state & 1).astype(bool)
-        right = (state & 2).astype(bool)
+        left, right = (state & 1).astype(bool), (state & 2).astype(bool)
         a += (v[left].T * kl[left]) @ v[left] + (v[right].T * kr[right]) @ v[right]
         b += v[left].T @ (kl[left] * j[left] / 2) - v[right].T @ (kr[right] * j[right] / 2)
+        resid = a @ q_e + mr * acc_e - b
         if free_rigid:
-            # equilibrated: acceleration column and pin row scaled to the stiffness
-            big = np.abs(a).max() + 1e-300
-            col = big / (np.abs(mr).max() + 1e-300)
-            aug = np.zeros((n + 1, n + 1))
-            aug[:n, :n] = a
-            aug[:n, n] = mr * col
-            aug[n, k_in] = big
-            rhs = np.append(b, 0.0)
-            sol = np.linalg.lstsq(aug, rhs, rcond=None)[0]
-            q, acc = sol[:n], float(sol[n] * col)
-            resid = aug @ sol - rhs
-        else:
-            q = np.linalg.lstsq(a, b, rcond=None)[0]
-            resid = a @ q - b
-        d = v @ q
-        new = (d > j / 2).astype(np.int64) + 2 * (d < -j / 2).astype(np.int64)
-        if np.array_equal(new, state):
-            return q, acc, a, b, resid
-        state = new
-    raise SimulationError("static equilibrium: the flank-contact sets do not converge")
+            resid = np.append(resid, 0.0)
+        return q_e, acc_e, a, b, resid
+    states = np.array([*hist1, *(hist_e or []), *hist2])
+    switching = np.flatnonzero(np.any(states != states[-1], axis=0))
+    raise _NoConvergence([int(m) for m in switching])
 
 
 def static_equilibrium(
@@ -54,6 +234,7 @@ def static_equilibrium(
     rigid_acceleration: float = 0.0,
     free_rigid: bool = False,
     max_iter: int = 100,
+    mesh_names: Sequence[str] | None = None,
 ) -> tuple[np.ndarray, float]:
     """Static (quasi-static) equilibrium at ``t = 0`` with the piecewise-linear contact law.
 
@@ -77,9 +258,11 @@ def static_equilibrium(
     rigid_acceleration : float
         Prescribed input acceleration [rad/s^2] (ignored with ``free_rigid``).
     free_rigid : bool
-        The rigid-body mode is free (torque-driven run).
+        The rigid-body mode is free (torque- or motor-driven run).
     max_iter : int
         Maximum number of contact-set updates.
+    mesh_names : sequence of str, optional
+        Mesh names for the error messages.
 
     Returns
     -------
@@ -113,7 +296,14 @@ def static_equilibrium(
         f[k_in] += fpar[kn.FP_KC] * phi[0] + fpar[kn.FP_CC] * (w[0] - qd0[k_in])
     elif mode == kn.DRIVE_TORQUE:
         f[k_in] += float(np.interp(0.0, system.torque_table[0], system.torque_table[1]))
+    elif mode == kn.DRIVE_MOTOR:
+        f[k_in] += float(np.interp(qd0[k_in], system.torque_table[0], system.torque_table[1]))
     k_out = int(ipar[kn.IP_OUTPUT])
+    load_text = f"load torque {float(fpar[kn.FP_T0]):.4g} N m at the output"
+    if mode in (kn.DRIVE_TORQUE, kn.DRIVE_MOTOR):
+        t_in = float(np.interp(0.0 if mode == kn.DRIVE_TORQUE else qd0[k_in],
+                               system.torque_table[0], system.torque_table[1]))
+        load_text = f"input torque {t_in:.4g} N m, " + load_text
     if k_out >= 0:
         e = fpar[kn.FP_OUTDIR]
         wo = e * qd0[k_out]
@@ -124,20 +314,32 @@ def static_equilibrium(
     v = system.mesh_vectors
     j = system.backlash
     q = np.zeros(n)
-    k_prev = None
+    k_seen: list[np.ndarray] = []
     for _outer in range(20):  # flank stiffness at the mesh positions of the current solution
         pos = system.mesh_position_offsets + system.mesh_position_vectors @ q
         kl = np.array([kn.periodic_interp(system.left_tables, m, s) for m, s in enumerate(pos)])
         kr = np.array([kn.periodic_interp(system.right_tables, m, s) for m, s in enumerate(pos)])
         k_now = np.concatenate([kl, kr])
-        if k_prev is not None and np.allclose(k_now, k_prev, rtol=1e-12, atol=0.0):
+        # converged, or the solution sits on a jump of a stiffness table (k alternates between
+        # both sides of it): either solution is the equilibrium to the table's resolution
+        if any(np.allclose(k_now, k, rtol=1e-12, atol=0.0) for k in k_seen):
             break
-        k_prev = k_now
-        q, acc, a, b, resid = _contact_solve(a0, f, mr, v, j, kl, kr, k_in, free_rigid, max_iter)
+        k_seen.append(k_now)
+        try:
+            q, acc, a, b, resid = _contact_solve(a0, f, mr, rigid, v, j, kl, kr, k_in,
+                                                 free_rigid, max_iter)
+        except _NoConvergence as exc:
+            names = list(mesh_names) if mesh_names is not None else None
+            which = [names[m] if names else f"mesh {m}" for m in exc.args[0]] or ["the meshes"]
+            raise SimulationError(
+                "static equilibrium: the flank-contact sets do not converge: the contact of "
+                f"{', '.join(which)} keeps switching between its flanks and the backlash "
+                f"({load_text} at t = 0). Try a start speed of 0 (no gyroscopic terms at "
+                "t = 0), a larger load, or a negative backlash (both flanks in contact)"
+            ) from None
         if not free_rigid:
             acc = float(rigid_acceleration)
-    scale = np.abs(b).max() + np.abs(a).max() * np.abs(q).max() + 1e-300
-    if np.abs(resid).max() > 1e-8 * scale:
+    if not _balanced(a, b, q, resid):
         raise SimulationError(
             "no static equilibrium at t = 0: the initial load is not balanced (a member is "
             "free, or the drive and load torques do not match); max residual "

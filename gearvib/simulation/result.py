@@ -98,9 +98,11 @@ class RunUpResult:
         Prescribed input speed [min^-1] and angle [rad] (speed-driven), or the simulated ones of
         the input member (torque-driven).
     drive_torque : ndarray, shape (n_time,)
-        Torque applied to the input member by the coupling or the torque table [N m].
-    mesh_frequency : ndarray, shape (n_time,)
-        ``|mesh_frequency_per_rpm * input_speed|`` [Hz].
+        Torque applied to the input member by the coupling, the torque table or the motor
+        characteristic at the input speed [N m].
+    mesh_frequency : ndarray, shape (n_mesh, n_time)
+        Mesh frequency of every mesh, ``|mesh_frequencies_per_rpm[m] * input_speed|`` [Hz]
+        (NaN for a mesh without tooth numbers). Stages and planet toothings have their own.
     natural_frequencies : ndarray, shape (n_mode,)
         Elastic natural frequencies of the mean system [Hz].
     flank_contact_changes : ndarray of int64, shape (n_mesh,)
@@ -112,7 +114,7 @@ class RunUpResult:
     config_json : str
         Full configuration, JSON with sorted keys.
     drive : str
-        ``"speed"`` or ``"torque"``.
+        ``"speed"``, ``"torque"`` or ``"motor"``.
     gyroscopic : bool
         Gyroscopic/centripetal terms included.
     coupling : DriveCoupling or None
@@ -205,7 +207,11 @@ class RunUpResult:
             ),
             "input_angle": var(t, self.input_angle, "rad", "input rotation angle", "input_angle"),
             "mesh_frequency": var(
-                t, self.mesh_frequency, "Hz", "gear mesh frequency", "mesh_frequency"
+                ("mesh", "time"),
+                np.atleast_2d(self.mesh_frequency).reshape(len(self.mesh_names), -1),
+                "Hz",
+                "tooth-mesh frequency of the mesh at the input speed",
+                "mesh_frequency",
             ),
         }
         data = {
@@ -347,7 +353,8 @@ def build_result(
     else:
         angle = q[:, k_in].copy()
         input_speed = qd[:, k_in] / RAD_S_PER_RPM
-        drive_torque = np.interp(time, system.torque_table[0], system.torque_table[1])
+        at = time if setup.drive == "torque" else qd[:, k_in]  # motor: its characteristic
+        drive_torque = np.interp(at, system.torque_table[0], system.torque_table[1])
     if natural_frequencies is None:
         nat = elastic_frequencies(undamped_frequencies(model.mass, model.mean_stiffness_matrix()))
     else:
@@ -392,7 +399,7 @@ def build_result(
         input_speed=input_speed,
         input_angle=angle,
         drive_torque=drive_torque,
-        mesh_frequency=np.abs(model.mesh_frequency_per_rpm * input_speed),
+        mesh_frequency=np.abs(np.outer(model.mesh_frequencies_per_rpm, input_speed)),
         natural_frequencies=nat,
         flank_contact_changes=changes.copy(),
         step=step,

@@ -13,6 +13,7 @@ from gearvib.simulation.conditions import (
     RAD_S_PER_RPM,
     Conditions,
     DriveCoupling,
+    MotorDriven,
     SpeedRamp,
     SpeedTable,
     TorqueDriven,
@@ -78,7 +79,7 @@ class RunSetup:
     omega0, alpha0 : float
         Input speed [rad/s] and prescribed input acceleration [rad/s^2] at ``t = 0``.
     free_rigid : bool
-        The rigid-body mode is free (torque-driven run without a restoring support).
+        The rigid-body mode is free (torque- or motor-driven run without a restoring support).
     duration : float or None
         Default simulated time of the conditions [s].
     speed_max : float
@@ -88,7 +89,7 @@ class RunSetup:
     load : (T0, c1, c2)
         Load-torque coefficients at the output member.
     drive : str
-        ``"speed"`` or ``"torque"``.
+        ``"speed"``, ``"torque"`` or ``"motor"``.
     """
 
     system: kn.KernelSystem
@@ -133,7 +134,7 @@ def prepare_run(
     ----------
     model : AssembledModel
         The gear set.
-    conditions : SpeedRamp, SpeedTable or TorqueDriven
+    conditions : SpeedRamp, SpeedTable, TorqueDriven or MotorDriven
         Operating conditions.
     gyroscopic : bool
         Switch the gyroscopic and centripetal terms on.
@@ -193,10 +194,17 @@ def prepare_run(
         speed_max = float(np.abs(w).max())
         duration = float(conditions.duration)
         drive = "speed"
-    elif isinstance(conditions, TorqueDriven):
-        ipar[kn.IP_MODE] = kn.DRIVE_TORQUE
-        tt, tv = conditions.input_torque
-        torque_tab = np.vstack([np.array(tt), np.array(tv)])
+    elif isinstance(conditions, TorqueDriven | MotorDriven):
+        if isinstance(conditions, TorqueDriven):
+            ipar[kn.IP_MODE] = kn.DRIVE_TORQUE
+            tt, tv = conditions.input_torque
+            torque_tab = np.vstack([np.array(tt), np.array(tv)])
+            drive = "torque"
+        else:
+            ipar[kn.IP_MODE] = kn.DRIVE_MOTOR
+            torque_tab = np.vstack([np.array(conditions.speed_rpm) * RAD_S_PER_RPM,
+                                    np.array(conditions.torque)])
+            drive = "motor"
         if k_out < 0 and (conditions.load_inertia or any(conditions.load_torque)):
             raise ValueError(f"output member {model.output_member!r} has no rotation coordinate")
         if k_out >= 0:
@@ -210,7 +218,6 @@ def prepare_run(
         )
         speed_max = max(abs(conditions.max_rpm), abs(conditions.start_rpm)) * RAD_S_PER_RPM
         duration = conditions.duration
-        drive = "torque"
     else:
         raise TypeError(f"unsupported operating conditions {type(conditions).__name__}")
     fpar[kn.FP_T0], fpar[kn.FP_C1], fpar[kn.FP_C2] = load

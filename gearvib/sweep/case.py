@@ -17,14 +17,12 @@ hash) is simulated again and replaced.
 from __future__ import annotations
 
 import contextlib
-import math
 import multiprocessing
 import sys
 import time
 from dataclasses import dataclass
 from pathlib import Path
 
-import numpy as np
 import xarray as xr
 
 from analysis.fft import set_workers
@@ -32,7 +30,8 @@ from gearvib.assembly import assemble
 from gearvib.config import ConfigError, gearset_from_dict
 from gearvib.io import read_run, write_netcdf
 from gearvib.model import AssembledModel
-from gearvib.simulate import DriveCoupling, SimulationError, SpeedRamp, simulate
+from gearvib.simulate import Conditions, SimulationError, simulate
+from gearvib.simulation.settings import conditions_from_settings
 from gearvib.sweep.description import SweepCase
 from gearvib.sweep.summary import SummarySettings, summarise_run
 
@@ -101,29 +100,12 @@ def build_case(case: SweepCase) -> AssembledModel:
         raise ConfigError(str(exc)) from None
 
 
-def conditions_for(run: dict, model: AssembledModel) -> SpeedRamp:
-    """The speed ramp of a case's run settings.
-
-    A ``drive_stiffness`` without ``drive_damping`` gets critical damping of the drive's
-    rigid-body mode, ``c = 2 sqrt(k J_eff)`` with ``J_eff`` the inertia of the kinematic motion
-    reduced to the input member (as the default coupling of :func:`gearvib.simulate.simulate`).
-    """
-    coupling = None
-    if run.get("drive_stiffness") is not None:
-        k = float(run["drive_stiffness"])
-        c = run.get("drive_damping")
-        if c is None:
-            r = model.rigid_body_velocity()
-            k_in = int(model.rotation_dofs[model.input_member])
-            j_eff = float(r @ np.asarray(model.mass) @ r) / r[k_in] ** 2
-            c = 2.0 * math.sqrt(k * j_eff)
-        coupling = DriveCoupling(k, float(c))
-    load = run.get("load_torque")
-    return SpeedRamp(float(run["speed_start_rpm"]), float(run["speed_end_rpm"]),
-                     float(run["duration"]),
-                     load_torque=float(load) if load is not None else 0.0,
-                     input_torque=None if load is not None else float(run["input_torque"]),
-                     coupling=coupling)
+def conditions_for(run: dict, model: AssembledModel) -> Conditions:
+    """The operating conditions of a case's run settings (speed ramp, torque or motor drive;
+    :func:`gearvib.simulation.settings.conditions_from_settings`). ``model`` is not used
+    today; it is part of the signature so that conditions may depend on the gear set."""
+    del model
+    return conditions_from_settings(run)
 
 
 def finished_run(path: str | Path, sha256: str) -> xr.Dataset | None:

@@ -45,13 +45,13 @@ from scipy import special
 
 from gearvib import __version__
 from gearvib.config import ConfigError, check_keys, config_hash, gearset_from_dict, load_config
+from gearvib.simulation.settings import SIMULATION_KEYS, read_run_settings
 from gearvib.sweep.keys import get_path, parse_path, path_units, set_path, value_kind, value_label
 from gearvib.sweep.summary import SummarySettings
 
 __all__ = [
     "DEFAULT_MAX_CASES",
     "HARD_MAX_CASES",
-    "RUN_DEFAULTS",
     "Parameter",
     "Sweep",
     "SweepCase",
@@ -65,14 +65,6 @@ DEFAULT_MAX_CASES = 10_000
 
 HARD_MAX_CASES = 1_000_000
 """Largest admissible ``max_cases``."""
-
-RUN_DEFAULTS: dict[str, Any] = {
-    "speed_start_rpm": 0.0, "speed_end_rpm": 4000.0, "duration": 1.0, "input_torque": None,
-    "load_torque": None, "fs_out": None, "dt": None, "drive_stiffness": None,
-    "drive_damping": None, "gyroscopic": False,
-}
-"""Run settings used when neither the sweep's nor the base's ``[simulation]`` gives one (the
-defaults of ``gearvib simulate``; no torque given means an input torque of 0)."""
 
 _TOP = {"title", "description", "base", "mode", "samples", "seed", "max_cases", "simulation",
         "parameter", "summary"}
@@ -270,41 +262,23 @@ class SweepCase:
     sha256: str
 
 
-def _check_run_value(key: str, v: Any, where: str) -> Any:
-    if key == "gyroscopic":
-        if not isinstance(v, bool):
-            raise ConfigError(f"{where} must be true or false, got {v!r}")
-        return v
-    x = _num(v, where)
-    if key in ("duration", "fs_out", "dt", "drive_stiffness") and not x > 0:
-        raise ConfigError(f"{where} = {v!r}; admissible: > 0")
-    if key in ("speed_start_rpm", "speed_end_rpm", "drive_damping") and x < 0:
-        raise ConfigError(f"{where} = {v!r}; admissible: >= 0")
-    return x
-
-
 def resolve_run_settings(simulation: dict) -> dict[str, Any]:
     """Complete, checked run settings from a ``[simulation]`` table.
 
-    Missing keys take :data:`RUN_DEFAULTS`; with neither ``input_torque`` nor ``load_torque``
-    the input torque is 0. ``load_torque`` wins over ``input_torque`` when both are given.
+    The settings of :func:`gearvib.simulation.settings.read_run_settings` (the same defaults
+    and checks as ``gearvib simulate``: speed, torque or motor drive).
 
     Raises
     ------
     ConfigError
-        A value of the wrong type or out of range (the message names ``simulation.<key>``).
+        A value of the wrong type or out of range (the message names ``[simulation].<key>``).
     """
-    out = dict(RUN_DEFAULTS)
-    for k, v in simulation.items():
-        if k not in RUN_DEFAULTS:
-            raise ConfigError(f"unknown key {k!r} in [simulation] (admissible: "
-                              f"{', '.join(sorted(RUN_DEFAULTS))})")
-        out[k] = _check_run_value(k, v, f"simulation.{k}")
-    if out["input_torque"] is None and out["load_torque"] is None:
-        out["input_torque"] = 0.0
-    if out["drive_damping"] is not None and out["drive_stiffness"] is None:
-        raise ConfigError("simulation.drive_damping needs simulation.drive_stiffness")
-    return out
+    try:
+        return read_run_settings(simulation)
+    except ValueError as exc:
+        if isinstance(exc, ConfigError):
+            raise
+        raise ConfigError(str(exc)) from None
 
 
 def _coordinate_kind(values: list[Any]) -> str:
@@ -573,11 +547,10 @@ def sweep_from_dict(d: dict, *, base_dir: str | Path | None = None) -> Sweep:
     sim = d.get("simulation", {})
     if not isinstance(sim, dict):
         raise ConfigError("[simulation] must be a table")
-    for k, v in sim.items():
-        if k not in RUN_DEFAULTS:
+    for k in sim:
+        if k not in SIMULATION_KEYS:
             raise ConfigError(f"unknown key {k!r} in [simulation] (admissible: "
-                              f"{', '.join(sorted(RUN_DEFAULTS))})")
-        _check_run_value(k, v, f"simulation.{k}")
+                              f"{', '.join(sorted(SIMULATION_KEYS))})")
     summary = SummarySettings.from_dict(d.get("summary", {}))
     return Sweep(base=d["base"], parameters=params, mode=d.get("mode", "grid"),
                  samples=d.get("samples"), seed=d.get("seed"), simulation=dict(sim),

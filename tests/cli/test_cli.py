@@ -99,7 +99,7 @@ def test_python_dash_m_help():
     res = subprocess.run([sys.executable, "-m", "gearvib", "--help"], capture_output=True,
                          text=True, check=False)
     assert res.returncode == 0
-    for cmd in ("demo", "modes", "simulate", "report"):
+    for cmd in ("demo", "modes", "simulate", "preset", "report"):
         assert cmd in res.stdout
 
 
@@ -143,3 +143,48 @@ def test_demo_unwritable_output_folder(tmp_path, capsys, monkeypatch):
     assert main(["demo", "-o", str(target), "--duration", "0.05", "-q"]) == 2
     assert len(capsys.readouterr().err.strip().splitlines()) == 1
     assert target.read_text() == "a file where the folder should be"
+
+
+def test_preset_lists_and_prints(capsys, tmp_path):
+    import tomllib
+
+    from gearvib.config import load_config
+
+    assert main(["preset"]) == 0
+    out = capsys.readouterr().out
+    for name in ("paper-case1", "wolfrom-example", "ravigneaux-example", "two-stage-example"):
+        assert name in out
+    assert "Wolfrom set (stepped planets" in out  # titles
+    assert main(["preset", "wolfrom-example"]) == 0
+    text = capsys.readouterr().out
+    assert text.startswith("# A Wolfrom set")  # the comments come along
+    assert tomllib.loads(text) == load_config("wolfrom-example")[0]
+    own = tmp_path / "mine.toml"
+    own.write_text(text.replace('name = "wolfrom-example"', 'name = "mine"'))
+    assert main(["modes", str(own)]) == 0
+    assert "mine" in capsys.readouterr().out
+    assert main(["preset", "wolfrom"]) == 2
+    assert "unknown preset 'wolfrom'" in capsys.readouterr().err
+
+
+def test_simulate_a_motor_driven_description(tmp_path, capsys):
+    from importlib import resources
+
+    text = resources.files("gearvib.presets").joinpath("paper-case1.toml").read_text()
+    sim = text[text.index("[simulation]"):]
+    motor = ('[simulation]\ndrive = "motor"\nmotor = { synchronous_rpm = 1500.0, '
+             'breakdown_torque = 150.0, breakdown_slip = 0.2 }\nload_torque = [0.0, 0.0, 0.05]\n'
+             'load_inertia = 0.5\nduration = 0.05\n')
+    path = tmp_path / "motor.toml"
+    path.write_text(text.replace(sim, motor))
+    out = tmp_path / "motor.nc"
+    assert main(["simulate", str(path), "-o", str(out), "-q"]) == 0
+    with xr.open_dataset(out, engine="netcdf4") as ds:
+        assert ds.attrs["drive"] == "motor"
+        assert float(ds["input_speed"].values[-1]) > 10.0  # the motor started the set
+        assert json.loads(ds.attrs["config_json"])["model"]["run"]["motor"][
+            "synchronous_rpm"] == 1500.0
+    capsys.readouterr()
+    path.write_text(text.replace(sim, '[simulation]\ndrive = "motor"\n'))
+    assert main(["simulate", str(path), "-o", str(out), "-q"]) == 2
+    assert "[simulation].motor is required" in capsys.readouterr().err

@@ -35,7 +35,7 @@ def gear_pair() -> AssembledModel:
         rotation_dofs={"pinion": 0, "gear": 1}, carrier_dof=-1, input_member="pinion",
         output_member="gear", fixed_members=(),
         kinematic_ratios={"pinion": 1.0, "gear": -r1 / r2},
-        mesh_frequency_per_rpm=20 / 60, meta={"name": "pair", "flag": True},
+        mesh_frequencies_per_rpm=np.array([20 / 60]), meta={"name": "pair", "flag": True},
     )
 
 

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 import scipy.linalg
@@ -86,7 +88,8 @@ def planetary(
         carrier_dof=1, input_member="sun", output_member="carrier", fixed_members=("ring",),
         kinematic_ratios={"sun": 1.0, "carrier": ratio_c, "ring": 0.0,
                           **dict.fromkeys(planets, ratio_p)},
-        mesh_frequency_per_rpm=z_s * (1 - ratio_c) / 60, meta={"name": "hand-built planetary"},
+        mesh_frequencies_per_rpm=np.full(nm, z_s * (1 - ratio_c) / 60),
+        meta={"name": "hand-built planetary"},
     )
 
 
@@ -159,6 +162,66 @@ def test_static_equilibrium_rejects_unbalanced_free_member() -> None:
     assert acc == pytest.approx(10.0 / j_eff, rel=1e-9)  # quasi-static rigid acceleration
     with pytest.raises(SimulationError, match="no static equilibrium"):
         static_equilibrium(setup.system, setup.mass, setup.rigid, np.zeros(5), free_rigid=False)
+
+
+def static_flank_forces(model: AssembledModel, conditions) -> tuple[np.ndarray, np.ndarray]:
+    """Left and right flank forces [N] of the static equilibrium at ``t = 0``."""
+    setup = prepare_run(model, conditions, False)
+    sy = setup.system
+    q0, _ = static_equilibrium(sy, setup.mass, setup.rigid, setup.rigid * setup.omega0,
+                               rigid_acceleration=setup.alpha0, free_rigid=setup.free_rigid,
+                               mesh_names=model.mesh_names)
+    d = sy.mesh_vectors @ q0
+    pos = sy.mesh_position_offsets + sy.mesh_position_vectors @ q0
+    kl = model.mesh_stiffness_at(pos)
+    kr = model.mesh_stiffness_at(pos, back=True)
+    j = sy.backlash
+    return kl * np.maximum(d - j / 2, 0.0), kr * np.maximum(-d - j / 2, 0.0)
+
+
+@pytest.mark.parametrize("torque", [10.0, 100.0])
+def test_static_load_sharing_with_a_floating_planet(torque: float) -> None:
+    """Planet 3 has 2 x 5 um more backlash. Hand derivation (torsional, constant stiffness):
+    every planet path is a sun mesh and a ring mesh in series, k = 1/(1/k_s + 1/k_r), and
+    carries ``F_n = k (X - J_n / 2)_+`` with ``J_n`` its total backlash and ``X`` the common
+    relative sun-carrier motion; ``rb_s sum F_n = T``. Below ``T = 4 e k rb_s`` (33.8 N m)
+    planet 3 carries nothing and floats in its backlash (its linear system is singular: the
+    plain active-set iteration cycled here)."""
+    model = planetary(backlash=40e-6)
+    e = 5e-6
+    j = np.full(6, 40e-6)
+    j[[2, 5]] += 2 * e
+    model = dataclasses.replace(model, mesh_backlash=j)
+    k_ser = 1.0 / (1.0 / 1e8 + 1.0 / 1.2e8)
+    rb_s = model.mesh_vectors[0, 0]
+    j_tot = j[:3] + j[3:]
+    # solve rb_s k sum (X - J_n/2)_+ = T for X, assuming the loaded set, then check it
+    loaded = np.ones(3, dtype=bool) if torque > 4 * e * k_ser * rb_s else np.array([1, 1, 0], bool)
+    x = (torque / (rb_s * k_ser) + np.sum(j_tot[loaded] / 2)) / loaded.sum()
+    expected = np.where(loaded, k_ser * (x - j_tot / 2), 0.0)
+    assert loaded.all() == (torque == 100.0)
+    left, right = static_flank_forces(model, SpeedRamp(300, 300, 0.01, input_torque=torque))
+    np.testing.assert_allclose(left[:3], expected, rtol=1e-9, atol=1e-9 * expected.max())
+    np.testing.assert_allclose(left[3:], expected, rtol=1e-9, atol=1e-9 * expected.max())
+    np.testing.assert_array_equal(right, 0.0)
+    # and the run starts from it without a kick
+    res = simulate(model, SpeedRamp(300, 300, 0.004, input_torque=torque))
+    np.testing.assert_allclose(res.normal_force[:3, 0, -1], expected, rtol=1e-6,
+                               atol=1e-6 * expected.max())
+
+
+def test_static_equilibrium_names_the_switching_meshes(monkeypatch) -> None:
+    import gearvib.simulation.equilibrium as eq
+
+    model = planetary(backlash=40e-6)
+    j = np.full(6, 40e-6)
+    j[[2, 5]] += 1e-5
+    model = dataclasses.replace(model, mesh_backlash=j)
+    monkeypatch.setattr(eq, "MAX_NEWTON", 0)  # cripple the energy method
+    setup = prepare_run(model, SpeedRamp(300, 300, 0.01, input_torque=10.0), False)
+    with pytest.raises(SimulationError, match=r"sun-planet3.*keeps switching.*load torque"):
+        static_equilibrium(setup.system, setup.mass, setup.rigid, setup.rigid * setup.omega0,
+                           max_iter=1, mesh_names=model.mesh_names)
 
 
 # --------------------------------------------------------------------------- dynamics
@@ -272,8 +335,10 @@ def test_mesh_frequency_and_speed_outputs() -> None:
     model = planetary()
     res = simulate(model, SpeedRamp(0, 3000, 0.06, input_torque=30.0))
     np.testing.assert_allclose(res.input_speed, 3000 * res.time / 0.06, atol=1e-9)
-    np.testing.assert_allclose(res.mesh_frequency,
-                               model.mesh_frequency_per_rpm * res.input_speed, rtol=1e-12)
+    # every mesh has its own mesh frequency; here all share z_s (n_s - n_c) / 60
+    assert res.mesh_frequency.shape == (model.n_mesh, res.time.size)
+    hand = 33 * (1 - 33 / 147) / 60 * res.input_speed
+    np.testing.assert_allclose(res.mesh_frequency, np.tile(hand, (model.n_mesh, 1)), rtol=1e-12)
     # members follow the kinematics (coupling lag is small), angles are the speed integral
     carrier = res.members.index("carrier")
     np.testing.assert_allclose(res.speed[carrier, -1],
