@@ -153,7 +153,7 @@ def _panel_title(panel: Any, da: xr.DataArray) -> str:
     if panel is None:
         return ""
     ref = str(da.attrs.get("reference", ""))
-    return f"order {float(panel):g}" + (f" ({ref})" if ref == "mesh" else "")
+    return f"order {float(panel):g}" + (f" ({ref})" if ref.startswith("mesh") else "")
 
 
 def _line_figure(ds, da, name, xpos, cats, xlabel, markers_only, ok) -> Figure:

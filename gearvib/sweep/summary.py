@@ -129,8 +129,9 @@ class SummarySettings:
     orders : tuple of float
         Orders whose maximum level over the window is kept (none by default).
     order_reference : str
-        ``"mesh"`` (orders of the mesh frequency) or a member name: orders per revolution of
-        that member (``"sun"``, ``"carrier"``, ...).
+        ``"mesh"`` (orders of the mesh frequency; a set with several mesh frequencies needs
+        ``"mesh:<mesh name>"``) or a member name: orders per revolution of that member
+        (``"sun"``, ``"carrier"``, ...).
     order_signals : tuple of OrderSignal
         Signals analysed for ``orders`` (default the left-flank tooth force of every mesh).
     order_resolution : float
@@ -249,12 +250,32 @@ def _window_mask(ds: xr.Dataset, s: SummarySettings) -> np.ndarray:
 
 
 def _reference_rpm(ds: xr.Dataset, model: AssembledModel, reference: str) -> np.ndarray:
-    if reference == "mesh":
-        return ds["mesh_frequency"].values * 60.0
+    """Speed [min^-1] whose orders are counted: a mesh frequency x 60, or a member's speed."""
+    if reference == "mesh" or reference.startswith("mesh:"):
+        mf = ds["mesh_frequency"]
+        names = [str(v) for v in ds["mesh"].values]
+        if reference != "mesh" and reference[5:] not in names:
+            raise ValueError(f"order_reference = {reference!r}: no mesh {reference[5:]!r} "
+                             f"(meshes: {', '.join(names)})")
+        if "mesh" not in mf.dims:  # one mesh frequency for the whole set
+            return mf.values * 60.0
+        if reference != "mesh":
+            return mf.sel(mesh=reference[5:]).values * 60.0
+        rows = mf.transpose("mesh", "time").values
+        finite = [r for r in rows if np.isfinite(r).all()]
+        if not finite:
+            raise ValueError("order_reference = 'mesh': no mesh of this gear set has a mesh "
+                             "frequency (tooth numbers)")
+        if any(not np.allclose(r, finite[0], rtol=1e-9, atol=0.0) for r in finite[1:]):
+            raise ValueError("order_reference = 'mesh': the meshes of this gear set have "
+                             "different mesh frequencies; give order_reference = "
+                             f"'mesh:<mesh name>' (meshes: {', '.join(names)})")
+        return finite[0] * 60.0
     ratios = model.kinematic_ratios
     if reference not in ratios:
         raise ValueError(f"order_reference = {reference!r} is not a member of the gear set "
-                         f"(admissible: 'mesh', {', '.join(repr(k) for k in sorted(ratios))})")
+                         f"(admissible: 'mesh', 'mesh:<mesh name>', "
+                         f"{', '.join(repr(k) for k in sorted(ratios))})")
     return np.abs(ds["input_speed"].values * float(ratios[reference]))
 
 
@@ -398,8 +419,11 @@ def summarise_run(ds: xr.Dataset, model: AssembledModel, conditions: Conditions,
             for d in da.dims:
                 if d != "time" and d in ds.coords and d not in coords:
                     coords[str(d)] = ds[d].variable.copy()
-        what = "mesh orders" if s.order_reference == "mesh" else \
-            f"orders of the {s.order_reference} revolution"
+        if s.order_reference.startswith("mesh"):
+            what = "mesh orders" + (f" of {s.order_reference[5:]}"
+                                    if s.order_reference != "mesh" else "")
+        else:
+            what = f"orders of the {s.order_reference} revolution"
         coords["order"] = xr.Variable(("order",), np.asarray(s.orders, dtype=float),
                                       {"units": "1", "long_name": what})
     if s.floquet_speed_rpm is not None:

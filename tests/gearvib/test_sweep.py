@@ -349,11 +349,18 @@ def test_summary_window_and_reference(tiny_run):
         summarise_run(ds, model, cond, SummarySettings(window_rpm=(3000.0, 4000.0)))
     with pytest.raises(ValueError, match="not a member"):
         summarise_run(ds, model, cond, SummarySettings(orders=(1.0,), order_reference="moon"))
+    with pytest.raises(ValueError, match="no mesh 'sun-planet9'"):
+        summarise_run(ds, model, cond, SummarySettings(orders=(1.0,),
+                                                       order_reference="mesh:sun-planet9"))
+    one = summarise_run(ds, model, cond, SummarySettings(orders=(1.0,),
+                                                         order_reference="mesh:ring-planet2"))
     # mesh order 1 is order z_s (1 - n_c/n_s) of the sun; same frames in angle
     per_rev = 33.0 * (1 - model.kinematic_ratios["carrier"])
     by_member = summarise_run(ds, model, cond, SummarySettings(
         orders=(per_rev,), order_reference="sun", order_resolution=0.1 * per_rev))
     by_mesh = summarise_run(ds, model, cond, SummarySettings(orders=(1.0,)))
+    np.testing.assert_array_equal(one.normal_force_order_level.values,
+                                  by_mesh.normal_force_order_level.values)
     # (measured 1.2-1.6 %: the angular sampling of the two differs)
     np.testing.assert_allclose(by_member.normal_force_order_level.values,
                                by_mesh.normal_force_order_level.values, rtol=0.03)
