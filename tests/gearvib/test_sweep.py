@@ -307,7 +307,8 @@ def tiny_run():
 def test_order_levels_of_a_known_signal(tiny_run):
     """A tone at mesh order 2 of amplitude A: level A/sqrt(2) at order 2, nothing at 1 or 3."""
     ds, model, cond = tiny_run
-    phase = 2 * np.pi * np.cumsum(ds.mesh_frequency.values) / ds.attrs["fs_out"]
+    f_mesh = ds.mesh_frequency.values.reshape(-1, ds.sizes["time"])[0]  # (time) or (mesh, time)
+    phase = 2 * np.pi * np.cumsum(f_mesh) / ds.attrs["fs_out"]
     amp = 7.0
     ds = ds.assign(drive_torque=(("time",), amp * np.sin(2.0 * phase),
                                  {"units": "N m", "long_name": "synthetic tone"}))
