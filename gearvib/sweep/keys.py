@@ -46,6 +46,10 @@ KEY_UNITS: dict[str, str] = {
     "drive_stiffness": "N m rad-1",
     "drive_damping": "N m s rad-1",
     "gyroscopic": "1",
+    "load_inertia": "kg m2",
+    "synchronous_rpm": "min-1",
+    "breakdown_torque": "N m",
+    "breakdown_slip": "1",
     # geometry
     "module": "m",
     "module2": "m",

@@ -8,7 +8,8 @@ the static equilibrium of the same gear set under the same transmitted torque, w
 stiffness at its mean over the mesh cycle. "Same torque" means the run's load torque and, for a
 speed ramp, the d'Alembert torque of its (constant) acceleration: the equilibrium is exactly
 the one :func:`gearvib.simulate.static_equilibrium` computes for the start of the run, with the
-stiffness tables replaced by their means. For a single gear pair this is ``T / r_b`` whatever the
+stiffness tables replaced by their means (for a torque or motor drive: the input torque at
+``t = 0`` with the acceleration it gives the set). For a single gear pair this is ``T / r_b`` whatever the
 stiffness; for equally loaded planets it is the nominal share of each planet. The loaded flank is
 the flank that carries this static force (the larger one when a negative backlash loads both).
 
@@ -70,7 +71,7 @@ def static_tooth_force(model: AssembledModel, conditions: Conditions, *,
     ----------
     model : AssembledModel
         The gear set.
-    conditions : SpeedRamp, SpeedTable or TorqueDriven
+    conditions : Conditions
         The run's operating conditions (load torque, drive, initial acceleration).
     gyroscopic : bool
         As in :func:`gearvib.simulate.simulate` (centripetal stiffness at the initial speed).
