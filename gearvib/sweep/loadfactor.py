@@ -9,9 +9,10 @@ stiffness at its mean over the mesh cycle. "Same torque" means the run's load to
 speed ramp, the d'Alembert torque of its (constant) acceleration: the equilibrium is exactly
 the one :func:`gearvib.simulate.static_equilibrium` computes for the start of the run, with the
 stiffness tables replaced by their means (for a torque or motor drive: the input torque at
-``t = 0`` with the acceleration it gives the set). For a single gear pair this is ``T / r_b`` whatever the
-stiffness; for equally loaded planets it is the nominal share of each planet. The loaded flank is
-the flank that carries this static force (the larger one when a negative backlash loads both).
+``t = 0`` with the acceleration it gives the set). For a single gear pair this is ``T / r_b``
+whatever the stiffness; for equally loaded planets it is the nominal share of each planet. The
+loaded flank is the flank that carries this static force (the larger one when a negative
+backlash loads both).
 
 *Dynamic factor* ``K_v,m = max_t F_m(t) / F_stat,m`` over the summary window, with ``F_m`` the
 simulated normal force of the loaded flank (mesh damping force included, as in the contact law).
