@@ -24,6 +24,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import xarray as xr
+from threadpoolctl import threadpool_limits
 
 from analysis.fft import set_workers
 from gearvib.assembly import assemble
@@ -141,7 +142,7 @@ _interrupted = False  # a worker process got Ctrl-C: skip the calls still queued
 
 
 def _prepare_worker() -> None:
-    """Once per process: one FFT thread (numba, BLAS: environment of the pool)."""
+    """Once per process: one FFT thread (BLAS: :func:`run_case`; numba: no parallel loops)."""
     global _worker_ready
     if not _worker_ready:
         set_workers(1)
@@ -167,7 +168,10 @@ def run_case(task: CaseTask) -> CaseOutcome:
         raise KeyboardInterrupt
     _prepare_worker()
     try:
-        return _run(task)
+        # one BLAS/OpenMP thread during the case, whatever the process (a forked worker keeps
+        # the thread pools its parent loaded; the caller's own setting is restored after)
+        with threadpool_limits(limits=1):
+            return _run(task)
     except KeyboardInterrupt:
         if multiprocessing.parent_process() is not None:  # a pool worker, not the caller
             _interrupted = True

@@ -13,17 +13,18 @@ Threads and the numba cache
 Every case is a serial computation, so the workers must not start thread pools of their own:
 :func:`worker_environment` sets ``NUMBA_NUM_THREADS``, ``OMP_NUM_THREADS``,
 ``OPENBLAS_NUM_THREADS``, ``MKL_NUM_THREADS`` and ``PYFFTW_NUM_THREADS`` to 1 for the local
-workers it starts (a spawned worker reads them before it imports numpy or numba), and each case
-sets the FFT threads of :mod:`analysis.fft` to 1. The kernels have no parallel loops, so numba
-starts no threads. A forked worker keeps the BLAS library of this process as it was loaded; the
-matrices of a case (one row per DOF) are far below the size at which OpenBLAS or MKL split a
-call over threads, so they run on one thread anyway. The workers share numba's compilation
-cache: :func:`gearvib.sweep.run_sweep` compiles (or loads) the kernels once in this process
-before the fan-out; forked workers inherit them compiled, spawned ones load them from the same
-cache (this process's ``NUMBA_CACHE_DIR``, or the default ``__pycache__`` next to the
-sources). Dask's nanny sets ``OMP_NUM_THREADS=1`` (and MKL/OpenBLAS) for its
-workers by default (``distributed.nanny.pre-spawn-environ``); on a remote cluster give the
-workers a writable ``NUMBA_CACHE_DIR`` of their own: each compiles once.
+workers it starts (a spawned worker reads them before it imports numpy or numba); every case
+runs with one BLAS/OpenMP thread (``threadpoolctl``, which also covers a forked worker's BLAS,
+loaded by its parent with more threads, and a Dask worker) and one FFT thread of
+:mod:`analysis.fft`. The kernels have no parallel loops, so numba starts no threads.
+
+The workers share numba's compilation cache: :func:`gearvib.sweep.run_sweep` compiles (or
+loads) the kernels once in this process before the fan-out; forked workers inherit them
+compiled, spawned ones load them from the same cache (this process's ``NUMBA_CACHE_DIR``, or
+the default ``__pycache__`` next to the sources). Dask's nanny sets ``OMP_NUM_THREADS=1`` (and
+MKL/OpenBLAS) for its workers by default (``distributed.nanny.pre-spawn-environ``); on a
+remote cluster give the workers a writable ``NUMBA_CACHE_DIR`` of their own: each compiles
+once.
 """
 
 from __future__ import annotations

@@ -393,3 +393,26 @@ def test_local_workers_get_one_thread_each_and_the_numba_cache(method, monkeypat
     assert all(os.environ[v] == "7" for v in THREAD_VARIABLES)  # this process: restored
     with pytest.raises(ValueError, match="workers = 0"):
         local_executor(0)
+
+
+def test_cases_run_with_one_blas_thread_and_restore_the_callers(tmp_path, monkeypatch):
+    from threadpoolctl import threadpool_info, threadpool_limits
+
+    import gearvib.sweep.case as case_module
+    from gearvib.sweep.case import CaseTask, run_case
+
+    seen = []
+    real = case_module.simulate
+
+    def spy(*args, **kwargs):
+        seen.extend(lib["num_threads"] for lib in threadpool_info() if lib["user_api"] == "blas")
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(case_module, "simulate", spy)
+    s = sweep_from_dict({**TINY, "summary": {}})
+    with threadpool_limits(limits=2, user_api="blas"):
+        out = run_case(CaseTask(s.cases()[0], str(tmp_path / "run.nc"), s.summary))
+        after = {lib["num_threads"] for lib in threadpool_info() if lib["user_api"] == "blas"}
+    assert out.status == "simulated"
+    assert seen and set(seen) == {1}
+    assert after == {2}
