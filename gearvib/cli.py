@@ -1,4 +1,4 @@
-"""Command-line interface: ``gearvib demo | modes | catalogue | simulate | preset | report``.
+"""Command line: ``gearvib demo | modes | catalogue | simulate | preset | report | sweep``.
 
 Every subcommand has ``--help``. Errors are printed as one line on stderr with exit code 2
 (bad input) or 1 (a failed computation); nothing is written half.
@@ -192,6 +192,57 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_sweep(args: argparse.Namespace) -> int:
+    from gearvib.sweep import load_sweep, run_sweep
+    from gearvib.sweep.execution import dask_executor
+
+    sweep = load_sweep(args.sweep)
+    if args.list:
+        cases = sweep.cases()
+        paths = [p.path for p in sweep.parameters]
+        print("case  " + "  ".join(paths))
+        for c in cases:
+            print(f"{c.index:<5d} " + "  ".join(c.labels))
+        return 0
+    if not args.output:
+        raise CliError("gearvib sweep: -o/--output DIR is required (the output folder)")
+    client = None
+    executor = None
+    if args.scheduler:
+        try:
+            executor, client = dask_executor(args.scheduler)
+        except ImportError as exc:
+            raise CliError(str(exc)) from None
+    try:
+        result = run_sweep(sweep, args.output, workers=args.workers, executor=executor,
+                           progress=not args.quiet, report=not args.no_report)
+    finally:
+        if client is not None:
+            client.close()
+    print(f"sweep: {result.dataset.sizes['case']} cases ({len(result.simulated)} simulated, "
+          f"{len(result.reused)} reused, {len(result.failed)} failed) in "
+          f"{result.wall_time_s:.1f} s")
+    print(f"       {result.path}")
+    if result.report is not None:
+        print(f"       {result.report}")
+    if result.failed:
+        first = result.failed[0]
+        print(f"gearvib: failed: {len(result.failed)} case(s), e.g. case {first}: "
+              f"{result.dataset['failure'].values[first]}", file=sys.stderr)
+        return 1
+    return 0
+
+
+def _workers(text: str) -> int:
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"--workers {text!r} is not an integer") from None
+    if not 1 <= v <= 512:
+        raise argparse.ArgumentTypeError(f"--workers {v}: admissible 1..512")
+    return v
+
+
 def _parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(
         prog="gearvib",
@@ -277,6 +328,25 @@ def _parser() -> argparse.ArgumentParser:
                    help="run-up duration [s] (default 1; shorter for a quick look)")
     d.add_argument("-q", "--quiet", action="store_true", help="no progress display")
     d.set_defaults(func=_cmd_demo)
+
+    w = sub.add_parser("sweep", help="parameter sweep: many runs, one summary (sweep.nc)",
+                       description="Run every case of a sweep description (TOML: base gear set, "
+                       "[simulation] settings, [[parameter]] tables with key paths and values) on "
+                       "a local process pool or a Dask cluster; one netCDF run per case "
+                       "(resumable), the combined summary DIR/sweep.nc and the report "
+                       "DIR/sweep.html. See docs/sweeps.md.")
+    w.add_argument("sweep", help="sweep description (.toml)")
+    w.add_argument("-o", "--output", help="output folder (required unless --list)")
+    w.add_argument("--workers", type=_workers, metavar="N",
+                   help="local worker processes (default: the CPUs available; 1 runs in this "
+                   "process)")
+    w.add_argument("--scheduler", metavar="ADDRESS",
+                   help="address of a Dask scheduler, e.g. tcp://10.0.0.5:8786 (needs "
+                   "gearvib[dask]; the workers must see the output folder)")
+    w.add_argument("--list", action="store_true", help="print the cases and exit")
+    w.add_argument("--no-report", action="store_true", help="write sweep.nc only")
+    w.add_argument("-q", "--quiet", action="store_true", help="no progress display")
+    w.set_defaults(func=_cmd_sweep)
     return p
 
 

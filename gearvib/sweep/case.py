@@ -1,0 +1,205 @@
+"""Running one case of a sweep: the function every worker executes.
+
+:func:`run_case` maps a :class:`CaseTask` (one case description, where its run file goes and
+what to summarise) to a :class:`CaseOutcome` (the case's summary Dataset). It is a plain,
+picklable top-level function, so any :class:`concurrent.futures.Executor` can run it: the
+in-process :class:`~gearvib.sweep.execution.SerialExecutor`, a local process pool or a Dask
+cluster. A different runner with the same signature (e.g. a batched kernel that advances several
+cases at once) can be handed to :func:`gearvib.sweep.run_sweep` instead.
+
+Resuming: a run file is *finished* when it opens as netCDF, was written by gearvib and carries
+the case's hash in its ``sweep_case_sha256`` attribute (:attr:`SweepCase.sha256`: the gear-set
+description, run settings, base directory and gearvib version). Run files are written
+atomically, so a file with the final name is complete; anything else (missing, unreadable, other
+hash) is simulated again and replaced.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import multiprocessing
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import xarray as xr
+from threadpoolctl import threadpool_limits
+
+from analysis.fft import set_workers
+from gearvib.assembly import assemble
+from gearvib.config import ConfigError, gearset_from_dict
+from gearvib.io import read_run, write_netcdf
+from gearvib.model import AssembledModel
+from gearvib.simulate import Conditions, SimulationError, simulate
+from gearvib.simulation.settings import conditions_from_settings
+from gearvib.sweep.description import SweepCase
+from gearvib.sweep.summary import SummarySettings, summarise_run
+
+__all__ = ["CaseOutcome", "CaseTask", "build_case", "conditions_for", "finished_run",
+           "run_case"]
+
+
+@dataclass(frozen=True)
+class CaseTask:
+    """Everything a worker needs for one case.
+
+    Attributes
+    ----------
+    case : SweepCase
+        The case.
+    run_path : str
+        Where its run file is (or goes); absolute, on a file system the worker can reach.
+    summary : SummarySettings
+        What to summarise.
+    """
+
+    case: SweepCase
+    run_path: str
+    summary: SummarySettings
+
+
+@dataclass(frozen=True)
+class CaseOutcome:
+    """What a worker returns for one case.
+
+    Attributes
+    ----------
+    index : int
+        Case index.
+    status : str
+        ``"simulated"``, ``"reused"`` (a finished run file was found) or ``"failed"``.
+    message : str
+        Why a case failed (one line), else ``""``.
+    summary : xarray.Dataset or None
+        The case's summary (:func:`gearvib.sweep.summary.summarise_run`); None if failed.
+    wall_time : float
+        Wall time of the case in the worker [s] (not stored in the sweep Dataset).
+    """
+
+    index: int
+    status: str
+    message: str
+    summary: xr.Dataset | None
+    wall_time: float
+
+
+def build_case(case: SweepCase) -> AssembledModel:
+    """Assemble the gear set of a case.
+
+    Raises
+    ------
+    ConfigError
+        The description is invalid for this combination of values.
+    """
+    base = Path(case.base_dir) if case.base_dir else None
+    try:
+        return assemble(gearset_from_dict(case.description, base=base))
+    except ValueError as exc:
+        if isinstance(exc, ConfigError):
+            raise
+        raise ConfigError(str(exc)) from None
+
+
+def conditions_for(run: dict, model: AssembledModel) -> Conditions:
+    """The operating conditions of a case's run settings (speed ramp, torque or motor drive;
+    :func:`gearvib.simulation.settings.conditions_from_settings`). ``model`` is not used
+    today; it is part of the signature so that conditions may depend on the gear set."""
+    del model
+    return conditions_from_settings(run)
+
+
+def finished_run(path: str | Path, sha256: str) -> xr.Dataset | None:
+    """The run in ``path`` if it is the finished run of the case with hash ``sha256``."""
+    p = Path(path)
+    if not p.is_file():
+        return None
+    try:
+        with xr.open_dataset(p, engine="netcdf4") as ds:
+            if ds.attrs.get("sweep_case_sha256") != sha256:
+                return None
+        return read_run(p)
+    except (OSError, ValueError, RuntimeError, KeyError):
+        return None
+
+
+def _plain_file_locks() -> contextlib.AbstractContextManager:
+    """Inside a Dask worker, let xarray lock the run file with a process lock.
+
+    xarray asks dask which scheduler is active and, in a worker, would take a cluster-wide
+    ``distributed.Lock`` for every variable it writes (a round trip to the scheduler each,
+    about 1.5 s per run file). The run files are private to their case, so a local lock is
+    right; dask's synchronous scheduler gives xarray exactly that.
+    """
+    dask = sys.modules.get("dask")
+    if dask is None or not hasattr(dask, "config"):
+        return contextlib.nullcontext()
+    return dask.config.set(scheduler="synchronous")
+
+
+_worker_ready = False
+_interrupted = False  # a worker process got Ctrl-C: skip the calls still queued for it
+
+
+def _prepare_worker() -> None:
+    """Once per process: one FFT thread (BLAS: :func:`run_case`; numba: no parallel loops)."""
+    global _worker_ready
+    if not _worker_ready:
+        set_workers(1)
+        _worker_ready = True
+
+
+def run_case(task: CaseTask) -> CaseOutcome:
+    """Simulate (or reuse) one case, write its run file and summarise it.
+
+    Parameters
+    ----------
+    task : CaseTask
+
+    Returns
+    -------
+    CaseOutcome
+        ``status = "failed"`` with the message when the description is invalid for this
+        combination of values, the simulation blows up or the summary is impossible (e.g. an
+        empty window); other exceptions propagate.
+    """
+    global _interrupted
+    if _interrupted:
+        raise KeyboardInterrupt
+    _prepare_worker()
+    try:
+        # one BLAS/OpenMP thread during the case, whatever the process (a forked worker keeps
+        # the thread pools its parent loaded; the caller's own setting is restored after)
+        with threadpool_limits(limits=1):
+            return _run(task)
+    except KeyboardInterrupt:
+        if multiprocessing.parent_process() is not None:  # a pool worker, not the caller
+            _interrupted = True
+        raise
+
+
+def _run(task: CaseTask) -> CaseOutcome:
+    t0 = time.perf_counter()
+    case = task.case
+    try:
+        model = build_case(case)
+        conditions = conditions_for(case.run, model)
+        ds = finished_run(task.run_path, case.sha256)
+        status = "reused"
+        if ds is None:
+            status = "simulated"
+            res = simulate(model, conditions, dt=case.run.get("dt"), fs_out=case.run.get("fs_out"),
+                           gyroscopic=bool(case.run.get("gyroscopic")), progress=False,
+                           config={"gearset": case.description, "gearset_dir": case.base_dir,
+                                   "run": case.run})
+            ds = res.to_dataset()
+            ds.attrs["sweep_case_sha256"] = case.sha256
+            with _plain_file_locks():
+                write_netcdf(ds, task.run_path)
+        summary = summarise_run(ds, model, conditions, task.summary,
+                                gyroscopic=bool(case.run.get("gyroscopic")))
+    except (ConfigError, SimulationError, ValueError) as exc:
+        text = str(exc).strip().splitlines()
+        return CaseOutcome(case.index, "failed", text[0] if text else type(exc).__name__, None,
+                           time.perf_counter() - t0)
+    return CaseOutcome(case.index, status, "", summary, time.perf_counter() - t0)

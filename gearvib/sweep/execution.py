@@ -1,0 +1,171 @@
+"""Where the cases of a sweep run: any :class:`concurrent.futures.Executor`.
+
+* :class:`SerialExecutor`: in this process, one case after the other (``workers = 1``).
+* :func:`local_executor`: a :class:`~concurrent.futures.ProcessPoolExecutor` of worker
+  processes on this machine (forked on Linux, spawned elsewhere): no server to start.
+* :func:`dask_executor`: ``dask.distributed.Client(address).get_executor()``, the
+  ``concurrent.futures`` face of a Dask cluster (``pip install "gearvib[dask]"``).
+
+One code path (:func:`gearvib.sweep.run_sweep`) serves all of them.
+
+Threads and the numba cache
+---------------------------
+Every case is a serial computation, so the workers must not start thread pools of their own:
+:func:`worker_environment` sets ``NUMBA_NUM_THREADS``, ``OMP_NUM_THREADS``,
+``OPENBLAS_NUM_THREADS``, ``MKL_NUM_THREADS`` and ``PYFFTW_NUM_THREADS`` to 1 for the local
+workers it starts (a spawned worker reads them before it imports numpy or numba); every case
+runs with one BLAS/OpenMP thread (``threadpoolctl``, which also covers a forked worker's BLAS,
+loaded by its parent with more threads, and a Dask worker) and one FFT thread of
+:mod:`analysis.fft`. The kernels have no parallel loops, so numba starts no threads.
+
+The workers share numba's compilation cache: :func:`gearvib.sweep.run_sweep` compiles (or
+loads) the kernels once in this process before the fan-out; forked workers inherit them
+compiled, spawned ones load them from the same cache (this process's ``NUMBA_CACHE_DIR``, or
+the default ``__pycache__`` next to the sources). Dask's nanny sets ``OMP_NUM_THREADS=1`` (and
+MKL/OpenBLAS) for its workers by default (``distributed.nanny.pre-spawn-environ``); on a
+remote cluster give the workers a writable ``NUMBA_CACHE_DIR`` of their own: each compiles
+once.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import multiprocessing
+import os
+import sys
+from collections.abc import Callable, Iterator
+from concurrent.futures import Executor, Future, ProcessPoolExecutor
+from typing import Any
+
+__all__ = [
+    "THREAD_VARIABLES",
+    "SerialExecutor",
+    "dask_executor",
+    "default_start_method",
+    "default_workers",
+    "local_executor",
+    "worker_environment",
+]
+
+THREAD_VARIABLES = ("NUMBA_NUM_THREADS", "OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS",
+                    "MKL_NUM_THREADS", "PYFFTW_NUM_THREADS")
+"""Environment variables set to 1 in local worker processes."""
+
+MAX_WORKERS = 512
+"""Largest admissible number of local workers."""
+
+CONNECT_TIMEOUT_S = 30.0
+"""How long :func:`dask_executor` tries to reach the scheduler [s]."""
+
+
+class SerialExecutor(Executor):
+    """Runs every submitted call at once, in this process (an Executor for ``workers = 1``)."""
+
+    def submit(self, fn: Callable[..., Any], /, *args: Any, **kwargs: Any) -> Future:
+        """Call ``fn(*args, **kwargs)`` now; the returned future is done."""
+        fut: Future = Future()
+        if fut.set_running_or_notify_cancel():
+            try:
+                fut.set_result(fn(*args, **kwargs))
+            except BaseException as exc:
+                if isinstance(exc, KeyboardInterrupt | SystemExit):
+                    raise
+                fut.set_exception(exc)
+        return fut
+
+
+def default_workers() -> int:
+    """CPUs this process may use."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # not on Linux
+        return max(1, os.cpu_count() or 1)
+
+
+def _check_workers(workers: Any) -> int:
+    if isinstance(workers, bool) or not isinstance(workers, int) or \
+            not 1 <= workers <= MAX_WORKERS:
+        raise ValueError(f"workers = {workers!r}; admissible: an integer 1..{MAX_WORKERS}")
+    return workers
+
+
+@contextlib.contextmanager
+def worker_environment() -> Iterator[dict[str, str]]:
+    """Set the environment local workers start with; restore this process's afterwards.
+
+    Yields the variables set: :data:`THREAD_VARIABLES` = 1, and ``NUMBA_CACHE_DIR`` when this
+    process uses one (so every worker reads and writes the same cache).
+    """
+    import numba
+
+    env = dict.fromkeys(THREAD_VARIABLES, "1")
+    cache = str(getattr(numba.config, "CACHE_DIR", "") or "")
+    if cache:
+        env["NUMBA_CACHE_DIR"] = cache
+    old = {k: os.environ.get(k) for k in env}
+    os.environ.update(env)
+    try:
+        yield env
+    finally:
+        for k, v in old.items():
+            if v is None:
+                os.environ.pop(k, None)
+            else:
+                os.environ[k] = v
+
+
+def default_start_method() -> str:
+    """``"fork"`` on Linux (fast: the workers inherit the imported modules and the compiled
+    kernels, and the main script needs no ``if __name__ == "__main__":`` guard), else
+    ``"spawn"``."""
+    if sys.platform.startswith("linux") and "fork" in multiprocessing.get_all_start_methods():
+        return "fork"
+    return "spawn"
+
+
+def local_executor(workers: int, *, start_method: str | None = None) -> Executor:
+    """An executor of ``workers`` processes on this machine (in-process for 1).
+
+    Parameters
+    ----------
+    workers : int
+        Number of worker processes (1: :class:`SerialExecutor`).
+    start_method : {"fork", "spawn", "forkserver"}, optional
+        How the workers start (default :func:`default_start_method`). A ``spawn`` or
+        ``forkserver`` worker is a fresh interpreter that reads the environment of
+        :func:`worker_environment` (enter it before submitting) and loads the compiled kernels
+        from numba's cache; it imports the main script again, which must then guard its entry
+        point with ``if __name__ == "__main__":``.
+    """
+    n = _check_workers(workers)
+    if n == 1:
+        return SerialExecutor()
+    method = start_method or default_start_method()
+    if method not in multiprocessing.get_all_start_methods():
+        raise ValueError(f"start_method = {method!r}; admissible here: "
+                         f"{', '.join(multiprocessing.get_all_start_methods())}")
+    return ProcessPoolExecutor(max_workers=n, mp_context=multiprocessing.get_context(method))
+
+
+def dask_executor(address: str) -> tuple[Executor, Any]:
+    """``(executor, client)`` of the Dask scheduler at ``address`` (close the client after).
+
+    Raises
+    ------
+    ImportError
+        dask.distributed is not installed (the message names the extra to install).
+    OSError
+        The scheduler cannot be reached.
+    """
+    if not isinstance(address, str) or not address:
+        raise ValueError("scheduler address must be a string such as 'tcp://10.0.0.5:8786'")
+    try:
+        from distributed import Client
+    except ImportError:
+        raise ImportError("a Dask scheduler needs dask.distributed: pip install "
+                          "\"gearvib[dask]\"") from None
+    try:
+        client = Client(address, timeout=CONNECT_TIMEOUT_S)
+    except (OSError, TimeoutError) as exc:
+        raise OSError(f"cannot connect to the Dask scheduler at {address!r}: {exc}") from None
+    return client.get_executor(), client

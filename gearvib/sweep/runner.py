@@ -1,0 +1,223 @@
+"""Run a sweep: every case on an executor, one run file each, resumable; then ``sweep.nc``.
+
+Output folder::
+
+    DIR/runs/<hash>.nc     one run per case, named by the first 16 hex digits of its hash
+    DIR/sweep.nc           the combined summary (gearvib.sweep.combine)
+    DIR/sweep.html         the sweep report, with DIR/figures/*.png (gearvib.sweep.report)
+
+Run files are content-addressed: a case whose gear set and run settings did not change is found
+again (and not simulated) when the sweep is run a second time, also after an interruption, after
+values were added to a parameter, or after the ``[summary]`` table changed (the summaries are
+computed again from the run files, which is cheap). One sweep at a time may use a folder.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import os
+import time
+from collections.abc import Callable
+from concurrent.futures import FIRST_COMPLETED, Executor, Future, ProcessPoolExecutor, wait
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import xarray as xr
+
+from gearvib.config import ConfigError
+from gearvib.io import write_netcdf
+from gearvib.report.runner import check_output_dir
+from gearvib.simulate import SimulationError, simulate
+from gearvib.sweep.case import CaseOutcome, CaseTask, build_case, conditions_for, run_case
+from gearvib.sweep.combine import combine_summaries
+from gearvib.sweep.description import Sweep
+from gearvib.sweep.execution import (
+    SerialExecutor,
+    default_workers,
+    local_executor,
+    worker_environment,
+)
+
+__all__ = ["SweepResult", "run_file_name", "run_sweep"]
+
+log = logging.getLogger("gearvib.sweep")
+
+CaseRunner = Callable[[CaseTask], CaseOutcome]
+
+
+@dataclass(frozen=True)
+class SweepResult:
+    """Outcome of :func:`run_sweep`.
+
+    Attributes
+    ----------
+    dataset : xarray.Dataset
+        The combined summary (also written to ``path``).
+    path : Path
+        ``DIR/sweep.nc``.
+    report : Path or None
+        ``DIR/sweep.html`` (None without a report).
+    simulated, reused, failed : tuple of int
+        Case indices simulated now, found finished in their run files, and failed.
+    wall_time_s : float
+        Wall time of the call [s].
+    case_time_s : tuple of float
+        Wall time of every case in its worker [s].
+    """
+
+    dataset: xr.Dataset
+    path: Path
+    report: Path | None
+    simulated: tuple[int, ...]
+    reused: tuple[int, ...]
+    failed: tuple[int, ...]
+    wall_time_s: float
+    case_time_s: tuple[float, ...] = field(default=(), repr=False)
+
+
+def run_file_name(sha256: str) -> str:
+    """Run file of a case, relative to the sweep folder."""
+    return f"runs/{sha256[:16]}.nc"
+
+
+def _warm_up(sweep_case) -> None:
+    """Compile (or load) the kernels once in this process before the fan-out."""
+    try:
+        model = build_case(sweep_case)
+        cond = conditions_for(sweep_case.run, model)
+        simulate(model, cond, dt=sweep_case.run.get("dt"), fs_out=sweep_case.run.get("fs_out"),
+                 duration=min(float(sweep_case.run["duration"]), 1e-3), progress=False)
+    except (ConfigError, SimulationError, ValueError):
+        pass  # this case fails in its worker too, with its message; the workers compile
+
+
+def _remove_stale_temporaries(runs: Path) -> None:
+    for p in runs.glob(".*.nc.*.tmp"):  # left by a killed worker (atomic_write's temporaries)
+        with contextlib.suppress(OSError):
+            p.unlink()
+
+
+def run_sweep(sweep: Sweep, out_dir: str | os.PathLike, *, workers: int | None = None,
+              executor: Executor | None = None, start_method: str | None = None,
+              runner: CaseRunner = run_case,
+              progress: bool = True, report: bool = True,
+              on_case_done: Callable[[CaseOutcome], None] | None = None) -> SweepResult:
+    """Run every case of a sweep and write ``sweep.nc`` (and the report).
+
+    Parameters
+    ----------
+    sweep : Sweep
+        The sweep (:func:`gearvib.sweep.load_sweep`).
+    out_dir : path-like
+        Output folder (created; checked for writability before any work).
+    workers : int, optional
+        Local worker processes (default: the CPUs available); 1 runs in this process. Ignored
+        when ``executor`` is given.
+    start_method : str, optional
+        Start method of the local workers (see :func:`gearvib.sweep.execution.local_executor`).
+    executor : concurrent.futures.Executor, optional
+        Where the cases run, e.g. ``dask.distributed.Client(address).get_executor()``. Its
+        workers must reach ``out_dir`` under the same path. Not shut down here.
+    runner : callable
+        ``runner(CaseTask) -> CaseOutcome`` (default :func:`gearvib.sweep.case.run_case`).
+    progress : bool
+        Show a progress bar (tqdm; hidden on non-terminal output).
+    report : bool
+        Write the sweep report (``sweep.html`` and ``figures/``).
+    on_case_done : callable, optional
+        Called with each outcome as it arrives (in completion order).
+
+    Returns
+    -------
+    SweepResult
+
+    Raises
+    ------
+    gearvib.config.ConfigError
+        The sweep description is invalid (before anything is written).
+    PermissionError, ValueError
+        The output folder is not usable.
+    KeyboardInterrupt
+        Pending cases are cancelled; finished run files stay and are reused by the next call.
+    """
+    t0 = time.perf_counter()
+    cases = sweep.cases()
+    out = check_output_dir(out_dir)
+    runs = out / "runs"
+    runs.mkdir(exist_ok=True)
+    _remove_stale_temporaries(runs)
+    run_files = [run_file_name(c.sha256) for c in cases]
+    tasks = [CaseTask(c, str((out / f).resolve()), sweep.summary)
+             for c, f in zip(cases, run_files, strict=True)]
+    own = executor is None
+    n_workers = default_workers() if workers is None else workers
+    outcomes: dict[int, CaseOutcome] = {}
+    with contextlib.ExitStack() as stack:
+        if own:
+            stack.enter_context(worker_environment())
+            executor = local_executor(min(n_workers, max(1, len(tasks))),
+                                      start_method=start_method)
+        parallel = not isinstance(executor, SerialExecutor)
+        if parallel:  # compile once here; the workers load the kernels from numba's cache
+            _warm_up(cases[0])
+        bar = None
+        pending: set[Future] = set()
+        try:
+            if not parallel:
+                bar = _bar(stack, progress, len(tasks))
+                for task in tasks:
+                    _collect(executor.submit(runner, task), outcomes, bar, on_case_done)
+            else:  # submit first: a forked pool starts before the progress bar's thread
+                pending = {executor.submit(runner, task) for task in tasks}
+                bar = _bar(stack, progress, len(tasks))
+                while pending:
+                    done, pending = wait(pending, return_when=FIRST_COMPLETED)
+                    for fut in done:
+                        _collect(fut, outcomes, bar, on_case_done)
+        except BaseException:
+            for fut in pending:
+                fut.cancel()
+            if own and isinstance(executor, ProcessPoolExecutor):
+                executor.shutdown(wait=True, cancel_futures=True)
+            raise
+        finally:
+            if own and executor is not None:
+                executor.shutdown(wait=True)
+    ordered = [outcomes[c.index] for c in cases]
+    files = [f if o.summary is not None else "" for f, o in zip(run_files, ordered, strict=True)]
+    ds = combine_summaries(sweep, cases, ordered, files)
+    path = write_netcdf(ds, out / "sweep.nc")
+    report_path = None
+    if report:
+        from gearvib.sweep.report import build_sweep_report
+
+        report_path = build_sweep_report(ds, out)
+    by = {s: tuple(o.index for o in ordered if o.status == s)
+          for s in ("simulated", "reused", "failed")}
+    for o in ordered:
+        if o.status == "failed":
+            log.warning("case %d failed: %s", o.index, o.message)
+    return SweepResult(dataset=ds, path=path, report=report_path, simulated=by["simulated"],
+                       reused=by["reused"], failed=by["failed"],
+                       wall_time_s=time.perf_counter() - t0,
+                       case_time_s=tuple(o.wall_time for o in ordered))
+
+
+def _bar(stack: contextlib.ExitStack, progress: bool, total: int):
+    if not progress:
+        return None
+    from tqdm.auto import tqdm
+
+    return stack.enter_context(tqdm(total=total, unit="case", desc="gearvib sweep",
+                                    disable=None))
+
+
+def _collect(fut: Future, outcomes: dict[int, CaseOutcome], bar,
+             on_case_done: Callable[[CaseOutcome], None] | None) -> None:
+    outcome = fut.result()
+    outcomes[outcome.index] = outcome
+    if bar is not None:
+        bar.update(1)
+    if on_case_done is not None:
+        on_case_done(outcome)
