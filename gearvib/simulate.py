@@ -28,6 +28,7 @@ import numpy as np
 
 from gearvib import kernels as kn
 from gearvib.model import AssembledModel
+from gearvib.sensors.signal import add_sensor_signals
 from gearvib.simulation.conditions import (
     RAD_S_PER_RPM,
     Conditions,
@@ -193,6 +194,7 @@ def simulate(
     dec = step.decimation
 
     qd0 = setup.rigid * setup.omega0
+    law = setup.faults
     q0, acc0 = static_equilibrium(
         system,
         setup.mass,
@@ -201,6 +203,8 @@ def simulate(
         rigid_acceleration=setup.alpha0,
         free_rigid=setup.free_rigid,
         mesh_names=model.mesh_names,
+        flank_law=None if law is None else (
+            lambda q, first: law.flank_law(model, q, system.backlash, first)),
     )
     delta0 = np.abs(system.mesh_vectors @ q0)
     if system.mesh_back_vectors is not None:  # the static deflection of the loaded line
@@ -295,7 +299,7 @@ def simulate(
     ang, spd = reference(np.arange(n_out) * (dec * step.dt))
     out[:, :n] += ang[:, None] * rigid
     out[:, n : 2 * n] += spd[:, None] * rigid
-    return build_result(
+    result = build_result(
         model,
         conditions,
         setup,
@@ -309,3 +313,7 @@ def simulate(
         natural_frequencies,
         _time.perf_counter() - wall0,
     )
+    if model.sensors:
+        result = add_sensor_signals(result, model)
+        result.wall_time = _time.perf_counter() - wall0
+    return result
