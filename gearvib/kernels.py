@@ -257,7 +257,7 @@ N_HEADER = H_FVAL + 3
 # entries that are offsets point into the fault int block or (``*V``) the fault float block
 (F_NU, F_NSLOT, F_Z1, F_S1, F_T1, F_Z2, F_S2, F_T2, F_PAIRV, F_PROF1, F_SHIFT1V, F_PROF2,
  F_SHIFT2V, F_PROFV, F_NECC, F_ECCI, F_ECCV, F_CONSTV, F_NEV, F_EVV, F_ALWAYS, F_NPER, F_SHARED,
- F_EPSV, F_NEED, F_PERIOD) = range(26)
+ F_EPSV, F_NEED, F_PERIOD, F_EXIT) = range(27)
 
 #: A table segment whose stiffness changes by more than this fraction of the table's range
 #: within one table interval is a jump (e.g. the tooth-pair changes of a rectangular model).
@@ -607,6 +607,21 @@ def _cos_sin(ang, mesh_out, m, term):
 
 
 @njit(cache=True, inline="always")
+def _presence(i, i0, w, nper, ce):
+    """Weight of pair slot ``i`` (path position ``u = frac(s) + i``) at cell ``i0`` with
+    weight ``w`` of the cycle: 1 inside the path, ramping in over the last cell before entry
+    (slot -1) and out over the cell ``ce`` that holds the contact ratio."""
+    if i < 0:
+        return w if i0 == nper - 1 else 0.0
+    iu = i0 + i * nper
+    if iu < ce:
+        return 1.0
+    if iu == ce:
+        return 1.0 - w
+    return 0.0
+
+
+@njit(cache=True, inline="always")
 def _faulty_flanks(ints, vals, tables, m, rec, y, s, d, dd, dr, ddr, half, damping,
                    mesh_out):
     """Contact law of a faulty mesh, tooth pair by tooth pair (:mod:`gearvib.faults.law`).
@@ -661,50 +676,51 @@ def _faulty_flanks(ints, vals, tables, m, rec, y, s, d, dd, dr, ddr, half, dampi
     nu = ints[r + F_NU]
     nper = ints[r + F_NPER]
     nslot = ints[r + F_NSLOT]
-    eps = vals[fv0 + ints[r + F_EPSV]]
+    ce = ints[r + F_EXIT]
     sg1 = ints[r + F_S1]
     sg2 = ints[r + F_S2]
     p1 = fi0 + ints[r + F_PROF1]
     p2 = fi0 + ints[r + F_PROF2]
     sf = np.floor(s)
     frac = s - sf
-    n_in = 0
-    for i in range(nslot + 1):
-        if frac + i < eps:
-            n_in += 1
-    # teeth of the pair that entered last (floating-point modulo: no integer division); the
-    # older pairs step back by the sign
-    k1 = 0
-    k2 = 0
-    if z1 > 0:
-        x = sg1 * sf + ints[r + F_T1]
-        k1 = int(x - z1 * np.floor(x / z1))
-        if k1 >= z1:
-            k1 -= z1
-        elif k1 < 0:
-            k1 += z1
-    if z2 > 0:
-        x = sg2 * sf + ints[r + F_T2]
-        k2 = int(x - z2 * np.floor(x / z2))
-        if k2 >= z2:
-            k2 -= z2
-        elif k2 < 0:
-            k2 += z2
     x0 = frac * nper
     i0 = int(x0)
     w = x0 - i0
     if i0 >= nper:
         i0 = 0
         w = 0.0
+    # presence of the pair slots: the next pair (slot -1) ramps in over the last cell of the
+    # cycle, a pair ramps out over the cell that holds the contact ratio (as the table ramps)
+    psum = 0.0
+    for i in range(-1, nslot + 1):
+        psum += _presence(i, i0, w, nper, ce)
+    # teeth of the next pair (counter floor(s) + 1; floating-point modulo: no integer
+    # division); each older pair steps back by the sign
+    k1 = 0
+    k2 = 0
+    if z1 > 0:
+        x = sg1 * (sf + 1.0) + ints[r + F_T1]
+        k1 = int(x - z1 * np.floor(x / z1))
+        if k1 >= z1:
+            k1 -= z1
+        elif k1 < 0:
+            k1 += z1
+    if z2 > 0:
+        x = sg2 * (sf + 1.0) + ints[r + F_T2]
+        k2 = int(x - z2 * np.floor(x / z2))
+        if k2 >= z2:
+            k2 -= z2
+        elif k2 < 0:
+            k2 += z2
     shared = ints[r + F_SHARED] != 0
     share_l = 0.0
     share_r = 0.0
-    if shared and n_in > 0:
+    if shared and psum > 0.0:
         i1 = i0 + 1
         if i1 == nper:
             i1 = 0
-        share_l = ((1.0 - w) * tables[0, m, i0] + w * tables[0, m, i1]) / n_in
-        share_r = ((1.0 - w) * tables[1, m, i0] + w * tables[1, m, i1]) / n_in
+        share_l = ((1.0 - w) * tables[0, m, i0] + w * tables[0, m, i1]) / psum
+        share_r = ((1.0 - w) * tables[1, m, i0] + w * tables[1, m, i1]) / psum
     pv = fv0 + ints[r + F_PAIRV]
     prv = fv0 + ints[r + F_PROFV]
     h1 = fv0 + ints[r + F_SHIFT1V]
@@ -714,44 +730,52 @@ def _faulty_flanks(ints, vals, tables, m, rec, y, s, d, dd, dr, ddr, half, dampi
     ke = 0.0
     on_l = False
     on_r = False
-    for i in range(n_in):
-        idx = i0 + i * nper
-        if shared:
-            kl = share_l
-            kr = share_r
-        else:
-            kl = (1.0 - w) * vals[pv + idx] + w * vals[pv + idx + 1]
-            kr = (1.0 - w) * vals[pv + nu + idx] + w * vals[pv + nu + idx + 1]
-        ol = el
-        orr = er
-        for g in range(2):
-            if g == 0:
-                if z1 <= 0:
-                    continue
-                sh = vals[h1 + k1]
-                prof = ints[p1 + k1]
+    for i in range(-1, nslot + 1):
+        pres = _presence(i, i0, w, nper, ce)
+        if pres > 0.0:
+            # path position u = frac + i on the sampled grid; the entering pair (u < 0) takes
+            # the values at u = 0
+            idx = 0
+            wi = 0.0
+            if i >= 0:
+                idx = i0 + i * nper
+                wi = w
+            if shared:
+                kl = share_l * pres
+                kr = share_r * pres
             else:
-                if z2 <= 0:
-                    continue
-                sh = vals[h2 + k2]
-                prof = ints[p2 + k2]
-            ol += sh
-            orr += sh
-            if prof >= 0:
-                b = prv + prof * 4 * nu + idx
-                kl *= (1.0 - w) * vals[b] + w * vals[b + 1]
-                kr *= (1.0 - w) * vals[b + nu] + w * vals[b + nu + 1]
-                ol -= (1.0 - w) * vals[b + 2 * nu] + w * vals[b + 2 * nu + 1]
-                orr += (1.0 - w) * vals[b + 3 * nu] + w * vals[b + 3 * nu + 1]
-        if kl > 0.0 and d + ol > half:
-            f_el += kl * (d + ol - half)
-            ke += kl
-            on_l = True
-        if kr > 0.0 and dr + orr < -half:
-            f_er += kr * (dr + orr + half)
-            ke += kr
-            on_r = True
-        # the next older pair (counter jb - i - 1)
+                kl = ((1.0 - wi) * vals[pv + idx] + wi * vals[pv + idx + 1]) * pres
+                kr = ((1.0 - wi) * vals[pv + nu + idx] + wi * vals[pv + nu + idx + 1]) * pres
+            ol = el
+            orr = er
+            for g in range(2):
+                if g == 0:
+                    if z1 <= 0:
+                        continue
+                    sh = vals[h1 + k1]
+                    prof = ints[p1 + k1]
+                else:
+                    if z2 <= 0:
+                        continue
+                    sh = vals[h2 + k2]
+                    prof = ints[p2 + k2]
+                ol += sh
+                orr += sh
+                if prof >= 0:
+                    b = prv + prof * 4 * nu + idx
+                    kl *= (1.0 - wi) * vals[b] + wi * vals[b + 1]
+                    kr *= (1.0 - wi) * vals[b + nu] + wi * vals[b + nu + 1]
+                    ol -= (1.0 - wi) * vals[b + 2 * nu] + wi * vals[b + 2 * nu + 1]
+                    orr += (1.0 - wi) * vals[b + 3 * nu] + wi * vals[b + 3 * nu + 1]
+            if kl > 0.0 and d + ol > half:
+                f_el += kl * (d + ol - half)
+                ke += kl
+                on_l = True
+            if kr > 0.0 and dr + orr < -half:
+                f_er += kr * (dr + orr + half)
+                ke += kr
+                on_r = True
+        # the next older pair
         k1 -= sg1
         if k1 < 0:
             k1 += z1
@@ -1000,8 +1024,8 @@ def _split_times(y, dt, ints, vals, mesh_out, splits):
         lo = min(s, s_end)
         hi = max(s, s_end)
         if rec >= 0:  # the pair law of a faulty mesh during this step (cached per cycle)
-            flo = np.floor(lo)
-            fhi = np.floor(hi)
+            flo = np.floor(lo - NEED_MARGIN)
+            fhi = np.floor(hi + NEED_MARGIN)
             if not (mesh_out[m, 8] == flo and mesh_out[m, 9] == fhi):
                 mesh_out[m, 7] = 1.0 if _pairs_needed(ints, vals, rec, lo, hi) else 0.0
                 mesh_out[m, 8] = flo

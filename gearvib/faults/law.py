@@ -66,8 +66,8 @@ allocating)."""
 R_NU, R_NPAIR, R_Z1, R_S1, R_T1, R_Z2, R_S2, R_T2 = range(8)
 R_PAIR, R_PROF1, R_SHIFT1, R_PROF2, R_SHIFT2, R_PROFV = range(8, 14)
 R_NECC, R_ECCI, R_ECCV, R_CONST, R_NEV, R_EVV, R_ALWAYS, R_NPER, R_SHARED, R_EPS = range(14, 24)
-R_NEED, R_PERIOD = 24, 25
-N_RECORD = 26
+R_NEED, R_PERIOD, R_EXIT = 24, 25, 26
+N_RECORD = 27
 
 
 @dataclass
@@ -137,8 +137,26 @@ class FaultedMesh:
 
     @property
     def n_slots(self) -> int:
-        """Most pairs in contact at once, ``ceil(eps)``."""
+        """Pair slots behind the entering one: ``ceil(eps)``."""
         return math.ceil(self.eps)
+
+    @property
+    def exit_cell(self) -> int:
+        """Cell of the per-pair grid (``u`` in ``[c, c + 1) / n_per``) that holds ``eps``: a
+        pair ramps out of contact across it."""
+        return math.floor(self.eps * self.n_per)
+
+    def presence(self, i: int, i0: int, w: float) -> float:
+        """Weight of pair slot ``i`` (``u = frac(s) + i``) at cell ``i0``, weight ``w``: 1 on
+        the path, ramping in over the cycle's last cell before entry (slot -1) and out over
+        :attr:`exit_cell` - the pairs switch where the table's jumps ramp, and the force stays
+        continuous in ``s`` (the integrator ends sub-steps at the cell ends)."""
+        if i < 0:
+            return w if i0 == self.n_per - 1 else 0.0
+        iu = i0 + i * self.n_per
+        if iu < self.exit_cell:
+            return 1.0
+        return 1.0 - w if iu == self.exit_cell else 0.0
 
     @property
     def has_teeth(self) -> bool:
@@ -155,9 +173,9 @@ class FaultedMesh:
         return False
 
     def need_table(self) -> np.ndarray:
-        """``need[floor(s) mod L]``: a faulty pair may be in contact (one of the
-        ``ceil(eps)`` pairs that entered last), over the period ``L`` of the faulty teeth; a
-        single 1 when the mesh has deviations (the pair law always holds)."""
+        """``need[floor(s) mod L]``: a faulty pair is on the path (one of the pairs that
+        entered last), over the period ``L`` of the faulty teeth; a single 1 when the mesh has
+        deviations (the pair law always holds)."""
         if self.always:
             return np.ones(1, dtype=np.int64)
         period = 1
@@ -166,7 +184,10 @@ class FaultedMesh:
                 period = math.lcm(period, self.z[g])
         faulty = np.array([self.faulty_pair(j) for j in range(period)])
         need = np.zeros(period, dtype=np.int64)
-        for i in range(self.n_slots):
+        # the pairs on the path at floor(s) = k: k - i for u = frac + i up to the exit cell
+        # (the entering pair, present in the cycle's last cell, is caught by the kernel's
+        # margin around the step)
+        for i in range(self.exit_cell // self.n_per + 1):
             need |= np.roll(faulty, i).astype(np.int64)
         return need
 
@@ -300,6 +321,7 @@ class FaultLaw:
             r[R_NU] = fm.n_u
             r[R_NPER] = fm.n_per
             r[R_NPAIR] = fm.n_slots
+            r[R_EXIT] = fm.exit_cell
             r[R_SHARED] = int(fm.shared)
             r[R_EPS] = put([fm.eps])
             r[R_PAIR] = put(np.concatenate([fm.pair_left, fm.pair_right]))
@@ -370,45 +392,49 @@ class FaultLaw:
         fm = self.meshes[m]
         el, er, edl, edr = self._deviation(fm, q, qd)
         sf = math.floor(s)
-        frac = s - sf
-        x0 = frac * fm.n_per
+        x0 = (s - sf) * fm.n_per
         i0 = int(x0)
         w = x0 - i0
         if i0 >= fm.n_per:
             i0, w = 0, 0.0
-
-        def at(a: np.ndarray, idx: int) -> float:
-            return (1.0 - w) * a[idx] + w * a[idx + 1]
-
-        n_in = sum(1 for i in range(fm.n_slots + 1) if frac + i < fm.eps)
-        if fm.shared:
+        slots = range(-1, fm.n_slots + 1)
+        pres = [fm.presence(i, i0, w) for i in slots]
+        psum = sum(pres)
+        if fm.shared and psum > 0:
             tl, tr = model.mesh_stiffness_tables[m], model.mesh_back_tables[m]
             i1 = i0 + 1 if i0 + 1 < fm.n_per else 0
-            share_l = ((1.0 - w) * tl[i0] + w * tl[i1]) / n_in
-            share_r = ((1.0 - w) * tr[i0] + w * tr[i1]) / n_in
+            share_l = ((1.0 - w) * tl[i0] + w * tl[i1]) / psum
+            share_r = ((1.0 - w) * tr[i0] + w * tr[i1]) / psum
         out = []
-        for i in range(n_in):
-            idx = i0 + i * fm.n_per
+        for i, p in zip(slots, pres, strict=True):
+            if p <= 0.0:
+                continue
+            idx, wi = (i0 + i * fm.n_per, w) if i >= 0 else (0, 0.0)
+
+            def at(a: np.ndarray, idx=idx, wi=wi) -> float:
+                return (1.0 - wi) * a[idx] + wi * a[idx + 1]
+
             j = sf - i
             if fm.shared:
-                kl, kr = share_l, share_r
+                kl, kr = share_l * p, share_r * p
             else:
-                kl, kr = at(fm.pair_left, idx), at(fm.pair_right, idx)
+                kl, kr = at(fm.pair_left) * p, at(fm.pair_right) * p
             dl, dr = el, er
-            for g in (0, 1):
-                if fm.z[g] == 0:
-                    continue
-                tooth = (fm.sign[g] * j + fm.tooth0[g]) % fm.z[g]
-                sh = fm.shift[g][tooth]
-                dl += sh
-                dr += sh
-                p = fm.profile[g][tooth]
-                if p >= 0:
-                    prof = fm.profiles[p]
-                    kl *= at(prof[0], idx)
-                    kr *= at(prof[1], idx)
-                    dl -= at(prof[2], idx)
-                    dr += at(prof[3], idx)
+            if fm.has_teeth:
+                for g in (0, 1):
+                    if fm.z[g] == 0:
+                        continue
+                    tooth = (fm.sign[g] * j + fm.tooth0[g]) % fm.z[g]
+                    sh = fm.shift[g][tooth]
+                    dl += sh
+                    dr += sh
+                    pi = fm.profile[g][tooth]
+                    if pi >= 0:
+                        prof = fm.profiles[pi]
+                        kl *= at(prof[0])
+                        kr *= at(prof[1])
+                        dl -= at(prof[2])
+                        dr += at(prof[3])
             out.append((kl, kr, dl, dr, j))
         return out, (edl, edr)
 
@@ -656,13 +682,13 @@ def _events(model: AssembledModel, fm: FaultedMesh) -> None:
     of the pairs it shares the load with, and its own entry and exit.
     """
     n_per = fm.n_per
-    frac_eps = fm.eps - math.floor(fm.eps)
     healthy_l = healthy_pair(model, fm)
     healthy_r = healthy_pair(model, fm, back=True)
     span = float(max(np.ptp(healthy_l), np.ptp(healthy_r), 0.0))
-    cycle: set[float] = set()
-    if fm.always:
-        cycle |= {0.0, frac_eps}
+    # the cells where pairs ramp in (the cycle's last) and out (the one holding eps)
+    ramp = {(n_per - 1) / n_per, 0.0, (fm.exit_cell % n_per) / n_per,
+            ((fm.exit_cell + 1) % n_per) / n_per}
+    cycle: set[float] = set(ramp) if fm.always else set()
     if not fm.shared:
         cycle |= {(i % n_per) / n_per for i in _jump_cells(healthy_l, span)
                   | _jump_cells(healthy_r, span)}
@@ -675,9 +701,10 @@ def _events(model: AssembledModel, fm: FaultedMesh) -> None:
         period = math.lcm(period, fm.z[g])
     events: set[float] = set()
     n_ev = 0
-    own = [float(i) for i in range(fm.n_slots + 1)] + [
-        i + frac_eps for i in range(fm.n_slots + 1)]
-    own = [x for x in own if x <= fm.eps + 1e-12]
+    # while a faulty pair is present its share changes where any pair ramps in or out
+    own = [c + x - (1.0 if x > 0.5 and c == 0 and x == (n_per - 1) / n_per else 0.0)
+           for c in range(fm.n_slots + 2) for x in ramp]
+    own = [x for x in own if -1.0 / n_per - 1e-12 <= x <= (fm.exit_cell + 1) / n_per + 1e-12]
     for g in sides:
         for tooth in np.flatnonzero(fm.profile[g] >= 0):
             prof = fm.profiles[int(fm.profile[g][tooth])]
@@ -687,7 +714,7 @@ def _events(model: AssembledModel, fm: FaultedMesh) -> None:
             gap_span = float(np.abs(prof[2:]).max())
             for arr in prof[2:]:
                 cells |= _jump_cells(arr, gap_span)
-            offsets = sorted({c / n_per for c in cells if c / n_per <= fm.eps} | set(own))
+            offsets = sorted({c / n_per for c in cells if c <= fm.exit_cell + 1} | set(own))
             j0 = (fm.sign[g] * (int(tooth) - fm.tooth0[g])) % fm.z[g]
             n_ev += len(offsets) * (period // fm.z[g])
             if n_ev > MAX_EVENTS_PER_MESH:

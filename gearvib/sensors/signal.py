@@ -52,7 +52,7 @@ __all__ = ["add_sensor_signals", "housing_response", "path_force", "tacho_signal
 
 def window_weight(window: str, width_deg: float, delta: np.ndarray) -> np.ndarray:
     """Transmission-path weight at angles ``delta`` [rad] between planet and sensor."""
-    d = np.abs(np.angle(np.exp(1j * np.asarray(delta, dtype=float))))  # wrapped to [0, pi]
+    d = np.abs(np.mod(np.asarray(delta, dtype=float) + np.pi, 2.0 * np.pi) - np.pi)  # 0..pi
     width = math.radians(width_deg)
     if window == "hann":
         return np.where(d <= width, 0.5 * (1.0 + np.cos(np.pi * np.minimum(d / width, 1.0))),
