@@ -28,10 +28,9 @@ nothing into the analysed band; the FFT applies the FRF exactly at every output 
 the kernel it would cost work at every internal step and could not use a measured FRF.
 
 Tacho: the pulse train of the simulated shaft angle ``theta`` (the member's actual rotation)
-with ``P`` pulses per revolution: high (``level_v``) while ``frac(P theta / 2 pi) < duty``.
-Each sample holds the fraction of its interval during which the signal is high (area
-sampling), so an edge falls between samples as it does on a real acquisition's anti-alias
-path and the edge times interpolate to a fraction of a sample.
+with ``P`` pulses per revolution: high (``level_v``) while ``frac(P theta / 2 pi) < duty``;
+every edge is a linear ramp over two samples centred on its exact time, so a trigger that
+interpolates the level crossing (``analysis.speed.from_tacho``) recovers it to rounding.
 """
 
 from __future__ import annotations
@@ -110,23 +109,31 @@ def housing_response(p: np.ndarray, fs: float, sensor: HousingSensor) -> np.ndar
 
 
 def tacho_signal(angle: np.ndarray, tacho: Tacho) -> np.ndarray:
-    """Area-sampled pulse train [V] of a shaft angle [rad] (module docstring)."""
+    """Pulse train [V] of a shaft angle [rad] sampled on a uniform grid (module docstring).
+
+    The state is high while ``frac(P theta / 2 pi) < duty``. Each edge is placed at its exact
+    time (the angle interpolated linearly between the samples) and drawn as a linear ramp of
+    two samples centred there, so a trigger that interpolates its level crossing between two
+    samples finds the edge exactly (as a measured, anti-alias filtered edge).
+    """
     x = np.asarray(angle, dtype=float) * tacho.pulses_per_rev / (2.0 * math.pi)
-    if x.size < 2:
-        return np.where((x - np.floor(x)) < tacho.duty, tacho.level_v, 0.0)
-    mid = 0.5 * (x[1:] + x[:-1])
-    edges = np.concatenate([[x[0] - (mid[0] - x[0])], mid, [x[-1] + (x[-1] - mid[-1])]])
-
-    def integral(v: np.ndarray) -> np.ndarray:  # time high per unit x, integrated
-        fl = np.floor(v)
-        return fl * tacho.duty + np.minimum(v - fl, tacho.duty)
-
-    dx = np.diff(edges)
-    ih = np.diff(integral(edges))
-    still = np.abs(dx) <= 1e-12
-    high = np.where(still, ((x - np.floor(x)) < tacho.duty).astype(float),
-                    ih / np.where(still, 1.0, dx))
-    return tacho.level_v * np.clip(high, 0.0, 1.0)
+    duty = tacho.duty
+    state = ((x - np.floor(x)) < duty).astype(float)
+    out = state.copy()
+    if x.size >= 2:
+        k = np.flatnonzero(state[1:] != state[:-1])
+        a, b = x[k], x[k + 1]
+        lo, hi = np.minimum(a, b), np.maximum(a, b)
+        rising = np.floor(hi) - np.floor(lo)  # integers in (lo, hi]
+        falling = np.floor(hi - duty) - np.floor(lo - duty)
+        single = (rising + falling) == 1  # one edge in the interval: place it exactly
+        level = np.where(rising == 1, np.floor(hi), np.floor(hi - duty) + duty)
+        tau = (level - a) / np.where(b != a, b - a, 1.0)  # edge time, fraction of a sample
+        step = state[k + 1] - state[k]
+        k, tau, step = k[single], tau[single], step[single]
+        out[k] += step * (0.5 - 0.5 * tau)
+        out[k + 1] += step * (-0.5 * tau)
+    return tacho.level_v * np.clip(out, 0.0, 1.0)
 
 
 def add_sensor_signals(result, model: AssembledModel):
