@@ -948,18 +948,18 @@ def evaluate_rhs(t: float, y: np.ndarray, system: tuple) -> tuple[np.ndarray, np
     -------
     dy : ndarray, shape (2 n,)
         ``[qdot, qddot]``.
-    mesh_out : ndarray, shape (n_mesh, MESH_OUT_COLUMNS)
+    mesh_out : ndarray, shape (n_mesh, 7)
         Per mesh ``F_left, -F_right, k_eff, contact state, delta``, the mesh position ``s`` and
-        ``delta_R``.
+        ``delta_R`` (the first columns of the kernels' scratch).
     """
     ints, vals, tables, speed_tab, torque_tab = system
     dy = np.empty(2 * ints[H_N])
-    mesh_out = np.empty((ints[H_NMESH], MESH_OUT_COLUMNS))
+    mesh_out = np.zeros((ints[H_NMESH], MESH_OUT_COLUMNS))
     mesh_out[:, 7] = 1.0  # faulty meshes: the pair law (exact everywhere)
     mesh_out[:, 12] = np.nan  # no cached eccentricity angles
     mesh_out[:, 15] = np.nan
     _rhs(t, y, dy, mesh_out, ints, vals, tables, speed_tab, torque_tab)
-    return dy, mesh_out
+    return dy, mesh_out[:, :7].copy()
 
 
 def work_shape(n_dof: int, n_mesh: int) -> tuple[int, int]:
