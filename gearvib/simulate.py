@@ -136,7 +136,10 @@ def simulate(
     Parameters
     ----------
     model : AssembledModel
-        The gear set (:func:`gearvib.assembly.assemble`).
+        The gear set (:func:`gearvib.assembly.assemble`). Its local tooth faults and
+        manufacturing errors (``model.faults``, :mod:`gearvib.faults`) act in the run; its
+        virtual sensors (``model.sensors``, :mod:`gearvib.sensors`) are computed from the
+        stored forces and added to the result.
     conditions : SpeedRamp, SpeedTable, TorqueDriven or MotorDriven
         Operating conditions. Speed-driven runs prescribe the input angle ``phi(t)`` through a
         :class:`DriveCoupling`; by default its frequency (rigid-body mode on the coupling) is

@@ -260,3 +260,27 @@ def test_sensor_at_the_output_rate_matches_a_finer_output() -> None:
     fb = np.fft.rfft(b.sensor_acceleration[0, -2 * n - 1:-1])[: fa.size] / (2 * n)
     band = np.arange(fa.size) < 0.3 * 2 * fa.size / 2  # below 0.3 fs_out = 6 kHz
     assert np.abs(fa[band] - fb[band]).max() < 2e-3 * np.abs(fa[band]).max()
+
+
+def test_bearing_path_adds_the_projected_radial_force() -> None:
+    """A bearing path adds the member's radial bearing force (components in the carrier frame)
+    projected on the sensor's direction, times its gain, to the windowed mesh forces."""
+    from gearvib.faults import Eccentricity
+
+    # an eccentric sun: the equally spaced planets no longer cancel the ring's radial force
+    model = assemble(load_gearset("paper-case1-elastic")).with_faults(
+        [Eccentricity("sun", 20e-6)])
+    plain = HousingSensor("p", 75.0, housing_modes=MODES)
+    with_path = HousingSensor("b", 75.0, housing_modes=MODES, bearings=(("ring", 0.7),))
+    model = model.with_sensors([plain, with_path])
+    res = simulate(model, SpeedRamp(900, 900, 1.0, input_torque=60.0), duration=0.05,
+                   progress=False)
+    p0 = path_force(res, model, model.sensors[0])
+    p1 = path_force(res, model, model.sensors[1])
+    fx = res.bearing_force[res.bearing_names.index("ring.x")]
+    fy = res.bearing_force[res.bearing_names.index("ring.y")]
+    theta_c = res.rotation[res.members.index("carrier")]
+    rel = math.radians(75.0) - theta_c
+    np.testing.assert_allclose(p1 - p0, 0.7 * (fx * np.cos(rel) + fy * np.sin(rel)),
+                               rtol=1e-12, atol=1e-9)
+    assert np.abs(fx).max() > 1.0
