@@ -550,3 +550,29 @@ def test_sun_eccentricity_gives_sidebands_at_the_shaft_order() -> None:
             continue
         assert levels[1][f] > 100 * levels[0][f] + 0.2  # N; healthy: numerical noise
     assert levels[1][f_mesh] == pytest.approx(levels[0][f_mesh], rel=0.05)
+
+
+def test_elastic_pin_error_tends_to_the_rigid_one() -> None:
+    """On stiff elastic planet bearings a pin error preloads the bearing (its rest position
+    moves); the load sharing tends to the rigid pin's hand network, and the reported bearing
+    force is k (u.q - e)."""
+    cfg, base = load_config("paper-case1")
+    cfg = copy.deepcopy(cfg)
+    for fam in ("sun", "ring"):
+        cfg["meshes"][fam]["stiffness"] = {"model": "constant", "k": 3.5e7}
+    cfg["bodies"]["planet"]["support"] = {"radial": 1e12, "tangential": 1e12}
+    model = assemble(gearset_from_dict(cfg, base=base))
+    faulty = model.with_faults([PinError("planet1", tangential=20e-6)])
+    forces, setup = static_forces(faulty)
+    assert np.any(setup.faults.f_const) and not setup.faults.meshes
+    rigid = constant_stiffness_model()
+    expected, _ = static_forces(rigid.with_faults([PinError("planet1", tangential=20e-6)]))
+    np.testing.assert_allclose(forces, expected, rtol=2e-3)
+    res = run(faulty, 30.0, 0.02)
+    b = faulty.bearing_names.index("planet1.tangential")
+    u = faulty.bearing_vectors[b]
+    q = np.array([res.rotation[res.members.index(n.split(".")[0])] if n.endswith("theta")
+                  else res.displacement[res.translation_dofs.index(n)]
+                  for n in faulty.dof_names])
+    np.testing.assert_allclose(res.bearing_force[b], 1e12 * (u @ q - 20e-6), rtol=1e-6,
+                               atol=1e-3)
