@@ -621,7 +621,7 @@ def _presence(i, i0, w, nper, ce):
     return 0.0
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _faulty_flanks(ints, vals, tables, m, rec, y, s, d, dd, dr, ddr, half, damping,
                    mesh_out):
     """Contact law of a faulty mesh, tooth pair by tooth pair (:mod:`gearvib.faults.law`).
