@@ -21,7 +21,9 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
+from gearvib.faults.description import FaultError, faults_from_list
 from gearvib.geometry import Toothing
+from gearvib.sensors.description import SensorError, sensors_from_list
 from gearvib.stiffness import stiffness_from_dict
 from gearvib.structure import (
     RIGID,
@@ -55,9 +57,10 @@ class ConfigError(ValueError):
 
 
 _TOP = {"name", "title", "description", "type", "operation", "geometry", "bodies", "meshes",
-        "body", "mesh", "coupling", "stage1", "stage2", "shaft", "simulation", "references"}
+        "body", "mesh", "coupling", "stage1", "stage2", "shaft", "simulation", "references",
+        "fault", "sensor"}
 _COMMON_TOP = {"name", "title", "description", "type", "simulation", "references", "body",
-               "coupling", "operation"}
+               "coupling", "operation", "fault", "sensor"}
 _TYPE_KEYS = {
     "simple": {"geometry", "bodies", "meshes"},
     "wolfrom": {"geometry", "bodies", "meshes"},
@@ -533,6 +536,28 @@ def _general_set(cfg: dict, base: Path | None) -> GearSet:
 
 
 def gearset_from_dict(cfg: dict, *, base: Path | None = None) -> GearSet:
+    """Build a :class:`GearSet` from a description dict (parsed TOML), with its ``[[fault]]``
+    and ``[[sensor]]`` tables (:mod:`gearvib.faults`, :mod:`gearvib.sensors`).
+
+    See :func:`_gearset_from_dict` for the parameters and errors.
+    """
+    return _with_faults_and_sensors(_gearset_from_dict(cfg, base=base), cfg, base)
+
+
+def _with_faults_and_sensors(gs: GearSet, cfg: dict, base: Path | None) -> GearSet:
+    """The ``[[fault]]`` and ``[[sensor]]`` tables of a description added to its gear set
+    (checked here; against the bodies and teeth when the set is assembled)."""
+    if not isinstance(cfg, dict) or ("fault" not in cfg and "sensor" not in cfg):
+        return gs
+    try:
+        faults = faults_from_list(cfg.get("fault"), base=base)
+        sensors = sensors_from_list(cfg.get("sensor"), base=base)
+    except (FaultError, SensorError) as exc:
+        raise ConfigError(str(exc)) from None
+    return replace(gs, faults=gs.faults + faults, sensors=gs.sensors + sensors)
+
+
+def _gearset_from_dict(cfg: dict, *, base: Path | None = None) -> GearSet:
     """Build a :class:`GearSet` from a description dict (parsed TOML).
 
     Parameters
@@ -568,6 +593,10 @@ def gearset_from_dict(cfg: dict, *, base: Path | None = None) -> GearSet:
         if "simulation" in stage:
             raise ConfigError(f"[{key}.simulation] is not admissible: give [simulation] once, "
                               "at the top level")
+        for extra in ("fault", "sensor"):
+            if extra in stage:
+                raise ConfigError(f"[[{key}.{extra}]] is not admissible: give [[{extra}]] at "
+                                  "the top level (members named s1.sun, s2.planet1, ...)")
         try:
             stages.append(gearset_from_dict({**stage, "name": key}, base=base))
         except ConfigError as exc:

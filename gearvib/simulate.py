@@ -28,6 +28,7 @@ import numpy as np
 
 from gearvib import kernels as kn
 from gearvib.model import AssembledModel
+from gearvib.sensors.signal import add_sensor_signals
 from gearvib.simulation.conditions import (
     RAD_S_PER_RPM,
     Conditions,
@@ -135,7 +136,10 @@ def simulate(
     Parameters
     ----------
     model : AssembledModel
-        The gear set (:func:`gearvib.assembly.assemble`).
+        The gear set (:func:`gearvib.assembly.assemble`). Its local tooth faults and
+        manufacturing errors (``model.faults``, :mod:`gearvib.faults`) act in the run; its
+        virtual sensors (``model.sensors``, :mod:`gearvib.sensors`) are computed from the
+        stored forces and added to the result.
     conditions : SpeedRamp, SpeedTable, TorqueDriven or MotorDriven
         Operating conditions. Speed-driven runs prescribe the input angle ``phi(t)`` through a
         :class:`DriveCoupling`; by default its frequency (rigid-body mode on the coupling) is
@@ -193,6 +197,7 @@ def simulate(
     dec = step.decimation
 
     qd0 = setup.rigid * setup.omega0
+    law = setup.faults
     q0, acc0 = static_equilibrium(
         system,
         setup.mass,
@@ -201,6 +206,8 @@ def simulate(
         rigid_acceleration=setup.alpha0,
         free_rigid=setup.free_rigid,
         mesh_names=model.mesh_names,
+        flank_law=None if law is None else (
+            lambda q, first: law.flank_law(model, q, system.backlash, first)),
     )
     delta0 = np.abs(system.mesh_vectors @ q0)
     if system.mesh_back_vectors is not None:  # the static deflection of the loaded line
@@ -295,7 +302,7 @@ def simulate(
     ang, spd = reference(np.arange(n_out) * (dec * step.dt))
     out[:, :n] += ang[:, None] * rigid
     out[:, n : 2 * n] += spd[:, None] * rigid
-    return build_result(
+    result = build_result(
         model,
         conditions,
         setup,
@@ -309,3 +316,7 @@ def simulate(
         natural_frequencies,
         _time.perf_counter() - wall0,
     )
+    if model.sensors:
+        result = add_sensor_signals(result, model)
+        result.wall_time = _time.perf_counter() - wall0
+    return result
