@@ -4,7 +4,10 @@ The files are NETCDF4 written with the netCDF4 engine (xarray's default engine h
 between releases), zlib-compressed and chunked along ``time``. Coordinates and data that hold no
 NaN get ``_FillValue = None`` (CF forbids missing values in coordinate variables). The write is
 atomic: a temporary file in the destination directory is written, flushed to disk and renamed
-over the destination, so a crash or Ctrl-C never leaves a partial file.
+over the destination, so a crash or Ctrl-C never leaves a partial file. The temporary file is
+named ``.<name>.gearvib-<host>-<pid>-<token>.tmp`` (:mod:`gearvib.tempfiles`); netCDF files are
+written and read in a worker thread that an interrupt abandons (:mod:`gearvib.interrupts`
+explains why: xarray's backend locks are not safe against an exception from a signal handler).
 """
 
 from __future__ import annotations
@@ -12,13 +15,15 @@ from __future__ import annotations
 import contextlib
 import json
 import os
-import uuid
 from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import TypeVar
 
 import numpy as np
 import xarray as xr
+
+from gearvib import tempfiles
+from gearvib.interrupts import run_abandonable
 
 __all__ = [
     "GearvibFileError",
@@ -105,8 +110,8 @@ def write_netcdf(ds: xr.Dataset, path: str | os.PathLike) -> Path:
 
     Notes
     -----
-    Written through :func:`atomic_write`: nothing half-written is left on any error, including
-    ``KeyboardInterrupt``.
+    Written through :func:`atomic_write` in a worker thread (``abandonable``): nothing
+    half-written is left on any error or interrupt, and an interrupt returns at once.
     """
     dest = Path(path)
     out = ds.copy(deep=False)
@@ -114,11 +119,12 @@ def write_netcdf(ds: xr.Dataset, path: str | os.PathLike) -> Path:
     for name in out.variables:
         out[name].attrs = sanitize_attrs(ds[name].attrs)
     atomic_write(dest, lambda tmp: out.to_netcdf(tmp, engine="netcdf4", format="NETCDF4",
-                                                 encoding=_encoding(out)))
+                                                 encoding=_encoding(out)), abandonable=True)
     return dest
 
 
-def atomic_write(dest: str | os.PathLike, write: Callable[[Path], T]) -> T:
+def atomic_write(dest: str | os.PathLike, write: Callable[[Path], T], *,
+                 abandonable: bool = False) -> T:
     """Write a file atomically: ``write(tmp)`` on a temporary file beside ``dest``, then rename.
 
     Parameters
@@ -128,29 +134,49 @@ def atomic_write(dest: str | os.PathLike, write: Callable[[Path], T]) -> T:
         one is complete.
     write : callable
         ``write(tmp_path)`` writes the whole content to ``tmp_path``; its result is returned.
+    abandonable : bool
+        Run ``write`` and the ``fsync`` in a worker thread that an interrupt abandons
+        (:func:`gearvib.interrupts.run_abandonable`); for library code that is not safe
+        against a ``KeyboardInterrupt`` (netCDF through xarray).
 
     Notes
     -----
-    The temporary file lives in the destination directory (so ``os.replace`` is an atomic
-    rename on the same file system), is fsync-ed before the rename and is removed on any error,
-    including ``KeyboardInterrupt``; the directory is fsync-ed after the rename where possible.
+    The temporary file ``.<name>.gearvib-<host>-<pid>-<token>.tmp``
+    (:func:`gearvib.tempfiles.temp_path`) lives in the destination directory (so
+    ``os.replace`` is an atomic rename on the same file system), is fsync-ed before the rename
+    and is removed on any error, including ``KeyboardInterrupt`` and SIGTERM under the command
+    line; the directory is fsync-ed after the rename where possible. Only SIGKILL can leave
+    it; :func:`gearvib.tempfiles.remove_stale` removes it later.
     """
     dest = Path(dest)
     directory = dest.parent if str(dest.parent) else Path(".")
     if not directory.is_dir():
         raise FileNotFoundError(f"directory of {dest} does not exist")
-    tmp = directory / f".{dest.name}.{uuid.uuid4().hex}.tmp"
-    # O_EXCL: never clobber; mode 0o666 so the process umask applies as for a plain open()
-    os.close(os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666))
+    if dest.is_dir():
+        raise IsADirectoryError(f"{dest} is a directory (give a file name)")
+    tmp = tempfiles.temp_path(dest)
+    tempfiles.register(tmp)
     try:
-        result = write(tmp)
-        with open(tmp, "rb+") as fh:
-            os.fsync(fh.fileno())
+        # O_EXCL: never clobber; mode 0o666 so the process umask applies as for a plain open()
+        os.close(os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666))
+
+        def body() -> T:
+            out = write(tmp)
+            with open(tmp, "rb+") as fh:
+                os.fsync(fh.fileno())
+            return out
+
+        result = run_abandonable(body) if abandonable else body()
         os.replace(tmp, dest)
-    except BaseException:
+    except BaseException as exc:
         with contextlib.suppress(OSError):
             tmp.unlink()
+        if isinstance(exc, Exception):
+            tempfiles.unregister(tmp)
+        # else (an interrupt): abandoned work may still create it; it stays listed for the
+        # removal just before a forced exit (gearvib.interrupts.exit_now)
         raise
+    tempfiles.unregister(tmp)
     with contextlib.suppress(OSError):  # persist the rename (POSIX); not possible everywhere
         dir_fd = os.open(directory, os.O_RDONLY)
         try:
@@ -182,9 +208,12 @@ def read_run(path: str | os.PathLike) -> xr.Dataset:
     p = Path(path)
     if not p.is_file():
         raise GearvibFileError(f"gearvib run file not found: {p}")
-    try:
+    def load() -> xr.Dataset:
         with xr.open_dataset(p, engine="netcdf4") as ds:
-            loaded = ds.load()
+            return ds.load()
+
+    try:
+        loaded = run_abandonable(load)  # see gearvib.interrupts: xarray's locks and Ctrl-C
     except Exception as exc:
         raise GearvibFileError(f"cannot read {p} as netCDF: {exc}") from exc
     if not str(loaded.attrs.get("source", "")).startswith("gearvib"):
