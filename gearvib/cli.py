@@ -35,7 +35,8 @@ class _Parser(argparse.ArgumentParser):
     """An argument parser whose errors are one line, like every other error of gearvib."""
 
     def error(self, message: str) -> NoReturn:
-        self.exit(2, f"gearvib: error: {self.prog}: {message} (see {self.prog} --help)\n")
+        self.exit(2, f"gearvib: error: {self.prog}: {_one_line(message)} (see {self.prog} "
+                  "--help)\n")
 
 
 def _cmd_modes(args: argparse.Namespace) -> int:
@@ -54,19 +55,24 @@ def _cmd_modes(args: argparse.Namespace) -> int:
     return 0
 
 
+MAX_RPM = 1e9
+"""Largest speed accepted on the command line [min^-1] (as ``[simulation]``)."""
+
+
 def _speed_range(text: str) -> tuple[float, float]:
     try:
         lo, hi = (float(v) for v in text.split(":"))
     except ValueError:
         raise argparse.ArgumentTypeError(
-            f"--speed {text[:40]!r}: expected START:END in min-1, e.g. 0:4000") from None
-    if not (math.isfinite(lo) and math.isfinite(hi)) or lo < 0 or hi < 0:
-        raise argparse.ArgumentTypeError(f"--speed {text[:40]!r}: speeds must be finite and "
-                                         ">= 0 min-1")
+            f"{text[:40]!r}: expected START:END in min-1, e.g. 0:4000") from None
+    if not all(math.isfinite(v) and 0 <= v <= MAX_RPM for v in (lo, hi)):
+        raise argparse.ArgumentTypeError(f"{text[:40]!r}: speeds must be finite, 0 .. "
+                                         f"{MAX_RPM:g} min-1")
     return lo, hi
 
 
-def _number(text: str) -> float:
+def _number(text: str, low: float = -math.inf, high: float = math.inf, *,
+            strict: bool = False) -> float:
     try:
         v = float(text)
     except ValueError:
@@ -74,14 +80,23 @@ def _number(text: str) -> float:
     if not math.isfinite(v):
         raise argparse.ArgumentTypeError(f"{text[:40]!r} is not admissible (admissible: a "
                                          "finite number)")
+    if v < low or (strict and v == low) or v > high:
+        parts = [f"{'>' if strict else '>='} {low:g}" if low > -math.inf else "",
+                 f"<= {high:g}" if high < math.inf else ""]
+        rng = " and ".join(p for p in parts if p)
+        raise argparse.ArgumentTypeError(f"{text[:40]!r} is not admissible (admissible: {rng})")
     return v
 
 
-def _positive(text: str) -> float:
-    v = _number(text)
-    if not v > 0:
-        raise argparse.ArgumentTypeError(f"{text[:40]!r} must be > 0")
-    return v
+def _limits(low: float = -math.inf, high: float = math.inf, *, strict: bool = False):
+    """An argparse type: a finite number in ``[low, high]`` (``strict``: ``> low``)."""
+    def parse(text: str) -> float:
+        return _number(text, low, high, strict=strict)
+
+    parse.__name__ = "number"
+    return parse
+
+
 
 
 def _steps(text: str) -> int:
@@ -226,7 +241,8 @@ def _parser() -> argparse.ArgumentParser:
                        description="Modal analysis of the mean-stiffness system.")
     m.add_argument("config", help="TOML file or preset name (e.g. paper-case1)")
     m.add_argument("--json", action="store_true", help="print JSON instead of a table")
-    m.add_argument("--carrier-speed", type=_number, default=0.0, metavar="RPM",
+    m.add_argument("--carrier-speed", type=_limits(-MAX_RPM, MAX_RPM), default=0.0,
+                   metavar="RPM",
                    help="carrier speed for gyroscopic/centripetal terms [min-1] (default 0)")
     m.set_defaults(func=_cmd_modes)
 
@@ -239,12 +255,14 @@ def _parser() -> argparse.ArgumentParser:
     s.add_argument("-f", "--overwrite", action="store_true", help=_OVERWRITE_HELP)
     s.add_argument("--speed", type=_speed_range, metavar="START:END",
                    help="input speed range [min-1], e.g. 0:4000")
-    s.add_argument("--duration", type=_positive, metavar="S", help="run-up duration [s]")
-    s.add_argument("--fs", dest="fs_out", type=_positive, metavar="HZ",
+    s.add_argument("--duration", type=_limits(1e-6, 1e7), metavar="S",
+                   help="run-up duration [s]")
+    s.add_argument("--fs", dest="fs_out", type=_limits(0.0, 1e12, strict=True), metavar="HZ",
                    help="output sample rate [Hz] (default >= 20 kHz)")
-    s.add_argument("--dt", type=_positive, metavar="S", help="integration step [s] (default: "
+    s.add_argument("--dt", type=_limits(0.0, 1.0, strict=True), metavar="S",
+                   help="integration step [s] (default: "
                    "from the highest natural and mesh frequency)")
-    s.add_argument("--torque", dest="input_torque", type=_number, metavar="NM",
+    s.add_argument("--torque", dest="input_torque", type=_limits(-1e12, 1e12), metavar="NM",
                    help="input torque [N m] (default from the description)")
     s.add_argument("--max-steps", type=_steps, default=None, metavar="N",
                    help="time budget: refuse runs of more internal steps (default 1e9, about "
@@ -266,7 +284,7 @@ def _parser() -> argparse.ArgumentParser:
     r.add_argument("-o", "--output", default="gearvib-report", help="output folder "
                    "(default ./gearvib-report)")
     r.add_argument("-f", "--overwrite", action="store_true", help=_OVERWRITE_HELP)
-    r.add_argument("--duration", type=_positive, metavar="S",
+    r.add_argument("--duration", type=_limits(1e-6, 1e7), metavar="S",
                    help="override the run-up duration of a study [s]")
     r.add_argument("-q", "--quiet", action="store_true", help="no progress display")
     r.set_defaults(func=_cmd_report)
@@ -278,7 +296,7 @@ def _parser() -> argparse.ArgumentParser:
     d.add_argument("-o", "--output", default="gearvib-demo",
                    help="output folder (default ./gearvib-demo)")
     d.add_argument("-f", "--overwrite", action="store_true", help=_OVERWRITE_HELP)
-    d.add_argument("--duration", type=_positive, metavar="S",
+    d.add_argument("--duration", type=_limits(1e-6, 1e7), metavar="S",
                    help="run-up duration [s] (default 1; shorter for a quick look)")
     d.add_argument("-q", "--quiet", action="store_true", help="no progress display")
     d.set_defaults(func=_cmd_demo)
@@ -342,5 +360,8 @@ def _show_warning(message, category, filename, lineno, file=None, line=None) -> 
 
 
 def _one_line(exc: BaseException | Warning | str) -> str:
-    text = str(exc).strip()
-    return " ".join(text.split()) if text else type(exc).__name__
+    """The message on one line, control characters escaped (messages may echo input)."""
+    text = " ".join(str(exc).split())
+    if not text:
+        return type(exc).__name__
+    return "".join(c if c.isprintable() else repr(c)[1:-1] for c in text)

@@ -143,11 +143,13 @@ def check_run_size(step: StepChoice, duration: float, *, n_dof: int, n_mesh: int
             "(simulate(max_steps=...), gearvib simulate --max-steps)")
     n_out = math.floor(n_out_f + 1e-9) + 1
     chunk_rows = max(MAX_KERNEL_STEPS, 2 * half + dec + 1) + 2 * half + dec + 1
-    nbytes = 8 * (OUTPUT_COPIES * n_out * max(n_signals, n_stored)
-                  + chunk_rows * n_signals + 4 * taps)
-    if taps * 8 * 4 > 0.25 * nbytes:
-        what = (f"the anti-alias filter ({taps:.3g} taps for decimation {dec:.3g} from "
-                f"1/dt = {1 / step.dt:.4g} Hz to fs_out = {step.fs_out:.4g} Hz)")
+    output = 8 * OUTPUT_COPIES * n_out * max(n_signals, n_stored)
+    filtering = 8 * (chunk_rows * n_signals + 4 * taps)  # taps and the record spanning them
+    nbytes = output + filtering
+    if filtering > output:
+        what = (f"the anti-alias filter ({taps:.3g} taps and a record of as many steps, for "
+                f"the decimation by {dec:.3g} from 1/dt = {1 / step.dt:.4g} Hz to fs_out = "
+                f"{step.fs_out:.4g} Hz)")
         remedy = "raise fs_out (--fs) towards the internal rate, or lower the stiffness/speed"
     else:
         rate = f"fs_out = {step.fs_out:.4g} Hz"

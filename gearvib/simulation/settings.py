@@ -62,9 +62,18 @@ _ONLY = {
 
 MAX_TABLE = 100_000
 """Longest motor characteristic table accepted."""
+MAX_SPEED_RPM = 1e9
+"""Largest speed magnitude accepted [min^-1] (a run that fast is then refused for its size)."""
+MAX_TORQUE = 1e12
+"""Largest torque magnitude accepted [N m] (also the coefficients of ``load_torque``)."""
+MIN_DURATION = 1e-6
+"""Shortest simulated time accepted [s]."""
+MAX_DURATION = 1e7
+"""Longest simulated time accepted [s] (a long run is then refused for its steps or memory)."""
 
 
-def _num(value: Any, key: str, *, low: float | None = None, strict: bool = False) -> float:
+def _num(value: Any, key: str, *, low: float | None = None, strict: bool = False,
+         high: float | None = None) -> float:
     if isinstance(value, bool) or not isinstance(value, int | float):
         raise ConfigError(f"[simulation].{key} must be a number, got {_short(value)}")
     try:
@@ -77,6 +86,9 @@ def _num(value: Any, key: str, *, low: float | None = None, strict: bool = False
     if low is not None and (v < low or (strict and v == low)):
         bound = f"> {low:g}" if strict else f">= {low:g}"
         raise ConfigError(f"[simulation].{key} = {v!r} is not admissible (admissible: {bound})")
+    if high is not None and abs(v) > high:
+        raise ConfigError(f"[simulation].{key} = {v!r} is not admissible (admissible: "
+                          f"|{key.split('.')[-1]}| <= {high:g})")
     return v
 
 
@@ -101,9 +113,9 @@ def _motor(value: Any) -> dict:
     keys = set(value)
     if keys == _MOTOR_KLOSS:
         return {"synchronous_rpm": _num(value["synchronous_rpm"], "motor.synchronous_rpm",
-                                        low=0.0, strict=True),
+                                        low=0.0, strict=True, high=MAX_SPEED_RPM),
                 "breakdown_torque": _num(value["breakdown_torque"], "motor.breakdown_torque",
-                                         low=0.0, strict=True),
+                                         low=0.0, strict=True, high=MAX_TORQUE),
                 "breakdown_slip": _slip(value["breakdown_slip"])}
     if keys == _MOTOR_TABLE:
         out = {}
@@ -111,7 +123,8 @@ def _motor(value: Any) -> dict:
             if not isinstance(value[k], list) or not 2 <= len(value[k]) <= MAX_TABLE:
                 raise ConfigError(f"[simulation].motor.{k} must be a list of 2..{MAX_TABLE} "
                                   "numbers")
-            out[k] = [_num(v, f"motor.{k}") for v in value[k]]
+            out[k] = [_num(v, f"motor.{k}", high=MAX_SPEED_RPM if k == "speed_rpm"
+                           else MAX_TORQUE) for v in value[k]]
         if len(out["speed_rpm"]) != len(out["torque"]):
             raise ConfigError(f"[simulation].motor: speed_rpm ({len(out['speed_rpm'])} values) "
                               f"and torque ({len(out['torque'])}) must be as long")
@@ -168,21 +181,23 @@ def read_run_settings(sim: Mapping[str, Any] | None,
             raise ConfigError(f"[simulation].{key} applies to drive = "
                              f"{' or '.join(repr(d) for d in drives)}, not {drive!r}")
     run: dict[str, Any] = {"drive": drive}
-    run["speed_start_rpm"] = _num(table.get("speed_start_rpm", 0.0), "speed_start_rpm")
-    run["speed_end_rpm"] = (_num(table["speed_end_rpm"], "speed_end_rpm")
+    run["speed_start_rpm"] = _num(table.get("speed_start_rpm", 0.0), "speed_start_rpm",
+                                  high=MAX_SPEED_RPM)
+    run["speed_end_rpm"] = (_num(table["speed_end_rpm"], "speed_end_rpm", high=MAX_SPEED_RPM)
                             if "speed_end_rpm" in table else
                             (None if drive == "motor" else 4000.0))
-    run["duration"] = _num(table.get("duration", 1.0), "duration", low=0.0, strict=True)
-    run["input_torque"] = (_num(table["input_torque"], "input_torque")
+    run["duration"] = _num(table.get("duration", 1.0), "duration", low=MIN_DURATION,
+                           high=MAX_DURATION)
+    run["input_torque"] = (_num(table["input_torque"], "input_torque", high=MAX_TORQUE)
                            if "input_torque" in table else None)
     load = table.get("load_torque")
     if isinstance(load, list | tuple):
         if drive == "speed" or len(load) != 3:
             raise ConfigError("[simulation].load_torque must be a number (speed drive) or "
                              "[T0, c1, c2] (torque and motor drive)")
-        load = [_num(v, "load_torque") for v in load]
+        load = [_num(v, "load_torque", high=MAX_TORQUE) for v in load]
     elif load is not None:
-        load = _num(load, "load_torque")
+        load = _num(load, "load_torque", high=MAX_TORQUE)
     run["load_torque"] = load
     if drive == "speed":
         if run["input_torque"] is not None and load is not None:
@@ -192,12 +207,14 @@ def read_run_settings(sim: Mapping[str, Any] | None,
             run["input_torque"] = 0.0
     if drive == "torque" and run["input_torque"] is None:
         raise ConfigError("[simulation].input_torque is required for drive = 'torque' [N m]")
-    run["load_inertia"] = _num(table.get("load_inertia", 0.0), "load_inertia", low=0.0)
+    run["load_inertia"] = _num(table.get("load_inertia", 0.0), "load_inertia", low=0.0,
+                               high=1e9)
     if "drive_damping" in table and "drive_stiffness" not in table:
         raise ConfigError("[simulation].drive_damping needs drive_stiffness")
-    run["drive_stiffness"] = (_num(table["drive_stiffness"], "drive_stiffness", low=0.0,
+    run["drive_stiffness"] = (_num(table["drive_stiffness"], "drive_stiffness", low=0.0, high=1e40,
                                    strict=True) if "drive_stiffness" in table else None)
-    run["drive_damping"] = (_num(table.get("drive_damping", 0.0), "drive_damping", low=0.0)
+    run["drive_damping"] = (_num(table.get("drive_damping", 0.0), "drive_damping", low=0.0,
+                                 high=1e12)
                             if "drive_stiffness" in table else None)
     if drive == "motor":
         if "motor" not in table:
@@ -211,7 +228,7 @@ def read_run_settings(sim: Mapping[str, Any] | None,
         run["motor"] = None
     if run["input_torque"] is None:  # no single input torque (load_torque given, or a motor)
         del run["input_torque"]
-    run["fs_out"] = (_num(table["fs_out"], "fs_out", low=0.0, strict=True)
+    run["fs_out"] = (_num(table["fs_out"], "fs_out", low=0.0, strict=True, high=1e12)
                      if table.get("fs_out") is not None else None)
     run["dt"] = (_num(table["dt"], "dt", low=0.0, strict=True)
                  if table.get("dt") is not None else None)

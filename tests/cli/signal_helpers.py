@@ -26,9 +26,11 @@ def handlers_installed(pid: int) -> bool:
     return False
 
 
-def temp_files(folder: Path) -> list[Path]:
-    """Temporary files of atomic writes in ``folder`` (any naming, hidden ``.tmp`` files)."""
-    return sorted(p for p in folder.iterdir() if p.name.endswith(".tmp"))
+def temp_files(folder: Path, *, probes: bool = True) -> list[Path]:
+    """Temporary files in ``folder`` (any naming, hidden ``.tmp`` files); ``probes=False``:
+    not the write-test probes of the output checks."""
+    return sorted(p for p in folder.iterdir() if p.name.endswith(".tmp") and (
+        probes or not p.name.startswith(".write-test.")))
 
 
 @dataclass
@@ -63,7 +65,8 @@ def run_and_signal(argv: list[str], cwd: Path, sig: int, *, delay: float | None 
                 moment = f"{delay:.3f} s after start-up"
                 break
             if at_temp_file is not None and any(
-                    tempfiles.parse(p) for p in at_temp_file.iterdir()):
+                    (info := tempfiles.parse(p)) and info[0] != "write-test"
+                    for p in at_temp_file.iterdir()):
                 moment = "while a temporary file was being written"
                 break
             time.sleep(0.001)
