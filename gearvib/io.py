@@ -14,16 +14,19 @@ from __future__ import annotations
 
 import contextlib
 import json
+import math
 import os
 from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import TypeVar
 
+import netCDF4
 import numpy as np
 import xarray as xr
 
 from gearvib import tempfiles
 from gearvib.interrupts import run_abandonable
+from gearvib.memory import RunSizeError, format_bytes, require_memory
 
 __all__ = [
     "GearvibFileError",
@@ -36,6 +39,7 @@ __all__ = [
 T = TypeVar("T")
 
 _TIME_CHUNK = 65536
+_ZLIB_MAX_RATIO = 1032  # deflate's largest compression ratio (258-byte matches in 2 bits)
 
 
 class GearvibFileError(OSError):
@@ -186,6 +190,19 @@ def atomic_write(dest: str | os.PathLike, write: Callable[[Path], T], *,
     return result
 
 
+def _declared_bytes(nc: netCDF4.Dataset) -> int:
+    """Bytes the variables of every group declare (strings count 8 bytes per element)."""
+    total = 0
+    groups = [nc]
+    while groups:
+        g = groups.pop()
+        groups.extend(g.groups.values())
+        for var in g.variables.values():
+            itemsize = var.dtype.itemsize if isinstance(var.dtype, np.dtype) else 8
+            total += math.prod(int(n) for n in var.shape) * max(itemsize, 1)
+    return total
+
+
 def read_run(path: str | os.PathLike) -> xr.Dataset:
     """Read a gearvib netCDF file into memory.
 
@@ -202,18 +219,35 @@ def read_run(path: str | os.PathLike) -> xr.Dataset:
     Raises
     ------
     GearvibFileError
-        If the file is missing, is not readable netCDF, or was not written by gearvib (no
-        ``source`` attribute starting with ``"gearvib"``). The message names the path.
+        If the file is missing, is not readable netCDF, was not written by gearvib (no
+        ``source`` attribute starting with ``"gearvib"``), or its header declares more data
+        than the file can hold (zlib compresses at most 1032:1). The message names the path.
+    gearvib.memory.RunSizeError
+        The declared data do not fit into the memory available (checked before loading).
     """
     p = Path(path)
     if not p.is_file():
         raise GearvibFileError(f"gearvib run file not found: {p}")
+
     def load() -> xr.Dataset:
+        # the declared sizes first, with netCDF4 directly: xarray would load the index
+        # coordinates (time) while opening, whatever size the header claims
+        with netCDF4.Dataset(p, "r") as nc:
+            declared = _declared_bytes(nc)
+        size = p.stat().st_size
+        if declared > _ZLIB_MAX_RATIO * size + 2**20:
+            raise GearvibFileError(
+                f"{p} declares {format_bytes(declared)} of data in {format_bytes(size)}, more "
+                "than zlib can compress into it: its header is corrupt")
+        require_memory(2 * declared, f"reading {p} ({format_bytes(declared)} declared)",
+                       "the run is too large for this machine")
         with xr.open_dataset(p, engine="netcdf4") as ds:
             return ds.load()
 
     try:
         loaded = run_abandonable(load)  # see gearvib.interrupts: xarray's locks and Ctrl-C
+    except (GearvibFileError, RunSizeError):
+        raise
     except Exception as exc:
         raise GearvibFileError(f"cannot read {p} as netCDF: {exc}") from exc
     if not str(loaded.attrs.get("source", "")).startswith("gearvib"):

@@ -30,6 +30,7 @@ __all__ = [
     "host_tag",
     "parse",
     "pid_alive",
+    "prefix",
     "register",
     "remove_own",
     "remove_stale",
@@ -54,12 +55,17 @@ def host_tag() -> str:
     return re.sub(r"[^A-Za-z0-9_]", "_", name)[:32]
 
 
+def prefix(name: str) -> str:
+    """``.<name>.gearvib-<host>-<pid>-``: with :func:`tempfile.mkstemp` (``suffix=".tmp"``,
+    which adds 8 random characters) it gives a name of the pattern."""
+    return f".{name}.gearvib-{host_tag()}-{os.getpid()}-"
+
+
 def temp_path(dest: str | os.PathLike) -> Path:
     """A new temporary file name beside ``dest`` (the file is not created)."""
     dest = Path(dest)
     directory = dest.parent if str(dest.parent) else Path(".")
-    return directory / (f".{dest.name}.gearvib-{host_tag()}-{os.getpid()}-"
-                        f"{secrets.token_hex(4)}.tmp")
+    return directory / f"{prefix(dest.name)}{secrets.token_hex(4)}.tmp"
 
 
 def parse(path: str | os.PathLike) -> tuple[str, str, int] | None:

@@ -17,6 +17,7 @@ import logging
 import math
 import os
 import sys
+import tempfile
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -121,8 +122,9 @@ def check_output_dir(out_dir: str | os.PathLike) -> Path:
         raise ValueError(f"cannot create output folder {str(p)!r}: {str(q)!r} is a file")
     try:
         p.mkdir(parents=True, exist_ok=True)
-        probe = tempfiles.temp_path(p / "write-test")
-        os.close(os.open(probe, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600))
+        fd, probe = tempfile.mkstemp(dir=p, prefix=tempfiles.prefix("write-test"),
+                                     suffix=".tmp")
+        os.close(fd)
         os.unlink(probe)
     except OSError as exc:
         for d in created:  # remove what this call created, deepest first

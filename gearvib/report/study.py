@@ -37,6 +37,7 @@ from typing import Any
 
 from gearvib.config import ConfigError, check_keys, list_presets, load_config
 from gearvib.memory import require_memory
+from gearvib.simulation.settings import MAX_DURATION, MAX_SPEED_RPM, MAX_TORQUE, MIN_DURATION
 
 __all__ = [
     "ANALYSIS_LIMITS",
@@ -66,13 +67,17 @@ ANALYSIS_LIMITS: dict[str, tuple[float, float]] = {
     "stability_points": (2, 20_000),
     "orders": (1, 100),
     "spectrum_peaks": (1, 200),
-    "map_resolution_hz": (0.0, 1e6),
+    "map_resolution_hz": (1e-3, 1e6),
     "tolerance": (0.0, 0.5),
     "threshold_db": (0.0, 200.0),
     "frequency_max_hz": (0.0, 1e9),
 }
 """Admissible ranges of the ``[analysis]`` keys (integers: inclusive; ``stability_points``
 bounds the Floquet chart's computing time, about 1-5 ms per point)."""
+_RUN_LIMITS = {"speed_start_rpm": (0.0, MAX_SPEED_RPM), "speed_end_rpm": (0.0, MAX_SPEED_RPM),
+               "duration": (MIN_DURATION, MAX_DURATION), "input_torque": (-MAX_TORQUE, MAX_TORQUE),
+               "fs_out": (0.0, 1e12)}
+"""Ranges of the run settings (as ``[simulation]``, :mod:`gearvib.simulation.settings`)."""
 MAX_CASES = 100
 """Most cases of one study."""
 MAP_COPIES = 4
@@ -218,8 +223,10 @@ class AnalysisSettings:
                 kw[k] = _integer(table[k], f"{where}.{k}", int(lo), int(hi))
         for k in ("map_resolution_hz", "tolerance"):
             if k in table:
+                lo, hi = ANALYSIS_LIMITS[k]
                 kw[k] = _number(table[k], f"{where}.{k}", positive=True,
-                                maximum=ANALYSIS_LIMITS[k][1] if k != "tolerance" else None)
+                                minimum=lo if k != "tolerance" else None,
+                                maximum=hi if k != "tolerance" else None)
         for k in ("threshold_db", "frequency_max_hz"):
             if k in table:
                 kw[k] = _number(table[k], f"{where}.{k}", minimum=0.0,
@@ -318,8 +325,8 @@ class Study:
 
     def with_duration(self, duration: float) -> Study:
         """A copy whose run-up lasts ``duration`` seconds (same speed range)."""
-        return replace(self, run=replace(self.run, duration=_number(duration, "duration",
-                                                                     positive=True)))
+        return replace(self, run=replace(self.run, duration=_number(
+            duration, "duration", minimum=MIN_DURATION, maximum=MAX_DURATION)))
 
 
 def resolve_run(run: RunSettings, gearset_cfg: dict) -> dict[str, float]:
@@ -340,7 +347,8 @@ def resolve_run(run: RunSettings, gearset_cfg: dict) -> dict[str, float]:
     out = {}
     for k, default in DEFAULT_RUN.items():
         v = given.get(k, sim.get(k, default))
-        out[k] = _number(v, f"run setting {k}")
+        lo, hi = _RUN_LIMITS[k]
+        out[k] = _number(v, f"run setting {k}", minimum=lo, maximum=hi)
     if not out["duration"] > 0:
         raise ConfigError(f"duration = {out['duration']!r}; admissible: > 0 s")
     if out["speed_end_rpm"] <= out["speed_start_rpm"] or out["speed_start_rpm"] < 0:
@@ -445,7 +453,8 @@ def check_report_size(n_samples: int, fs: float, settings: AnalysisSettings,
         Naming ``map_overlap`` and ``map_resolution_hz``, the frames and the memory needed.
     """
     n = max(int(n_samples), 1)
-    seg = max(4, min(n, round(1.5 * fs / settings.map_resolution_hz)))
+    seg_f = 1.5 * fs / settings.map_resolution_hz
+    seg = max(4, min(n, round(seg_f) if math.isfinite(seg_f) else n))
     hop = max(1, round(seg * (1.0 - settings.map_overlap)))
     frames = (n - seg) // hop + 1
     bins = seg // 2 + 1

@@ -180,6 +180,9 @@ def choose_step(
                 fs_out = fs_int / max(1, math.floor(fs_int / lo + 1e-9))
             _check_fs_out(fs_out, f_mesh_max, speed_max_rpm)
         ratio = fs_int / float(fs_out)
+        if not math.isfinite(ratio):
+            raise ConfigError(f"fs_out = {fs_out:.6g} Hz is not admissible with dt = {dt:.6g} "
+                              "s: the decimation 1/(dt fs_out) overflows (give a larger fs_out)")
         dec = round(ratio)
         if dec < 1 or abs(ratio - dec) > 1e-9 * ratio:
             raise ConfigError(f"1/dt = {fs_int:.9g} Hz (dt, --dt) is not an integer multiple "
@@ -190,10 +193,12 @@ def choose_step(
             _nice_rates(lo, 1e13) or [math.ceil(lo)])
     else:
         fs = fs_out
-    ratio = 1.0 / (dt_rec * fs)
+    denom = dt_rec * fs
+    ratio = 1.0 / denom if denom > 0 else math.inf
     if not math.isfinite(ratio):
-        raise ConfigError(f"the internal step {dt_rec:.3g} s is too small for fs_out = "
-                          f"{fs:.6g} Hz: a stiffness or speed of the description is out of "
-                          "range")
+        raise ConfigError(f"fs_out = {fs:.6g} Hz is not admissible for the internal step "
+                          f"{dt_rec:.3g} s: the decimation 1/(dt fs_out) overflows (give a "
+                          "larger fs_out; a tiny step comes from a stiffness or speed out of "
+                          "range)")
     dec = max(min_decimation, math.ceil(ratio - 1e-9))
     return StepChoice(1.0 / (dec * fs), fs, dec, dt_rec, dt_adm, f_nat_max, f_mesh_max)

@@ -7,17 +7,24 @@ misplaced key inserted, a value replaced by a value of another type (strings for
 by an extreme number (NaN, +-inf, 1e308, 5e-324, 0, -1, an integer of 320 digits) or scaled
 by 1e-300..1e300. The result goes the way of ``gearvib modes`` / ``simulate`` up to the run:
 :func:`gearset_from_dict`, :func:`assemble`, :func:`modal_analysis`, and the ``[simulation]``
-table through :func:`read_run_settings` and :func:`conditions_from_settings`. Property: only
-documented errors occur (:mod:`tests.gearvib.fuzz_support`), each within 30 s.
+table through :func:`read_run_settings` and :func:`conditions_from_settings`. The study recipes
+of ``reports/`` are mutated the same way, written as TOML and read with :func:`load_study`,
+followed by the checks a study makes before its first simulation (every case's description, run
+settings and map size). Property: only documented errors occur
+(:mod:`tests.gearvib.fuzz_support`), each within 30 s.
 
-``GEARVIB_FUZZ_EXAMPLES`` sets the number of examples (default 150 here, fixed seed); the
-README reports the long campaign.
+``GEARVIB_FUZZ_EXAMPLES`` sets the number of examples (default 150 and 60 here, fixed seed);
+the README reports the long campaign.
 """
 
 from __future__ import annotations
 
 import copy
+import json
 import math
+import tempfile
+import tomllib
+from pathlib import Path
 from typing import Any
 
 import pytest
@@ -27,12 +34,15 @@ from hypothesis import strategies as st
 from gearvib.assembly import assemble
 from gearvib.config import gearset_from_dict, list_presets, load_config
 from gearvib.modal import modal_analysis
+from gearvib.report.study import check_report_size, load_study, resolve_run
 from gearvib.simulation.settings import conditions_from_settings, read_run_settings
 from tests.gearvib import fuzz_support as fz
 from tests.gearvib.test_literature_models import lin_parker
 from tests.gearvib.two_stage_sets import other_stage, paper_stage, two_stage_config
 
+REPO = Path(__file__).resolve().parents[2]
 PRESETS = {name: load_config(name)[0] for name in list_presets()}
+RECIPES = {p.name: tomllib.loads(p.read_text()) for p in sorted((REPO / "reports").glob("*.toml"))}
 # a literature model (type = "general", [[body]] / [[mesh]] / [[coupling]]) and a two-stage set
 # with its own stages, as the tests build them
 PRESETS["general: lin-parker"] = lin_parker()
@@ -50,7 +60,8 @@ def _keys(obj: Any, out: set[str]) -> set[str]:
     return out
 
 
-KEY_NAMES = sorted(set().union(*(_keys(c, set()) for c in PRESETS.values()))
+KEY_NAMES = sorted(set().union(*(_keys(c, set()) for c in [*PRESETS.values(),
+                                                             *RECIPES.values()]))
                    | {"colour", "z_sun2", "n_planet", "Mass", ""})
 
 EXTREMES = [0, 1, -1, 2, 3, 33, 40, -114, 114, 10**320, -(10**30), 2**63, 33.9, -0.0, 0.5,
@@ -219,3 +230,75 @@ def test_integers_stay_integers():
     cfg = copy.deepcopy(PRESETS["paper-case1"])
     cfg["geometry"]["z_sun"] = 33.0
     assert assemble(gearset_from_dict(cfg)).n_mesh == 6
+
+
+# ------------------------------------------------------------------------------ study recipes
+
+
+def _toml_value(v: Any) -> str:
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, int):
+        return str(v)
+    if isinstance(v, float):
+        return "nan" if math.isnan(v) else ("inf" if v > 0 else "-inf") if math.isinf(v) \
+            else repr(v)
+    if isinstance(v, str):
+        return json.dumps(v)
+    if isinstance(v, list):
+        return "[" + ", ".join(_toml_value(x) for x in v if x is not None) + "]"
+    if isinstance(v, dict):
+        return "{" + ", ".join(f"{json.dumps(str(k))} = {_toml_value(x)}" for k, x in v.items()
+                               if x is not None) + "}"
+    return '"none"'
+
+
+def to_toml(doc: dict) -> str:
+    """TOML text of a (mutated) recipe: tables as [sections], nested tables inline."""
+    lines = [f"{json.dumps(str(k))} = {_toml_value(v)}" for k, v in doc.items()
+             if not isinstance(v, dict) and v is not None]
+    for k, v in doc.items():
+        if isinstance(v, dict):
+            lines.append(f"[{json.dumps(str(k))}]")
+            lines += [f"{json.dumps(str(kk))} = {_toml_value(vv)}" for kk, vv in v.items()
+                      if vv is not None]
+    return "\n".join(lines) + "\n"
+
+
+def check_study(path: Path) -> None:
+    """What ``gearvib report STUDY.toml`` checks before its first simulation."""
+    study = load_study(path)
+    for case in study.cases:
+        cfg, base = case.load()
+        gearset_from_dict(cfg, base=base)
+        run = resolve_run(study.run, cfg)
+        check_report_size(int(run["duration"] * run["fs_out"]) + 1, run["fs_out"],
+                          study.analysis, case.name)
+
+
+def test_every_recipe_passes_its_checks_unmutated(tmp_path):
+    for name, doc in RECIPES.items():
+        p = tmp_path / name
+        p.write_text(to_toml(doc))
+        check_study(p)
+        fz.record("study recipes: unmutated", None)
+    assert len(RECIPES) >= 2
+
+
+@settings(max_examples=fz.examples(60), deadline=None, database=None,
+          derandomize=fz.derandomize(),
+          suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
+@given(name=st.sampled_from(sorted(RECIPES)), mutations=st.lists(mutation, min_size=1,
+                                                                 max_size=3))
+def test_mutated_study_recipes_give_only_documented_errors(name, mutations):
+    doc = mutate(RECIPES[name], mutations)
+    err = None
+    with tempfile.TemporaryDirectory(prefix="gearvib-recipe-fuzz-") as d:
+        p = Path(d) / "study.toml"
+        p.write_text(to_toml(doc))
+        try:
+            with fz.time_limit(30.0):
+                check_study(p)
+        except Exception as exc:
+            err = exc
+    fz.check("study recipes", err, (name, mutations))

@@ -194,3 +194,24 @@ def test_a_fir_of_the_admitted_size_is_still_alias_free():
     taps = decimation_filter(10)
     w, h = scipy.signal.freqz(taps, worN=8192, fs=1.0)
     assert np.all(20 * np.log10(np.abs(h[w >= 0.05]) + 1e-300) <= -80.0)
+
+
+@pytest.mark.skipif(sys.platform != "linux", reason="RLIMIT_AS")
+def test_a_run_file_declaring_2_31_records_is_refused_before_loading(tmp_path):
+    """A netCDF-3 header claiming 2^31 - 1 records of a 380-byte file: xarray would load the
+    time index (16 GiB) while opening; the declared size is checked first."""
+    import xarray as xr
+
+    ds = xr.Dataset({"normal_force": (("time",), np.arange(10.0))},
+                    coords={"time": np.arange(10.0)}, attrs={"source": "gearvib test"})
+    good = tmp_path / "small.nc"
+    ds.to_netcdf(good, format="NETCDF3_CLASSIC", unlimited_dims=["time"])
+    data = bytearray(good.read_bytes())
+    assert data[:4] == b"CDF\x01"
+    data[4:8] = (2**31 - 1).to_bytes(4, "big")  # numrecs
+    bad = tmp_path / "huge.nc"
+    bad.write_bytes(bytes(data))
+    code, err, _ = limited_gearvib(["report", str(bad), "-o", "rep", "-q"], tmp_path)
+    assert code == 2, err
+    assert "huge.nc declares 32 GiB of data in" in err and "header is corrupt" in err, err
+    assert not (tmp_path / "rep").exists()
