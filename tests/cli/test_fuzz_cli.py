@@ -19,7 +19,7 @@ argument and output checks, and a stand-in for the simulations and the rendering
 study makes before its first simulation: every case's description, run settings and map size;
 for run files: reading them) -- the full commands are tested in ``test_cli.py``.
 
-``GEARVIB_FUZZ_EXAMPLES`` sets the number of examples (default 60 here, fixed seed).
+``GEARVIB_FUZZ_EXAMPLES`` sets the number of examples (default 500 here, fixed seed).
 """
 
 from __future__ import annotations
@@ -162,7 +162,7 @@ class CliOutcome(Exception):
     """An outcome that breaks the command line's promises."""
 
 
-@settings(max_examples=fz.examples(60), deadline=None, database=None,
+@settings(max_examples=fz.examples(500), deadline=None, database=None,
           derandomize=fz.derandomize(),
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 @given(args=argv)

@@ -13,7 +13,7 @@ followed by the checks a study makes before its first simulation (every case's d
 settings and map size). Property: only documented errors occur
 (:mod:`tests.gearvib.fuzz_support`), each within 30 s.
 
-``GEARVIB_FUZZ_EXAMPLES`` sets the number of examples (default 150 and 60 here, fixed seed);
+``GEARVIB_FUZZ_EXAMPLES`` sets the number of examples (default 1000 and 300 here, fixed seed);
 the README reports the long campaign.
 """
 
@@ -177,7 +177,7 @@ def test_every_preset_builds_unmutated():
     assert len(PRESETS) >= 8
 
 
-@settings(max_examples=fz.examples(150), deadline=None, database=None,
+@settings(max_examples=fz.examples(1000), deadline=None, database=None,
           derandomize=fz.derandomize(),
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 @given(name=st.sampled_from(sorted(PRESETS)), mutations=st.lists(mutation, min_size=1,
@@ -285,7 +285,7 @@ def test_every_recipe_passes_its_checks_unmutated(tmp_path):
     assert len(RECIPES) >= 2
 
 
-@settings(max_examples=fz.examples(60), deadline=None, database=None,
+@settings(max_examples=fz.examples(300), deadline=None, database=None,
           derandomize=fz.derandomize(),
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 @given(name=st.sampled_from(sorted(RECIPES)), mutations=st.lists(mutation, min_size=1,

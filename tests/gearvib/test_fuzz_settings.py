@@ -12,7 +12,7 @@ size check) and :meth:`RunUpResult.to_dataset`. Property: only documented errors
 :class:`~gearvib.config.ConfigError` (with :class:`~gearvib.memory.RunSizeError`) for bad
 settings, :class:`~gearvib.simulate.SimulationError` for a real blow-up -- each within 60 s.
 
-``GEARVIB_FUZZ_EXAMPLES`` sets the number of examples (default 40 here, fixed seed).
+``GEARVIB_FUZZ_EXAMPLES`` sets the number of examples (default 500 here, fixed seed).
 """
 
 from __future__ import annotations
@@ -105,7 +105,7 @@ def _report():
     fz.write_report()
 
 
-@settings(max_examples=fz.examples(40), deadline=None, database=None,
+@settings(max_examples=fz.examples(500), deadline=None, database=None,
           derandomize=fz.derandomize(),
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 @given(name=st.sampled_from(sorted(CONFIGS)), edits=st.lists(edit, min_size=1, max_size=4),
