@@ -6,21 +6,26 @@ admissible, so that a user looking at a measured file knows what to fix.
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 
 __all__ = [
+    "renamed",
     "require_block_size",
     "require_choice",
     "require_finite",
     "require_finite_blocks",
     "require_int",
+    "require_mass_matrix",
     "require_monotonic",
     "require_positive",
     "require_same_length",
+    "require_square",
     "sample_rate",
+    "time_or_rate",
     "uniform_rate",
 ]
 
@@ -177,3 +182,70 @@ def require_finite_blocks(x: np.ndarray, name: str) -> None:
                 f"{name}: non-finite value (NaN or inf) at time sample {idx}; only finite "
                 "values are admissible (gap-fill or trim the channel first)"
             )
+
+
+def renamed(
+    new: Any, old: Any, new_name: str, old_name: str, function: str, stacklevel: int = 3
+) -> Any:
+    """Value of a renamed keyword: ``new``, or ``old`` with a :class:`FutureWarning`.
+
+    The old name is accepted for one release; the warning is attributed to the caller of
+    ``function`` (``stacklevel=3`` when ``function`` calls this directly).
+    """
+    if old is None:
+        return new
+    if new is not None:
+        raise ValueError(f"{function}: give {new_name}= only ({old_name}= is its old name)")
+    warnings.warn(
+        f"{function}: {old_name}= is deprecated and will be removed in the next release; "
+        f"use {new_name}=",
+        FutureWarning,
+        stacklevel=stacklevel,
+    )
+    return old
+
+
+def time_or_rate(fs: Any, time: Any, function: str) -> tuple[Any, Any]:
+    """``(fs, time)``, accepting the old call with the time axis as second argument.
+
+    Every function now takes ``fs`` second (as MATLAB does); an array there is taken as
+    ``time`` with a :class:`FutureWarning` for one release.
+    """
+    if fs is not None and np.ndim(fs) >= 1 and np.size(fs) > 1:
+        if time is not None:
+            raise ValueError(f"{function}: fs must be a number (Hz); the time axis goes to time=")
+        warnings.warn(
+            f"{function}: a time axis as the second argument is deprecated and will be an "
+            "error in the next release; the second argument is fs (Hz): pass time=<axis>",
+            FutureWarning,
+            stacklevel=3,
+        )
+        return None, fs
+    return fs, time
+
+
+def require_square(a: Any, name: str, n: int | None = None) -> np.ndarray:
+    """A finite square matrix (a scalar is 1 x 1), of size ``n`` when given."""
+    arr = require_finite(a, name)
+    if arr.ndim == 0:
+        arr = arr.reshape(1, 1)
+    if arr.ndim != 2 or arr.shape[0] != arr.shape[1]:
+        raise ValueError(f"{name} must be a square (n, n) matrix; got shape {arr.shape}")
+    if n is not None and arr.shape[0] != n:
+        raise ValueError(
+            f"{name} has shape {arr.shape} but M is ({n}, {n}); all matrices must have the "
+            "same size"
+        )
+    return arr
+
+
+def require_mass_matrix(M: Any) -> np.ndarray:
+    """The mass matrix ``M``: finite, square, symmetric and positive definite."""
+    m = require_square(M, "M")
+    if not np.allclose(m, m.T, rtol=1e-10, atol=1e-14 * np.abs(m).max()):
+        raise ValueError("M must be symmetric (M == M.T within 1e-10 relative)")
+    try:
+        np.linalg.cholesky(m)
+    except np.linalg.LinAlgError:
+        raise ValueError("M must be positive definite (all eigenvalues > 0)") from None
+    return m

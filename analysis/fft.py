@@ -4,8 +4,11 @@ Every spectral routine in :mod:`analysis` calls :func:`rfft` / :func:`irfft` fro
 backend, the thread count and the plan cache are controlled in one place.
 
 * **Backend.** pyFFTW (FFTW 3) when it can be imported, otherwise :mod:`scipy.fft`
-  (:func:`backend` tells which one is active). Both give the unnormalised forward transform
-  and the ``1/n``-normalised inverse, like :mod:`numpy.fft`.
+  (:func:`backend` tells which one is active). Setting the environment variable
+  ``GEARVIB_FFT=scipy`` before the first import forces :mod:`scipy.fft` (BSD-licensed
+  pocketfft) even when pyFFTW is installed: pyFFTW's wheels bundle FFTW, which is GPL.
+  Both give the unnormalised forward transform and the ``1/n``-normalised inverse, like
+  :mod:`numpy.fft`.
 * **Plans.** pyFFTW builder objects are cached per ``(kind, shape, dtype, n, axis, threads,
   thread id)``. The thread id is part of the key because only FFTW's *execute* step is
   thread-safe, not the planner (pyFFTW issues #343/#377): each thread gets its own objects.
@@ -67,7 +70,10 @@ _CACHE_MAX_BYTES = 1 << 28  # buffers pinned by all cached plans together (256 M
 
 
 def _load_pyfftw() -> ModuleType | None:
-    """Import ``pyfftw.builders``; return the ``pyfftw`` module or ``None`` if unavailable."""
+    """Import ``pyfftw.builders``; return the ``pyfftw`` module or ``None`` if unavailable or
+    if ``GEARVIB_FFT=scipy`` asks for the scipy.fft backend."""
+    if os.environ.get("GEARVIB_FFT", "").strip().lower() == "scipy":
+        return None
     try:
         import pyfftw
         import pyfftw.builders  # the submodule must be importable too

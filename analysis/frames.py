@@ -15,15 +15,11 @@ from typing import Any
 
 import numpy as np
 
-from analysis.checks import (
-    BLOCK_SAMPLES,
-    require_block_size,
-    require_finite_blocks,
-    uniform_rate,
-)
+from analysis.checks import require_block_size
 from analysis.fft import rfft
+from analysis.inputs import Reference, Signal, moving_range, reference_input, signal_input
 from analysis.levels import line_factors
-from analysis.resample import AngleResampler, speed_resampler
+from analysis.resample import Tracking, tracking
 from analysis.windows import WindowSpec, get_window, window_info
 
 __all__ = [
@@ -31,14 +27,11 @@ __all__ = [
     "FrequencyPlan",
     "OrderPlan",
     "Plan",
-    "check_speed",
     "frame_coords",
     "frame_layout",
     "frame_ranges",
     "frequency_plan",
     "order_plan",
-    "rate_and_start",
-    "signal_1d",
     "stft_into",
     "values_at",
     "window_length",
@@ -70,28 +63,6 @@ def frame_coords(
     }
 
 
-def check_speed(rpm: Any, n: int, message: str | None = None) -> np.ndarray:
-    """``rpm`` as an array of ``n`` finite values, checked block-wise (no copy).
-
-    With ``message`` (formatted with ``i`` and ``value``) every value must also be > 0.
-    """
-    r = np.asarray(rpm)
-    if r.ndim != 1 or r.size != n:
-        raise ValueError(
-            f"sample-count mismatch (x: {n}, rpm: {r.size}); rpm must be 1-D, one value per "
-            "sample of x"
-        )
-    require_finite_blocks(r, "rpm")
-    if message is None:
-        return r
-    for a in range(0, n, BLOCK_SAMPLES):
-        bad = np.flatnonzero(r[a : a + BLOCK_SAMPLES] <= 0)
-        if bad.size:
-            i = a + int(bad[0])
-            raise ValueError(message.format(i=i, value=r[i]))
-    return r
-
-
 def stft_into(
     x: np.ndarray,
     w: np.ndarray,
@@ -100,7 +71,14 @@ def stft_into(
     amplitude: str,
     scale: str,
 ) -> None:
-    """Fill ``out[frame, line]`` with the scaled short-time spectrum of 1-D ``x``, block-wise."""
+    """Fill ``out[..., frame, line]`` with the scaled short-time spectra of ``x[..., time]``.
+
+    Channel by channel, each exactly as a single channel, and block-wise.
+    """
+    if x.ndim > 1:
+        for ch in np.ndindex(*x.shape[:-1]):
+            stft_into(x[ch], w, step, out[ch], amplitude, scale)
+        return
     seg = w.size
     frames = np.lib.stride_tricks.sliding_window_view(x, seg)[::step]
     n_frames = out.shape[0]
@@ -126,6 +104,7 @@ def stft_into(
 
 
 def frame_layout(n: int, seg: int, overlap: float) -> tuple[int, int]:
+    """Hop and number of frames of ``seg`` samples with ``overlap`` in ``n`` samples."""
     if not 0.0 <= float(overlap) < 1.0:
         raise ValueError(f"overlap = {overlap!r} is not admissible: must be in [0, 1)")
     step = max(1, round(seg * (1.0 - float(overlap))))
@@ -133,6 +112,7 @@ def frame_layout(n: int, seg: int, overlap: float) -> tuple[int, int]:
 
 
 def window_length(window: WindowSpec, rate: float, resolution: float, n: int, name: str) -> int:
+    """Window length whose ENBW is ``resolution`` at ``rate`` (at most ``n``)."""
     if not np.isfinite(resolution) or resolution <= 0:
         raise ValueError(f"{name} = {resolution!r} is not admissible: must be finite and > 0")
     enbw = window_info(window, 4096).enbw_bins
@@ -145,37 +125,8 @@ def window_length(window: WindowSpec, rate: float, resolution: float, n: int, na
     return min(seg, n)  # record too short: one estimate over the whole record (MATLAB)
 
 
-def signal_1d(x: Any, name: str) -> np.ndarray:
-    arr = np.asarray(x)
-    if np.iscomplexobj(arr) or not np.issubdtype(arr.dtype, np.number):
-        raise ValueError(f"{name} must be a real numeric array; got dtype {arr.dtype}")
-    if arr.ndim != 1:
-        raise ValueError(f"{name} must be 1-D (one channel); got shape {arr.shape}")
-    require_finite_blocks(arr, name)
-    return arr
-
-
-def rate_and_start(fs: float | None, time: Any, n: int) -> tuple[float, float]:
-    """Sample rate and start time from ``fs`` and/or ``time`` (checked against each other)."""
-    if time is None:
-        if fs is None:
-            raise ValueError("fs (Hz, > 0) or time (s) is required")
-        fs = float(fs)
-        if not np.isfinite(fs) or fs <= 0:
-            raise ValueError(f"fs = {fs!r} is not admissible: must be finite and > 0 Hz")
-        return fs, 0.0
-    t = np.asarray(time)
-    if t.ndim != 1 or t.size != n:
-        raise ValueError(f"sample-count mismatch (x: {n}, time: {t.size})")
-    fs_t = uniform_rate(t, "time")
-    if fs is not None and abs(float(fs) - fs_t) > 1e-6 * fs_t:
-        raise ValueError(
-            f"sample-rate mismatch: fs = {fs!r} Hz but the time axis gives {fs_t:.9g} Hz"
-        )
-    return fs_t, float(t[0])
-
-
 def values_at(frac_index: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Linear interpolation of ``v`` at fractional indices."""
     i = np.clip(np.floor(frac_index).astype(np.int64), 0, v.size - 2)
     u = frac_index - i
     return v[i] * (1.0 - u) + v[i + 1] * u
@@ -198,10 +149,25 @@ class Plan:
         Samples per second (frequency map) or per revolution (order map).
     block : int
         Samples per block (a block always holds at least one frame).
+    signal : Signal
+        The checked input (channels, units, name).
+    reference : str
+        Label of the speed reference.
+    notes : tuple of str
+        What was done beyond the request (standstill left out).
     """
 
     def __init__(
-        self, seg: int, step: int, n_frames: int, window: WindowSpec, rate: float, block: int
+        self,
+        seg: int,
+        step: int,
+        n_frames: int,
+        window: WindowSpec,
+        rate: float,
+        block: int,
+        signal: Signal,
+        reference: str = "",
+        notes: tuple[str, ...] = (),
     ) -> None:
         self.seg, self.step, self.n_frames = seg, step, n_frames
         self.window = window
@@ -209,6 +175,9 @@ class Plan:
         self.w = get_window(window, seg)
         self.rate = rate
         self.block = block
+        self.signal = signal
+        self.reference = reference
+        self.notes = notes
 
     @property
     def axis(self) -> np.ndarray:
@@ -222,61 +191,75 @@ class Plan:
     def blocks(self) -> Iterator[tuple[int, int, np.ndarray, np.ndarray, np.ndarray]]:
         """``(k0, k1, samples, time, rpm)`` for consecutive ranges of frames ``[k0, k1)``.
 
-        ``samples`` spans frames ``k0 .. k1 - 1``; ``time`` [s] and ``rpm`` [min-1] are at
-        their centres.
+        ``samples`` (shape ``(*channels, n)``) spans frames ``k0 .. k1 - 1``; ``time`` [s]
+        and ``rpm`` [min-1] are at their centres.
         """
         raise NotImplementedError
 
 
 class FrequencyPlan(Plan):
-    """Frames of an rpm-frequency map: the time signal itself."""
+    """Frames of an rpm-frequency map: the time signal itself.
+
+    The speed of a frame is the speed interpolated at its centre (rpm reference) or its mean
+    speed, the angle it spans over its duration (angle reference).
+    """
 
     def __init__(
         self,
-        x: np.ndarray,
-        rpm: np.ndarray,
-        fs: float,
-        t0: float,
+        signal: Signal,
+        ref: Reference,
         seg: int,
         step: int,
         n_frames: int,
         window: WindowSpec,
         block: int,
     ) -> None:
-        super().__init__(seg, step, n_frames, window, fs, block)
-        self.x, self.rpm, self.t0 = x, rpm, t0
+        super().__init__(seg, step, n_frames, window, signal.fs, block, signal, ref.label)
+        self.x, self.ref, self.t0 = signal.values, ref, signal.t0
+
+    def frame_speeds(self, k0: int, k1: int) -> tuple[np.ndarray, np.ndarray]:
+        """Centre time [s] and speed [min-1] of frames ``[k0, k1)``."""
+        centre = self.centres(k0, k1)
+        if self.ref.kind == "rpm":
+            rpm = values_at(centre, self.ref.values)
+        else:
+            first = np.arange(k0, k1) * self.step
+            th = self.ref.values
+            span = np.asarray(th[first + self.seg - 1], float) - np.asarray(th[first], float)
+            rpm = span * (self.rate * 60.0 / (2.0 * np.pi * (self.seg - 1)))
+        return self.t0 + centre / self.rate, rpm
 
     def blocks(self) -> Iterator[tuple[int, int, np.ndarray, np.ndarray, np.ndarray]]:
         for k0, k1 in frame_ranges(self.n_frames, self.seg, self.step, self.block):
-            centre = self.centres(k0, k1)
-            samples = self.x[k0 * self.step : (k1 - 1) * self.step + self.seg]
-            yield k0, k1, samples, self.t0 + centre / self.rate, values_at(centre, self.rpm)
+            samples = self.x[..., k0 * self.step : (k1 - 1) * self.step + self.seg]
+            yield k0, k1, samples, *self.frame_speeds(k0, k1)
 
 
 class OrderPlan(Plan):
-    """Frames of an rpm-order map: the signal resampled to constant angle, block by block."""
+    """Frames of an rpm-order map: the signal resampled to constant angle, block by block.
+
+    The speed of a frame is the speed interpolated at its centre time (rpm reference) or, for
+    an angle reference, the revolutions over the time they take, symmetric about the frame's
+    centre angle and over at most one revolution (which averages out tooth-to-tooth and
+    once-per-revolution ripple of a tacho angle).
+    """
 
     def __init__(
-        self,
-        resampler: AngleResampler,
-        rpm: np.ndarray,
-        fs: float,
-        t0: float,
-        seg: int,
-        step: int,
-        n_frames: int,
-        window: WindowSpec,
+        self, tracking: Tracking, seg: int, step: int, n_frames: int, window: WindowSpec,
         block: int,
-    ) -> None:
-        super().__init__(seg, step, n_frames, window, float(resampler.samples_per_rev), block)
-        self.resampler, self.rpm, self.fs, self.t0 = resampler, rpm, fs, t0
-
-    def _speed_at(self, tc: np.ndarray) -> np.ndarray:
-        """Speed at the instants ``tc``, interpolated linearly between samples."""
-        return values_at((tc - self.t0) * self.fs, self.rpm)
+    ) -> None:  # fmt: skip
+        res = tracking.resampler
+        super().__init__(
+            seg, step, n_frames, window, float(res.samples_per_rev), block, tracking.signal,
+            tracking.reference.label, tracking.notes,
+        )  # fmt: skip
+        self.tracking = tracking
+        self.resampler = res
+        self.fs, self.t0 = tracking.signal.fs, tracking.t0
 
     def blocks(self) -> Iterator[tuple[int, int, np.ndarray, np.ndarray, np.ndarray]]:
         m = self.resampler.n_out
+        rpm = self.tracking.rpm
         for k0, k1 in frame_ranges(self.n_frames, self.seg, self.step, self.block):
             j0 = k0 * self.step
             samples, times = self.resampler.block(j0, (k1 - 1) * self.step + self.seg)
@@ -284,63 +267,75 @@ class OrderPlan(Plan):
             i = np.clip(np.floor(centre).astype(np.int64), 0, m - 2)
             u = centre - i
             tc = times[i - j0] * (1.0 - u) + times[i - j0 + 1] * u
-            yield k0, k1, samples, tc, self._speed_at(tc)
+            if rpm is not None:
+                speed = values_at((tc - self.t0) * self.fs, rpm)
+            else:  # revolutions over time, symmetric about the centre (up to one revolution)
+                q = max(1, min((self.seg - 1) // 2, int(self.rate) // 2))
+                span = values_at(centre - j0 + q, times) - values_at(centre - j0 - q, times)
+                speed = (2 * q / self.rate * 60.0) / span
+            yield k0, k1, samples, tc, speed
 
 
 def frequency_plan(
     x: Any,
     fs: float | None,
-    rpm: Any,
+    rpm: Any = None,
     *,
+    angle: Any = None,
     resolution: float | None = None,
     window: WindowSpec = "hann",
     overlap: float = 0.5,
     time: Any = None,
-    name: str = "x",
+    axis: int | None = None,
+    units: str | None = None,
+    name: str | None = None,
     block_size: int | None = None,
 ) -> FrequencyPlan:
-    """Checked inputs and frame layout of :func:`rpm_frequency_map`."""
-    arr = signal_1d(x, name)
-    n = arr.size
-    r = check_speed(rpm, n)
-    rate, t0 = rate_and_start(fs, time, n)
+    """Checked inputs and frame layout of :func:`analysis.maps.rpm_frequency_map`."""
+    lengths = tuple(np.shape(r)[0] for r in (rpm, angle) if r is not None and np.ndim(r) == 1)
+    sig = signal_input(x, fs, time=time, axis=axis, units=units, name=name, lengths=lengths)
+    ref = reference_input(rpm, angle, sig.n, required=True, signal=sig)
+    assert ref is not None
+    if ref.kind == "angle":
+        moving_range(ref, sig.fs, sig.t0, 0.0)  # checks the angle never decreases
     block = require_block_size(block_size)
-    res = rate / 128.0 if resolution is None else float(resolution)
-    seg = window_length(window, rate, res, n, "resolution")
-    step, n_frames = frame_layout(n, seg, overlap)
-    return FrequencyPlan(arr, r, rate, t0, seg, step, n_frames, window, block)
+    res = sig.fs / 128.0 if resolution is None else float(resolution)
+    seg = window_length(window, sig.fs, res, sig.n, "resolution")
+    step, n_frames = frame_layout(sig.n, seg, overlap)
+    return FrequencyPlan(sig, ref, seg, step, n_frames, window, block)
 
 
 def order_plan(
     x: Any,
     fs: float | None,
-    rpm: Any,
+    rpm: Any = None,
     *,
+    angle: Any = None,
     resolution: float | None = None,
     window: WindowSpec = "flattop",
     overlap: float = 0.5,
     samples_per_rev: int | None = None,
     max_order: float | None = None,
     time: Any = None,
-    name: str = "x",
+    axis: int | None = None,
+    min_rpm: float | None = None,
+    units: str | None = None,
+    name: str | None = None,
     block_size: int | None = None,
 ) -> OrderPlan:
-    """Checked inputs, angular resampler and frame layout of :func:`rpm_order_map`."""
-    arr = signal_1d(x, name)
-    n = arr.size
-    r = check_speed(
-        rpm,
-        n,
-        "rpm must be > 0 for order tracking (angle strictly increasing); rpm[{i}] = {value}",
-    )
-    rate, t0 = rate_and_start(fs, time, n)
-    if n < 8:
-        raise ValueError(f"{name}: needs at least 8 samples for angular resampling")
+    """Checked inputs, angular resampler and frame layout of :func:`analysis.maps.rpm_order_map`.
+
+    ``resolution`` [orders] defaults to ``samples_per_rev / 256`` (MATLAB ``rpmordermap``).
+    """
+    lengths = tuple(np.shape(r)[0] for r in (rpm, angle) if r is not None and np.ndim(r) == 1)
+    sig = signal_input(x, fs, time=time, axis=axis, units=units, name=name, lengths=lengths)
+    ref = reference_input(rpm, angle, sig.n, required=True, signal=sig)
+    assert ref is not None
     block = require_block_size(block_size)
-    resampler = speed_resampler(arr, r, samples_per_rev, max_order, block, fs=rate, t0=t0)
-    spr = resampler.samples_per_rev
+    tr = tracking(sig, ref, samples_per_rev, max_order, block, min_rpm)
+    spr = tr.resampler.samples_per_rev
     res = spr / 256.0 if resolution is None else float(resolution)
-    m = resampler.n_out
+    m = tr.resampler.n_out
     seg = window_length(window, float(spr), res, m, "resolution")
     step, n_frames = frame_layout(m, seg, overlap)
-    return OrderPlan(resampler, r, rate, t0, seg, step, n_frames, window, block)
+    return OrderPlan(tr, seg, step, n_frames, window, block)

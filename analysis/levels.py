@@ -9,22 +9,57 @@ that; :func:`power_of` converts any of them, linear or dB, back to power.
 
 from __future__ import annotations
 
+import warnings
+from typing import Any
+
 import numpy as np
 
-from analysis.checks import require_choice
+from analysis.checks import renamed, require_choice
 
-__all__ = ["SCALINGS", "line_factors", "power_of", "to_db", "units_of"]
+__all__ = [
+    "AMPLITUDES",
+    "SCALINGS",
+    "amplitude_choice",
+    "line_factors",
+    "power_of",
+    "to_db",
+    "units_of",
+]
 
-#: Admissible spectrum scalings.
+#: Amplitude conventions of spectra (``"density"`` is the PSD, scipy's word).
+AMPLITUDES = ("peak", "rms", "power", "density")
+#: Deprecated: the conventions with the old name ``"psd"`` for ``"density"``.
 SCALINGS = ("peak", "rms", "power", "psd")
 
 
-def to_db(values: np.ndarray, scaling: str, ref: float = 1.0) -> np.ndarray:
-    """Level in dB: ``20 log10`` for amplitude scalings, ``10 log10`` for power and PSD.
+def amplitude_choice(
+    amplitude: Any, scaling: Any, function: str, allowed: tuple[str, ...], default: str = "rms"
+) -> str:
+    """Checked amplitude convention from ``amplitude=`` or the deprecated ``scaling=``.
 
-    Zero values map to -400 dB (no ``-inf``).
+    The old value ``"psd"`` is accepted for ``"density"`` with a :class:`FutureWarning`.
     """
-    require_choice(scaling, (*SCALINGS, "linear"), "scaling")
+    value = renamed(amplitude, scaling, "amplitude", "scaling", function, stacklevel=4)
+    if value is None:
+        return default
+    if value == "psd" and "density" in allowed:
+        warnings.warn(
+            f"{function}: 'psd' is deprecated and will be removed in the next release; use "
+            "'density' (scipy's word)",
+            FutureWarning,
+            stacklevel=3,
+        )
+        return "density"
+    return require_choice(value, allowed, "amplitude")
+
+
+def to_db(values: np.ndarray, scaling: str, ref: float = 1.0) -> np.ndarray:
+    """Level in dB: ``20 log10`` for amplitudes (peak, rms), ``10 log10`` for power and density.
+
+    ``scaling`` is the amplitude convention of ``values`` (``"psd"`` is accepted for
+    ``"density"``). Zero values map to -400 dB (no ``-inf``).
+    """
+    require_choice(scaling, (*AMPLITUDES, "psd", "linear"), "scaling")
     factor = 20.0 if scaling in ("peak", "rms") else 10.0
     v = np.maximum(np.abs(np.asarray(values, dtype=float)) / ref, 1e-20)
     return factor * np.log10(v)
@@ -40,7 +75,7 @@ def line_factors(n_lines: int, nfft: int) -> np.ndarray:
 
 
 def power_of(values: np.ndarray, amplitude: str, scale: str, nfft: int) -> np.ndarray:
-    """Lines ``values(frame, line)`` of a map in ``amplitude``/``scale`` as power per line."""
+    """Lines ``values(..., line)`` of a map in ``amplitude``/``scale`` as power per line."""
     v = values
     if scale == "dB":
         v = 10.0 ** (v / (10.0 if amplitude == "power" else 20.0))
@@ -48,14 +83,19 @@ def power_of(values: np.ndarray, amplitude: str, scale: str, nfft: int) -> np.nd
         return np.array(v, dtype=float, copy=True)
     p = np.asarray(v, dtype=float) ** 2
     if amplitude == "peak":
-        p = p * (1.0 / line_factors(p.shape[1], nfft))
+        p = p * (1.0 / line_factors(p.shape[-1], nfft))
     return p
 
 
-def units_of(units: str, scaling: str) -> str:
-    """Units of a spectrum of a signal in ``units`` in the given scaling."""
-    if scaling in ("peak", "rms"):
+def units_of(units: str, amplitude: str, per: str = "Hz-1") -> str:
+    """Units of a spectrum of a signal in ``units`` in the given amplitude convention.
+
+    ``per`` is the unit of the density's denominator (``"Hz-1"``; ``""`` for a density per
+    order, which is dimensionless).
+    """
+    if amplitude in ("peak", "rms"):
         return units
-    if scaling == "power":
-        return "1" if units == "1" else f"({units})^2"
-    return "Hz-1" if units == "1" else f"({units})^2 Hz-1"
+    squared = "1" if units == "1" else f"({units})^2"
+    if amplitude == "power" or not per:
+        return squared
+    return per if units == "1" else f"{squared} {per}"

@@ -23,19 +23,15 @@ the signal to constant angle block by block as well (``block_size``, see
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, Literal
+import dataclasses
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, Literal, Self
 
 import numpy as np
 
 from analysis.checks import require_choice, require_finite
-from analysis.frames import (
-    frame_coords,
-    frequency_plan,
-    order_plan,
-    stft_into,
-    values_at,
-)
+from analysis.frames import frame_coords, frequency_plan, order_plan, stft_into
+from analysis.inputs import channel_coords, dataset_reference, dataset_variable, select_channel
 from analysis.levels import power_of, to_db
 from analysis.plots import (
     campbell_figure,
@@ -80,6 +76,10 @@ class _MapBase:
     segment_length: int
     signal_units: str
     name: str
+    dims: tuple[str, ...] = ()
+    coords: dict[str, np.ndarray] = field(default_factory=dict)
+    reference: str = ""
+    notes: tuple[str, ...] = ()
 
     @property
     def _level_units(self) -> str:
@@ -102,6 +102,12 @@ class _MapBase:
         """Map converted back to power per line (``A^2/2`` for a sine on a line)."""
         return power_of(self.values, self.amplitude, self.scale, self.segment_length)
 
+    def select(self, channel: Any) -> Self:
+        """The map of one channel (a label of the channel coordinate, or an index)."""
+        values, dims, coords, label = select_channel(self.values, self.dims, self.coords, channel)
+        name = f"{self.name} {label}" if self.name else label
+        return dataclasses.replace(self, values=values, dims=dims, coords=coords, name=name)
+
     def _axis(self) -> tuple[str, np.ndarray, dict[str, str]]:
         raise NotImplementedError
 
@@ -109,7 +115,8 @@ class _MapBase:
         raise NotImplementedError
 
     def to_dataset(self) -> xr.Dataset:
-        """Dataset with ``amplitude(time, <axis>)`` and auxiliary coordinate ``rpm(time)``."""
+        """Dataset with ``amplitude(*channels, time, <axis>)`` and auxiliary coordinate
+        ``rpm(time)``."""
         import xarray as xr
 
         name, axis, axis_attrs = self._axis()
@@ -124,12 +131,17 @@ class _MapBase:
         ds = xr.Dataset(
             {
                 "amplitude": (
-                    ("time", name),
+                    (*self.dims, "time", name),
                     self.values,
                     {"units": self.units, "long_name": long},
                 )
             },
-            coords={"time": frame["time"], name: (name, axis, axis_attrs), "rpm": frame["rpm"]},
+            coords={
+                "time": frame["time"],
+                name: (name, axis, axis_attrs),
+                "rpm": frame["rpm"],
+                **channel_coords(self.dims, self.coords),
+            },
         )
         ds.attrs.update(
             window=self.window,
@@ -139,6 +151,10 @@ class _MapBase:
             segment_length=int(self.segment_length),
             **self._attrs(),
         )
+        if self.reference:
+            ds.attrs["speed_reference"] = self.reference
+        if self.notes:
+            ds.attrs["comment"] = "; ".join(self.notes)
         return ds
 
 
@@ -153,7 +169,7 @@ class RpmFrequencyMap(_MapBase):
     frequency : numpy.ndarray
         Line frequencies [Hz].
     values : numpy.ndarray
-        Map, shape ``(time, frequency)``.
+        Map, shape ``(*channels, time, frequency)``.
     resolution_hz : float
         Resolution bandwidth actually used (``ENBW_bins * fs / L``), as MATLAB's ``res``.
     bin_spacing_hz : float
@@ -162,6 +178,12 @@ class RpmFrequencyMap(_MapBase):
         Equivalent noise bandwidth [Hz] (equal to ``resolution_hz``).
     fs : float
         Sample rate [Hz].
+    dims, coords : tuple, dict
+        Names and coordinates of the channel dimensions (empty for one channel).
+    reference : str
+        Speed reference used.
+    notes : tuple of str
+        What was done beyond the request.
     """
 
     frequency: np.ndarray = None  # type: ignore[assignment]
@@ -195,7 +217,7 @@ class RpmOrderMap(_MapBase):
     order : numpy.ndarray
         Line orders.
     values : numpy.ndarray
-        Map, shape ``(time, order)``.
+        Map, shape ``(*channels, time, order)``.
     resolution_orders : float
         Resolution bandwidth actually used [orders] (``ENBW_bins * spr / L``).
     bin_spacing_orders : float
@@ -234,32 +256,37 @@ class RpmOrderMap(_MapBase):
 
 def rpm_frequency_map(
     x: Any,
-    fs: float | None,
-    rpm: Any,
+    fs: float | None = None,
+    rpm: Any = None,
     *,
+    angle: Any = None,
     resolution: float | None = None,
     window: WindowSpec = "hann",
     overlap: float = 0.5,
     amplitude: Literal["rms", "peak", "power"] = "rms",
     scale: Literal["linear", "dB"] = "linear",
     time: Any = None,
-    units: str = "1",
-    name: str = "x",
+    axis: int | None = None,
+    units: str | None = None,
+    name: str | None = None,
 ) -> RpmFrequencyMap:
-    """Rpm-frequency map (sonogram) of one channel.
+    """Rpm-frequency map (sonogram), MATLAB ``rpmfreqmap``.
 
     Parameters
     ----------
-    x : array_like
-        One channel (1-D), float32 or float64.
-    fs : float or None
-        Sample rate [Hz]; may be ``None`` when ``time`` is given.
-    rpm : array_like
+    x : array_like or xarray.DataArray
+        One or several channels, float32 or float64 (see :mod:`analysis.inputs`).
+    fs : float, optional
+        Sample rate [Hz]; may be omitted when ``time`` is given or ``x`` is a DataArray.
+    rpm : array_like, optional
         Speed [min-1], one value per sample.
+    angle : array_like, optional
+        Shaft angle [rad] per sample instead of ``rpm``; the speed of a frame is then the
+        angle it spans over its duration.
     resolution : float, optional
         Resolution bandwidth [Hz] (= ENBW of the window), default ``fs / 128`` (MATLAB).
-    window : str or ("kaiser", beta), default "hann"
-        Window (MATLAB default).
+    window : str or tuple, default "hann"
+        Any :func:`scipy.signal.get_window` window (MATLAB's default is Hann).
     overlap : float, default 0.5
         Frame overlap fraction in ``[0, 1)``.
     amplitude : {"rms", "peak", "power"}, default "rms"
@@ -268,25 +295,30 @@ def rpm_frequency_map(
         dB is re 1 unit (``20 log10`` for amplitudes, ``10 log10`` for power).
     time : array_like, optional
         Uniform time axis [s] (gives the frame times; must agree with ``fs``).
-    units, name : str
+    axis : int, optional
+        Time axis of a multi-dimensional array.
+    units, name : str, optional
         Metadata of ``x``.
 
     Returns
     -------
     RpmFrequencyMap
-        Map ``(time, frequency)`` with speed per frame and the resolution actually used.
+        Map ``(*channels, time, frequency)`` with speed per frame and the resolution actually
+        used.
     """
     require_choice(amplitude, _AMPLITUDES, "amplitude")
     require_choice(scale, _SCALES, "scale")
     p = frequency_plan(
-        x, fs, rpm, resolution=resolution, window=window, overlap=overlap, time=time, name=name
-    )
-    out = np.empty((p.n_frames, p.seg // 2 + 1))
+        x, fs, rpm, angle=angle, resolution=resolution, window=window, overlap=overlap,
+        time=time, axis=axis, units=units, name=name,
+    )  # fmt: skip
+    sig = p.signal
+    out = np.empty((*sig.lead, p.n_frames, p.seg // 2 + 1))
     stft_into(p.x, p.w, p.step, out, amplitude, scale)
-    centre = p.centres(0, p.n_frames)
+    tc, rc = p.frame_speeds(0, p.n_frames)
     return RpmFrequencyMap(
-        time=p.t0 + centre / p.rate,
-        rpm=values_at(centre, p.rpm),
+        time=tc,
+        rpm=rc,
         values=out,
         window=p.info.label,
         window_spec=window,
@@ -295,8 +327,11 @@ def rpm_frequency_map(
         enbw_bins=p.info.enbw_bins,
         overlap=float(overlap),
         segment_length=p.seg,
-        signal_units=units,
-        name=name,
+        signal_units=sig.units,
+        name=sig.name,
+        dims=sig.dims,
+        coords=sig.coords,
+        reference=p.reference,
         frequency=p.axis,
         resolution_hz=p.info.enbw_hz(p.rate),
         bin_spacing_hz=p.rate / p.seg,
@@ -307,9 +342,10 @@ def rpm_frequency_map(
 
 def rpm_order_map(
     x: Any,
-    fs: float | None,
-    rpm: Any,
+    fs: float | None = None,
+    rpm: Any = None,
     *,
+    angle: Any = None,
     resolution: float | None = None,
     window: WindowSpec = "flattop",
     overlap: float = 0.5,
@@ -317,12 +353,15 @@ def rpm_order_map(
     scale: Literal["linear", "dB"] = "linear",
     samples_per_rev: int | None = None,
     max_order: float | None = None,
+    min_rpm: float | None = None,
     time: Any = None,
-    units: str = "1",
-    name: str = "x",
+    axis: int | None = None,
+    units: str | None = None,
+    name: str | None = None,
     block_size: int | None = None,
 ) -> RpmOrderMap:
-    """Rpm-order map by computed order tracking (angular resampling, then short-time spectra).
+    """Rpm-order map by computed order tracking (angular resampling, then short-time spectra),
+    MATLAB ``rpmordermap``.
 
     The signal is resampled to constant angle increments block by block and each block's
     frames go straight into the map, so the angle-domain signal is never held whole: the
@@ -330,16 +369,18 @@ def rpm_order_map(
 
     Parameters
     ----------
-    x : array_like
-        One channel (1-D).
-    fs : float or None
+    x : array_like or xarray.DataArray
+        One or several channels (see :mod:`analysis.inputs`).
+    fs : float, optional
         Sample rate [Hz] (or give ``time``).
-    rpm : array_like
-        Speed [min-1] per sample; must be > 0 everywhere.
+    rpm : array_like, optional
+        Speed [min-1] per sample (integrated to the angle).
+    angle : array_like, optional
+        Shaft angle [rad] per sample instead of ``rpm`` (more accurate for a tacho).
     resolution : float, optional
         Resolution bandwidth [orders] (= window ENBW), default ``samples_per_rev / 256``.
-    window : str or ("kaiser", beta), default "flattop"
-        Window (MATLAB default).
+    window : str or tuple, default "flattop"
+        Any :func:`scipy.signal.get_window` window (MATLAB's default is flat-top).
     overlap : float, default 0.5
         Frame overlap in the angle domain.
     amplitude, scale : str
@@ -349,9 +390,14 @@ def rpm_order_map(
         speed).
     max_order : float, optional
         Highest alias-free order (default ``samples_per_rev / 2.56``).
+    min_rpm : float, optional
+        Standstill threshold [min-1] (default 2 % of the highest speed): slower samples at
+        the start and end are left out and ``notes`` says so.
     time : array_like, optional
         Uniform time axis [s].
-    units, name : str
+    axis : int, optional
+        Time axis of a multi-dimensional array.
+    units, name : str, optional
         Metadata of ``x``.
     block_size : int, optional
         Angle-domain samples resampled per block (default 32768; a block always holds at
@@ -361,28 +407,21 @@ def rpm_order_map(
     Returns
     -------
     RpmOrderMap
-        Map ``(time, order)``; time and speed at the angle-frame centres.
+        Map ``(*channels, time, order)``; time and speed at the angle-frame centres.
     """
     require_choice(amplitude, _AMPLITUDES, "amplitude")
     require_choice(scale, _SCALES, "scale")
     p = order_plan(
-        x,
-        fs,
-        rpm,
-        resolution=resolution,
-        window=window,
-        overlap=overlap,
-        samples_per_rev=samples_per_rev,
-        max_order=max_order,
-        time=time,
-        name=name,
-        block_size=block_size,
-    )
-    out = np.empty((p.n_frames, p.seg // 2 + 1))
+        x, fs, rpm, angle=angle, resolution=resolution, window=window, overlap=overlap,
+        samples_per_rev=samples_per_rev, max_order=max_order, time=time, axis=axis,
+        min_rpm=min_rpm, units=units, name=name, block_size=block_size,
+    )  # fmt: skip
+    sig = p.signal
+    out = np.empty((*sig.lead, p.n_frames, p.seg // 2 + 1))
     tc = np.empty(p.n_frames)
     rc = np.empty(p.n_frames)
     for k0, k1, samples, t_blk, r_blk in p.blocks():
-        stft_into(samples, p.w, p.step, out[k0:k1], amplitude, scale)
+        stft_into(samples, p.w, p.step, out[..., k0:k1, :], amplitude, scale)
         tc[k0:k1], rc[k0:k1] = t_blk, r_blk
     spr = p.resampler.samples_per_rev
     return RpmOrderMap(
@@ -396,8 +435,12 @@ def rpm_order_map(
         enbw_bins=p.info.enbw_bins,
         overlap=float(overlap),
         segment_length=p.seg,
-        signal_units=units,
-        name=name,
+        signal_units=sig.units,
+        name=sig.name,
+        dims=sig.dims,
+        coords=sig.coords,
+        reference=p.reference,
+        notes=p.notes,
         order=p.axis,
         resolution_orders=p.info.enbw_hz(spr),
         bin_spacing_orders=spr / p.seg,
@@ -407,71 +450,37 @@ def rpm_order_map(
     )
 
 
-_SPEED_FACTORS = {
-    "min-1": 1.0,
-    "rpm": 1.0,
-    "1/min": 1.0,
-    "min^-1": 1.0,
-    "r/min": 1.0,
-    "rad s-1": 60.0 / (2 * np.pi),
-    "rad/s": 60.0 / (2 * np.pi),
-    "hz": 60.0,
-    "s-1": 60.0,
-    "1/s": 60.0,
-}
-
-
-def _from_dataset(ds: Any, variable: str, speed: str) -> tuple[Any, Any, Any, str]:
-    if variable not in ds.variables:
-        raise ValueError(f"variable = {variable!r} is not in the dataset ({list(ds.data_vars)})")
-    if speed not in ds.variables:
-        raise ValueError(f"speed = {speed!r} is not a variable or coordinate of the dataset")
-    da, sp = ds[variable], ds[speed]
-    if da.dims != ("time",):
-        raise ValueError(
-            f"{variable} has dims {da.dims}; select one channel so that it depends on 'time' "
-            "only, e.g. ds.sel(channel='ring_x')"
-        )
-    if sp.dims != ("time",):
-        raise ValueError(f"speed {speed!r} must be along 'time' only; it has dims {sp.dims}")
-    if "time" not in ds.coords:
-        raise ValueError("the dataset needs a 'time' coordinate in seconds")
-    su = str(sp.attrs.get("units", "min-1")).strip()
-    factor = _SPEED_FACTORS.get(su.lower() if su.lower() == "hz" else su)
-    if factor is None:
-        raise ValueError(f"speed {speed!r} has units {su!r}; admissible: {sorted(_SPEED_FACTORS)}")
-    rpm = sp.values if factor == 1.0 else sp.values * factor
-    return da.values, rpm, ds["time"].values, str(da.attrs.get("units", "1"))
-
-
 def rpm_frequency_map_ds(
-    ds: Any, variable: str, speed: str = "shaft_speed", **kwargs: Any
+    ds: Any, variable: str, speed: str | None = None, *, angle: str | None = None, **kwargs: Any
 ) -> RpmFrequencyMap:
-    """:func:`rpm_frequency_map` of ``ds[variable]`` against the speed ``ds[speed]``.
+    """:func:`rpm_frequency_map` of ``ds[variable]`` against a speed or angle of ``ds``.
 
     Parameters
     ----------
     ds : xarray.Dataset
         Recording with a uniform ``time`` coordinate [s].
     variable : str
-        Data variable along ``time`` only (select a channel first).
-    speed : str, default "shaft_speed"
-        Variable or auxiliary coordinate along ``time``, in ``min-1`` (``rad s-1`` and ``Hz``
+        Data variable along ``time`` (and possibly ``channel``: all channels are mapped).
+    speed : str, optional
+        Variable or auxiliary coordinate along ``time`` in ``min-1`` (``rad s-1`` and ``Hz``
         are converted).
+    angle : str, optional
+        Angle variable [rad] instead. Without either, the reference is found by its
+        attributes (:func:`analysis.inputs.find_reference`; an angle wins over a speed).
     **kwargs
         Passed on (``resolution``, ``window``, ``overlap``, ``amplitude``, ``scale``).
     """
-    x, rpm, t, units = _from_dataset(ds, variable, speed)
-    return rpm_frequency_map(x, None, rpm, time=t, units=units, name=variable, **kwargs)
+    da = dataset_variable(ds, variable)
+    return rpm_frequency_map(da, **dataset_reference(ds, speed, angle), **kwargs)
 
 
 def rpm_order_map_ds(
-    ds: Any, variable: str, speed: str = "shaft_speed", **kwargs: Any
+    ds: Any, variable: str, speed: str | None = None, *, angle: str | None = None, **kwargs: Any
 ) -> RpmOrderMap:
-    """:func:`rpm_order_map` of ``ds[variable]`` against ``ds[speed]`` (see
+    """:func:`rpm_order_map` of ``ds[variable]`` against a speed or angle of ``ds`` (see
     :func:`rpm_frequency_map_ds`)."""
-    x, rpm, t, units = _from_dataset(ds, variable, speed)
-    return rpm_order_map(x, None, rpm, time=t, units=units, name=variable, **kwargs)
+    da = dataset_variable(ds, variable)
+    return rpm_order_map(da, **dataset_reference(ds, speed, angle), **kwargs)
 
 
 # ----------------------------------------------------------------------------- overall level
@@ -501,24 +510,40 @@ class OverallLevel:
     resolution_hz: float
     level_reference: str = ""
     name: str = "x"
+    dims: tuple[str, ...] = ()
+    coords: dict[str, np.ndarray] = field(default_factory=dict)
+    reference: str = ""
 
     def to_dataset(self) -> xr.Dataset:
-        """Dataset with ``overall_level(time)`` and auxiliary coordinate ``rpm(time)``."""
+        """Dataset with ``overall_level(*channels, time)`` and auxiliary coordinate
+        ``rpm(time)``."""
         import xarray as xr
 
         long = f"overall rms level of {self.name}"
         if self.scale == "dB":
             long += f" (dB re {self.level_reference})"
+        attrs: dict[str, Any] = {
+            "f_min_hz": float(self.frequency_range[0]),
+            "f_max_hz": float(self.frequency_range[1]),
+            "window": self.window,
+            "resolution_hz": float(self.resolution_hz),
+            "scale": self.scale,
+        }
+        if self.reference:
+            attrs["speed_reference"] = self.reference
         return xr.Dataset(
-            {"overall_level": ("time", self.values, {"units": self.units, "long_name": long})},
-            coords=frame_coords(self.time, self.rpm),
-            attrs={
-                "f_min_hz": float(self.frequency_range[0]),
-                "f_max_hz": float(self.frequency_range[1]),
-                "window": self.window,
-                "resolution_hz": float(self.resolution_hz),
-                "scale": self.scale,
+            {
+                "overall_level": (
+                    (*self.dims, "time"),
+                    self.values,
+                    {"units": self.units, "long_name": long},
+                )
             },
+            coords={
+                **frame_coords(self.time, self.rpm),
+                **channel_coords(self.dims, self.coords),
+            },
+            attrs=attrs,
         )
 
     def plot(self, **kwargs: Any) -> matplotlib.figure.Figure:
@@ -528,17 +553,19 @@ class OverallLevel:
 
 def overall_level(
     x: Any,
-    fs: float | None,
-    rpm: Any,
+    fs: float | None = None,
+    rpm: Any = None,
     *,
+    angle: Any = None,
     frequency_range: tuple[float, float] | None = None,
     resolution: float | None = None,
     window: WindowSpec = "hann",
     overlap: float = 0.5,
     scale: Literal["linear", "dB"] = "linear",
     time: Any = None,
-    units: str = "1",
-    name: str = "x",
+    axis: int | None = None,
+    units: str | None = None,
+    name: str | None = None,
 ) -> OverallLevel:
     """Overall rms level vs rpm from the sum of the lines of the rpm-frequency map.
 
@@ -548,7 +575,7 @@ def overall_level(
 
     Parameters
     ----------
-    x, fs, rpm, resolution, window, overlap, time, units, name
+    x, fs, rpm, angle, resolution, window, overlap, time, axis, units, name
         As in :func:`rpm_frequency_map`.
     frequency_range : (float, float), optional
         Band [Hz] whose lines are summed.
@@ -565,11 +592,13 @@ def overall_level(
         x,
         fs,
         rpm,
+        angle=angle,
         resolution=resolution,
         window=window,
         overlap=overlap,
         amplitude="power",
         time=time,
+        axis=axis,
         units=units,
         name=name,
     )
@@ -579,14 +608,15 @@ def overall_level(
     sel = (m.frequency >= lo) & (m.frequency <= hi)
     if not sel.any():
         raise ValueError(f"frequency_range = {frequency_range!r} holds no line of the map")
-    vals = np.sqrt(m.values[:, sel].sum(axis=1) / m.enbw_bins)
+    vals = np.sqrt(m.values[..., sel].sum(axis=-1) / m.enbw_bins)
     ref = ""
-    out_units = units
+    out_units = m.signal_units
     if scale == "dB":
-        vals, ref, out_units = to_db(vals, "rms"), f"1 {units}", "1"
+        vals, ref, out_units = to_db(vals, "rms"), f"1 {out_units}", "1"
     return OverallLevel(
-        m.time, m.rpm, vals, scale, out_units, (lo, hi), m.window, m.resolution_hz, ref, name
-    )
+        m.time, m.rpm, vals, scale, out_units, (lo, hi), m.window, m.resolution_hz, ref,
+        m.name, m.dims, m.coords, m.reference,
+    )  # fmt: skip
 
 
 # ---------------------------------------------------------------------------------- Campbell

@@ -13,37 +13,28 @@ angle-domain signal: beyond their output they need a few MB whatever the record'
 from __future__ import annotations
 
 import dataclasses
-from dataclasses import dataclass
+import warnings
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
-from analysis.checks import (
-    require_block_size,
-    require_choice,
-    require_finite,
-    require_same_length,
-    uniform_rate,
-)
+from analysis.checks import require_block_size, require_choice, require_finite, time_or_rate
 from analysis.frames import (
     BLOCK_ELEMENTS,
-    check_speed,
+    FrequencyPlan,
+    OrderPlan,
     frame_coords,
     frame_ranges,
     frequency_plan,
     order_plan,
     stft_into,
 )
-from analysis.levels import line_factors, power_of, to_db
+from analysis.inputs import channel_coords, reference_input, select_channel, signal_input
+from analysis.levels import AMPLITUDES, amplitude_choice, line_factors, power_of, to_db, units_of
 from analysis.maps import RpmFrequencyMap, RpmOrderMap
 from analysis.plots import order_cuts_figure, order_spectrum_figure
-from analysis.resample import (
-    AngleSignal,
-    angle_from_speed,
-    check_signal,
-    resample_to_angle,
-    speed_resampler,
-)
+from analysis.resample import AngleSignal, angle_from_speed, resample_to_angle, tracking
 from analysis.spectrum import Peaks, Spectrum, find_peaks, spectrum
 from analysis.windows import WindowSpec, main_lobe_half_width, window_info
 
@@ -68,53 +59,107 @@ __all__ = [
 
 @dataclass
 class OrderSpectrum:
-    """Averaged spectrum of an angle-domain signal: level vs order.
+    """Averaged spectrum of an angle-domain signal: level vs order (MATLAB ``orderspectrum``).
 
     Attributes
     ----------
     order : numpy.ndarray
-        Orders (cycles per revolution) of the bins.
+        Orders (cycles per revolution) of the lines.
     values : numpy.ndarray
-        Spectrum in ``scaling`` (as for :class:`analysis.spectrum.Spectrum`).
+        Spectrum in ``amplitude``, shape ``(*channels, order)``.
+    amplitude : str
+        ``"peak"``, ``"rms"``, ``"power"`` or ``"density"`` (power per order).
     resolution_orders : float
-        Bin spacing actually used [orders] (``1 / revolutions per segment``).
+        Resolution bandwidth actually used [orders]: the window's ENBW (as in the maps).
+    bin_spacing_orders : float
+        Line spacing [orders] (``1 / revolutions per segment``).
     enbw_orders : float
-        Equivalent noise bandwidth [orders].
+        Equivalent noise bandwidth [orders] (= ``resolution_orders``).
+    segment_length : int
+        Angle-domain samples per segment.
     spectrum : Spectrum
         The underlying spectrum, whose "frequency" axis is in orders.
     samples_per_rev : int
         Angular sampling.
     max_order : float
         Highest alias-free order.
+    dims, coords : tuple, dict
+        Names and coordinates of the channel dimensions (empty for one channel).
+    reference : str
+        Speed reference used.
+    notes : tuple of str
+        What was done beyond the request (standstill left out).
     """
 
     order: np.ndarray
     values: np.ndarray
     window: str
-    scaling: str
+    amplitude: str
     resolution_orders: float
+    bin_spacing_orders: float
     enbw_orders: float
     n_averages: int
     units: str
     spectrum: Spectrum
     samples_per_rev: int
     max_order: float
+    segment_length: int = 0
     name: str = "x"
+    dims: tuple[str, ...] = ()
+    coords: dict[str, np.ndarray] = field(default_factory=dict)
+    reference: str = ""
+    notes: tuple[str, ...] = ()
+
+    @property
+    def scaling(self) -> str:
+        """Deprecated name of :attr:`amplitude` (``"psd"`` for ``"density"``)."""
+        warnings.warn(
+            "OrderSpectrum.scaling is deprecated; use OrderSpectrum.amplitude",
+            FutureWarning,
+            stacklevel=2,
+        )
+        return "psd" if self.amplitude == "density" else self.amplitude
+
+    def select(self, channel: Any) -> OrderSpectrum:
+        """The order spectrum of one channel (a label of the channel coordinate, or an index)."""
+        values, dims, coords, label = select_channel(self.values, self.dims, self.coords, channel)
+        spec = self.spectrum.select(channel)
+        name = f"{self.name} {label}" if self.name else label
+        return dataclasses.replace(
+            self, values=values, dims=dims, coords=coords, name=name, spectrum=spec
+        )
 
     def to_dataset(self) -> xr.Dataset:
-        """:class:`xarray.Dataset` with variable ``order_spectrum(..., order)``."""
+        """:class:`xarray.Dataset` with variable ``order_spectrum(*channels, order)``."""
         import xarray as xr
 
-        dims = (*self.spectrum.dims, "order")
+        long = {
+            "peak": "peak amplitude order spectrum",
+            "rms": "rms amplitude order spectrum",
+            "power": "power order spectrum",
+            "density": "power spectral density per order",
+        }[self.amplitude]
+        attrs: dict[str, Any] = {
+            "window": self.window,
+            "amplitude": self.amplitude,
+            "resolution_orders": float(self.resolution_orders),
+            "bin_spacing_orders": float(self.bin_spacing_orders),
+            "enbw_orders": float(self.enbw_orders),
+            "segment_length": int(self.segment_length),
+            "n_averages": int(self.n_averages),
+            "samples_per_rev": int(self.samples_per_rev),
+            "max_order": float(self.max_order),
+        }
+        if self.reference:
+            attrs["speed_reference"] = self.reference
+        if self.notes:
+            attrs["comment"] = "; ".join(self.notes)
         return xr.Dataset(
             {
                 "order_spectrum": (
-                    dims,
+                    (*self.dims, "order"),
                     self.values,
-                    {
-                        "units": self.units,
-                        "long_name": f"{self.scaling} order spectrum of {self.name}",
-                    },
+                    {"units": self.units, "long_name": f"{long} of {self.name}"},
                 )
             },
             coords={
@@ -122,17 +167,10 @@ class OrderSpectrum:
                     "order",
                     self.order,
                     {"units": "1", "long_name": "order (cycles per shaft revolution)"},
-                )
+                ),
+                **channel_coords(self.dims, self.coords),
             },
-            attrs={
-                "window": self.window,
-                "scaling": self.scaling,
-                "resolution_orders": float(self.resolution_orders),
-                "enbw_orders": float(self.enbw_orders),
-                "n_averages": int(self.n_averages),
-                "samples_per_rev": int(self.samples_per_rev),
-                "max_order": float(self.max_order),
-            },
+            attrs=attrs,
         )
 
     def peaks(self, **kwargs: Any) -> Peaks:
@@ -148,125 +186,169 @@ class OrderSpectrum:
 
 def order_spectrum(
     x: Any,
-    time: Any,
-    rpm: Any,
+    fs: Any = None,
+    rpm: Any = None,
     *,
-    orders_resolution: float,
+    angle: Any = None,
+    resolution: float | None = None,
     window: WindowSpec = "flattop",
-    scaling: Literal["peak", "rms", "power", "psd"] = "rms",
+    amplitude: Literal["peak", "rms", "power", "density"] | None = None,
     overlap: float = 0.5,
     samples_per_rev: int | None = None,
     max_order: float | None = None,
-    units: str = "1",
-    name: str = "x",
+    min_rpm: float | None = None,
+    time: Any = None,
+    axis: int | None = None,
+    units: str | None = None,
+    name: str | None = None,
     block_size: int | None = None,
+    orders_resolution: float | None = None,
+    scaling: str | None = None,
 ) -> OrderSpectrum:
-    """Averaged order spectrum of a signal measured at varying speed.
+    """Averaged order spectrum of a signal measured at varying speed (MATLAB
+    ``orderspectrum``).
 
     The signal is resampled to constant angle increments block by block and each block's
-    segments are added to the average at once, so the angle-domain signal is never held
-    whole: the working memory is a few blocks, whatever the length of the record.
+    segments are added to the (energy) average at once, so the angle-domain signal is never
+    held whole: the working memory is a few blocks, whatever the length of the record.
 
     Parameters
     ----------
-    x : array_like
-        Signal, time along the last axis.
-    time : array_like
-        Uniform sample instants [s].
-    rpm : array_like
-        Shaft speed [min-1] at ``time``; must be > 0.
-    orders_resolution : float
-        Requested bin spacing [orders]; the segment spans ``1 / orders_resolution``
-        revolutions (rounded to whole samples; the value used is reported).
-    window : str or ("kaiser", beta), default "flattop"
-        Window (flat-top like MATLAB ``orderspectrum``).
-    scaling : {"peak", "rms", "power", "psd"}, default "rms"
-        Amplitude convention.
+    x : array_like or xarray.DataArray
+        One or several channels (see :mod:`analysis.inputs`).
+    fs : float, optional
+        Sample rate [Hz] (or give ``time``).
+    rpm : array_like, optional
+        Shaft speed [min-1] per sample.
+    angle : array_like, optional
+        Shaft angle [rad] per sample instead of ``rpm``.
+    resolution : float, optional
+        Resolution bandwidth [orders] (the window's ENBW, as in the maps): the segment spans
+        ``ENBW_bins / resolution`` revolutions (rounded to whole samples; the values used are
+        reported). Default ``samples_per_rev / 256`` (MATLAB).
+    window : str or tuple, default "flattop"
+        Any :func:`scipy.signal.get_window` window (flat-top like MATLAB ``orderspectrum``).
+    amplitude : {"peak", "rms", "power", "density"}, default "rms"
+        Amplitude convention; ``"density"`` is power per order.
     overlap : float, default 0.5
         Segment overlap.
     samples_per_rev : int, optional
         Angular sampling; default so that the top speed is sampled at about ``fs``.
     max_order : float, optional
         Highest order to keep (default ``samples_per_rev / 2.56``).
-    units, name : str
+    min_rpm : float, optional
+        Standstill threshold [min-1] (default 2 % of the highest speed).
+    time : array_like, optional
+        Uniform sample instants [s].
+    axis : int, optional
+        Time axis of a multi-dimensional array.
+    units, name : str, optional
         Metadata of ``x``.
     block_size : int, optional
         Angle-domain samples resampled per block (default 32768; a block always holds at
         least one segment). Only the working memory depends on it; the result equals that
         of a single block to rounding.
+    orders_resolution : float, optional
+        Deprecated: the old *line spacing* [orders] (segment of ``1 / orders_resolution``
+        revolutions); use ``resolution`` (a bandwidth, like everywhere else).
+    scaling : str, optional
+        Deprecated name of ``amplitude``.
 
     Returns
     -------
     OrderSpectrum
-        Energy-averaged order spectrum.
+        Energy-averaged order spectrum, shape ``(*channels, order)``.
     """
-    arr = check_signal(x, name)
-    t = np.asarray(time)
-    n = check_speed(
-        rpm, t.size, "rpm must be > 0 everywhere for order tracking (min-1); rpm[{i}] = {value}"
-    )
-    res = float(orders_resolution)
-    if not np.isfinite(res) or res <= 0:
-        raise ValueError(f"orders_resolution = {orders_resolution!r} must be finite and > 0")
-    require_choice(scaling, ("peak", "rms", "power", "psd"), "scaling")
+    amp = amplitude_choice(amplitude, scaling, "order_spectrum", AMPLITUDES)
+    fs, time = time_or_rate(fs, time, "order_spectrum")
+    if orders_resolution is not None:
+        if resolution is not None:
+            raise ValueError("give resolution= only (orders_resolution= is deprecated)")
+        warnings.warn(
+            "order_spectrum: orders_resolution= (a line spacing) is deprecated and will be "
+            "removed in the next release; use resolution= (the resolution bandwidth in orders, "
+            "the window's ENBW, as in rpm_order_map and MATLAB)",
+            FutureWarning,
+            stacklevel=2,
+        )
+        spacing = float(orders_resolution)
+        if not np.isfinite(spacing) or spacing <= 0:
+            raise ValueError(f"orders_resolution = {orders_resolution!r} must be finite and > 0")
+    if resolution is not None and not (np.isfinite(float(resolution)) and resolution > 0):
+        raise ValueError(f"resolution = {resolution!r} is not admissible: must be > 0 orders")
     if not 0.0 <= float(overlap) < 1.0:
         raise ValueError(f"overlap = {overlap!r} is not admissible: must be in [0, 1)")
-    fs = uniform_rate(t, "time")
-    require_same_length([arr, t], [name, "time"])
-    if t.size < 8:
-        raise ValueError(f"{name}: needs at least 8 samples for angular resampling")
+    lengths = tuple(np.shape(r)[0] for r in (rpm, angle) if r is not None and np.ndim(r) == 1)
+    sig = signal_input(x, fs, time=time, axis=axis, units=units, name=name, lengths=lengths)
+    ref = reference_input(rpm, angle, sig.n, required=True, signal=sig)
+    assert ref is not None
     block = require_block_size(block_size)
-    resampler = speed_resampler(arr, n, samples_per_rev, max_order, block, fs=fs, time=t)
+    enbw_bins = window_info(window, 4096).enbw_bins  # also checks the window before the work
+    tr = tracking(sig, ref, samples_per_rev, max_order, block, min_rpm)
+    resampler = tr.resampler
     spr = resampler.samples_per_rev
     m = resampler.n_out
-    seg = round(spr / res)
+    if orders_resolution is not None:
+        seg, what = round(spr / spacing), f"orders_resolution = {spacing:g}"
+    else:
+        res = spr / 256.0 if resolution is None else float(resolution)
+        seg, what = round(enbw_bins * spr / res), f"resolution = {res:g} orders"
     if seg > m:
         raise ValueError(
-            f"orders_resolution = {res:g} needs {seg / spr:.4g} revolutions "
-            f"per segment, but the record has only {m / spr:.4g}"
+            f"{what} needs {seg / spr:.4g} revolutions per segment, but the record has only "
+            f"{m / spr:.4g}"
         )
-    window_info(window, max(seg, 2))  # checks the window before the work
+    if seg < 4:
+        raise ValueError(f"{what} is too coarse: segments of {seg} < 4 samples")
     step = max(1, round(seg * (1.0 - float(overlap))))
     n_seg = (m - seg) // step + 1
-    kind = "psd" if scaling == "psd" else "power"
-    total = np.zeros((*arr.shape[:-1], seg // 2 + 1))
+    kind = "density" if amp == "density" else "power"
+    total = np.zeros((*sig.lead, seg // 2 + 1))
     values = np.empty(0)
     for k0, k1 in frame_ranges(n_seg, seg, step, block):
         values, _ = resampler.block(k0 * step, (k1 - 1) * step + seg)
         part = spectrum(
-            values, float(spr), window=window, scaling=kind, segment_length=seg, overlap=overlap
-        )
+            values, float(spr), window=window, amplitude=kind, segment_length=seg,
+            overlap=overlap, axis=-1,
+        )  # fmt: skip
         total += part.values * part.n_averages
     total /= n_seg
-    if scaling in ("rms", "peak"):
+    if amp in ("rms", "peak"):
         np.sqrt(total, out=total)
-        if scaling == "peak":
+        if amp == "peak":
             total *= np.sqrt(line_factors(total.shape[-1], seg))
-    # metadata (units, window label, ENBW...) from the last block in the requested scaling
+    # metadata (window label, ENBW...) from the last block in the requested convention
     last = spectrum(
-        values,
-        float(spr),
-        window=window,
-        scaling=scaling,
-        segment_length=seg,
-        overlap=overlap,
-        units=units,
-        name=name,
+        values, float(spr), window=window, amplitude=amp, segment_length=seg, overlap=overlap,
+        axis=-1, units=sig.units, name=sig.name,
+    )  # fmt: skip
+    s = dataclasses.replace(
+        last,
+        values=total,
+        n_averages=n_seg,
+        dims=sig.dims,
+        coords=sig.coords,
+        units=units_of(sig.units, amp, per=""),
     )
-    s = dataclasses.replace(last, values=total, n_averages=n_seg)
     return OrderSpectrum(
         order=s.frequency,
         values=s.values,
         window=s.window,
-        scaling=scaling,
-        resolution_orders=s.resolution_hz,
+        amplitude=amp,
+        resolution_orders=s.enbw_hz,
+        bin_spacing_orders=s.bin_spacing_hz,
         enbw_orders=s.enbw_hz,
         n_averages=s.n_averages,
         units=s.units,
         spectrum=s,
         samples_per_rev=spr,
         max_order=resampler.max_order,
-        name=name,
+        segment_length=seg,
+        name=sig.name,
+        dims=sig.dims,
+        coords=sig.coords,
+        reference=ref.label,
+        notes=tr.notes,
     )
 
 
@@ -275,7 +357,7 @@ def order_spectrum(
 
 @dataclass
 class OrderCut:
-    """Level of chosen orders vs time and speed.
+    """Level of chosen orders vs time and speed (MATLAB ``ordertrack``, map-based).
 
     Attributes
     ----------
@@ -286,7 +368,8 @@ class OrderCut:
     rpm : numpy.ndarray
         Speed at the frame centres [min-1].
     values : numpy.ndarray
-        Level, shape ``(order, time)``; NaN where the band leaves the analysed range.
+        Level, shape ``(*channels, order, time)``; NaN where the band leaves the analysed
+        range.
     amplitude : str
         ``"rms"``, ``"peak"`` or ``"power"``.
     scale : str
@@ -298,11 +381,27 @@ class OrderCut:
     bandwidth_kind : str
         ``"order"`` (proportional) or ``"Hz"`` (fixed).
     source : str
-        The map the cut was read from.
+        The frames the cut was read from (``"RpmOrderMap"`` or ``"RpmFrequencyMap"``).
     window : str
-        Window of that map.
+        Window of those frames.
     level_reference : str
         Reference of the dB scale (``"1 <units>"``), or ``""`` for linear.
+    resolution : float
+        Resolution bandwidth (ENBW) of the frames, in ``resolution_units``.
+    resolution_units : str
+        ``"1"`` (orders, order frames) or ``"Hz"`` (frequency frames).
+    segment_length : int
+        Frame length in samples (angle-domain samples for order frames).
+    samples_per_rev : int
+        Angular sampling of order frames (0 for frequency frames: no resampling).
+    overlap : float
+        Frame overlap.
+    dims, coords : tuple, dict
+        Names and coordinates of the channel dimensions (empty for one channel).
+    reference : str
+        Speed reference used.
+    notes : tuple of str
+        What was done beyond the request (standstill left out).
     """
 
     orders: np.ndarray
@@ -318,28 +417,61 @@ class OrderCut:
     window: str
     level_reference: str = ""
     name: str = "x"
+    resolution: float = 0.0
+    resolution_units: str = "1"
+    segment_length: int = 0
+    samples_per_rev: int = 0
+    overlap: float = 0.0
+    dims: tuple[str, ...] = ()
+    coords: dict[str, np.ndarray] = field(default_factory=dict)
+    reference: str = ""
+    notes: tuple[str, ...] = ()
+
+    def select(self, channel: Any) -> OrderCut:
+        """The cuts of one channel (a label of the channel coordinate, or an index)."""
+        values, dims, coords, label = select_channel(self.values, self.dims, self.coords, channel)
+        name = f"{self.name} {label}" if self.name else label
+        return dataclasses.replace(self, values=values, dims=dims, coords=coords, name=name)
 
     def to_dataset(self) -> xr.Dataset:
-        """Dataset with ``level(order, time)`` and auxiliary coordinate ``rpm(time)``."""
+        """Dataset with ``level(*channels, order, time)`` and auxiliary coordinate
+        ``rpm(time)``."""
         import xarray as xr
 
         long = f"{self.amplitude} level of {self.name} in the order band"
         if self.scale == "dB":
             long += f" (dB re {self.level_reference})"
+        attrs: dict[str, Any] = {
+            "amplitude": self.amplitude,
+            "scale": self.scale,
+            "bandwidth": float(self.bandwidth),
+            "bandwidth_kind": self.bandwidth_kind,
+            "source": self.source,
+            "window": self.window,
+            "resolution": float(self.resolution),
+            "resolution_units": self.resolution_units,
+            "segment_length": int(self.segment_length),
+            "samples_per_rev": int(self.samples_per_rev),
+            "overlap": float(self.overlap),
+        }
+        if self.reference:
+            attrs["speed_reference"] = self.reference
+        if self.notes:
+            attrs["comment"] = "; ".join(self.notes)
         return xr.Dataset(
-            {"level": (("order", "time"), self.values, {"units": self.units, "long_name": long})},
+            {
+                "level": (
+                    (*self.dims, "order", "time"),
+                    self.values,
+                    {"units": self.units, "long_name": long},
+                )
+            },
             coords={
                 "order": ("order", self.orders, {"units": "1", "long_name": "tracked order"}),
                 **frame_coords(self.time, self.rpm),
+                **channel_coords(self.dims, self.coords),
             },
-            attrs={
-                "amplitude": self.amplitude,
-                "scale": self.scale,
-                "bandwidth": float(self.bandwidth),
-                "bandwidth_kind": self.bandwidth_kind,
-                "source": self.source,
-                "window": self.window,
-            },
+            attrs=attrs,
         )
 
     def plot(self, **kwargs: Any) -> matplotlib.figure.Figure:
@@ -360,6 +492,8 @@ def _cut_setup(
     """Checked orders, band kind (``"order"``/``"Hz"``), band width and line spacing."""
     require_choice(amplitude, ("rms", "peak", "power"), "amplitude")
     require_choice(scale, ("linear", "dB"), "scale")
+    if orders is None:
+        raise ValueError("orders (the orders to track, > 0) are required")
     ords = np.atleast_1d(require_finite(orders, "orders"))
     if ords.ndim != 1 or np.any(ords <= 0):
         raise ValueError("orders must be a 1-D list of orders > 0")
@@ -388,10 +522,16 @@ def _band_power(
     is_freq: bool,
     enbw_bins: float,
 ) -> np.ndarray:
-    """Power in the order bands, shape ``(order, frame)``, of map lines ``power(frame, line)``.
+    """Power in the order bands, shape ``(*channels, order, frame)``, of map lines
+    ``power(*channels, frame, line)``.
 
     ``rpm`` is the speed of each frame; NaN where the band exceeds ``axis``.
     """
+    if power.ndim > 2:
+        out = np.empty((*power.shape[:-2], ords.size, power.shape[-2]))
+        for ch in np.ndindex(*power.shape[:-2]):
+            out[ch] = _band_power(power[ch], rpm, axis, ords, kind, bw, is_freq, enbw_bins)
+        return out
     spacing = float(axis[1] - axis[0])
     shaft_hz = rpm / 60.0  # (time,)
     shape = (ords.size, shaft_hz.size)
@@ -415,22 +555,8 @@ def _band_power(
     return band
 
 
-def _cut_result(
-    band: np.ndarray,
-    ords: np.ndarray,
-    time: np.ndarray,
-    rpm: np.ndarray,
-    *,
-    amplitude: str,
-    scale: str,
-    signal_units: str,
-    kind: str,
-    bw: float,
-    source: str,
-    window: str,
-    name: str,
-) -> OrderCut:
-    """:class:`OrderCut` from the band powers ``band(order, frame)``."""
+def _levels(band: np.ndarray, amplitude: str, scale: str, signal_units: str) -> tuple:
+    """Levels, units and dB reference from the band powers."""
     if amplitude == "rms":
         vals = np.sqrt(band)
     elif amplitude == "peak":
@@ -446,21 +572,7 @@ def _cut_result(
     if scale == "dB":
         vals = to_db(vals, "power" if amplitude == "power" else "rms")
         ref, units = f"1 {units}", "1"
-    return OrderCut(
-        orders=ords,
-        time=time,
-        rpm=rpm,
-        values=vals,
-        amplitude=amplitude,
-        scale=scale,
-        units=units,
-        bandwidth=bw,
-        bandwidth_kind=kind,
-        source=source,
-        window=window,
-        level_reference=ref,
-        name=name,
-    )
+    return vals, units, ref
 
 
 def order_cuts_from_map(
@@ -481,8 +593,8 @@ def order_cuts_from_map(
     Parameters
     ----------
     m : RpmFrequencyMap or RpmOrderMap
-        Map of any amplitude/scale (converted back to power internally, a block of frames
-        at a time).
+        Map of any amplitude/scale and any number of channels (converted back to power
+        internally, a block of frames at a time).
     orders : array_like
         Orders to track (> 0).
     bandwidth : float, optional
@@ -499,7 +611,7 @@ def order_cuts_from_map(
     Returns
     -------
     OrderCut
-        Levels; NaN where the band exceeds the map's axis.
+        Levels ``(*channels, order, time)``; NaN where the band exceeds the map's axis.
     """
     if not isinstance(m, RpmFrequencyMap | RpmOrderMap):
         raise ValueError("m must be an RpmFrequencyMap or RpmOrderMap")
@@ -508,41 +620,59 @@ def order_cuts_from_map(
     ords, kind, bw, _ = _cut_setup(
         m.window_spec, axis, is_freq, orders, bandwidth, bandwidth_hz, amplitude, scale
     )
-    band = np.empty((ords.size, m.values.shape[0]))
-    rows = max(1, BLOCK_ELEMENTS // max(1, m.values.shape[1]))
-    for r0 in range(0, m.values.shape[0], rows):
-        sl = slice(r0, r0 + rows)
-        power = power_of(m.values[sl], m.amplitude, m.scale, m.segment_length)
-        band[:, sl] = _band_power(power, m.rpm[sl], axis, ords, kind, bw, is_freq, m.enbw_bins)
-    return _cut_result(
-        band,
-        ords,
-        m.time.copy(),
-        m.rpm.copy(),
+    lead = m.values.shape[:-2]
+    n_frames = m.values.shape[-2]
+    band = np.empty((*lead, ords.size, n_frames))
+    rows = max(1, BLOCK_ELEMENTS // max(1, m.values.shape[-1]))
+    for ch in np.ndindex(*lead):
+        for r0 in range(0, n_frames, rows):
+            sl = slice(r0, r0 + rows)
+            power = power_of(m.values[ch][sl], m.amplitude, m.scale, m.segment_length)
+            band[ch][:, sl] = _band_power(
+                power, m.rpm[sl], axis, ords, kind, bw, is_freq, m.enbw_bins
+            )
+    vals, units, ref = _levels(band, amplitude, scale, m.signal_units)
+    return OrderCut(
+        orders=ords,
+        time=m.time.copy(),
+        rpm=m.rpm.copy(),
+        values=vals,
         amplitude=amplitude,
         scale=scale,
-        signal_units=m.signal_units,
-        kind=kind,
-        bw=bw,
+        units=units,
+        bandwidth=bw,
+        bandwidth_kind=kind,
         source=type(m).__name__,
         window=m.window,
+        level_reference=ref,
         name=m.name,
+        resolution=m.resolution_hz if is_freq else m.resolution_orders,  # type: ignore[union-attr]
+        resolution_units="Hz" if is_freq else "1",
+        segment_length=m.segment_length,
+        samples_per_rev=0 if is_freq else m.samples_per_rev,  # type: ignore[union-attr]
+        overlap=m.overlap,
+        dims=m.dims,
+        coords=m.coords,
+        reference=m.reference,
+        notes=m.notes,
     )
 
 
 def order_cuts(
     x: Any,
-    fs: float,
-    rpm: Any,
-    orders: Any,
+    fs: Any = None,
+    rpm: Any = None,
+    orders: Any = None,
     *,
+    angle: Any = None,
     bandwidth: float | None = None,
     bandwidth_hz: float | None = None,
     amplitude: Literal["rms", "peak", "power"] = "rms",
     scale: Literal["linear", "dB"] = "linear",
     **map_kwargs: Any,
 ) -> OrderCut:
-    """Order cuts (level of chosen orders vs rpm) directly from a signal.
+    """Order cuts (level of chosen orders vs rpm) directly from a signal (MATLAB
+    ``ordertrack``, map-based).
 
     With ``bandwidth_hz`` (fixed band) the cut is read from the frames of :func:`analysis.
     maps.rpm_frequency_map`; otherwise (proportional band, ``bandwidth`` in orders, default
@@ -553,27 +683,40 @@ def order_cuts(
     Parameters
     ----------
     x, fs, rpm
-        Signal (1-D), sample rate [Hz] (or ``None`` with ``time``) and speed [min-1].
+        Signal (one or several channels, see :mod:`analysis.inputs`), sample rate [Hz] (or
+        ``time``) and speed [min-1].
     orders : array_like
         Orders to track (> 0).
+    angle : array_like, optional
+        Shaft angle [rad] per sample instead of ``rpm`` (more accurate for a tacho).
     bandwidth, bandwidth_hz, amplitude, scale
         As in :func:`order_cuts_from_map`.
     **map_kwargs
         Passed on as to the map function: ``window``, ``resolution``, ``overlap``, ``time``,
-        ``units``, ``name``; for the order map also ``samples_per_rev``, ``max_order``; and
-        ``block_size`` (samples per block, default 32768, of the time signal for a fixed band
-        and of the angle-domain signal otherwise; the result does not depend on it beyond
-        rounding).
+        ``axis``, ``units``, ``name``; for the order map also ``samples_per_rev``,
+        ``max_order``, ``min_rpm``; and ``block_size`` (samples per block, default 32768, of
+        the time signal for a fixed band and of the angle-domain signal otherwise; the result
+        does not depend on it beyond rounding).
 
     Returns
     -------
     OrderCut
-        See :func:`order_cuts_from_map`.
+        See :func:`order_cuts_from_map`; it reports the resolution, frame length and
+        angular sampling of the frames it was read from.
     """
-    units = str(map_kwargs.pop("units", "1"))
-    name = str(map_kwargs.get("name", "x"))
+    fs, time = time_or_rate(fs, map_kwargs.pop("time", None), "order_cuts")
     is_freq = bandwidth_hz is not None
-    plan = (frequency_plan if is_freq else order_plan)(x, fs, rpm, **map_kwargs)
+    if is_freq:
+        for key in ("samples_per_rev", "max_order", "min_rpm"):
+            if map_kwargs.get(key) is not None:
+                raise ValueError(f"{key} is for proportional bands (order frames); "
+                                 "bandwidth_hz reads frequency frames")
+            map_kwargs.pop(key, None)
+        plan: FrequencyPlan | OrderPlan = frequency_plan(
+            x, fs, rpm, angle=angle, time=time, **map_kwargs
+        )
+    else:
+        plan = order_plan(x, fs, rpm, angle=angle, time=time, **map_kwargs)
     axis = plan.axis
     ords, kind, bw, spacing = _cut_setup(
         plan.window, axis, is_freq, orders, bandwidth, bandwidth_hz, amplitude, scale
@@ -583,27 +726,40 @@ def order_cuts(
             f"bandwidth ({bw:g} {kind}) is narrower than the map's line spacing somewhere "
             "(the band would hold no line); widen it or use a finer map"
         )
-    band = np.empty((ords.size, plan.n_frames))
+    sig = plan.signal
+    band = np.empty((*sig.lead, ords.size, plan.n_frames))
     tc = np.empty(plan.n_frames)
     rc = np.empty(plan.n_frames)
     for k0, k1, samples, t_blk, r_blk in plan.blocks():
-        power = np.empty((k1 - k0, axis.size))
+        power = np.empty((*sig.lead, k1 - k0, axis.size))
         stft_into(samples, plan.w, plan.step, power, "power", "linear")
-        band[:, k0:k1] = _band_power(
+        band[..., k0:k1] = _band_power(
             power, r_blk, axis, ords, kind, bw, is_freq, plan.info.enbw_bins
         )
         tc[k0:k1], rc[k0:k1] = t_blk, r_blk
-    return _cut_result(
-        band,
-        ords,
-        tc,
-        rc,
+    vals, units, ref = _levels(band, amplitude, scale, sig.units)
+    spr = 0 if is_freq else int(plan.rate)
+    return OrderCut(
+        orders=ords,
+        time=tc,
+        rpm=rc,
+        values=vals,
         amplitude=amplitude,
         scale=scale,
-        signal_units=units,
-        kind=kind,
-        bw=bw,
+        units=units,
+        bandwidth=bw,
+        bandwidth_kind=kind,
         source="RpmFrequencyMap" if is_freq else "RpmOrderMap",
         window=plan.info.label,
-        name=name,
+        level_reference=ref,
+        name=sig.name,
+        resolution=plan.info.enbw_hz(plan.rate),
+        resolution_units="Hz" if is_freq else "1",
+        segment_length=plan.seg,
+        samples_per_rev=spr,
+        overlap=float(map_kwargs.get("overlap", 0.5)),
+        dims=sig.dims,
+        coords=sig.coords,
+        reference=plan.reference,
+        notes=plan.notes,
     )

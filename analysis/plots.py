@@ -1,14 +1,16 @@
 """Figure builders for spectra, rpm maps, order cuts and Campbell diagrams.
 
 Plotting only: every function takes a result object from :mod:`analysis.spectrum`,
-:mod:`analysis.orders` or :mod:`analysis.maps` and returns a new
-:class:`matplotlib.figure.Figure` (built with the Figure API, never pyplot, so it works in
+:mod:`analysis.orders` or :mod:`analysis.maps` and returns a
+:class:`matplotlib.figure.Figure`: a new one, or the figure of ``ax=`` when it draws into
+given axes (built with the Figure API, never pyplot, so it works in
 scripts, servers and notebooks alike). Save it with ``fig.savefig("map.png", dpi=150)``.
 matplotlib is imported lazily.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
@@ -40,10 +42,46 @@ def _figure(figsize: tuple[float, float]) -> Figure:
     return Figure(figsize=figsize, layout="constrained")
 
 
+def _axes(ax: Any, figsize: tuple[float, float]) -> tuple[Figure, Any]:
+    """The figure and axes to draw into: ``ax`` and its figure, or a new figure."""
+    if ax is None:
+        fig = _figure(figsize)
+        return fig, fig.add_subplot()
+    if not hasattr(ax, "figure") or not hasattr(ax, "plot"):
+        raise ValueError(f"ax must be matplotlib Axes; got {type(ax).__name__}")
+    return ax.figure, ax
+
+
+def _rows(values: np.ndarray, dims: tuple[str, ...], coords: dict, name: str) -> list:
+    """``(label, row)`` of every channel of a line result (values ``(*channels, n)``)."""
+    if values.ndim == 1:
+        return [(name, values)]
+    out = []
+    for idx in np.ndindex(*values.shape[:-1]):
+        parts = []
+        for d, i in zip(dims, idx, strict=False):
+            c = coords.get(d)
+            parts.append(str(np.asarray(c)[i]) if c is not None else f"{d} {i}")
+        out.append((", ".join(parts) or name, values[idx]))
+    return out
+
+
+def _one_channel(m: Any, channel: Any) -> Any:
+    """The single-channel map to draw (``channel`` required for multi-channel maps)."""
+    if m.values.ndim == 2:
+        return m
+    if channel is None:
+        labels = list(np.asarray(m.coords[m.dims[0]])) if m.dims and m.dims[0] in m.coords else (
+            list(range(m.values.shape[0]))
+        )
+        raise ValueError(f"the map has {m.values.shape[0]} channels: choose one with "
+                         f"channel= (one of {labels})")  # fmt: skip
+    return m.select(channel)
+
+
 def _value_label(scaling: str, units: str, db: bool) -> str:
-    name = {"peak": "peak amplitude", "rms": "rms amplitude", "power": "power", "psd": "PSD"}.get(
-        scaling, scaling
-    )
+    name = {"peak": "peak amplitude", "rms": "rms amplitude", "power": "power",
+            "density": "PSD"}.get(scaling, scaling)  # fmt: skip
     if db:
         return f"{name} [dB re 1 {units}]"
     return f"{name} [{units}]"
@@ -55,7 +93,8 @@ def spectrum_figure(
     peaks: Peaks | None = None,
     labels: Sequence[str] | None = None,
     db: bool = True,
-    channel: int | tuple[int, ...] | None = None,
+    channel: Any = None,
+    ax: Any = None,
     figsize: tuple[float, float] = (8.0, 4.0),
 ) -> Figure:
     """Spectrum with optional labelled peaks.
@@ -70,32 +109,41 @@ def spectrum_figure(
         One text per peak (default: its frequency).
     db : bool, default True
         Level in dB (``20 log10`` amplitudes, ``10 log10`` power) or linear.
-    channel : int or tuple, optional
-        Which spectrum of a multi-channel result (default: all).
+    channel : int, str or tuple, optional
+        Which spectrum of a multi-channel result (a label or an index; default: all, one
+        line per channel with a legend).
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw into (default: a new figure).
     figsize : (float, float)
-        Size in inches.
+        Size in inches of a new figure.
     """
-    fig = _figure(figsize)
-    ax = fig.add_subplot()
-    vals = spectrum.values if channel is None else spectrum.values[channel]
-    vals2 = np.atleast_2d(vals).reshape(-1, vals.shape[-1])
-    for row in vals2:
-        y = to_db(row, spectrum.scaling) if db else row
-        ax.plot(spectrum.frequency, y, lw=0.8)
+    fig, ax = _axes(ax, figsize)
+    if isinstance(channel, tuple):  # an index into several leading dimensions
+        spectrum = dataclasses.replace(
+            spectrum, values=spectrum.values[channel], dims=(), coords={}
+        )
+    elif channel is not None:
+        spectrum = spectrum.select(channel)
+    rows = _rows(spectrum.values, spectrum.dims, spectrum.coords, spectrum.name)
+    for label, row in rows:
+        y = to_db(row, spectrum.amplitude) if db else row
+        ax.plot(spectrum.frequency, y, lw=0.8, label=label)
+    if len(rows) > 1:
+        ax.legend(fontsize=8)
     if peaks is not None and len(peaks):
         text = list(labels) if labels is not None else peaks.labels()
         if len(text) != len(peaks):
             raise ValueError(f"labels: {len(text)} given for {len(peaks)} peaks")
-        y = to_db(peaks.amplitude, spectrum.scaling) if db else peaks.amplitude
+        y = to_db(peaks.amplitude, spectrum.amplitude) if db else peaks.amplitude
         ax.plot(peaks.frequency, y, "v", color="C3", ms=5)
         for f, v, s in zip(peaks.frequency, y, text, strict=True):
             ax.annotate(
                 s, (f, v), xytext=(0, 6), textcoords="offset points", ha="center", fontsize=8
             )
     ax.set_xlabel("frequency [Hz]")
-    ax.set_ylabel(_value_label(spectrum.scaling, spectrum.units, db))
+    ax.set_ylabel(_value_label(spectrum.amplitude, spectrum.units, db))
     ax.set_title(
-        f"{spectrum.name}: {spectrum.window}, Δf = {spectrum.resolution_hz:.4g} Hz, "
+        f"{spectrum.name}: {spectrum.window}, RBW = {spectrum.resolution_hz:.4g} Hz, "
         f"{spectrum.n_averages} avg."
     )
     ax.grid(True, alpha=0.3)
@@ -103,17 +151,25 @@ def spectrum_figure(
 
 
 def order_spectrum_figure(
-    spectrum: OrderSpectrum, *, db: bool = True, figsize: tuple[float, float] = (8.0, 4.0)
+    spectrum: OrderSpectrum,
+    *,
+    db: bool = True,
+    ax: Any = None,
+    figsize: tuple[float, float] = (8.0, 4.0),
 ) -> Figure:
-    """Order spectrum (level vs order)."""
-    fig = _figure(figsize)
-    ax = fig.add_subplot()
-    vals = np.atleast_2d(spectrum.values).reshape(-1, spectrum.values.shape[-1])
-    for row in vals:
-        ax.plot(spectrum.order, to_db(row, spectrum.scaling) if db else row, lw=0.8)
+    """Order spectrum (level vs order), one line per channel; ``ax`` to draw into."""
+    fig, ax = _axes(ax, figsize)
+    rows = _rows(spectrum.values, spectrum.dims, spectrum.coords, spectrum.name)
+    for label, row in rows:
+        ax.plot(spectrum.order, to_db(row, spectrum.amplitude) if db else row, lw=0.8,
+                label=label)  # fmt: skip
+    if len(rows) > 1:
+        ax.legend(fontsize=8)
     ax.set_xlabel("order [-]")
-    ax.set_ylabel(_value_label(spectrum.scaling, spectrum.units, db))
-    ax.set_title(f"{spectrum.name}: {spectrum.window}, Δorder = {spectrum.resolution_orders:.4g}")
+    ax.set_ylabel(_value_label(spectrum.amplitude, spectrum.units, db))
+    ax.set_title(
+        f"{spectrum.name}: {spectrum.window}, RBW = {spectrum.resolution_orders:.4g} orders"
+    )
     ax.grid(True, alpha=0.3)
     return fig
 
@@ -143,6 +199,8 @@ def rpm_frequency_map_figure(
     dynamic_range_db: float = 60.0,
     frequency_max: float | None = None,
     cmap: str = "viridis",
+    channel: Any = None,
+    ax: Any = None,
     figsize: tuple[float, float] = (8.0, 6.0),
 ) -> Figure:
     """Sonogram: speed vertical, frequency horizontal, colour = level in dB.
@@ -167,9 +225,17 @@ def rpm_frequency_map_figure(
         Colour range below the maximum.
     frequency_max : float, optional
         Upper frequency limit of the plot.
+    cmap : str
+        Colour map.
+    channel : str or int, optional
+        The channel to draw of a multi-channel map (required then).
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw into (default: a new figure).
+    figsize : (float, float)
+        Size in inches of a new figure.
     """
-    fig = _figure(figsize)
-    ax = fig.add_subplot()
+    m = _one_channel(m, channel)
+    fig, ax = _axes(ax, figsize)
     levels = _map_levels(m, dynamic_range_db)
     order = np.argsort(m.rpm, kind="stable")  # a coast-down plots with speed upwards too
     _colourmap(
@@ -215,11 +281,16 @@ def rpm_order_map_figure(
     dynamic_range_db: float = 60.0,
     order_max: float | None = None,
     cmap: str = "viridis",
+    channel: Any = None,
+    ax: Any = None,
     figsize: tuple[float, float] = (8.0, 6.0),
 ) -> Figure:
-    """Rpm-order map: speed vertical, order horizontal; optional vertical order markers."""
-    fig = _figure(figsize)
-    ax = fig.add_subplot()
+    """Rpm-order map: speed vertical, order horizontal; optional vertical order markers.
+
+    ``channel`` chooses the channel of a multi-channel map; ``ax`` are axes to draw into.
+    """
+    m = _one_channel(m, channel)
+    fig, ax = _axes(ax, figsize)
     levels = _map_levels(m, dynamic_range_db)
     idx = np.argsort(m.rpm, kind="stable")
     _colourmap(
@@ -245,19 +316,31 @@ def order_cuts_figure(
     *,
     labels: Sequence[str] | None = None,
     db: bool | None = None,
+    channel: Any = None,
+    ax: Any = None,
     figsize: tuple[float, float] = (8.0, 4.0),
 ) -> Figure:
     """Order cuts: level of each tracked order vs speed.
 
-    ``db`` defaults to the cut's own scale; a linear cut can be shown in dB.
+    ``db`` defaults to the cut's own scale; a linear cut can be shown in dB. A multi-channel
+    cut draws every channel (``channel=`` chooses one); ``ax`` are axes to draw into.
     """
-    fig = _figure(figsize)
-    ax = fig.add_subplot()
+    fig, ax = _axes(ax, figsize)
+    if channel is not None:
+        cut = cut.select(channel)
     show_db = (cut.scale == "dB") if db is None else db
     text = list(labels) if labels is not None else [f"order {o:g}" for o in cut.orders]
     if len(text) != cut.orders.size:
         raise ValueError(f"labels: {len(text)} given for {cut.orders.size} orders")
-    for row, lab in zip(cut.values, text, strict=True):
+    vals = cut.values.reshape(-1, *cut.values.shape[-2:])
+    names = [lab for lab, _ in _rows(cut.values[..., 0], cut.dims, cut.coords, "")] if (
+        cut.values.ndim > 2) else [""]  # fmt: skip
+    series = [
+        (f"{ch}: {lab}" if ch else lab, row)
+        for ch, block in zip(names, vals, strict=True)
+        for row, lab in zip(block, text, strict=True)
+    ]
+    for lab, row in series:
         y = row
         if show_db and cut.scale != "dB":
             y = to_db(row, "power" if cut.amplitude == "power" else "rms")
@@ -269,7 +352,7 @@ def order_cuts_figure(
         f"{cut.amplitude} level [dB re 1 {ref}]" if show_db else f"{cut.amplitude} level [{ref}]"
     )
     ax.set_xlabel("speed [min⁻¹]")
-    bw = f"{cut.bandwidth:g} {'orders' if cut.bandwidth_kind == 'order' else 'Hz'}"
+    bw = f"{cut.bandwidth:.4g} {'orders' if cut.bandwidth_kind == 'order' else 'Hz'}"
     ax.set_title(f"{cut.name}: order cuts, band {bw}, {cut.window}")
     ax.legend(fontsize=8)
     ax.grid(True, alpha=0.3)
@@ -277,12 +360,15 @@ def order_cuts_figure(
 
 
 def overall_level_figure(
-    level: OverallLevel, *, figsize: tuple[float, float] = (8.0, 4.0)
+    level: OverallLevel, *, ax: Any = None, figsize: tuple[float, float] = (8.0, 4.0)
 ) -> Figure:
-    """Overall rms level vs speed."""
-    fig = _figure(figsize)
-    ax = fig.add_subplot()
-    ax.plot(level.rpm, level.values, lw=1.0)
+    """Overall rms level vs speed (one line per channel); ``ax`` to draw into."""
+    fig, ax = _axes(ax, figsize)
+    rows = _rows(level.values, level.dims, level.coords, level.name)
+    for label, row in rows:
+        ax.plot(level.rpm, row, lw=1.0, label=label)
+    if len(rows) > 1:
+        ax.legend(fontsize=8)
     ax.set_xlabel("speed [min⁻¹]")
     ax.set_ylabel(
         f"overall rms level [dB re {level.level_reference}]"
@@ -300,11 +386,11 @@ def campbell_figure(
     *,
     order_labels: Sequence[str] | None = None,
     frequency_max: float | None = None,
+    ax: Any = None,
     figsize: tuple[float, float] = (7.0, 5.0),
 ) -> Figure:
     """Campbell diagram: order rays, natural-frequency lines and critical speeds."""
-    fig = _figure(figsize)
-    ax = fig.add_subplot()
+    fig, ax = _axes(ax, figsize)
     text = list(order_labels) if order_labels is not None else [f"{o:g}×" for o in c.orders]
     if len(text) != c.orders.size:
         raise ValueError(f"order_labels: {len(text)} given for {c.orders.size} orders")

@@ -12,7 +12,8 @@ aliasing at every speed of a run-up, not just at the top speed:
    interest;
 2. the angle grid is oversampled by an integer factor ``L`` chosen so that whatever survives
    step 1 at the *lowest* speed lies below the fine grid's Nyquist order and cannot alias
-   into ``[0, samples_per_rev / 2]``; a 24-tap Kaiser-windowed sinc interpolator (error
+   into ``[0, samples_per_rev / 2]``; a 24-tap Kaiser-windowed sinc interpolator (compiled,
+   :func:`analysis.sinc.interpolate`; error
    < 0.01 dB up to 0.4 ``fs``) evaluates the signal at the instants of the fine angle grid;
 3. a Kaiser-window FIR (80 dB stop band, pass band up to ``max_order``, stop band from
    ``samples_per_rev / 2``) removes everything above the final Nyquist order before
@@ -39,8 +40,7 @@ beyond their output they need a few MB whatever the record's length.
 
 from __future__ import annotations
 
-import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -48,13 +48,23 @@ import scipy.integrate
 import scipy.signal
 
 from analysis.checks import (
+    BLOCK_SAMPLES,
     require_block_size,
     require_finite,
     require_finite_blocks,
     require_monotonic,
     require_same_length,
-    uniform_rate,
+    time_or_rate,
 )
+from analysis.inputs import (
+    Reference,
+    Signal,
+    channel_coords,
+    moving_range,
+    reference_input,
+    signal_input,
+)
+from analysis.sinc import HALF_TAPS, decimate, interpolate, positions
 
 if TYPE_CHECKING:
     import xarray as xr
@@ -63,18 +73,17 @@ __all__ = [
     "AngleResampler",
     "AngleSignal",
     "Track",
+    "Tracking",
     "angle_from_speed",
     "check_sampling",
-    "check_signal",
+    "check_speed",
     "default_samples_per_rev",
     "resample_to_angle",
-    "speed_resampler",
+    "tracking",
 ]
 
 _MAX_OVERSAMPLING = 64
 _MIN_INTERVAL = 256  # smallest spacing of the time-domain checkpoints [samples]
-_INTERP_BLOCK = 1 << 11  # fine-grid samples per sinc-interpolation call (stays in cache)
-_SINC_HALF = 12
 
 
 def angle_from_speed(time: Any, rpm: Any) -> np.ndarray:
@@ -120,6 +129,14 @@ class AngleSignal:
         Oversampling factor of the intermediate fine angle grid.
     units, name : str
         Units and name of the signal.
+    dims : tuple of str
+        Names of the leading (channel) dimensions of ``values``.
+    coords : dict
+        Their coordinates (may be empty).
+    reference : str
+        The speed reference used (``"rpm"``, ``"angle"`` or a variable name and units).
+    notes : tuple of str
+        What was done beyond the request (e.g. standstill left out).
     """
 
     angle: np.ndarray
@@ -130,6 +147,10 @@ class AngleSignal:
     oversampling: int
     units: str = "1"
     name: str = "x"
+    dims: tuple[str, ...] = ()
+    coords: dict[str, np.ndarray] = field(default_factory=dict)
+    reference: str = ""
+    notes: tuple[str, ...] = ()
 
     @property
     def revolutions(self) -> np.ndarray:
@@ -140,73 +161,36 @@ class AngleSignal:
         """:class:`xarray.Dataset` with dimension ``angle`` and auxiliary coordinate ``time``."""
         import xarray as xr
 
-        dims = (*(f"dim_{i}" for i in range(self.values.ndim - 1)), "angle")
+        lead = self.dims or tuple(f"dim_{i}" for i in range(self.values.ndim - 1))
+        coords: dict[str, Any] = {
+            "angle": ("angle", self.angle, {"units": "rad", "long_name": "shaft angle"}),
+            "time": (
+                "angle",
+                self.time,
+                {"units": "s", "long_name": "time at which the shaft reaches the angle"},
+            ),
+        }
+        coords.update(channel_coords(lead, self.coords))
+        attrs: dict[str, Any] = {
+            "samples_per_rev": int(self.samples_per_rev),
+            "max_order": float(self.max_order),
+            "oversampling": int(self.oversampling),
+        }
+        if self.reference:
+            attrs["speed_reference"] = self.reference
+        if self.notes:
+            attrs["comment"] = "; ".join(self.notes)
         return xr.Dataset(
-            {self.name: (dims, self.values, {"units": self.units, "long_name": self.name})},
-            coords={
-                "angle": ("angle", self.angle, {"units": "rad", "long_name": "shaft angle"}),
-                "time": (
-                    "angle",
-                    self.time,
-                    {"units": "s", "long_name": "time at which the shaft reaches the angle"},
-                ),
+            {
+                self.name: (
+                    (*lead, "angle"),
+                    self.values,
+                    {"units": self.units, "long_name": self.name},
+                )
             },
-            attrs={
-                "samples_per_rev": int(self.samples_per_rev),
-                "max_order": float(self.max_order),
-                "oversampling": int(self.oversampling),
-            },
+            coords=coords,
+            attrs=attrs,
         )
-
-
-# Power series of the Kaiser window: I0(beta sqrt(z)) = sum_k (beta^2 / 4)^k z^k / (k!)^2 for
-# beta = 7 and z = 1 - (tau / _SINC_HALF)^2 in [0, 1]; all terms are positive and the omitted
-# ones (k > 22) add less than 1e-19 relative, so Horner's rule in z evaluates it to rounding.
-_KAISER_SERIES = np.array([(49.0 / 4.0) ** k / math.factorial(k) ** 2 for k in range(23)])
-_SINC_TAPS = np.arange(-_SINC_HALF + 1, _SINC_HALF + 1)
-_SINC_SIGNS = np.where(_SINC_TAPS % 2 == 0, 1.0, -1.0)  # sin(pi (f - k)) = (-1)^k sin(pi f)
-
-
-def _sinc_at(
-    x: np.ndarray, pos: np.ndarray, start: int = 0, n_total: int | None = None
-) -> np.ndarray:
-    """Band-limited interpolation of a record at fractional sample indices ``pos``.
-
-    ``x`` holds the samples ``start, start + 1, ...`` (last axis) of a record of ``n_total``
-    samples (default: ``x`` is the whole record) and must cover every sample the kernel
-    reaches. Kaiser-windowed sinc with ``2 * _SINC_HALF`` taps (beta 7), rows normalised to
-    unit DC gain: amplitude error below 0.01 dB up to 0.4 ``fs`` (checked numerically; the
-    cubic Lagrange interpolator would lose 0.25 dB already at 0.17 ``fs``). Samples beyond
-    the ends of the record are taken equal to the end samples. The window is evaluated by
-    its power series and the sine once per row (both exact to rounding): half the cost of
-    ``numpy.sinc(tau) * numpy.i0(...)``.
-    """
-    n = start + x.shape[-1] if n_total is None else n_total
-    base = np.floor(pos).astype(np.int64)
-    frac = pos - base
-    tau = frac[:, None] - _SINC_TAPS[None, :]
-    z = tau / _SINC_HALF
-    z *= z
-    np.subtract(1.0, z, out=z)
-    np.maximum(z, 0.0, out=z)
-    h = np.full_like(z, _KAISER_SERIES[-1])
-    for c in _KAISER_SERIES[-2::-1]:
-        h *= z
-        h += c
-    sinc = np.multiply(np.pi, tau, out=tau)
-    with np.errstate(divide="ignore", invalid="ignore"):  # tau = 0 only where frac = 0
-        np.divide(_SINC_SIGNS, sinc, out=sinc)
-        sinc *= np.sin(np.pi * frac)[:, None]
-    on_sample = frac == 0.0
-    if on_sample.any():
-        sinc[on_sample] = _SINC_TAPS == 0
-    h *= sinc
-    h /= h.sum(axis=1, keepdims=True)
-    idx = base[:, None] + _SINC_TAPS[None, :]
-    np.clip(idx, 0, n - 1, out=idx)
-    if start:
-        idx -= start
-    return np.einsum("...mj,mj->...m", x[..., idx], h)
 
 
 class Track:
@@ -253,6 +237,7 @@ class Track:
         self._angle = angle
         self._rpm = rpm
         self._checkpoints = np.empty(-(-n // interval))
+        self._cache: dict[int, np.ndarray] = {}
         d_min, d_max = np.inf, -np.inf
         th = np.zeros(1)
         for k in range(self._checkpoints.size):
@@ -290,7 +275,7 @@ class Track:
             return np.asarray(self._time[a:b], dtype=float)
         return self._t0 + np.arange(a, b) / self._fs
 
-    def _integrate(self, a: int, b: int, start: float) -> np.ndarray:
+    def _integrate(self, a: int, b: int, start: Any) -> np.ndarray:
         """Angle of samples ``[a, b)`` given the angle ``start`` of sample ``a``."""
         assert self._rpm is not None
         t = self.time(a, b)
@@ -300,13 +285,34 @@ class Track:
         inc[1:] = np.diff(t) * (w[1:] + w[:-1]) / 2.0
         return np.cumsum(inc, out=inc)
 
+    def _interval(self, k: int) -> np.ndarray:
+        """Angle of the samples ``[k iv, (k + 1) iv]`` (``iv`` = interval), integrated from
+        checkpoint ``k``; the last two are kept, since blocks progress through the record."""
+        hit = self._cache.get(k)
+        if hit is None:
+            a = k * self.interval
+            hit = self._integrate(a, min(self.n, a + self.interval + 1), self._checkpoints[k])
+            if len(self._cache) >= 2:
+                self._cache.pop(next(iter(self._cache)))
+            self._cache[k] = hit
+        return hit
+
     def angle(self, a: int, b: int) -> np.ndarray:
-        """Shaft angle of samples ``[a, b)`` [rad]."""
+        """Shaft angle of samples ``[a, b)`` [rad].
+
+        Integrated from the checkpoint before ``a``: the same additions in the same order as
+        the first pass, so the values equal an integration over the whole record bit for bit.
+        """
         if self._angle is not None:
             return np.asarray(self._angle[a:b], dtype=float)
-        k = a // self.interval
-        c = k * self.interval
-        return self._integrate(c, b, float(self._checkpoints[k]))[a - c :]
+        iv = self.interval
+        ka, kb = a // iv, (b - 1) // iv
+        if ka == kb:
+            return self._interval(ka)[a - ka * iv : b - ka * iv]
+        parts = [self._interval(ka)[a - ka * iv : iv]]
+        parts += [self._interval(k)[:iv] for k in range(ka + 1, kb)]
+        parts.append(self._interval(kb)[: b - kb * iv])
+        return np.concatenate(parts)
 
     def span(self, lo: float, hi: float) -> tuple[np.ndarray, np.ndarray]:
         """Angle and time of the shortest stretch of samples bracketing ``[lo, hi]``.
@@ -462,7 +468,8 @@ class AngleResampler:
             raise ValueError(
                 f"speed range too wide for alias-free resampling: shaft frequency {n_min:.4g} "
                 f"to {n_max:.4g} Hz needs {over}x angular oversampling (max "
-                f"{_MAX_OVERSAMPLING}); trim the low-speed part of the record or lower max_order"
+                f"{_MAX_OVERSAMPLING}); raise min_rpm (leaves out the slow start or end of the "
+                "record) or lower max_order"
             )
         self.signal = _Lowpassed(x, sos, max(_MIN_INTERVAL, block))
         self.oversampling = over
@@ -493,19 +500,15 @@ class AngleResampler:
 
     def _fine(self, f0: int, f1: int) -> tuple[np.ndarray, np.ndarray]:
         """Signal and time at the fine-grid angles ``[f0, f1)``."""
-        phi = self.track.first + self.dphi * np.arange(f0, f1)
-        th, t = self.track.span(float(phi[0]), float(phi[-1]))
-        tq = np.interp(phi, th, t)
-        pos = (tq - self.t_first) * self.fs
+        first, dphi = self.track.first, self.dphi
+        th, t = self.track.span(first + dphi * float(f0), first + dphi * float(f1 - 1))
+        pos, tq = positions(th, t, first, dphi, f0, f1 - f0, self.t_first, self.fs)
         n = self.signal.n
-        lo = max(0, int(np.floor(pos[0])) - _SINC_HALF + 1)
-        hi = min(n, int(np.floor(pos[-1])) + _SINC_HALF + 1)
+        lo = max(0, int(np.floor(pos[0])) - HALF_TAPS + 1)
+        hi = min(n, int(np.floor(pos[-1])) + HALF_TAPS + 1)
         data = self.signal.get(lo, hi)
-        out = np.empty((*self.lead, f1 - f0))
-        for s in range(0, f1 - f0, _INTERP_BLOCK):
-            sl = slice(s, s + _INTERP_BLOCK)
-            out[..., sl] = _sinc_at(data, pos[sl], lo, n)
-        return out, tq
+        out = interpolate(data.reshape(-1, data.shape[-1]), pos, lo, n)
+        return out.reshape(*self.lead, f1 - f0), tq
 
     def block(self, j0: int, j1: int) -> tuple[np.ndarray, np.ndarray]:
         """Output samples ``[j0, j1)`` (shape ``(..., j1 - j0)``) and their instants [s].
@@ -531,9 +534,8 @@ class AngleResampler:
         f0 = max(0, j0 - reach) * over
         f1 = min(self.n_fine, (j1 - 1) * over + self.fir.size // 2 + 1)
         fine, tq = self._fine(f0, f1)
-        dec = scipy.signal.resample_poly(fine, 1, over, axis=-1, window=self.fir)
-        first = j0 - f0 // over
-        return dec[..., first : first + j1 - j0], tq[j0 * over - f0 :: over][: j1 - j0]
+        dec = decimate(fine.reshape(-1, fine.shape[-1]), self.fir, over, j0 - f0 // over, j1 - j0)
+        return dec.reshape(*self.lead, j1 - j0), tq[j0 * over - f0 :: over][: j1 - j0]
 
 
 def check_sampling(samples_per_rev: Any, max_order: float | None) -> tuple[int, float]:
@@ -551,74 +553,170 @@ def check_sampling(samples_per_rev: Any, max_order: float | None) -> tuple[int, 
     return spr, mo
 
 
-def check_signal(x: Any, name: str) -> np.ndarray:
-    arr = np.asarray(x)
-    if np.iscomplexobj(arr) or not np.issubdtype(arr.dtype, np.number) or arr.ndim == 0:
-        raise ValueError(f"x must be a real numeric array with time last; got {arr.dtype}")
-    require_finite_blocks(arr, name)
-    return arr
-
-
-def speed_resampler(
-    x: np.ndarray,
-    rpm: np.ndarray,
-    samples_per_rev: int | None,
-    max_order: float | None,
-    block: int,
-    *,
-    fs: float,
-    time: np.ndarray | None = None,
-    t0: float = 0.0,
-) -> AngleResampler:
-    """Resampler of ``x`` driven by the speed ``rpm`` (checked), with the default sampling."""
-    if samples_per_rev is None:
-        spr, mo_default = default_samples_per_rev(fs, float(np.max(rpm)))
-        mo = mo_default if max_order is None else max_order
-    else:
-        spr, mo = samples_per_rev, max_order
-    interval = max(_MIN_INTERVAL, block)
-    track = Track(x.shape[-1], interval, time=time, t0=t0, fs=fs, rpm=rpm)
-    spr, mo = check_sampling(spr, mo)
-    return AngleResampler(x, track, fs, spr, mo, block)
-
-
 def default_samples_per_rev(fs: float, rpm_max: float) -> tuple[int, float]:
     """Angular sampling matching ``fs`` at the top speed, and its max order ``spr / 2.56``."""
     spr = int(2 * np.ceil(0.5 * fs / (rpm_max / 60.0)))
     return max(spr, 8), max(spr, 8) / 2.56
 
 
+@dataclass
+class Tracking:
+    """A record ready for order tracking: moving part, its resampler and what was done.
+
+    Attributes
+    ----------
+    signal : Signal
+        The checked input signal (whole record).
+    reference : Reference
+        Its speed reference (whole record).
+    start, stop : int
+        The samples ``[start, stop)`` analysed (standstill at the ends left out).
+    resampler : AngleResampler
+        Resampler of that part.
+    notes : tuple of str
+        What was left out, for the result.
+    """
+
+    signal: Signal
+    reference: Reference
+    start: int
+    stop: int
+    resampler: AngleResampler
+    notes: tuple[str, ...]
+
+    @property
+    def rpm(self) -> np.ndarray | None:
+        """Speed [min-1] of the analysed samples (``None`` for an angle reference)."""
+        if self.reference.kind != "rpm":
+            return None
+        return self.reference.values[self.start : self.stop]
+
+    @property
+    def t0(self) -> float:
+        """Time of the first analysed sample [s]."""
+        return self.signal.t0 + self.start / self.signal.fs
+
+    @property
+    def angle(self) -> np.ndarray | None:
+        """Angle [rad] of the analysed samples (``None`` for a speed reference)."""
+        if self.reference.kind != "angle":
+            return None
+        return self.reference.values[self.start : self.stop]
+
+
+def tracking(
+    signal: Signal,
+    reference: Reference,
+    samples_per_rev: int | None,
+    max_order: float | None,
+    block: int,
+    min_rpm: float | None,
+) -> Tracking:
+    """Leave out standstill at the ends, check the rest and set up its angular resampler.
+
+    ``samples_per_rev`` defaults to ``2 ceil(fs / 2 / f_shaft,max)`` (about ``fs`` at the top
+    speed), ``max_order`` to ``samples_per_rev / 2.56``.
+    """
+    fs = signal.fs
+    a, b, _, note = moving_range(reference, fs, signal.t0, min_rpm)
+    if b - a < 8:
+        raise ValueError(
+            f"{signal.name}: needs at least 8 samples for angular resampling ({b - a} moving)"
+        )
+    x = signal.values[..., a:b]
+    t0 = signal.t0 + a / fs  # the time axis is taken as uniform: t0 + k / fs
+    interval = max(_MIN_INTERVAL, block)
+    values = reference.values[a:b]
+    if reference.kind == "rpm":
+        message = (
+            "rpm must be > 0 for order tracking (angle strictly increasing); rpm[{i}] = {value}"
+        )
+        check_speed(values, b - a, message, offset=a)
+        track = Track(b - a, interval, t0=t0, fs=fs, rpm=values)
+        rpm_max = float(np.max(values))
+    else:
+        track = Track(b - a, interval, t0=t0, fs=fs, angle=values)
+        rpm_max = track.step_max * fs * 60.0 / (2.0 * np.pi)
+    if samples_per_rev is None:
+        spr, mo_default = default_samples_per_rev(fs, rpm_max)
+        mo = mo_default if max_order is None else max_order
+    else:
+        spr, mo = samples_per_rev, max_order
+    spr, mo = check_sampling(spr, mo)
+    resampler = AngleResampler(x, track, fs, spr, mo, block)
+    return Tracking(signal, reference, a, b, resampler, (note,) if note else ())
+
+
+def check_speed(
+    rpm: np.ndarray, n: int, message: str | None = None, *, offset: int = 0
+) -> np.ndarray:
+    """``rpm`` as an array of ``n`` finite values, checked block-wise (no copy).
+
+    With ``message`` (formatted with ``i`` and ``value``; ``i`` counts from ``offset``) every
+    value must also be > 0.
+    """
+    r = np.asarray(rpm)
+    if r.ndim != 1 or r.size != n:
+        raise ValueError(
+            f"sample-count mismatch (x: {n}, rpm: {r.size}); rpm must be 1-D, one value per "
+            "sample of x"
+        )
+    require_finite_blocks(r, "rpm")
+    if message is None:
+        return r
+    for a in range(0, n, BLOCK_SAMPLES):
+        bad = np.flatnonzero(r[a : a + BLOCK_SAMPLES] <= 0)
+        if bad.size:
+            i = a + int(bad[0])
+            raise ValueError(message.format(i=i + offset, value=r[i]))
+    return r
+
+
 def resample_to_angle(
     x: Any,
-    time: Any,
-    angle: Any,
-    samples_per_rev: int,
+    fs: Any = None,
+    angle: Any = None,
+    samples_per_rev: int | None = None,
     max_order: float | None = None,
     *,
-    units: str = "1",
-    name: str = "x",
+    rpm: Any = None,
+    time: Any = None,
+    axis: int | None = None,
+    min_rpm: float | None = None,
+    units: str | None = None,
+    name: str | None = None,
     block_size: int | None = None,
 ) -> AngleSignal:
     """Resample a time signal onto a constant-angle grid, with anti-alias filtering.
 
-    The whole resampled signal is returned; :func:`order_spectrum`, :func:`order_cuts` and
-    :func:`analysis.maps.rpm_order_map` use the same resampling block by block instead and
-    never hold it.
+    The whole resampled signal is returned; :func:`analysis.orders.order_spectrum`,
+    :func:`analysis.orders.order_cuts` and :func:`analysis.maps.rpm_order_map` use the same
+    resampling block by block instead and never hold it.
 
     Parameters
     ----------
-    x : array_like
-        Signal, time along the last axis.
-    time : array_like
-        Uniform sample instants [s] (same length as ``x``).
-    angle : array_like
-        Shaft angle [rad] at ``time``; must be strictly increasing (positive speed).
-    samples_per_rev : int
-        Samples per revolution of the output (>= 4).
+    x : array_like or xarray.DataArray
+        Signal, one or several channels (see :mod:`analysis.inputs`).
+    fs : float, optional
+        Sample rate [Hz] (or give ``time``).
+    angle : array_like, optional
+        Shaft angle [rad] per sample; non-decreasing. Give ``angle`` or ``rpm``.
+    samples_per_rev : int, optional
+        Samples per revolution of the output (>= 4); default about ``fs`` at the top speed.
     max_order : float, optional
         Highest order to keep, ``<= samples_per_rev / 2``; default ``samples_per_rev / 2.56``.
-    units, name : str
-        Metadata of ``x``.
+    rpm : array_like, optional
+        Shaft speed [min-1] per sample, integrated to the angle (trapezoidal rule).
+    time : array_like, optional
+        Uniform sample instants [s].
+    axis : int, optional
+        Time axis of a multi-dimensional array (required unless the reference's length
+        singles it out).
+    min_rpm : float, optional
+        Standstill threshold [min-1]: slower samples at the start and end are left out and
+        the result says so in ``notes``; default 2 % of the highest speed.
+    units, name : str, optional
+        Metadata of ``x`` (default from a DataArray, else ``"1"`` and ``"x"``).
     block_size : int, optional
         Output samples resampled per block (default 32768). Only the working memory depends
         on it; the result equals that of a single block to rounding.
@@ -626,25 +724,33 @@ def resample_to_angle(
     Returns
     -------
     AngleSignal
-        Resampled signal, starting at ``angle[0]``.
+        Resampled signal, shape ``(*channels, angle)``, starting at the angle of the first
+        analysed sample.
     """
-    arr = check_signal(x, name)
-    fs = uniform_rate(time, "time")
-    t = np.asarray(time)
-    th = np.asarray(angle)
-    require_same_length([arr, t, th], [name, "time", "angle"])
-    if t.size < 8:
-        raise ValueError(f"{name}: needs at least 8 samples for angular resampling")
+    fs, time = time_or_rate(fs, time, "resample_to_angle")
+    lengths = tuple(np.shape(r)[0] for r in (rpm, angle) if r is not None and np.ndim(r) == 1)
+    sig = signal_input(x, fs, time=time, axis=axis, units=units, name=name, lengths=lengths)
+    ref = reference_input(rpm, angle, sig.n, required=True, signal=sig)
+    assert ref is not None
     block = require_block_size(block_size)
-    interval = max(_MIN_INTERVAL, block)
-    track = Track(t.size, interval, time=t, angle=th)
-    spr, mo = check_sampling(samples_per_rev, max_order)
-    res = AngleResampler(arr, track, fs, spr, mo, block)
-    values = np.empty((*arr.shape[:-1], res.n_out))
+    tr = tracking(sig, ref, samples_per_rev, max_order, block, min_rpm)
+    res = tr.resampler
+    values = np.empty((*sig.lead, res.n_out))
     times = np.empty(res.n_out)
     for j0 in range(0, res.n_out, block):
         j1 = min(res.n_out, j0 + block)
         values[..., j0:j1], times[j0:j1] = res.block(j0, j1)
     return AngleSignal(
-        res.angle(0, res.n_out), times, values, spr, mo, res.oversampling, units, name
+        res.angle(0, res.n_out),
+        times,
+        values,
+        res.samples_per_rev,
+        res.max_order,
+        res.oversampling,
+        sig.units,
+        sig.name,
+        sig.dims,
+        sig.coords,
+        ref.label,
+        tr.notes,
     )

@@ -22,6 +22,8 @@ Averaging is over power (``<|X|^2>``), never over complex spectra or magnitudes,
 
 from __future__ import annotations
 
+import dataclasses
+import warnings
 from collections.abc import Hashable, Iterator
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Literal
@@ -30,14 +32,10 @@ import numpy as np
 import scipy.optimize
 import scipy.signal
 
-from analysis.checks import (
-    require_choice,
-    require_finite_blocks,
-    require_int,
-    uniform_rate,
-)
+from analysis.checks import require_choice, require_int, time_or_rate
 from analysis.fft import RfftPlan, rfft_plan
-from analysis.levels import SCALINGS, to_db, units_of
+from analysis.inputs import channel_coords, select_channel, signal_input
+from analysis.levels import AMPLITUDES, SCALINGS, amplitude_choice, to_db, units_of
 from analysis.plots import spectrum_figure
 from analysis.windows import (
     WINDOWS,
@@ -71,22 +69,22 @@ _BLOCK_ELEMENTS = 1 << 17  # windowed samples per FFT block (1 MiB: stays in the
 
 @dataclass
 class Spectrum:
-    """Single-sided spectrum (see the module docstring for the scalings).
+    """Single-sided spectrum (see the module docstring for the amplitude conventions).
 
     Attributes
     ----------
     frequency : numpy.ndarray
         Bin frequencies [Hz], ``k * fs / nfft``.
     values : numpy.ndarray
-        Spectrum, shape ``(*leading, frequency)``.
+        Spectrum, shape ``(*channels, frequency)``.
     window : str
         Window label.
-    scaling : str
-        ``"peak"``, ``"rms"``, ``"power"`` or ``"psd"``.
+    amplitude : str
+        ``"peak"``, ``"rms"``, ``"power"`` or ``"density"`` (PSD).
     enbw_hz : float
         Equivalent noise bandwidth [Hz] (``enbw_bins * fs / segment_length``).
-    resolution_hz : float
-        Bin spacing actually used, ``fs / nfft`` [Hz].
+    bin_spacing_hz : float
+        Line spacing ``fs / nfft`` [Hz].
     n_averages : int
         Number of averaged segments.
     units : str
@@ -102,19 +100,21 @@ class Spectrum:
     beta : float or None
         Kaiser parameter, if any.
     dims : tuple of str
-        Names of the leading dimensions of ``values``.
+        Names of the leading (channel) dimensions of ``values``.
     coords : dict
         Coordinate arrays of the leading dimensions (may be empty).
     name : str
         Name of the analysed channel.
+    window_params : tuple
+        Parameters of the window other than Kaiser's beta.
     """
 
     frequency: np.ndarray
     values: np.ndarray
     window: str
-    scaling: str
+    amplitude: str
     enbw_hz: float
-    resolution_hz: float
+    bin_spacing_hz: float
     n_averages: int
     units: str
     fs: float
@@ -126,12 +126,34 @@ class Spectrum:
     dims: tuple[str, ...] = ()
     coords: dict[str, np.ndarray] = field(default_factory=dict)
     name: str = "x"
+    window_params: tuple[Any, ...] = ()
+
+    @property
+    def resolution_hz(self) -> float:
+        """Resolution bandwidth [Hz]: the window's ENBW, as in the maps (MATLAB's ``res``)."""
+        return self.enbw_hz
+
+    @property
+    def scaling(self) -> str:
+        """Deprecated name of :attr:`amplitude` (``"psd"`` for ``"density"``)."""
+        warnings.warn(
+            "Spectrum.scaling is deprecated; use Spectrum.amplitude", FutureWarning, stacklevel=2
+        )
+        return "psd" if self.amplitude == "density" else self.amplitude
 
     @property
     def window_spec(self) -> WindowSpec:
         """Window specification accepted by :func:`get_window`."""
         base = self.window.split("(")[0]
-        return (base, self.beta) if self.beta is not None else base
+        if self.beta is not None:
+            return (base, self.beta)
+        return (base, *self.window_params) if self.window_params else base
+
+    def select(self, channel: Any) -> Spectrum:
+        """The spectrum of one channel (a label of the channel coordinate, or an index)."""
+        values, dims, coords, label = select_channel(self.values, self.dims, self.coords, channel)
+        name = f"{self.name} {label}" if self.name else label
+        return dataclasses.replace(self, values=values, dims=dims, coords=coords, name=name)
 
     def to_dataset(self) -> xr.Dataset:
         """CF-annotated :class:`xarray.Dataset` with variable ``spectrum(..., frequency)``."""
@@ -141,15 +163,13 @@ class Spectrum:
             "peak": "peak amplitude spectrum",
             "rms": "rms amplitude spectrum",
             "power": "power spectrum",
-            "psd": "power spectral density",
-        }[self.scaling]
+            "density": "power spectral density",
+        }[self.amplitude]
         dims = (*self.dims, "frequency")
         coords: dict[Hashable, Any] = {
             "frequency": ("frequency", self.frequency, {"units": "Hz", "long_name": "frequency"})
         }
-        for d in self.dims:
-            if d in self.coords:
-                coords[d] = (d, np.asarray(self.coords[d]), {"long_name": str(d)})
+        coords.update(channel_coords(self.dims, self.coords))
         ds = xr.Dataset(
             {
                 "spectrum": (
@@ -162,9 +182,10 @@ class Spectrum:
         )
         ds.attrs.update(
             window=self.window,
-            scaling=self.scaling,
+            amplitude=self.amplitude,
             enbw_hz=float(self.enbw_hz),
             resolution_hz=float(self.resolution_hz),
+            bin_spacing_hz=float(self.bin_spacing_hz),
             n_averages=int(self.n_averages),
             segment_length=int(self.segment_length),
             nfft=int(self.nfft),
@@ -264,38 +285,49 @@ def spectrum(
     fs: float | None = None,
     *,
     window: WindowSpec = "hann",
-    scaling: Literal["peak", "rms", "power", "psd"] = "peak",
-    nfft: int | None = None,
+    amplitude: Literal["peak", "rms", "power", "density"] | None = None,
+    resolution: float | None = None,
     segment_length: int | None = None,
+    nfft: int | None = None,
     overlap: float = 0.5,
     average: Literal["mean", "max"] = "mean",
+    time: Any = None,
+    axis: int | None = None,
     units: str | None = None,
     name: str | None = None,
     workers: int | None = None,
+    scaling: str | None = None,
 ) -> Spectrum:
-    """Single-sided windowed spectrum, Welch-averaged when ``segment_length`` is given.
+    """Single-sided windowed spectrum, Welch-averaged over segments.
 
     Parameters
     ----------
     x : array_like or xarray.DataArray
-        Signal; the last axis is time. A DataArray must have a ``time`` dimension with a
-        uniform ``time`` coordinate in seconds, from which ``fs`` is taken; its ``units``
-        attribute is used for the output units.
+        Signal, one or several channels (see :mod:`analysis.inputs`). A DataArray gives
+        ``fs`` (its uniform ``time`` coordinate), ``units`` and its channel coordinates; a
+        multi-dimensional array needs ``axis``.
     fs : float, optional
-        Sample rate [Hz]; required for plain arrays. For a DataArray it must match the
-        coordinate (within 1e-6 relative) if given.
-    window : str or ("kaiser", beta), default "hann"
-        See :data:`WINDOWS`.
-    scaling : {"peak", "rms", "power", "psd"}, default "peak"
-        Amplitude convention (module docstring).
-    nfft : int, optional
-        Transform length >= ``segment_length`` (zero padding); default ``segment_length``.
+        Sample rate [Hz] (or ``time``); for a DataArray it must match the coordinate.
+    window : str or tuple, default "hann"
+        Any :func:`scipy.signal.get_window` window.
+    amplitude : {"peak", "rms", "power", "density"}, default "rms"
+        Amplitude convention (module docstring); ``"density"`` is the PSD (scipy's word).
+    resolution : float, optional
+        Resolution bandwidth [Hz] (the window's ENBW, as in the maps): sets
+        ``segment_length = round(ENBW_bins * fs / resolution)``. Exclusive with
+        ``segment_length``.
     segment_length : int, optional
         Samples per averaged segment; default the whole record (one segment).
+    nfft : int, optional
+        Transform length >= ``segment_length`` (zero padding); default ``segment_length``.
     overlap : float, default 0.5
         Overlap fraction between segments, in ``[0, 1)``.
     average : {"mean", "max"}, default "mean"
         Mean or peak hold of the segment powers.
+    time : array_like, optional
+        Uniform time axis [s] instead of ``fs``.
+    axis : int, optional
+        Time axis of a multi-dimensional array.
     units : str, optional
         Units of ``x`` (default from the DataArray, else ``"1"``).
     name : str, optional
@@ -305,11 +337,13 @@ def spectrum(
         CPUs. The result does not depend on it beyond floating-point rounding. Extra threads
         pay off only when CPUs are idle: each block is a few milliseconds of work, and
         waiting for a busy CPU at every execute can cost more than it saves.
+    scaling : str, optional
+        Deprecated name of ``amplitude`` (``"psd"`` for ``"density"``).
 
     Returns
     -------
     Spectrum
-        The spectrum with its window, ENBW, bin spacing and number of averages.
+        The spectrum with its window, ENBW (= resolution), bin spacing and number of averages.
 
     Notes
     -----
@@ -317,50 +351,26 @@ def spectrum(
     FFTW plan (see :func:`analysis.fft.rfft_plan`), so memory stays bounded for any record
     length, and the same input gives the same output bit for bit.
     """
-    dims: tuple[str, ...] = ()
-    coords: dict[str, np.ndarray] = {}
-    try:
-        import xarray as xr
-    except ImportError:  # pragma: no cover - xarray is a hard dependency
-        xr = None  # type: ignore[assignment]
-    if xr is not None and isinstance(x, xr.DataArray):
-        if "time" not in x.dims:
-            raise ValueError(f"x: DataArray needs a 'time' dimension; it has dims {x.dims}")
-        if "time" not in x.coords:
-            raise ValueError("x: DataArray needs a 'time' coordinate in seconds")
-        fs_coord = uniform_rate(x["time"].values, "x.time")
-        if fs is not None and abs(float(fs) - fs_coord) > 1e-6 * fs_coord:
-            raise ValueError(
-                f"sample-rate mismatch: fs = {fs!r} Hz but the time coordinate of x gives "
-                f"{fs_coord:.9g} Hz; omit fs or make them agree"
-            )
-        fs = fs_coord
-        x = x.transpose(..., "time")
-        dims = tuple(str(d) for d in x.dims[:-1])
-        coords = {d: np.asarray(x[d].values) for d in dims if d in x.coords}
-        units = units if units is not None else str(x.attrs.get("units", "1"))
-        name = name if name is not None else (str(x.name) if x.name is not None else "x")
-        arr = np.asarray(x.values)
-    else:
-        arr = np.asarray(x)
-    name = name if name is not None else "x"
-    units = units if units is not None else "1"
-    if fs is None:
-        raise ValueError("fs is required (sample rate in Hz, > 0) for a plain array")
-    fs = float(fs)
-    if not np.isfinite(fs) or fs <= 0:
-        raise ValueError(f"fs = {fs!r} is not admissible: must be finite and > 0 Hz")
-    if np.iscomplexobj(arr) or not np.issubdtype(arr.dtype, np.number):
-        raise ValueError(f"x must be a real numeric array; got dtype {arr.dtype}")
-    if arr.ndim == 0:
-        raise ValueError("x must have at least one dimension (time last)")
-    require_finite_blocks(arr, name)
-    if not dims:
-        dims = tuple(f"dim_{i}" for i in range(arr.ndim - 1))
-    require_choice(scaling, SCALINGS, "scaling")
+    amp = amplitude_choice(amplitude, scaling, "spectrum", AMPLITUDES)
+    fs, time = time_or_rate(fs, time, "spectrum")
+    sig = signal_input(x, fs, time=time, axis=axis, units=units, name=name)
+    arr, fs, dims = sig.values, sig.fs, sig.dims
     require_choice(average, ("mean", "max"), "average")
     n = arr.shape[-1]
-    seg = n if segment_length is None else require_int(segment_length, "segment_length", 2)
+    if resolution is not None:
+        if segment_length is not None:
+            raise ValueError("give resolution= (Hz) or segment_length= (samples), not both")
+        res = float(resolution)
+        if not np.isfinite(res) or res <= 0:
+            raise ValueError(f"resolution = {resolution!r} is not admissible: must be > 0 Hz")
+        seg = round(window_info(window, 4096).enbw_bins * fs / res)
+        if not 2 <= seg <= n:
+            raise ValueError(
+                f"resolution = {res:g} Hz needs segments of {seg} samples; admissible: 2 to "
+                f"{n} (the record's length)"
+            )
+    else:
+        seg = n if segment_length is None else require_int(segment_length, "segment_length", 2)
     if seg > n:
         raise ValueError(f"segment_length = {seg} is not admissible: must be <= {n} (x length)")
     nfft = seg if nfft is None else require_int(nfft, "nfft", 1)
@@ -378,32 +388,33 @@ def spectrum(
     one_sided[0] = 1.0
     if nfft % 2 == 0:
         one_sided[-1] = 1.0
-    if scaling == "psd":
+    if amp == "density":
         values = power * (one_sided / (fs * s2))
     else:
         values = power * (one_sided / (s1 * s1))
-        if scaling in ("rms", "peak"):
+        if amp in ("rms", "peak"):
             np.sqrt(values, out=values)
-        if scaling == "peak":
+        if amp == "peak":
             values *= np.sqrt(one_sided)
     return Spectrum(
         frequency=np.arange(nfft // 2 + 1) * (fs / nfft),
         values=values,
         window=info.label,
-        scaling=scaling,
+        amplitude=amp,
         enbw_hz=info.enbw_hz(fs),
-        resolution_hz=fs / nfft,
+        bin_spacing_hz=fs / nfft,
         n_averages=n_avg,
-        units=units_of(units, scaling),
+        units=units_of(sig.units, amp),
         fs=fs,
         segment_length=seg,
         nfft=nfft,
-        overlap=overlap if segment_length is not None else 0.0,
+        overlap=overlap if seg < n else 0.0,
         average=average,
         beta=info.beta,
         dims=dims,
-        coords=coords,
-        name=name,
+        coords=sig.coords,
+        name=sig.name,
+        window_params=info.params,
     )
 
 
@@ -419,13 +430,16 @@ class Peaks:
     frequency : numpy.ndarray
         Interpolated peak frequencies [Hz] (ascending).
     amplitude : numpy.ndarray
-        Peak heights corrected for scalloping, in the spectrum's scaling and ``units``: a
+        Peak heights corrected for scalloping, in the spectrum's convention and ``units``: a
         sinusoid of amplitude ``A`` gives ``A`` ("peak"), ``A/sqrt(2)`` ("rms"), ``A^2/2``
-        ("power"); for "psd" the corrected PSD height (the sine's power is
+        ("power"); for "density" the corrected PSD height (the sine's power is
         ``amplitude * enbw_hz``).
     bin_frequency, bin_value : numpy.ndarray
         Frequency and raw value of the local-maximum bins.
-    scaling, units, window : str
+    scaling : str
+        The spectrum's amplitude convention (``Spectrum.amplitude``; here the field is called
+        ``scaling`` because ``amplitude`` holds the peak heights).
+    units, window : str
         Copied from the spectrum.
     """
 
@@ -530,7 +544,7 @@ def find_peaks(
     prominence_db: float | None = None,
     max_peaks: int | None = None,
     min_distance_hz: float | None = None,
-    channel: int | tuple[int, ...] | None = None,
+    channel: Any = None,
 ) -> Peaks:
     """Local maxima of a spectrum with interpolated frequency and amplitude.
 
@@ -546,8 +560,9 @@ def find_peaks(
         Keep only the strongest ``max_peaks`` (result sorted by frequency).
     min_distance_hz : float, optional
         Minimum distance between peaks [Hz]; the stronger one is kept.
-    channel : int or tuple of int, optional
-        Index into the leading dimensions for multi-channel spectra (required then).
+    channel : int, str or tuple of int, optional
+        Multi-channel spectra: a label of the channel coordinate, or an index (tuple of
+        indices) into the leading dimensions (required then).
 
     Returns
     -------
@@ -562,7 +577,7 @@ def find_peaks(
             raise ValueError(
                 f"spectrum has leading dims {spectrum.dims}; pass channel=<index> to choose one"
             )
-        vals = vals[channel]
+        vals = spectrum.select(channel).values if isinstance(channel, str) else vals[channel]
         if vals.ndim != 1:
             raise ValueError(f"channel = {channel!r} does not select a single spectrum")
     kwargs: dict[str, Any] = {}
@@ -575,10 +590,10 @@ def find_peaks(
             raise ValueError(
                 f"min_distance_hz = {min_distance_hz!r} is not admissible: must be > 0 Hz"
             )
-        kwargs["distance"] = max(1, round(min_distance_hz / spectrum.resolution_hz))
+        kwargs["distance"] = max(1, round(min_distance_hz / spectrum.bin_spacing_hz))
     if max_peaks is not None:
         require_int(max_peaks, "max_peaks", 1)
-    levels = to_db(vals, spectrum.scaling)
+    levels = to_db(vals, spectrum.amplitude)
     idx, _ = scipy.signal.find_peaks(np.concatenate(([-np.inf], levels, [-np.inf])), **kwargs)
     idx = idx - 1
     if threshold is not None:  # absolute threshold on the linear values
@@ -586,9 +601,9 @@ def find_peaks(
     if max_peaks is not None and idx.size > max_peaks:
         idx = np.sort(idx[np.argsort(vals[idx])[::-1][:max_peaks]])
     # bin magnitudes proportional to |X_k| (undo the one-sided factors and the square root)
-    power_like = spectrum.scaling in ("power", "psd")
+    power_like = spectrum.amplitude in ("power", "density")
     mag = np.sqrt(vals) if power_like else vals.copy()
-    one_sided = np.full(mag.size, 0.5 if spectrum.scaling == "peak" else np.sqrt(0.5))
+    one_sided = np.full(mag.size, 0.5 if spectrum.amplitude == "peak" else np.sqrt(0.5))
     one_sided[0] = 1.0
     if spectrum.nfft % 2 == 0:
         one_sided[-1] = 1.0
@@ -602,14 +617,14 @@ def find_peaks(
             d, gain = _interpolate(kernel, mag[k - 1], mag[k], mag[k + 1])
         else:
             d, gain = 0.0, 1.0
-        freq[j] = (k + d) * spectrum.resolution_hz
+        freq[j] = (k + d) * spectrum.bin_spacing_hz
         amp[j] = vals[k] * (gain * gain if power_like else gain)
     return Peaks(
         frequency=freq,
         amplitude=amp,
         bin_frequency=spectrum.frequency[idx],
         bin_value=vals[idx].copy(),
-        scaling=spectrum.scaling,
+        scaling=spectrum.amplitude,
         units=spectrum.units,
         window=spectrum.window,
     )

@@ -22,9 +22,10 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 import xarray as xr
-from scipy.interpolate import CubicSpline, PchipInterpolator
+from scipy.interpolate import CubicSpline, PchipInterpolator, make_lsq_spline
 from scipy.ndimage import median_filter
 
+from analysis.cf import time_attrs
 from analysis.checks import require_finite, require_monotonic, require_positive
 
 __all__ = ["SpeedAccuracy", "SpeedReference", "from_angle", "from_rpm", "from_tacho"]
@@ -102,7 +103,11 @@ class SpeedReference:
     def to_dataset(self) -> xr.Dataset:
         """Return a Dataset with ``angle`` (units ``rad``) and ``rpm`` (units ``min-1``) along
         ``time`` (units ``s``); accuracy figures become global attributes."""
-        attrs: dict[str, object] = {"Conventions": "CF-1.11", "speed_method": self.method}
+        attrs: dict[str, object] = {
+            "Conventions": "CF-1.11",
+            "history": f"speed reference from {self.method} by analysis.speed",
+            "speed_method": self.method,
+        }
         attrs.update({f"speed_{k}": v for k, v in asdict(self.accuracy).items()})
         return xr.Dataset(
             {
@@ -117,7 +122,7 @@ class SpeedReference:
                     {"units": "min-1", "long_name": "shaft speed (revolutions per minute)"},
                 ),
             },
-            coords={"time": ("time", self.time, {"units": "s", "long_name": "time"})},
+            coords={"time": ("time", self.time, time_attrs("time"))},
             attrs=attrs,
         )
 
@@ -149,6 +154,20 @@ def _evaluate(t_knots: np.ndarray, angle: np.ndarray, t_out: np.ndarray):
     ang[after] = angle[-1] + om1 * (t_out[after] - t1)
     om[after] = om1
     return ang, om * _RAD_PER_S_TO_RPM
+
+
+def _smooth_rpm(tp: np.ndarray, angle: np.ndarray, t_out: np.ndarray, every: int) -> np.ndarray:
+    """Rpm from a least-squares cubic spline through the pulse angles, a knot every ``every``
+    pulses; constant speed outside the pulses (as the angle)."""
+    inner = tp[every:-every:every] if tp.size > 2 * every else tp[:0]
+    inner = inner[(inner > tp[0]) & (inner < tp[-1])]
+    knots = np.concatenate([np.repeat(tp[0], 4), inner, np.repeat(tp[-1], 4)])
+    if tp.size < knots.size - 4:  # too few pulses for the knots: one cubic
+        knots = np.concatenate([np.repeat(tp[0], 4), np.repeat(tp[-1], 4)])
+    spline = make_lsq_spline(tp, angle, knots, k=3)
+    d = spline.derivative()
+    om = d(np.clip(t_out, tp[0], tp[-1]))
+    return om * _RAD_PER_S_TO_RPM
 
 
 def _check_time(time: np.ndarray, name: str = "time") -> np.ndarray:
@@ -332,6 +351,7 @@ def from_tacho(
     missing_teeth: int = 0,
     repair: bool = True,
     output_time: np.ndarray | None = None,
+    rpm_smoothing: int | None = None,
 ) -> SpeedReference:
     """Speed reference from a tacho pulse train.
 
@@ -361,13 +381,22 @@ def from_tacho(
         whole number of pitches is removed). Default True.
     output_time : array_like, optional
         Time base [s] of the result; default the signal's samples, ``arange(n) / fs``.
+    rpm_smoothing : int, optional
+        Pulses per interval of the smoothing spline of the rpm (see Returns); default
+        ``max(4, pulses_per_rev)``, one knot per revolution; 1 gives the plain derivative
+        of the angle (the rpm before smoothing existed).
 
     Returns
     -------
     SpeedReference
-        Angle (PCHIP through the pulse angles :math:`2\\pi\\,\\mathrm{count}/\\mathrm{ppr}`, with
-        constant-speed extrapolation before the first and after the last pulse) and rpm (its
-        derivative). Without a missing-tooth reference, the first pulse has angle 0.
+        Angle: PCHIP through the pulse angles :math:`2\\pi\\,\\mathrm{count}/\\mathrm{ppr}`, with
+        constant-speed extrapolation before the first and after the last pulse; exact at the
+        pulses, it is the reference to give order analysis (``angle=``). Rpm: the derivative
+        of a least-squares cubic spline through the pulse angles with a knot every
+        ``rpm_smoothing`` pulses. The derivative of the angle itself carries the pulse-timing
+        scatter and tooth pitch errors as a tooth-to-tooth ripple of the rpm (about 0.5 % in
+        the tests at 60 pulses per revolution); the least-squares spline averages them over
+        the knot interval. Without a missing-tooth reference, the first pulse has angle 0.
 
     Raises
     ------
@@ -446,6 +475,16 @@ def from_tacho(
         else require_finite(output_time, "output_time").ravel()
     )
     angle, rpm = _evaluate(tp, pulse_angle, t_out)
+    if rpm_smoothing is None:
+        k = max(4, ppr)
+    elif isinstance(rpm_smoothing, bool) or not isinstance(rpm_smoothing, int | np.integer) or (
+        rpm_smoothing < 1
+    ):
+        raise ValueError(f"rpm_smoothing = {rpm_smoothing!r}: must be an integer >= 1 (pulses)")
+    else:
+        k = int(rpm_smoothing)
+    if k > 1:
+        rpm = _smooth_rpm(tp, pulse_angle, t_out, k)
     omega_p = PchipInterpolator(tp, pulse_angle).derivative()(tp)
     timing = _timing_error(tp, pos, omega_p)
     resid = _fit_residual(tp, pulse_angle)

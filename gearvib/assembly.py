@@ -14,6 +14,23 @@ with ``sigma = -1`` for an internal pair, ``n = cos(alpha) t + sigma sin(alpha) 
 of action (``e`` the unit vector from gear 1 to gear 2, ``t`` = ``e`` turned by +90°), ``d`` the
 in-plane displacement of each gear centre and ``h`` the helix hand of gear 1.
 
+Back flank. The right (back) flank touches along the other common tangent of the base circles,
+the mirror image of the left flank's line of action about the line of centres::
+
+    n_R = cos(alpha) t - sigma sin(alpha) e
+
+Derivation: ``n_L`` is the direction in which gear 1 pushes gear 2 on the left flank
+(external pair: tangential ``+t`` and separating ``+e``; internal pair, gear 1 the ring: the
+planet is pushed ``+t`` and towards the ring's axis, ``-e``). Gear 1 turning the other way
+pushes gear 2 on its back flank with the tangential component reversed and the separating one
+unchanged, ``-cos(alpha) t + sigma sin(alpha) e = -n_R``; with the deflection counted like the
+left one's (negative in contact), the back-flank deflection is ``delta_R`` of the formula above
+with ``n_R`` in place of ``n``. The rotations enter both alike (equal base radii) and so does
+the axial term (a helical flank facing the other way has the opposite normal: the tangential
+and the axial force reverse together, for either hand). Only the in-plane translations differ:
+``mesh_back_vectors`` of the model (None when they are identical, i.e. when no translation of a
+meshing gear is a coordinate).
+
 Axial sign convention: ``z`` runs along the main axis so that positive rotations are
 counter-clockwise seen from ``+z`` (right-hand rule); a positive helix angle is a right-hand
 helix (ISO 21771); an internal gear has the hand of its planet. The flank of a right-hand gear
@@ -273,6 +290,7 @@ def assemble(gs: GearSet, *, n_table: int = N_TABLE) -> AssembledModel:
     # ---- meshes ---------------------------------------------------------------------------
     n_mesh = len(gs.meshes)
     v_mesh = np.zeros((n_mesh, n))
+    v_back = np.zeros((n_mesh, n))
     w_mesh = np.zeros((n_mesh, n))
     s0 = np.zeros(n_mesh)
     mesh_meta = []
@@ -292,20 +310,29 @@ def assemble(gs: GearSet, *, n_table: int = N_TABLE) -> AssembledModel:
         e = diff / dist
         t = np.array([-e[1], e[0]])
         sigma = r.sigma
-        nvec = math.cos(r.pressure_angle) * t + sigma * math.sin(r.pressure_angle) * e
+        ca, sa = math.cos(r.pressure_angle), math.sin(r.pressure_angle)
+        # left (drive) flank line of action and its mirror image about the line of centres,
+        # the back flank's (module docstring, "Back flank")
+        n_left = ca * t + sigma * sa * e
+        n_back = ca * t - sigma * sa * e
         cb = math.cos(r.base_helix_angle)
         v = np.zeros(n)
         v[coords.get(b1.name, "theta")] += cb * sigma * r.base_radius1
         v[coords.get(b2.name, "theta")] += cb * sigma * r.base_radius2
-        _add_displacement(v, coords, b1, nvec, cb)
-        _add_displacement(v, coords, b2, nvec, -cb)
         if axial and r.base_helix_angle:
             # axial part of the contact normal: a right-hand gear1 (h = +1) driving in the
-            # positive sense is pushed towards +z (see the module docstring)
+            # positive sense is pushed towards +z (see the module docstring); the back flank
+            # reverses the tangential and the axial force together, so the term is the same
             sb = math.sin(r.base_helix_angle) * r.helix_hand
             v[coords.get(b1.name, "z")] -= sb
             v[coords.get(b2.name, "z")] += sb
+        vb = v.copy()
+        _add_displacement(v, coords, b1, n_left, cb)
+        _add_displacement(v, coords, b2, n_left, -cb)
+        _add_displacement(vb, coords, b1, n_back, cb)
+        _add_displacement(vb, coords, b2, n_back, -cb)
         v_mesh[k] = v
+        v_back[k] = vb
 
         varying = not math.isclose(m.stiffness.min, m.stiffness.max, rel_tol=1e-12)
         if r.z1 is None or r.z2 is None:
@@ -408,6 +435,15 @@ def assemble(gs: GearSet, *, n_table: int = N_TABLE) -> AssembledModel:
     k_red = reduce_matrix(k_full)
     c_red = reduce_matrix(c_full)
     v_red = v_mesh @ tmat
+    vb_red = v_back @ tmat
+    # the back flank's line of action differs from the left one's only by the relative
+    # displacement of the gear centres along the line of centres: where the reduced coordinates
+    # have none (rigid in-plane bearings) the two vectors agree up to rounding and the left one
+    # is used for both, so such models keep one set of vectors (and their results bit for bit)
+    same = np.abs(vb_red - v_red).max(axis=1, initial=0.0) <= BACK_LINE_RTOL * np.abs(
+        v_red).max(axis=1, initial=0.0)
+    vb_red[same] = v_red[same]
+    back_red = None if same.all() else np.ascontiguousarray(vb_red)
     w_red = w_mesh @ tmat
     dof_names = tuple(coords.names[i] for i in kept)
 
@@ -525,6 +561,7 @@ def assemble(gs: GearSet, *, n_table: int = N_TABLE) -> AssembledModel:
         centripetal=reduce_matrix(centripetal),
         mesh_names=tuple(m.name for m in gs.meshes),
         mesh_vectors=np.ascontiguousarray(v_red),
+        mesh_back_vectors=back_red,
         mesh_position_vectors=np.ascontiguousarray(w_red),
         mesh_position_offsets=s0,
         mesh_stiffness_tables=np.ascontiguousarray(tables, dtype=float),
@@ -545,6 +582,10 @@ def assemble(gs: GearSet, *, n_table: int = N_TABLE) -> AssembledModel:
         meta=meta,
     )
 
+
+BACK_LINE_RTOL = 1e-12
+"""Relative difference below which a back-flank deflection vector is taken as the left one's
+(the difference is then rounding: no relative displacement along the line of centres)."""
 
 PHASE_TOLERANCE = 2e-3
 """Largest mismatch [mesh cycles] between the two ways a mesh position follows from the

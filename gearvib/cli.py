@@ -1,4 +1,4 @@
-"""Command-line interface: ``gearvib demo | modes | simulate | preset | report``.
+"""Command-line interface: ``gearvib demo | modes | catalogue | simulate | preset | report``.
 
 Every subcommand has ``--help``. Errors are printed as one line on stderr with exit code 2
 (bad input: a description, a setting, an option, an output that exists or cannot be
@@ -16,15 +16,16 @@ from __future__ import annotations
 
 import argparse
 import math
+import signal
 import sys
 import warnings
 from collections.abc import Sequence
 from typing import NoReturn
 
 from gearvib import __version__
-from gearvib.interrupts import Interrupted, exit_now, signals_as_exceptions
+from gearvib.interrupts import Interrupted, exit_now, pending_signal, signals_as_exceptions
 
-__all__ = ["main"]
+__all__ = ["main", "run"]
 
 
 class CliError(Exception):
@@ -53,6 +54,37 @@ def _cmd_modes(args: argparse.Namespace) -> int:
               f"{model.n_mesh} meshes)")
         print(result.table())
     return 0
+
+
+def _cmd_catalogue(args: argparse.Namespace) -> int:
+    from gearvib.catalogue import gear_set_catalogue
+    from gearvib.config import load_gearset
+
+    cat = gear_set_catalogue(load_gearset(args.config), reference=args.reference,
+                             speed_rpm=args.speed, mesh_harmonics=args.mesh_harmonics,
+                             harmonics=args.harmonics, sidebands=args.sidebands)
+    if args.json:
+        print(cat.to_json(visible_only=True))
+    else:
+        print(f"gear set: {cat.name}; lines a sensor on {cat.sensor} can see "
+              f"({int(cat.visible.sum())} of {len(cat)})")
+        print(cat.table(visible_only=True))
+    return 0
+
+
+MAX_COUNT = 1000
+"""Largest harmonic or sideband count accepted on the command line."""
+
+
+def _non_negative_int(text: str) -> int:
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text[:40]!r} is not an integer") from None
+    if not 0 <= v <= MAX_COUNT:
+        raise argparse.ArgumentTypeError(f"{text[:40]!r} is not admissible (admissible: "
+                                         f"0..{MAX_COUNT})")
+    return v
 
 
 MAX_RPM = 1e9
@@ -97,8 +129,6 @@ def _limits(low: float = -math.inf, high: float = math.inf, *, strict: bool = Fa
     return parse
 
 
-
-
 def _steps(text: str) -> int:
     try:
         v = int(text)
@@ -106,6 +136,13 @@ def _steps(text: str) -> int:
         raise argparse.ArgumentTypeError(f"{text[:40]!r} is not an integer") from None
     if not 1 <= v <= 10**15:
         raise argparse.ArgumentTypeError(f"{v} is not admissible (admissible: 1..1e15)")
+    return v
+
+
+def _positive_int(text: str) -> int:
+    v = _non_negative_int(text)
+    if v < 1:
+        raise argparse.ArgumentTypeError(f"{text[:40]!r} must be >= 1")
     return v
 
 
@@ -246,6 +283,29 @@ def _parser() -> argparse.ArgumentParser:
                    help="carrier speed for gyroscopic/centripetal terms [min-1] (default 0)")
     m.set_defaults(func=_cmd_modes)
 
+    c = sub.add_parser("catalogue", help="kinematic frequency catalogue of a gear set",
+                       description="Every order-locked frequency of the gear set at one speed: "
+                       "shaft orders, mesh frequencies and harmonics, planet pass, sun/planet/"
+                       "ring fault frequencies, hunting-tooth and assembly-phase frequencies, "
+                       "planet-pass sidebands (only those the planet phasing lets through to a "
+                       "sensor on the fixed member). Families: see docs/catalogue.md.")
+    c.add_argument("config", help="TOML file or preset name")
+    c.add_argument("--speed", type=_limits(0.0, MAX_RPM, strict=True), required=True,
+                   metavar="RPM",
+                   help="speed of the reference shaft [min-1]")
+    c.add_argument("--reference", metavar="MEMBER",
+                   help="reference shaft of the orders (default: the input member)")
+    c.add_argument("--mesh-harmonics", type=_positive_int, default=7, metavar="M",
+                   help="mesh harmonics listed, with their sidebands (default 7)")
+    c.add_argument("--harmonics", type=_positive_int, default=3, metavar="H",
+                   help="harmonics of shaft, planet-pass and fault lines (default 3)")
+    c.add_argument("--sidebands", type=_non_negative_int, default=2, metavar="K",
+                   help="sidebands up to K planet-pass frequencies (default 2)")
+    c.add_argument("--json", action="store_true",
+                   help='print {"reference": ..., "lines": [{"family", "harmonic", "sideband", '
+                   '"member", "frequency_hz", "order"}, ...]}')
+    c.set_defaults(func=_cmd_catalogue)
+
     s = sub.add_parser("simulate", help="simulate a run-up and write it as netCDF",
                        description="Simulate a run-up (speed ramp at the input, constant "
                        "torque) and write tooth forces, bearing forces, displacements and "
@@ -310,26 +370,65 @@ def main(argv: Sequence[str] | None = None) -> int:
     runs. After the clean-up (temporary files removed, the message printed) the process exits
     at once with ``128 + signal number`` (``os._exit``): work abandoned by the interrupt (a
     netCDF write in its worker thread) is not waited for, and the interpreter's shutdown,
-    which takes 0.5-1.3 s once xarray and numba are loaded, is skipped.
+    which takes 0.5-1.3 s once xarray and numba are loaded, is skipped. A signal whose
+    exception library code swallowed or converted ends the command the same way.
     """
     with signals_as_exceptions():
+        return _run_command(argv)
+
+
+def run() -> None:
+    """The ``gearvib`` command (console script, ``python -m gearvib``): :func:`main`, then exit.
+
+    The process leaves with ``os._exit`` right after the command, with the signal handlers
+    still active: the interpreter's shutdown (0.5-1.3 s with xarray and numba loaded) is
+    skipped, so a signal cannot arrive in it and end the process with the default action
+    instead of exit code 130/143. Standard streams and logging are flushed first; every output
+    file is complete and closed by then.
+    """
+    import logging
+
+    with signals_as_exceptions():
         try:
-            return _main(argv)
-        except Interrupted as exc:
-            code = exc.exit_code
-            print(f"gearvib: interrupted by {exc.name} (nothing half-written was kept)",
-                  file=sys.stderr)
-        except KeyboardInterrupt:
-            code = 130
-            print("gearvib: interrupted (nothing half-written was kept)", file=sys.stderr)
+            code = _run_command(None)
+        except SystemExit as exc:  # --help, --version, option errors
+            code = exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 1)
+            if exc.code is not None and not isinstance(exc.code, int):
+                print(exc.code, file=sys.stderr)
+        if hasattr(signal, "pthread_sigmask"):  # done: a signal from now on changes nothing
+            signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM,
+                                                      *([signal.SIGHUP]
+                                                        if hasattr(signal, "SIGHUP") else [])})
+        logging.shutdown()
         exit_now(code)
-        return code  # not reached
+
+
+def _run_command(argv: Sequence[str] | None) -> int:
+    try:
+        code = _main(argv)
+    except BaseException as exc:
+        sig = pending_signal()
+        if sig is None and isinstance(exc, KeyboardInterrupt):
+            sig = signal.SIGINT
+        if sig is None:
+            raise
+        _exit_interrupted(sig)
+    sig = pending_signal()
+    if sig is not None:  # received, and its exception swallowed by library code
+        _exit_interrupted(sig)
+    return code
+
+
+def _exit_interrupted(signum: int) -> None:
+    try:
+        name = signal.Signals(signum).name
+    except ValueError:
+        name = f"signal {signum}"
+    print(f"gearvib: interrupted by {name} (nothing half-written was kept)", file=sys.stderr)
+    exit_now(128 + signum)
 
 
 def _main(argv: Sequence[str] | None) -> int:
-    from gearvib.config import ConfigError
-    from gearvib.simulation.errors import SimulationError
-
     parser = _parser()
     args = parser.parse_args(argv)
     if getattr(args, "max_steps", 0) is None:
@@ -340,19 +439,32 @@ def _main(argv: Sequence[str] | None) -> int:
         warnings.showwarning = _show_warning
         try:
             return int(args.func(args) or 0)
-        except SimulationError as exc:  # a failed computation, e.g. a numerical blow-up
-            print(f"gearvib: failed: {_one_line(exc)}", file=sys.stderr)
-            return 1
-        except (CliError, ConfigError, ValueError, OSError) as exc:
-            print(f"gearvib: error: {_one_line(exc)}", file=sys.stderr)
-            return 2
-        except MemoryError:
-            print("gearvib: failed: out of memory (a size the input checks did not foresee; "
-                  "please report it with the command)", file=sys.stderr)
-            return 1
-        except RuntimeError as exc:
-            print(f"gearvib: failed: {_one_line(exc)}", file=sys.stderr)
-            return 1
+        except Exception as exc:
+            sig = pending_signal()
+            if sig is not None:  # an interrupt that library code turned into another error
+                raise Interrupted(sig) from None
+            return _error(exc)
+
+
+def _error(exc: Exception) -> int:
+    """Print a documented error as one line; returns the exit code (re-raises the rest)."""
+    from gearvib.config import ConfigError
+    from gearvib.simulation.errors import SimulationError
+
+    if isinstance(exc, SimulationError):  # a failed computation, e.g. a numerical blow-up
+        print(f"gearvib: failed: {_one_line(exc)}", file=sys.stderr)
+        return 1
+    if isinstance(exc, CliError | ConfigError | ValueError | OSError):
+        print(f"gearvib: error: {_one_line(exc)}", file=sys.stderr)
+        return 2
+    if isinstance(exc, MemoryError):
+        print("gearvib: failed: out of memory (a size the input checks did not foresee; "
+              "please report it with the command)", file=sys.stderr)
+        return 1
+    if isinstance(exc, RuntimeError):
+        print(f"gearvib: failed: {_one_line(exc)}", file=sys.stderr)
+        return 1
+    raise exc
 
 
 def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:

@@ -120,15 +120,22 @@ _SIMULATION = {"drive", "speed_start_rpm", "speed_end_rpm", "duration", "input_t
                "load_torque", "load_inertia", "drive_stiffness", "drive_damping", "motor",
                "fs_out", "dt", "gyroscopic"}
 """Keys of ``[simulation]``; their values are checked by :mod:`gearvib.simulation.settings`."""
+_WOLFROM_SHIFTS = ("profile_shift_sun", "profile_shift_ring1", "profile_shift_planet1",
+                   "profile_shift_ring2", "profile_shift_planet2")
+_RAVIGNEAUX_SHIFTS = ("profile_shift_sun_small", "profile_shift_sun_large", "profile_shift_ring",
+                      "profile_shift_planet_short", "profile_shift_planet_long")
+_SOLVED_SHIFTS = {"profile_shift_planet", "profile_shift_planet1", "profile_shift_planet_long"}
+"""Planet profile shifts solved for a common centre distance when not given."""
 _GEOMETRY = {
     "simple": {"module", "pressure_angle_deg", "helix_angle_deg", "face_width", "z_sun",
                "z_ring", "z_planet", "profile_shift_sun", "profile_shift_ring",
                "profile_shift_planet", "planet_angles_deg", "n_planets"},
     "wolfrom": {"module", "module2", "pressure_angle_deg", "face_width", "z_sun", "z_ring1",
-                "z_ring2", "z_planet1", "z_planet2", "n_planets", "planet_step_offset_deg"},
+                "z_ring2", "z_planet1", "z_planet2", "n_planets", "planet_step_offset_deg",
+                "helix_angle_deg", "helix_angle2_deg", *_WOLFROM_SHIFTS},
     "ravigneaux": {"module", "pressure_angle_deg", "face_width", "z_sun_small", "z_sun_large",
                    "z_ring", "z_planet_short", "z_planet_long", "n_pairs",
-                   "planet_mesh_phases"},
+                   "planet_mesh_phases", "helix_angle_deg", *_RAVIGNEAUX_SHIFTS},
 }
 _BODIES = {
     "simple": ("sun", "ring", "carrier", "planet"),
@@ -465,6 +472,11 @@ def _builder_set(kind: str, cfg: dict, base: Path | None) -> GearSet:
                               f"{ring} = {z(ring)} (admissible: fewer teeth than the ring, "
                               f"{planet} < {abs(z(ring))})")
 
+    def shifts(keys: tuple[str, ...]) -> dict[str, float | None]:
+        """Profile shifts (finite numbers; a solved planet shift defaults to None)."""
+        return {k: _finite(g[k], f"[geometry].{k}") if k in g else
+                (None if k in _SOLVED_SHIFTS else 0.0) for k in keys}
+
     if len(op["fixed"]) != 1 and kind != "simple":
         raise ConfigError(f"[operation].fixed must name one member for type = {kind!r}, got "
                           f"{op['fixed']!r}")
@@ -513,6 +525,10 @@ def _builder_set(kind: str, cfg: dict, base: Path | None) -> GearSet:
                                 high=1.0) if "module2" in g else None,
                 step_offset=math.radians(_finite(g.get("planet_step_offset_deg", 0.0),
                                                  "[geometry].planet_step_offset_deg")),
+                helix_angle2=math.radians(_finite(g["helix_angle2_deg"],
+                                                  "[geometry].helix_angle2_deg"))
+                if "helix_angle2_deg" in g else None,
+                **shifts(_WOLFROM_SHIFTS),
                 n_planets=count("n_planets", 3), sun=bodies["sun"], ring1=bodies["ring1"],
                 ring2=bodies["ring2"], carrier=bodies["carrier"], planet=bodies["planet"],
                 sun_mesh=specs["sun"], ring1_mesh=specs["ring1"], ring2_mesh=specs["ring2"],
@@ -528,6 +544,7 @@ def _builder_set(kind: str, cfg: dict, base: Path | None) -> GearSet:
             z_sun_small=z("z_sun_small"), z_sun_large=z("z_sun_large"), z_ring=z("z_ring"),
             z_planet_short=z("z_planet_short"), z_planet_long=z("z_planet_long"),
             n_pairs=count("n_pairs", 3), planet_mesh_phases=phases,
+            **shifts(_RAVIGNEAUX_SHIFTS),
             sun_small=bodies["sun_small"], sun_large=bodies["sun_large"], ring=bodies["ring"],
             carrier=bodies["carrier"], planet_short=bodies["planet_short"],
             planet_long=bodies["planet_long"], sun_mesh=specs["sun"], ring_mesh=specs["ring"],

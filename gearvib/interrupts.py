@@ -24,8 +24,10 @@ abandoned work is still running, so that HDF5 is never torn down under it.
 
 :func:`signals_as_exceptions` (used by :func:`gearvib.cli.main`) turns SIGINT, SIGTERM and
 SIGHUP into :class:`Interrupted` (a :class:`KeyboardInterrupt`, so every ``except
-BaseException`` clean-up runs), with the exit code ``128 + signal number``; a second signal
-while the first one is being handled removes this process's temporary files and exits
+BaseException`` clean-up runs), with the exit code ``128 + signal number``. The signal is
+also remembered: library code that swallows the exception cannot make the command commit an
+output or run on (a barrier in :func:`gearvib.io.atomic_write`, a watchdog that exits after
+:data:`GRACE_SECONDS`); a second signal removes this process's temporary files and exits
 immediately.
 """
 
@@ -45,12 +47,17 @@ from typing import TypeVar
 
 from gearvib import tempfiles
 
-__all__ = ["Interrupted", "abandoned_work", "exit_now", "run_abandonable",
-           "signals_as_exceptions"]
+__all__ = ["GRACE_SECONDS", "Interrupted", "abandoned_work", "check_interrupted", "exit_now",
+           "pending_signal", "run_abandonable", "signals_as_exceptions"]
 
 T = TypeVar("T")
 
 _ABANDONED: list[_Job] = []
+_PENDING: list[int] = []  # the signal received under signals_as_exceptions (list: no lock)
+_BLOCK: list[object] = []  # the active signals_as_exceptions block
+
+GRACE_SECONDS = 1.0
+"""After a signal, the command line exits by force if it is still running this much later."""
 
 
 class Interrupted(KeyboardInterrupt):
@@ -175,25 +182,56 @@ def _signals() -> list[int]:
     return [getattr(signal, n) for n in names if hasattr(signal, n)]
 
 
+def pending_signal() -> int | None:
+    """The signal received under :func:`signals_as_exceptions`, or None."""
+    return _PENDING[0] if _PENDING else None
+
+
+def check_interrupted() -> None:
+    """Raise :class:`Interrupted` if a signal was received (even if its exception was
+    swallowed by library code): the barrier before an output is committed."""
+    if _PENDING:
+        raise Interrupted(_PENDING[0])
+
+
+def _watchdog(signum: int, grace: float, block: object) -> None:
+    time.sleep(grace)
+    if block not in _BLOCK:
+        return
+    with contextlib.suppress(Exception):
+        name = signal.Signals(signum).name
+        sys.stderr.write(f"gearvib: interrupted by {name} (nothing half-written was kept)\n")
+    exit_now(128 + signum)
+
+
 @contextlib.contextmanager
-def signals_as_exceptions() -> Iterator[None]:
+def signals_as_exceptions(grace: float = GRACE_SECONDS) -> Iterator[None]:
     """Within the block, SIGINT, SIGTERM and SIGHUP raise :class:`Interrupted`.
 
-    A signal that is ignored when the block starts (e.g. SIGHUP under ``nohup``, SIGINT of a
-    background job) stays ignored. A second signal while the first one is handled removes the
-    temporary files this process writes and exits with ``128 + signum`` of the first signal.
+    The first signal raises :class:`Interrupted` in the main thread and is remembered
+    (:func:`pending_signal`, :func:`check_interrupted`): library code that swallows or converts
+    the exception (ReportLab's font loading turns it into a ``TTFError``, other code has bare
+    ``except:`` clauses) cannot make the command go on -- no output is committed after it
+    (:func:`gearvib.io.atomic_write` checks), and a watchdog thread exits the process with
+    ``128 + signum`` after ``grace`` seconds if it is still running, removing this process's
+    temporary files. A second signal exits at once the same way. A signal that is ignored when
+    the block starts (e.g. SIGHUP under ``nohup``, SIGINT of a background job) stays ignored.
     Outside the main thread the block changes nothing. The previous handlers are restored at
     the end.
     """
     if threading.current_thread() is not threading.main_thread():
         yield
         return
-    first: list[int] = []
+    _PENDING.clear()
+    block = object()
+    _BLOCK[:] = [block]
 
     def handler(signum: int, frame: object) -> None:
-        if first:
-            exit_now(128 + first[0])
-        first.append(signum)
+        if _PENDING:
+            exit_now(128 + _PENDING[0])
+        _PENDING.append(signum)
+        threading.Thread(target=_watchdog, args=(signum, grace, block), daemon=True,
+                         name="gearvib-interrupt-watchdog").start()
         raise Interrupted(signum)
 
     previous = {}
@@ -206,6 +244,7 @@ def signals_as_exceptions() -> Iterator[None]:
     try:
         yield
     finally:
+        _BLOCK.clear()  # a watchdog of this block does nothing any more
         for s, old in previous.items():
             with contextlib.suppress(ValueError, TypeError, OSError):
                 signal.signal(s, old if old is not None else signal.SIG_DFL)

@@ -8,6 +8,8 @@ over the destination, so a crash or Ctrl-C never leaves a partial file. The temp
 named ``.<name>.gearvib-<host>-<pid>-<token>.tmp`` (:mod:`gearvib.tempfiles`); netCDF files are
 written and read in a worker thread that an interrupt abandons (:mod:`gearvib.interrupts`
 explains why: xarray's backend locks are not safe against an exception from a signal handler).
+String labels (mesh, flank, ... names) are written as CF label variables ``<dim>_label`` and
+restored by :func:`read_run`; ``time`` is read as float seconds (see :mod:`analysis.cf`).
 """
 
 from __future__ import annotations
@@ -24,8 +26,9 @@ import netCDF4
 import numpy as np
 import xarray as xr
 
+from analysis.cf import labels_from_cf, labels_to_cf
 from gearvib import tempfiles
-from gearvib.interrupts import run_abandonable
+from gearvib.interrupts import check_interrupted, run_abandonable
 from gearvib.memory import RunSizeError, format_bytes, require_memory
 
 __all__ = [
@@ -118,10 +121,10 @@ def write_netcdf(ds: xr.Dataset, path: str | os.PathLike) -> Path:
     half-written is left on any error or interrupt, and an interrupt returns at once.
     """
     dest = Path(path)
-    out = ds.copy(deep=False)
+    out = labels_to_cf(ds.copy(deep=False))  # string labels: CF label variables, not coordinates
     out.attrs = sanitize_attrs(ds.attrs)
     for name in out.variables:
-        out[name].attrs = sanitize_attrs(ds[name].attrs)
+        out[name].attrs = sanitize_attrs(out[name].attrs)
     atomic_write(dest, lambda tmp: out.to_netcdf(tmp, engine="netcdf4", format="NETCDF4",
                                                  encoding=_encoding(out)), abandonable=True)
     return dest
@@ -171,6 +174,7 @@ def atomic_write(dest: str | os.PathLike, write: Callable[[Path], T], *,
             return out
 
         result = run_abandonable(body) if abandonable else body()
+        check_interrupted()  # nothing is committed after a signal, even a swallowed one
         os.replace(tmp, dest)
     except BaseException as exc:
         with contextlib.suppress(OSError):
@@ -241,8 +245,8 @@ def read_run(path: str | os.PathLike) -> xr.Dataset:
                 "than zlib can compress into it: its header is corrupt")
         require_memory(2 * declared, f"reading {p} ({format_bytes(declared)} declared)",
                        "the run is too large for this machine")
-        with xr.open_dataset(p, engine="netcdf4") as ds:
-            return ds.load()
+        with xr.open_dataset(p, engine="netcdf4", decode_times=False) as ds:
+            return labels_from_cf(ds.load())  # float seconds; labels as coordinates again
 
     try:
         loaded = run_abandonable(load)  # see gearvib.interrupts: xarray's locks and Ctrl-C

@@ -12,9 +12,18 @@ With the state ``y = [q, qdot]`` (``n`` coordinates each)::
 
 ``Omega_c = qdot[carrier]`` is the current carrier speed and ``g`` switches the gyroscopic and
 centripetal terms on (1) or off (0). For every mesh ``m`` (see :mod:`gearvib.model`):
-``delta = v_m . q``, ``s = w_m . q + s0_m``, ``k_L = table_L(s)``, ``k_R = table_R(s)`` and
-:func:`flank_forces` gives the flank forces (paper eq. 2, superposed). The mesh position uses the
-actual rotation angles, so vibration feeds back into the mesh phase.
+``delta = v_m . q`` along the left flank's line of action, ``delta_R = u_m . q`` along the
+right (back) flank's (``u_m = v_m`` unless the mesh has a distinct back line), ``s = w_m . q +
+s0_m``, ``k_L = table_L(s)``, ``k_R = table_R(s)``, and :func:`flank_forces_two_lines` gives the
+flank forces (paper eq. 2, superposed). The force term is ``F_L v_m + F_R u_m``. The mesh
+position uses the actual rotation angles, so vibration feeds back into the mesh phase.
+
+A mesh whose back line equals its left line (every mesh of a model with rigid in-plane
+bearings) takes the one-line path: ``delta_R = delta`` and the force ``(F_L + F_R) v_m``, the
+same floating-point operations as before back lines existed, so such runs are unchanged bit for
+bit. Per-tooth models added later belong in the stiffness lookup (``k_L``, ``k_R``) of
+:func:`_rhs`; the contact law and the force directions stay in :func:`flank_forces_two_lines`
+and the force loop.
 
 Drive (``ipar[IP_MODE]``):
 
@@ -56,6 +65,10 @@ from dataclasses import dataclass, fields
 import numpy as np
 from numba import njit
 
+from analysis.jit import prepare_cache
+
+prepare_cache(__file__)  # a writable numba cache also in read-only installs (before @njit)
+
 __all__ = [
     "DRIVE_MOTOR",
     "DRIVE_NONE",
@@ -71,6 +84,7 @@ __all__ = [
     "evaluate_rhs",
     "fir_decimate",
     "flank_forces",
+    "flank_forces_two_lines",
     "integrate",
     "integrate_chunk",
     "jump_positions",
@@ -122,7 +136,7 @@ class KernelSystem:
     gyroscopic, centripetal : ndarray, shape (n, n)
         ``G`` and ``K_Omega`` of the model.
     mesh_vectors, mesh_position_vectors : ndarray, shape (n_mesh, n)
-        ``v_m`` and ``w_m``.
+        ``v_m`` (left flank's line of action) and ``w_m``.
     mesh_position_offsets : ndarray, shape (n_mesh,)
         ``s0_m`` [cycles].
     left_tables, right_tables : ndarray, shape (n_mesh, n_table)
@@ -140,7 +154,9 @@ class KernelSystem:
     torque_table : ndarray, shape (2, n_torque)
         Rows: time [s] (``DRIVE_MOTOR``: input speed [rad/s]), input torque [N m].
     deflection_limit : ndarray, shape (n_mesh,)
-        Blow-up threshold on ``|delta_m|`` [m].
+        Blow-up threshold on ``|delta_m|`` and ``|delta_R,m|`` [m].
+    mesh_back_vectors : ndarray, shape (n_mesh, n), optional
+        ``u_m``, the right (back) flank's line of action; None: the same as ``v_m``.
     """
 
     minv: np.ndarray
@@ -161,16 +177,21 @@ class KernelSystem:
     speed_table: np.ndarray
     torque_table: np.ndarray
     deflection_limit: np.ndarray
+    mesh_back_vectors: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         for f in fields(self):
             a = getattr(self, f.name)
+            if a is None:
+                continue
             dtype = np.int64 if f.name == "ipar" else np.float64
             setattr(self, f.name, np.ascontiguousarray(a, dtype=dtype))
         n = self.minv.shape[0]
         n_mesh = self.mesh_vectors.shape[0]
         if self.mesh_vectors.shape != (n_mesh, n) or self.stiffness.shape != (n, n):
             raise ValueError("inconsistent array shapes in KernelSystem")
+        if self.mesh_back_vectors is not None and self.mesh_back_vectors.shape != (n_mesh, n):
+            raise ValueError("mesh_back_vectors must have the shape of mesh_vectors")
         if self.ipar.shape != (N_IPAR,) or self.fpar.shape != (N_FPAR,):
             raise ValueError("ipar must have 5 and fpar 7 entries")
 
@@ -184,6 +205,17 @@ class KernelSystem:
         """Number of meshes."""
         return int(self.mesh_vectors.shape[0])
 
+    @property
+    def back_vectors(self) -> np.ndarray:
+        """``u_m``: the back-flank vectors (``mesh_vectors`` when none are given)."""
+        return self.mesh_vectors if self.mesh_back_vectors is None else self.mesh_back_vectors
+
+    def distinct_back_lines(self) -> np.ndarray:
+        """True for every mesh whose back-flank line of action differs from the left one's."""
+        if self.mesh_back_vectors is None:
+            return np.zeros(self.n_mesh, dtype=bool)
+        return np.any(self.mesh_back_vectors != self.mesh_vectors, axis=1)
+
     def astuple(self) -> tuple:
         """The ``system`` argument of the kernels (see :func:`pack`)."""
         return pack(self)
@@ -195,22 +227,24 @@ H_N = 0
 H_NMESH = 1
 H_IPAR = 2
 _INT_BLOCKS = (
-    "lp", "li", "cp", "ci", "gp", "gi", "ii", "oi", "vp", "vi", "fp", "fi", "pp", "pi", "bp"
+    "lp", "li", "cp", "ci", "gp", "gi", "ii", "oi", "vp", "vi", "fp", "fi", "pp", "pi", "bp",
+    "rflag", "rvp", "rvi", "rfp", "rfi",
 )
 _FLOAT_BLOCKS = (
     "acc0", "lv", "cv", "gv", "iv", "ov", "vv", "fv", "pv", "s0", "bl", "mc", "fpar", "limit",
-    "bv",
-)
-H_LP, H_LI, H_CP, H_CI, H_GP, H_GI, H_II, H_OI, H_VP, H_VI, H_FP, H_FI, H_PP, H_PI, H_BP = range(
-    H_IPAR + N_IPAR, H_IPAR + N_IPAR + len(_INT_BLOCKS)
+    "bv", "rvv", "rfv",
 )
 (
+    H_LP, H_LI, H_CP, H_CI, H_GP, H_GI, H_II, H_OI, H_VP, H_VI, H_FP, H_FI, H_PP, H_PI, H_BP,
+    H_RFLAG, H_RVP, H_RVI, H_RFP, H_RFI,
+) = range(H_IPAR + N_IPAR, H_IPAR + N_IPAR + len(_INT_BLOCKS))
+(
     H_ACC0, H_LV, H_CV, H_GV, H_IV, H_OV, H_VV, H_FV, H_PV, H_S0, H_BL, H_MC, H_FPAR, H_LIMIT,
-    H_BV,
+    H_BV, H_RVV, H_RFV,
 ) = range(H_LP + len(_INT_BLOCKS), H_LP + len(_INT_BLOCKS) + len(_FLOAT_BLOCKS))
-H_NI = H_BV + 1  # number of entries of the sparse input column
-H_NO = H_BV + 2  # ... and of the output column
-N_HEADER = H_BV + 3
+H_NI = H_RFV + 1  # number of entries of the sparse input column
+H_NO = H_RFV + 2  # ... and of the output column
+N_HEADER = H_RFV + 3
 
 #: A table segment whose stiffness changes by more than this fraction of the table's range
 #: within one table interval is a jump (e.g. the tooth-pair changes of a rectangular model).
@@ -271,10 +305,12 @@ def pack(system: KernelSystem) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.n
         lengths), then the CSR pointers and indices of ``lin = -M^-1 [K C]`` (columns index the
         state ``y``), ``cent = M^-1 K_Omega``, ``gyro = -M^-1 G`` (columns index ``qdot``), the
         sparse columns ``M^-1 e`` of the input and output coordinates, the mesh vectors ``v_m``,
-        the rows ``(M^-1 v_m)^T`` and the mesh-position vectors ``w_m``.
+        the rows ``(M^-1 v_m)^T``, the mesh-position vectors ``w_m``, the jump counts, a flag
+        per mesh (1: distinct back line), and the back-flank vectors ``u_m`` and rows
+        ``(M^-1 u_m)^T`` (empty rows for the meshes without a distinct back line).
     floats : ndarray
         ``M^-1 f_const``, the CSR data of the operators above, ``s0``, backlash, mesh damping,
-        ``fpar`` and the deflection limits.
+        ``fpar``, the deflection limits and the jump positions.
     tables : ndarray, shape (2, n_mesh, n_table)
         Left and right flank stiffness tables.
     speed_table, torque_table : ndarray
@@ -304,10 +340,17 @@ def pack(system: KernelSystem) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.n
     jumps = jump_positions(system.left_tables, system.right_tables)
     bp = np.concatenate([[0], np.cumsum([j.size for j in jumps])]).astype(np.int64)
     bv = np.concatenate([np.zeros(0), *jumps])
-    int_blocks = [lp, li, cp, ci, gp, gi, ii, oi, vp, vi, fp, fi, pp, pi, bp]
+    distinct = system.distinct_back_lines()
+    rflag = distinct.astype(np.int64)
+    back = np.where(distinct[:, None], system.back_vectors, 0.0)
+    rvp, rvi, rvv = csr(back)
+    rfp, rfi, rfv = csr((minv @ back.T).T)
+    int_blocks = [lp, li, cp, ci, gp, gi, ii, oi, vp, vi, fp, fi, pp, pi, bp,
+                  rflag, rvp, rvi, rfp, rfi]
     float_blocks = [
         minv @ system.f_const, lv, cv, gv, iv, ov, vv, fv, pv, system.mesh_position_offsets,
         system.backlash, system.mesh_damping, system.fpar, system.deflection_limit, bv,
+        rvv, rfv,
     ]
     header = np.zeros(N_HEADER, dtype=np.int64)
     header[H_N] = n
@@ -329,8 +372,9 @@ def pack(system: KernelSystem) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.n
     return ints, floats, tables, system.speed_table, system.torque_table
 
 
-MESH_OUT_COLUMNS = 6
-"""Columns of the per-mesh scratch ``mesh_out``: ``F_L, -F_R, k_eff, state, delta, s``."""
+MESH_OUT_COLUMNS = 7
+"""Columns of the per-mesh scratch ``mesh_out``: ``F_L, -F_R, k_eff, state, delta, s,
+delta_R``."""
 
 
 def n_signals(n_dof: int, n_mesh: int) -> int:
@@ -365,12 +409,28 @@ def periodic_interp(table: np.ndarray, row: int, s: float) -> float:
 def flank_forces(
     delta: float, ddelta: float, k_left: float, k_right: float, backlash: float, damping: float
 ) -> tuple[float, float, float, int]:
+    """Contact law of one mesh whose two flanks share one line of action.
+
+    :func:`flank_forces_two_lines` with ``delta_right = delta`` (same operations, same
+    results).
+    """
+    return flank_forces_two_lines(delta, ddelta, delta, ddelta, k_left, k_right, backlash,
+                                  damping)
+
+
+@njit(cache=True)
+def flank_forces_two_lines(
+    delta: float, ddelta: float, delta_right: float, ddelta_right: float, k_left: float,
+    k_right: float, backlash: float, damping: float
+) -> tuple[float, float, float, int]:
     """Contact law of one mesh (paper eq. 2, both flanks checked and superposed).
 
     Parameters
     ----------
     delta, ddelta : float
-        Normal mesh deflection [m] and its rate [m/s].
+        Normal mesh deflection along the left flank's line of action [m] and its rate [m/s].
+    delta_right, ddelta_right : float
+        The same along the right (back) flank's line of action.
     k_left, k_right : float
         Flank stiffness at the current mesh position [N/m].
     backlash : float
@@ -383,7 +443,8 @@ def flank_forces(
     f_left : float
         ``k_L (delta - j/2) + c ddelta`` if ``delta > j/2``, floored at 0 (no tension), else 0.
     f_right : float
-        ``k_R (delta + j/2) + c ddelta`` if ``delta < -j/2``, capped at 0, else 0.
+        ``k_R (delta_R + j/2) + c ddelta_R`` if ``delta_R < -j/2``, capped at 0 (no tension),
+        else 0.
     k_eff : float
         Sum of the stiffness of the flanks in contact.
     state : int
@@ -400,8 +461,8 @@ def flank_forces(
             f_left = 0.0
         k_eff += k_left
         state += 1
-    if delta < -half:
-        f_right = k_right * (delta + half) + damping * ddelta
+    if delta_right < -half:
+        f_right = k_right * (delta_right + half) + damping * ddelta_right
         if f_right > 0.0:
             f_right = 0.0
         k_eff += k_right
@@ -469,7 +530,8 @@ def _table_at(tab: np.ndarray, t: float) -> float:
 
 @njit(cache=True)
 def _rhs(t, y, dy, mesh_out, ints, vals, tables, speed_tab, torque_tab):
-    """Right-hand side ``dy = f(t, y)``; ``mesh_out[m] = (F_L, -F_R, k_eff, state, delta, s)``.
+    """Right-hand side ``dy = f(t, y)``; ``mesh_out[m] = (F_L, -F_R, k_eff, state, delta, s,
+    delta_R)``.
 
     ``ints, vals, tables, speed_tab, torque_tab`` is the packed system of :func:`pack`; every
     product runs over the stored non-zeros only.
@@ -544,6 +606,13 @@ def _rhs(t, y, dy, mesh_out, ints, vals, tables, speed_tab, torque_tab):
     s0 = ints[H_S0]
     bl = ints[H_BL]
     mc = ints[H_MC]
+    rflag = ints[H_RFLAG]
+    rvp = ints[H_RVP]
+    rvi = ints[H_RVI]
+    rvv = ints[H_RVV]
+    rfp = ints[H_RFP]
+    rfi = ints[H_RFI]
+    rfv = ints[H_RFV]
     for m in range(n_mesh):
         d = 0.0
         dd = 0.0
@@ -551,23 +620,43 @@ def _rhs(t, y, dy, mesh_out, ints, vals, tables, speed_tab, torque_tab):
             j = ints[vi + p]
             d += vals[vv + p] * y[j]
             dd += vals[vv + p] * y[n + j]
+        two_lines = ints[rflag + m] != 0
+        dr = d
+        ddr = dd
+        if two_lines:  # the back flank's own line of action
+            dr = 0.0
+            ddr = 0.0
+            for p in range(ints[rvp + m], ints[rvp + m + 1]):
+                j = ints[rvi + p]
+                dr += vals[rvv + p] * y[j]
+                ddr += vals[rvv + p] * y[n + j]
         s = vals[s0 + m]
         for p in range(ints[pp + m], ints[pp + m + 1]):
             s += vals[pv + p] * y[ints[pi + p]]
         i0, i1, w = _interp_cell(n_table, s)
         kl = (1.0 - w) * tables[0, m, i0] + w * tables[0, m, i1]
         kr = (1.0 - w) * tables[1, m, i0] + w * tables[1, m, i1]
-        fl, fr, ke, st = flank_forces(d, dd, kl, kr, vals[bl + m], vals[mc + m])
-        f = fl + fr
-        if f != 0.0:
-            for p in range(ints[fp + m], ints[fp + m + 1]):
-                dy[n + ints[fi + p]] -= f * vals[fv + p]
+        fl, fr, ke, st = flank_forces_two_lines(d, dd, dr, ddr, kl, kr, vals[bl + m],
+                                                vals[mc + m])
+        if two_lines:
+            if fl != 0.0:
+                for p in range(ints[fp + m], ints[fp + m + 1]):
+                    dy[n + ints[fi + p]] -= fl * vals[fv + p]
+            if fr != 0.0:
+                for p in range(ints[rfp + m], ints[rfp + m + 1]):
+                    dy[n + ints[rfi + p]] -= fr * vals[rfv + p]
+        else:  # one line of action: the summed force (bit for bit as a one-line model)
+            f = fl + fr
+            if f != 0.0:
+                for p in range(ints[fp + m], ints[fp + m + 1]):
+                    dy[n + ints[fi + p]] -= f * vals[fv + p]
         mesh_out[m, 0] = fl
         mesh_out[m, 1] = -fr
         mesh_out[m, 2] = ke
         mesh_out[m, 3] = st
         mesh_out[m, 4] = d
         mesh_out[m, 5] = s
+        mesh_out[m, 6] = dr
 
 
 @njit(cache=True)
@@ -579,7 +668,8 @@ def evaluate_rhs(t: float, y: np.ndarray, system: tuple) -> tuple[np.ndarray, np
     dy : ndarray, shape (2 n,)
         ``[qdot, qddot]``.
     mesh_out : ndarray, shape (n_mesh, MESH_OUT_COLUMNS)
-        Per mesh ``F_left, -F_right, k_eff, contact state, delta`` and the mesh position ``s``.
+        Per mesh ``F_left, -F_right, k_eff, contact state, delta``, the mesh position ``s`` and
+        ``delta_R``.
     """
     ints, vals, tables, speed_tab, torque_tab = system
     dy = np.empty(2 * ints[H_N])
@@ -739,7 +829,8 @@ def integrate_chunk(
             if flank_state[m] >= 0 and st != flank_state[m] and g <= count_until:
                 contact_changes[m] += 1
             flank_state[m] = st
-            if bad == STATUS_OK and not abs(mesh_out[m, 4]) <= vals[lim + m]:
+            if bad == STATUS_OK and not (abs(mesh_out[m, 4]) <= vals[lim + m]
+                                         and abs(mesh_out[m, 6]) <= vals[lim + m]):
                 bad = STATUS_DEFLECTION
         if bad == STATUS_OK and k_in >= 0 and not abs(y[n + k_in]) <= speed_limit:
             bad = STATUS_SPEED

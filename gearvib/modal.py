@@ -2,7 +2,8 @@
 
 Modes are classified as in Lin & Parker (1999) for planetary gears:
 
-* ``rigid-body``: zero frequency (a free member, e.g. the input without a drive);
+* ``rigid-body``: zero frequency (a free member, e.g. the input without a drive), decided
+  scale-aware by :func:`rigid_body_mask`;
 * ``rotational``: the central members only rotate (no translation);
 * ``translational``: the central members only translate (no rotation);
 * ``planet``: the central members and carriers are at rest, only planets move;
@@ -11,6 +12,12 @@ Modes are classified as in Lin & Parker (1999) for planetary gears:
 A mode's *multiplicity* is the number of modes sharing its frequency (relative tolerance
 ``1e-7``): with N equally spaced planets the translational modes come in pairs and the planet
 modes N - 3 times (N - 1 in a purely torsional model).
+
+The mean system is that of the flanks in contact at the mean load
+(:meth:`AssembledModel.mesh_contacts`): the left flank on its line of action, the right flank
+on the mirror-image line where the static load puts it on the back flank (Ravigneaux
+planet-planet and ring meshes, Wolfrom ring-2 meshes), both flanks (``k_L + k_R``, each on its
+own line) for a negative backlash.
 """
 
 from __future__ import annotations
@@ -23,12 +30,49 @@ import numpy as np
 import scipy.linalg
 import xarray as xr
 
-from gearvib.model import AssembledModel
+from gearvib.model import FLANK_NAMES, AssembledModel
 
-__all__ = ["ModalResult", "modal_analysis"]
+__all__ = ["RIGID_BODY_RTOL", "ModalResult", "modal_analysis", "rigid_body_mask"]
 
 _REL_ENERGY = 1e-6
 _REL_FREQ = 1e-7
+RIGID_BODY_RTOL = 1e-10
+"""A mode is rigid-body when its strain energy ``|phi^H K phi|`` is below this fraction of
+``phi^H |K| phi`` (the same quadratic form with every entry of ``K`` taken positive): the
+energy then cancels to rounding. An elastic element more than 1e10 times softer than the
+stiffest element its mode strains would be mistaken for a rigid-body motion."""
+
+
+def rigid_body_mask(stiffness: np.ndarray, shapes: np.ndarray) -> np.ndarray:
+    """Scale-aware test for rigid-body modes.
+
+    A relative threshold on the frequency (e.g. 1e-6 of the highest) fails when one support is
+    many orders of magnitude stiffer than the meshes: a support of 1e16 N/m raises the highest
+    frequency so far that a real mode at a few hundred hertz falls below it. Here every mode is
+    measured against its own stiffness scale: the strain energy ``phi^H K phi`` of a rigid-body
+    motion cancels to rounding between the terms of ``|phi|^T |K| |phi|`` (the elements it
+    moves without straining them), that of an elastic mode does not. The energy is evaluated
+    from the mode shape (a Rayleigh quotient, accurate to the rounding of that mode's own
+    terms), not taken from the eigenvalue, whose absolute error grows with the stiffest element
+    of the whole system.
+
+    Parameters
+    ----------
+    stiffness : ndarray, shape (n, n)
+        ``K`` of the eigenproblem (with ``-Omega^2 K_Omega`` for a rotating frame).
+    shapes : ndarray, shape (n, n_mode)
+        Mode shapes (real or complex), any normalisation.
+
+    Returns
+    -------
+    ndarray of bool, shape (n_mode,)
+        True where ``|phi^H K phi| <= RIGID_BODY_RTOL |phi|^T |K| |phi|``.
+    """
+    k = np.asarray(stiffness)
+    phi = np.asarray(shapes)
+    energy = np.abs(np.real(np.einsum("im,ij,jm->m", phi.conj(), k, phi)))
+    scale = np.einsum("im,ij,jm->m", np.abs(phi), np.abs(k), np.abs(phi))
+    return energy <= RIGID_BODY_RTOL * scale
 
 
 @dataclass(frozen=True)
@@ -53,6 +97,9 @@ class ModalResult:
         Labels of the axes.
     carrier_speed_rpm : float
         Carrier speed of the analysis [min^-1] (gyroscopic and centripetal terms if nonzero).
+    loaded_flanks : tuple of str
+        Flank of every mesh in the mean system: ``"left"``, ``"right"`` or ``"both"``
+        (:meth:`AssembledModel.loaded_flanks`).
     """
 
     frequencies_hz: np.ndarray
@@ -65,6 +112,7 @@ class ModalResult:
     mesh_names: tuple[str, ...]
     bearing_names: tuple[str, ...]
     carrier_speed_rpm: float = 0.0
+    loaded_flanks: tuple[str, ...] = ()
 
     @property
     def n_modes(self) -> int:
@@ -129,11 +177,15 @@ class ModalResult:
             },
             attrs={"carrier_speed_rpm": float(self.carrier_speed_rpm)},
         )
+        if len(self.loaded_flanks) == len(self.mesh_names):
+            ds["loaded_flank"] = ("mesh", np.array(self.loaded_flanks, dtype=str),
+                                  {"long_name": "flank in contact in the mean system "
+                                   "(left, right or both)"})
         return ds
 
 
-def _classify(model: AssembledModel, phi: np.ndarray, freq: float, f_scale: float) -> str:
-    if freq <= 1e-6 * max(f_scale, 1.0):
+def _classify(model: AssembledModel, phi: np.ndarray, rigid: bool) -> str:
+    if rigid:
         return "rigid-body"
     m_diag = np.real(np.diag(model.mass))
     energy = m_diag * np.abs(phi) ** 2
@@ -177,8 +229,11 @@ def _multiplicity(freqs: np.ndarray) -> list[int]:
 
 
 def modal_analysis(model: AssembledModel, *, carrier_speed_rpm: float = 0.0,
-                   stiffness_scale: float = 1.0) -> ModalResult:
+                   stiffness_scale: float = 1.0, torque_sign: float = 1.0) -> ModalResult:
     """Natural frequencies and mode shapes of the mean-stiffness system.
+
+    The mean system holds the flanks in contact at the mean load (see the module docstring):
+    ``K + sum_c k_c u_c u_c^T`` over the contacts of :meth:`AssembledModel.mesh_contacts`.
 
     Parameters
     ----------
@@ -193,6 +248,9 @@ def modal_analysis(model: AssembledModel, *, carrier_speed_rpm: float = 0.0,
         exactly, the others to second order (0.1 % at 3000 min^-1 on ``paper-case1-elastic``).
     stiffness_scale : float
         Factor on every mesh stiffness (for sensitivity studies).
+    torque_sign : float
+        Sense of the mean load: +1 the input drives forward (default), -1 reversed (coast,
+        every flank swapped).
 
     Returns
     -------
@@ -202,13 +260,15 @@ def modal_analysis(model: AssembledModel, *, carrier_speed_rpm: float = 0.0,
         raise ValueError("carrier_speed_rpm must be finite")
     if not stiffness_scale > 0:
         raise ValueError(f"stiffness_scale = {stiffness_scale} must be > 0")
-    k_mesh = model.mean_mesh_stiffness() * stiffness_scale
-    k = model.stiffness + model.mesh_stiffness_matrix(k_mesh)
+    contacts = model.mesh_contacts(torque_sign)
+    k_contact = contacts.mean_stiffness() * stiffness_scale
+    k = model.stiffness + contacts.stiffness_matrix(k_contact)
     m = model.mass
     omega_c = carrier_speed_rpm * 2 * math.pi / 60.0
     if omega_c == 0.0:
         w2, phi = scipy.linalg.eigh(k, m)
-        w2 = np.where(np.abs(w2) < 1e-9 * max(abs(w2).max(), 1.0), 0.0, w2)
+        rigid = rigid_body_mask(k, phi)
+        w2 = np.where(rigid, 0.0, w2)
         if (w2 < 0).any():
             raise ValueError("mean stiffness matrix is not positive semi-definite "
                              f"(eigenvalue {w2.min():.3g}); check for negative stiffness")
@@ -232,12 +292,15 @@ def modal_analysis(model: AssembledModel, *, carrier_speed_rpm: float = 0.0,
         freqs = np.abs(lam.imag) / (2 * math.pi)
         norms = np.sqrt(np.real(np.einsum("im,ij,jm->m", vec.conj(), m, vec)))
         phi = vec / norms
-    f_scale = float(freqs.max()) if freqs.size else 1.0
-    kinds = tuple(_classify(model, phi[:, i], freqs[i], f_scale) for i in range(len(freqs)))
+        # rigid-body: a non-oscillating eigenvalue (at speed the centripetal terms strain the
+        # absolute planet coordinates of the rigid rotation slightly), or no strain energy
+        rigid = (np.abs(lam.imag) <= tol) | rigid_body_mask(kk, phi)
+        freqs = np.where(rigid, 0.0, freqs)
+    kinds = tuple(_classify(model, phi[:, i], bool(rigid[i])) for i in range(len(freqs)))
     mult = tuple(_multiplicity(freqs))
 
-    defl = model.mesh_vectors @ phi
-    u_mesh = 0.5 * k_mesh[:, None] * np.abs(defl) ** 2
+    defl = contacts.vectors @ phi
+    u_mesh = contacts.per_mesh((0.5 * k_contact[:, None] * np.abs(defl) ** 2).T).T
     u_b = 0.5 * model.bearing_stiffness[:, None] * np.abs(model.bearing_vectors @ phi) ** 2
     total = 0.5 * np.real(np.einsum("im,ij,jm->m", phi.conj(), k, phi))
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -254,4 +317,5 @@ def modal_analysis(model: AssembledModel, *, carrier_speed_rpm: float = 0.0,
         mesh_names=model.mesh_names,
         bearing_names=model.bearing_names,
         carrier_speed_rpm=float(carrier_speed_rpm),
+        loaded_flanks=tuple(FLANK_NAMES[int(f)] for f in contacts.flanks),
     )

@@ -21,12 +21,18 @@ A rigid bearing or a fixed member removes its DOF. Arrays that act on ``q`` have
 
 Mesh conventions
 ----------------
-For mesh ``m`` the normal deflection is ``delta_m = mesh_vectors[m] @ q`` [m]. Its flank
-``left`` is loaded when ``delta_m > j_m / 2`` and carries ``F = k_left(s) (delta - j/2)``;
-flank ``right`` is loaded when ``delta_m < -j_m / 2`` and carries ``F = k_right(s)
-(delta + j/2)`` (negative). A negative backlash loads both flanks at once. The generalised
-force of the mesh on ``q`` is ``-(F_left + F_right + damping) * mesh_vectors[m]``. The left
-flank is the one that carries the load when the central gear drives the planet forward.
+For mesh ``m`` the normal deflection along the left flank's line of action is
+``delta_m = mesh_vectors[m] @ q`` [m], along the right (back) flank's ``delta_R,m =
+back_vectors[m] @ q`` (the mirror-image line of action: the same rotations, other in-plane
+translations; :mod:`gearvib.assembly`). Flank ``left`` is loaded when ``delta_m > j_m / 2`` and
+carries ``F_L = k_left(s) (delta - j/2)``; flank ``right`` is loaded when ``delta_R,m <
+-j_m / 2`` and carries ``F_R = k_right(s) (delta_R + j/2)`` (negative). A negative backlash
+loads both flanks at once. The generalised force of the mesh on ``q`` is ``-F_L
+mesh_vectors[m] - F_R back_vectors[m]`` (damping included in the flank forces). The left flank
+is the one that carries the load when the central gear drives the planet forward; which flank
+carries the mean load of a gear set is :meth:`AssembledModel.loaded_flanks`, and
+:meth:`AssembledModel.mesh_contacts` gives the flanks in contact as linear springs (the mean
+system of the modal analysis, the drive coupling, the step choice and the stability analysis).
 
 The mesh position ``s_m`` in mesh cycles is ``mesh_position_vectors[m] @ q +
 mesh_position_offsets[m]``; ``s = 0`` (mod 1) is the instant a new tooth pair enters contact.
@@ -44,6 +50,108 @@ import numpy as np
 
 MESH_FREQUENCY_RTOL = 1e-9
 """Relative tolerance within which two meshes share one mesh frequency."""
+
+FLANK_LEFT = 1
+"""Loaded-flank code: the left (drive) flank."""
+FLANK_RIGHT = 2
+"""Loaded-flank code: the right (back) flank."""
+FLANK_BOTH = 3
+"""Loaded-flank code: both flanks (negative backlash, preloaded mesh)."""
+FLANK_NAMES = {FLANK_LEFT: "left", FLANK_RIGHT: "right", FLANK_BOTH: "both"}
+"""Names of the loaded-flank codes."""
+_UNLOADED_RTOL = 1e-9
+"""A mesh whose static deflection is below this fraction of the largest one is unloaded."""
+
+
+@dataclass(frozen=True)
+class MeshContacts:
+    """The flanks in contact of every mesh at a mean load, as linear springs.
+
+    One *contact* per loaded flank. A mesh loaded on both flanks whose two lines of action
+    coincide (rigid in-plane bearings) is one contact with the summed stiffness ``k_L + k_R``
+    and twice the mesh damping, as the run-up simulation sees it; with distinct lines of action
+    it is two contacts.
+
+    Attributes
+    ----------
+    flanks : ndarray of int, shape (n_mesh,)
+        Loaded flank of every mesh: :data:`FLANK_LEFT`, :data:`FLANK_RIGHT` or
+        :data:`FLANK_BOTH`.
+    mesh : ndarray of int, shape (n_contact,)
+        Mesh index of every contact.
+    flank : tuple of str
+        ``"left"``, ``"right"`` or ``"both"`` (two flanks on one line of action) per contact.
+    vectors : ndarray, shape (n_contact, n)
+        Deflection vector of every contact (the line of action of its flank).
+    tables : ndarray, shape (n_contact, n_table)
+        Stiffness over one mesh cycle [N/m].
+    peak : ndarray, shape (n_contact,)
+        Largest stiffness of every contact [N/m] (two flanks on one line: the sum of both
+        flanks' largest values).
+    damping : ndarray, shape (n_contact,)
+        Viscous damping [N s/m] (the mesh damping once per flank in contact).
+    torque_sign : float
+        Sense of the mean load they belong to (+1: the input drives forward).
+    """
+
+    flanks: np.ndarray
+    mesh: np.ndarray
+    flank: tuple[str, ...]
+    vectors: np.ndarray
+    tables: np.ndarray
+    peak: np.ndarray
+    damping: np.ndarray
+    torque_sign: float = 1.0
+
+    @property
+    def n_contact(self) -> int:
+        """Number of contacts."""
+        return int(self.mesh.size)
+
+    def mean_stiffness(self) -> np.ndarray:
+        """Cycle-mean stiffness of every contact [N/m]."""
+        return self.tables.mean(axis=1)
+
+    def stiffness_matrix(self, k: np.ndarray | None = None) -> np.ndarray:
+        """``sum_c k_c u_c u_c^T`` over the contacts (the cycle means by default)."""
+        kk = self.mean_stiffness() if k is None else np.asarray(k, dtype=float)
+        v = self.vectors
+        return (v.T * kk) @ v
+
+    def damping_matrix(self) -> np.ndarray:
+        """``sum_c c_c u_c u_c^T`` over the contacts."""
+        v = self.vectors
+        return (v.T * self.damping) @ v
+
+    def stiffness_at(self, positions: np.ndarray) -> np.ndarray:
+        """Stiffness of every contact at the mesh positions of its mesh [N/m].
+
+        Parameters
+        ----------
+        positions : ndarray, shape (..., n_contact)
+            Mesh position of every contact's mesh [cycles] (``s[..., contacts.mesh]``).
+        """
+        return _interpolate(self.tables, positions)
+
+    def per_mesh(self, values: np.ndarray) -> np.ndarray:
+        """Sum per-contact values (last axis) over the contacts of every mesh."""
+        v = np.asarray(values)
+        out = np.zeros((*v.shape[:-1], self.flanks.size), dtype=v.dtype)
+        for c, m in enumerate(self.mesh):
+            out[..., m] += v[..., c]
+        return out
+
+
+def _interpolate(tables: np.ndarray, positions: np.ndarray) -> np.ndarray:
+    """Periodic linear interpolation of row ``m`` of ``tables`` at ``positions[..., m]``."""
+    n_table = tables.shape[1]
+    s = np.asarray(positions, dtype=float)
+    u = (s - np.floor(s)) * n_table
+    i0 = np.floor(u).astype(np.int64) % n_table
+    i1 = (i0 + 1) % n_table
+    w = u - np.floor(u)
+    m = np.arange(tables.shape[0])
+    return (1.0 - w) * tables[m, i0] + w * tables[m, i1]
 
 
 @dataclass(frozen=True)
@@ -96,7 +204,8 @@ class AssembledModel:
     mesh_names : tuple of str
         E.g. ``"sun-planet1"``, ``"ring-planet1"``.
     mesh_vectors : ndarray, shape (n_mesh, n)
-        Normal mesh deflection per unit coordinate.
+        Normal mesh deflection along the left (drive) flank's line of action per unit
+        coordinate.
     mesh_position_vectors : ndarray, shape (n_mesh, n)
         Mesh cycles per unit coordinate (only rotations contribute).
     mesh_position_offsets : ndarray, shape (n_mesh,)
@@ -131,6 +240,10 @@ class AssembledModel:
         single value of a one-frequency set.
     meta : dict
         Free-form description (gear-set name, configuration) for provenance.
+    mesh_back_vectors : ndarray, shape (n_mesh, n), optional
+        Deflection along the right (back) flank's line of action, the mirror image of the left
+        one (:mod:`gearvib.assembly`); None when it equals :attr:`mesh_vectors` (no in-plane
+        translation of a meshing gear is a coordinate). Use :attr:`back_vectors`.
     """
 
     dof_names: tuple[str, ...]
@@ -160,8 +273,19 @@ class AssembledModel:
     kinematic_ratios: dict[str, float]
     mesh_frequencies_per_rpm: np.ndarray
     meta: dict = field(default_factory=dict)
+    mesh_back_vectors: np.ndarray | None = None
 
     def __post_init__(self) -> None:
+        if self.mesh_back_vectors is not None:
+            back = np.ascontiguousarray(self.mesh_back_vectors, dtype=float)
+            if back.shape != np.shape(self.mesh_vectors):
+                raise ValueError(
+                    f"mesh_back_vectors has shape {back.shape}, mesh_vectors "
+                    f"{np.shape(self.mesh_vectors)}; give one back-flank vector per mesh (or "
+                    "None: the same lines of action)"
+                )
+            object.__setattr__(self, "mesh_back_vectors", back)
+        object.__setattr__(self, "_contacts_cache", {})
         f = np.asarray(self.mesh_frequencies_per_rpm, dtype=float).reshape(-1)
         if f.size != len(self.mesh_names):
             raise ValueError(
@@ -253,9 +377,155 @@ class AssembledModel:
         """Number of tooth contacts (meshes)."""
         return len(self.mesh_names)
 
+    @property
+    def back_vectors(self) -> np.ndarray:
+        """Back-flank deflection vectors, shape (n_mesh, n) (:attr:`mesh_back_vectors`, or
+        :attr:`mesh_vectors` when the lines of action coincide)."""
+        return self.mesh_vectors if self.mesh_back_vectors is None else self.mesh_back_vectors
+
+    def distinct_back_lines(self) -> np.ndarray:
+        """True for every mesh whose back-flank line of action differs from the left one's."""
+        if self.mesh_back_vectors is None:
+            return np.zeros(self.n_mesh, dtype=bool)
+        return np.any(self.mesh_back_vectors != self.mesh_vectors, axis=1)
+
     def mean_mesh_stiffness(self) -> np.ndarray:
         """Mean left-flank stiffness of every mesh over one cycle [N/m]."""
         return self.mesh_stiffness_tables.mean(axis=1)
+
+    def nominal_load(self, torque_sign: float = 1.0) -> np.ndarray:
+        """Generalised force of a unit input torque in steady operation, shape (n,).
+
+        ``torque_sign`` N m at the input member and the lossless load at the output member
+        that balances it (``-torque_sign r_in / r_out``, ``r`` the kinematic ratios), or,
+        without a rotating output, the d'Alembert force of the rigid-body acceleration it
+        causes. A model without a rigid-body motion (every member held by a support) gets the
+        input torque alone.
+        """
+        sign = _torque_sign(torque_sign)
+        f = np.zeros(self.n_dof)
+        k_in = self.rotation_dofs.get(self.input_member, -1)
+        if k_in < 0:
+            raise ValueError(f"input member {self.input_member!r} has no rotation coordinate")
+        f[k_in] = sign
+        try:
+            r = self.rigid_body_velocity()
+        except ValueError:  # held by supports: no rigid-body motion to balance
+            return f
+        k_out = self.rotation_dofs.get(self.output_member, -1)
+        r_out = r[k_out] if k_out >= 0 and k_out != k_in else 0.0
+        if r_out != 0.0:
+            f[k_out] -= sign * r[k_in] / r_out
+        else:
+            mr = np.asarray(self.mass, dtype=float) @ r
+            f -= mr * (float(r @ f) / float(r @ mr))
+        return f
+
+    def loaded_flanks(self, torque_sign: float = 1.0) -> np.ndarray:
+        """Flank of every mesh that carries the mean load [:data:`FLANK_LEFT`, ...].
+
+        Both flanks for a negative backlash (preloaded mesh); otherwise the flank in contact at
+        the static equilibrium under :meth:`nominal_load` with the cycle-mean flank stiffness
+        and no backlash (the flank follows from the statics, not from the size of the load; a
+        mesh that carries no load counts as left-loaded). The active set is iterated until the
+        sign of every loaded flank's deflection agrees with its flank.
+
+        Parameters
+        ----------
+        torque_sign : float
+            +1: the input drives forward (traction); -1: the load torque reversed (coast).
+
+        Returns
+        -------
+        ndarray of int, shape (n_mesh,)
+        """
+        return self.mesh_contacts(torque_sign).flanks.copy()
+
+    def mesh_contacts(self, torque_sign: float = 1.0) -> MeshContacts:
+        """The flanks in contact at the mean load as linear springs (cached per sign).
+
+        The mean system of a gear set is ``K + contacts.stiffness_matrix()``: left flanks on
+        the left lines of action, right flanks on the back lines, both for a negative backlash
+        (see :class:`MeshContacts` and :meth:`loaded_flanks`). Modal analysis, the natural
+        frequencies of a run, the default drive coupling, the step choice and the stability
+        analysis all use it.
+        """
+        sign = _torque_sign(torque_sign)
+        cache = self.__dict__["_contacts_cache"]
+        if sign not in cache:
+            cache[sign] = self._contacts(self._static_flanks(sign), sign)
+        return cache[sign]
+
+    def _contacts(self, flanks: np.ndarray, sign: float) -> MeshContacts:
+        """Build the :class:`MeshContacts` of the given loaded flanks."""
+        left_t, back_t = self.mesh_stiffness_tables, self.mesh_back_tables
+        if np.all(flanks == FLANK_LEFT):  # the model's own arrays: results bit for bit as ever
+            return MeshContacts(flanks, np.arange(self.n_mesh), ("left",) * self.n_mesh,
+                                self.mesh_vectors, left_t, left_t.max(axis=1),
+                                np.asarray(self.mesh_damping, dtype=float), sign)
+        distinct = self.distinct_back_lines()
+        vl, vr = self.mesh_vectors, self.back_vectors
+        mesh, names, rows, tables, peak, damp = [], [], [], [], [], []
+
+        def add(m, name, row, table, top, c):
+            mesh.append(m)
+            names.append(name)
+            rows.append(row)
+            tables.append(table)
+            peak.append(top)
+            damp.append(c)
+
+        for m, fl in enumerate(flanks):
+            c = float(self.mesh_damping[m])
+            if fl == FLANK_BOTH and not distinct[m]:
+                add(m, "both", vl[m], left_t[m] + back_t[m], left_t[m].max() + back_t[m].max(),
+                    2.0 * c)
+                continue
+            if fl & FLANK_LEFT:
+                add(m, "left", vl[m], left_t[m], left_t[m].max(), c)
+            if fl & FLANK_RIGHT:
+                add(m, "right", vr[m], back_t[m], back_t[m].max(), c)
+        return MeshContacts(flanks, np.array(mesh, dtype=np.int64), tuple(names),
+                            np.ascontiguousarray(np.array(rows).reshape(len(rows), self.n_dof)),
+                            np.ascontiguousarray(np.array(tables).reshape(len(rows), -1)),
+                            np.array(peak, dtype=float), np.array(damp, dtype=float), sign)
+
+    def _static_flanks(self, sign: float) -> np.ndarray:
+        """Loaded flanks of the static equilibrium under :meth:`nominal_load` (see
+        :meth:`loaded_flanks`)."""
+        both = np.asarray(self.mesh_backlash) < 0
+        flanks = np.where(both, FLANK_BOTH, FLANK_LEFT).astype(np.int64)
+        if both.all() or self.n_mesh == 0:
+            return flanks
+        f = self.nominal_load(sign)
+        k_in = self.rotation_dofs[self.input_member]
+        keep = np.ones(self.n_dof, dtype=bool)
+        try:
+            self.rigid_body_velocity()
+            keep[k_in] = False  # pin the input (ratio 1): removes the rigid-body motion
+        except ValueError:  # held by supports: no rigid-body motion
+            pass
+        vl, vr = self.mesh_vectors, self.back_vectors
+        seen: set[bytes] = set()
+        for _ in range(4 * self.n_mesh + 4):
+            contacts = self._contacts(flanks, sign)
+            k = self.stiffness + contacts.stiffness_matrix()
+            q = np.zeros(self.n_dof)
+            kk = k[np.ix_(keep, keep)]
+            try:
+                q[keep] = np.linalg.solve(kk, f[keep])
+            except np.linalg.LinAlgError:
+                q[keep] = np.linalg.lstsq(kk, f[keep], rcond=None)[0]
+            dl, dr = vl @ q, vr @ q
+            tiny = _UNLOADED_RTOL * max(np.abs(dl).max(), np.abs(dr).max(), 1e-300)
+            new = flanks.copy()
+            new[~both & (flanks == FLANK_LEFT) & (dl < -tiny)] = FLANK_RIGHT
+            new[~both & (flanks == FLANK_RIGHT) & (dr > tiny)] = FLANK_LEFT
+            if np.array_equal(new, flanks) or new.tobytes() in seen:
+                return flanks
+            seen.add(flanks.tobytes())
+            flanks = new
+        return flanks
 
     def mesh_stiffness_matrix(self, k: np.ndarray | None = None) -> np.ndarray:
         """Stiffness matrix of the meshes, ``sum_m k_m v_m v_m^T``.
@@ -269,9 +539,10 @@ class AssembledModel:
         v = self.mesh_vectors
         return (v.T * kk) @ v
 
-    def mean_stiffness_matrix(self) -> np.ndarray:
-        """Mean-system stiffness: constant part plus the mean mesh stiffness."""
-        return self.stiffness + self.mesh_stiffness_matrix()
+    def mean_stiffness_matrix(self, torque_sign: float = 1.0) -> np.ndarray:
+        """Mean-system stiffness: constant part plus the mean stiffness of the flanks in
+        contact at the mean load (:meth:`mesh_contacts`)."""
+        return self.stiffness + self.mesh_contacts(torque_sign).stiffness_matrix()
 
     def rigid_body_velocity(self) -> np.ndarray:
         """Coordinate velocities per unit input speed (rigid-body kinematics).
@@ -300,7 +571,9 @@ class AssembledModel:
                     raise ValueError(f"no kinematic ratio for member {member!r}")
                 r[dof] = float(self.kinematic_ratios[member])
                 known[dof] = True
-        k = self.mean_stiffness_matrix()
+        # the kinematics do not depend on the flanks (a rigid motion strains neither line of
+        # action): the left-flank matrix, which also keeps loaded_flanks free of recursion
+        k = self.stiffness + self.mesh_stiffness_matrix()
         free = ~known
         if free.any():
             kff = k[np.ix_(free, free)]
@@ -381,14 +654,15 @@ class AssembledModel:
             Stiffness [N/m], periodic linear interpolation.
         """
         tables = self.mesh_back_tables if back else self.mesh_stiffness_tables
-        n_table = tables.shape[1]
-        s = np.asarray(positions, dtype=float)
-        u = (s - np.floor(s)) * n_table
-        i0 = np.floor(u).astype(np.int64) % n_table
-        i1 = (i0 + 1) % n_table
-        w = u - np.floor(u)
-        m = np.arange(tables.shape[0])
-        return (1.0 - w) * tables[m, i0] + w * tables[m, i1]
+        return _interpolate(tables, positions)
+
+
+def _torque_sign(value: float) -> float:
+    """+1.0 or -1.0 from a nonzero finite sign argument."""
+    v = float(value)
+    if not (math.isfinite(v) and v != 0.0):
+        raise ValueError(f"torque_sign = {value!r} is not admissible (admissible: +1 or -1)")
+    return 1.0 if v > 0 else -1.0
 
 
 def _group_names(model: AssembledModel, members: list[list[int]]) -> list[str]:

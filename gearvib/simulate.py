@@ -202,7 +202,7 @@ def simulate(
         raise ConfigError(f"max_steps = {max_steps!r} is not admissible (admissible: an "
                           "integer in 1..1e15)")
 
-    k_max = stiffest_matrix(model)
+    k_max = stiffest_matrix(model, setup.torque_sign)
     if setup.drive == "speed":
         k_max = k_max.copy()
         k_max[system.ipar[kn.IP_INPUT], system.ipar[kn.IP_INPUT]] += setup.coupling.stiffness
@@ -231,9 +231,11 @@ def simulate(
         free_rigid=setup.free_rigid,
         mesh_names=model.mesh_names,
     )
-    delta0 = system.mesh_vectors @ q0
+    delta0 = np.abs(system.mesh_vectors @ q0)
+    if system.mesh_back_vectors is not None:  # the static deflection of the loaded line
+        delta0 = np.maximum(delta0, np.abs(system.mesh_back_vectors @ q0))
     system.deflection_limit[:] = np.maximum(
-        1e3 * (np.abs(delta0) + np.abs(system.backlash) / 2), 1e-3
+        1e3 * (delta0 + np.abs(system.backlash) / 2), 1e-3
     )
     y = np.concatenate([q0, qd0])
 

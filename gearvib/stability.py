@@ -2,9 +2,11 @@
 
 This is the gear-set side of :mod:`analysis.instability`, which is generic: here the periodic
 system ``M q'' + C q' + K(t) q = 0`` is built from an :class:`AssembledModel` at a given mesh
-frequency, with every contact at its own phase and all flanks in contact (the linear system
-about the loaded state), and the theory candidates get the mode families and the planetary
-mesh-phasing rule of the gear set.
+frequency, with every contact at its own phase and the loaded flanks in contact (the linear
+system about the loaded state: :meth:`AssembledModel.mesh_contacts`, i.e. the left or the back
+flank on its own line of action, both flanks with stiffness and damping for a negative
+backlash), and the theory candidates get the mode families and the planetary mesh-phasing rule
+of the gear set.
 
 The input member is held by the same drive coupling the run-up simulation uses, so the
 rigid-body mode is removed and the stability chart describes the simulated system.
@@ -53,7 +55,7 @@ from analysis.instability import (
     stability_chart,
 )
 from gearvib.modal import ModalResult, modal_analysis
-from gearvib.model import AssembledModel, MeshFrequencyGroup
+from gearvib.model import AssembledModel, MeshContacts, MeshFrequencyGroup
 from gearvib.simulate import DriveCoupling, default_coupling
 
 __all__ = [
@@ -64,6 +66,7 @@ __all__ = [
     "common_period",
     "first_order_regions",
     "gear_set_candidates",
+    "mesh_phasing",
     "periodic_system",
     "stability_map",
     "stability_over_speed",
@@ -232,10 +235,12 @@ class PeriodicGearSystem:
     mesh_rates : ndarray, shape (n_mesh,)
         Mesh cycles per reference mesh cycle as analysed (signed: the direction in which the
         stiffness table is traversed; ``N_g / L`` in magnitude, 0 for a mesh outside a group).
-    contact_tables : ndarray, shape (n_mesh, n_table)
-        Stiffness of the flanks in contact over one mesh cycle [N/m]: the left (loaded) flank,
-        plus the back flank for a negative backlash (both flanks loaded, as in the
-        simulation). Default: the left-flank tables.
+    contact_tables : ndarray, shape (n_contact, n_table)
+        Stiffness of the flanks in contact over one mesh cycle [N/m], one row per contact of
+        :attr:`contacts`. Default: the left-flank tables.
+    contacts : MeshContacts, optional
+        The flanks in contact (:meth:`AssembledModel.mesh_contacts`); default: every mesh on
+        its left flank.
     """
 
     model: AssembledModel
@@ -247,13 +252,35 @@ class PeriodicGearSystem:
     period: CommonPeriod = CommonPeriod("single", 1, (1,), (1.0,), (0.0,))
     mesh_rates: np.ndarray | None = None
     contact_tables: np.ndarray | None = None
+    contacts: MeshContacts | None = None
 
     @property
     def tables(self) -> np.ndarray:
-        """:attr:`contact_tables`, or the model's left-flank tables when not given."""
-        if self.contact_tables is None:
-            return self.model.mesh_stiffness_tables
-        return self.contact_tables
+        """:attr:`contact_tables`, or the tables of :attr:`contacts` (the model's left-flank
+        tables when neither is given)."""
+        if self.contact_tables is not None:
+            return self.contact_tables
+        if self.contacts is not None:
+            return self.contacts.tables
+        return self.model.mesh_stiffness_tables
+
+    @property
+    def contact_mesh(self) -> np.ndarray:
+        """Mesh index of every contact."""
+        if self.contacts is None:
+            return np.arange(self.model.n_mesh)
+        return self.contacts.mesh
+
+    @property
+    def contact_vectors(self) -> np.ndarray:
+        """Deflection vector of every contact (its flank's line of action)."""
+        if self.contacts is None:
+            return self.model.mesh_vectors
+        return self.contacts.vectors
+
+    def _contact_matrix(self, k: np.ndarray) -> np.ndarray:
+        v = self.contact_vectors
+        return (v.T * np.asarray(k, dtype=float)) @ v
 
     @property
     def rates(self) -> np.ndarray:
@@ -268,7 +295,10 @@ class PeriodicGearSystem:
         return self.groups[0].frequency_per_rpm if self.groups else math.nan
 
     def mesh_stiffness_values(self, positions: np.ndarray) -> np.ndarray:
-        """Stiffness of the flanks in contact of every mesh at the given positions [N/m]."""
+        """Stiffness of every contact at the given positions of its mesh [N/m].
+
+        ``positions`` has one entry per contact (``s[..., contact_mesh]``).
+        """
         tables = self.tables
         n_table = tables.shape[1]
         s = np.asarray(positions, dtype=float)
@@ -281,12 +311,13 @@ class PeriodicGearSystem:
 
     def stiffness_at(self, t: float, mesh_frequency: float) -> np.ndarray:
         """``K(t)`` at constant reference mesh frequency [Hz]."""
-        s = self.model.mesh_position_offsets + self.rates * (mesh_frequency * t)
-        return self.stiffness + self.model.mesh_stiffness_matrix(self.mesh_stiffness_values(s))
+        cm = self.contact_mesh
+        s = self.model.mesh_position_offsets[cm] + self.rates[cm] * (mesh_frequency * t)
+        return self.stiffness + self._contact_matrix(self.mesh_stiffness_values(s))
 
     def mean_stiffness(self) -> np.ndarray:
         """Cycle-mean stiffness matrix."""
-        return self.stiffness + self.model.mesh_stiffness_matrix(self.tables.mean(axis=1))
+        return self.stiffness + self._contact_matrix(self.tables.mean(axis=1))
 
     @cached_property
     def _pieces(self) -> tuple[np.ndarray, np.ndarray] | None:
@@ -296,7 +327,9 @@ class PeriodicGearSystem:
             return None
         length = self.period.reference_cycles
         cuts = [np.array([0.0, float(length)])]
-        for r, s0, rate in zip(runs, self.model.mesh_position_offsets, self.rates, strict=True):
+        cm = self.contact_mesh
+        for r, s0, rate in zip(runs, self.model.mesh_position_offsets[cm], self.rates[cm],
+                               strict=True):
             if r is None or r[0].size < 2 or rate == 0.0:  # constant table: no switching
                 continue
             # s0 + rate u = b + k (mod 1) for u in [0, L)
@@ -343,7 +376,8 @@ class PeriodicGearSystem:
         tables = self.tables
         n_table = tables.shape[1]
         c = np.fft.rfft(tables, axis=1) / n_table  # coefficient of exp(+i 2 pi l s)
-        v = self.model.mesh_vectors
+        v = self.contact_vectors
+        cm = self.contact_mesh
         members = np.zeros(self.model.n_mesh, dtype=bool)
         if self.groups:
             members[list(self.groups[group].meshes)] = True
@@ -351,15 +385,15 @@ class PeriodicGearSystem:
             members[:] = True
         k_hat = np.zeros((l_max, *self.mass.shape), dtype=complex)
         for ell in range(1, l_max + 1):
-            coef = c[:, ell] * np.exp(2j * math.pi * ell * self.model.mesh_position_offsets)
-            coef = np.where(self.rates < 0, np.conj(coef), coef) * members
+            coef = c[:, ell] * np.exp(2j * math.pi * ell * self.model.mesh_position_offsets[cm])
+            coef = np.where(self.rates[cm] < 0, np.conj(coef), coef) * members[cm]
             k_hat[ell - 1] = (v.T * coef) @ v
         return self.mean_stiffness(), k_hat
 
 
 def periodic_system(model: AssembledModel, *, coupling: DriveCoupling | None = None,
-                    max_cycles: int = MAX_CYCLES, max_detuning: float = MAX_DETUNING
-                    ) -> PeriodicGearSystem:
+                    max_cycles: int = MAX_CYCLES, max_detuning: float = MAX_DETUNING,
+                    torque_sign: float = 1.0) -> PeriodicGearSystem:
     """Build the periodic system of ``model`` held at the input by a drive coupling.
 
     Parameters
@@ -370,19 +404,19 @@ def periodic_system(model: AssembledModel, *, coupling: DriveCoupling | None = N
     max_cycles, max_detuning
         Budget and tolerance of the common period of several mesh frequencies (see
         :func:`common_period` and the module docstring).
+    torque_sign : float
+        Sense of the mean load (+1: the input drives forward): selects the loaded flanks.
     """
-    coupling = coupling or default_coupling(model)
+    coupling = coupling or default_coupling(model, torque_sign)
     k_in = model.rotation_dofs[model.input_member]
     kd = np.zeros_like(model.stiffness)
     kd[k_in, k_in] = coupling.stiffness
     cd = np.zeros_like(model.stiffness)
     cd[k_in, k_in] = coupling.damping
-    # flanks in contact: the left one; both (stiffness and damping) with a negative backlash
-    both = np.asarray(model.mesh_backlash) < 0
-    tables = model.mesh_stiffness_tables + both[:, None] * model.mesh_back_tables
-    v = model.mesh_vectors
-    mesh_damping = (v.T * (model.mesh_damping * (1.0 + both))) @ v
-    damping = model.damping + mesh_damping + cd
+    # the flanks in contact at the mean load, each on its line of action (both, with stiffness
+    # and damping, for a negative backlash), as in the simulation
+    contacts = model.mesh_contacts(torque_sign)
+    damping = model.damping + contacts.damping_matrix() + cd
     varying = _varying(model)
     groups = tuple(g for g in model.mesh_frequency_groups() if varying[list(g.meshes)].any())
     rates = np.zeros(model.n_mesh)
@@ -397,7 +431,7 @@ def periodic_system(model: AssembledModel, *, coupling: DriveCoupling | None = N
     else:  # no varying mesh: a time-invariant system, any period
         period = common_period([1.0])
     return PeriodicGearSystem(model, model.mass, damping, model.stiffness + kd, coupling,
-                              groups, period, rates, tables)
+                              groups, period, rates, contacts=contacts)
 
 
 def _circular_harmonic(model: AssembledModel, shape: np.ndarray, planets: list[str]) -> int:
@@ -428,19 +462,6 @@ def _mode_families(model: AssembledModel, modal: ModalResult, keep: np.ndarray
     return fam
 
 
-def _loaded(model: AssembledModel) -> AssembledModel:
-    """The model with the stiffness of the flanks in contact as its mean-system tables.
-
-    A negative backlash loads both flanks (stiffness ``k_L + k_R``), which the modes that
-    give the theory candidates must see, as the Floquet system does.
-    """
-    both = np.asarray(model.mesh_backlash) < 0
-    if not both.any():
-        return model
-    tables = model.mesh_stiffness_tables + both[:, None] * model.mesh_back_tables
-    return dataclasses.replace(model, mesh_stiffness_tables=tables)
-
-
 def _concatenate(tables: Sequence, order_by: str):
     """Rows of several candidate or width tables (same dataclass) in one, sorted."""
     first = tables[0]
@@ -466,9 +487,38 @@ def _concatenate(tables: Sequence, order_by: str):
     return type(first)(**kw)
 
 
+def mesh_phasing(model: AssembledModel, modal: ModalResult | None = None, *,
+                 torque_sign: float = 1.0
+                 ) -> tuple[MeshPhasingRule | None, list[tuple[str, int]] | None]:
+    """The planetary mesh-phasing rule of a gear set and the family of every elastic mode.
+
+    Returns ``(rule, families)``: for a simple set with equally spaced, identical planets the
+    :class:`~analysis.instability.MeshPhasingRule` and one ``(kind, p)`` per elastic mode
+    (rigid-body modes left out); ``(None, None)`` otherwise (unequal spacing, modes of no pure
+    family). The modes are those of the loaded mean system (:func:`modal_analysis` with
+    ``torque_sign``).
+    """
+    modal = modal or modal_analysis(model, torque_sign=torque_sign)
+    keep = np.array([k != "rigid-body" for k in modal.kinds], dtype=bool)
+    planets = model.meta.get("planets", [])
+    meshes = model.meta.get("meshes", [])
+    z_sun = next((m["z1"] for m in meshes if m["z1"] and m["z1"] > 0), None)
+    z_ring = next((-m["z1"] for m in meshes if m["z1"] and m["z1"] < 0), None)
+    angles = [p["angle_deg"] for p in planets]
+    n = len(angles)
+    equal = n >= 2 and np.allclose(np.diff(np.sort(angles)), 360.0 / n, atol=1e-6)
+    if not (equal and z_sun):
+        return None, None
+    families = _mode_families(model, modal, keep)
+    if families is None:
+        return None, None
+    return MeshPhasingRule(n_planets=n, sun_teeth=int(z_sun),
+                           ring_teeth=int(z_ring) if z_ring else None), families
+
+
 def gear_set_candidates(model: AssembledModel, modal: ModalResult | None = None, *,
-                        n_max: int = 4, speed_range: tuple[float, float] | None = None
-                        ) -> Candidates:
+                        n_max: int = 4, speed_range: tuple[float, float] | None = None,
+                        torque_sign: float = 1.0) -> Candidates:
     """Theory candidates ``2 f_i / n`` and ``(f_i + f_j) / n`` of a gear set, with speeds.
 
     For a simple planetary set with equally spaced, identical planets the mesh-phasing
@@ -476,7 +526,8 @@ def gear_set_candidates(model: AssembledModel, modal: ModalResult | None = None,
     suppresses. Each mode's family is its classification with the dominant circular harmonic
     ``p`` of the planets' motion (0 rotational, 1 translational, ``j`` planet modes); the rule
     is not applied when a mode is of no pure family (unequal spacing, ``other`` modes). The
-    modes are those of the loaded mean system (both flanks for a negative backlash).
+    modes are those of the loaded mean system (:func:`gearvib.modal.modal_analysis`: the
+    loaded flanks at the mean load of sense ``torque_sign``, both for a negative backlash).
 
     A set with several mesh frequencies (two-stage, Wolfrom) gets the candidates of every mesh
     frequency ``f_g`` (``f_g = 2 f_i / n`` ...), each row naming its mesh frequency
@@ -484,7 +535,7 @@ def gear_set_candidates(model: AssembledModel, modal: ModalResult | None = None,
     sorted by speed. Combination frequencies of two groups (``l f_1 + m f_2``) are second order
     in the stiffness variation and not listed; the Floquet chart contains them.
     """
-    modal = modal or modal_analysis(_loaded(model))
+    modal = modal or modal_analysis(model, torque_sign=torque_sign)
     keep = np.array([k != "rigid-body" for k in modal.kinds], dtype=bool)
     freqs = modal.frequencies_hz[keep]
     labels = [f"f{i + 1}" for i in np.flatnonzero(keep)]
@@ -499,20 +550,7 @@ def gear_set_candidates(model: AssembledModel, modal: ModalResult | None = None,
         merged = _concatenate(tables, "rpm")
         return dataclasses.replace(merged,
                                    mesh_frequency_per_rpm=groups[0].frequency_per_rpm)
-    rule = None
-    families = None
-    planets = model.meta.get("planets", [])
-    meshes = model.meta.get("meshes", [])
-    z_sun = next((m["z1"] for m in meshes if m["z1"] and m["z1"] > 0), None)
-    z_ring = next((-m["z1"] for m in meshes if m["z1"] and m["z1"] < 0), None)
-    angles = [p["angle_deg"] for p in planets]
-    n = len(angles)
-    equal = n >= 2 and np.allclose(np.diff(np.sort(angles)), 360.0 / n, atol=1e-6)
-    if equal and z_sun:
-        families = _mode_families(model, modal, keep)
-        if families is not None:
-            rule = MeshPhasingRule(n_planets=n, sun_teeth=int(z_sun),
-                                   ring_teeth=int(z_ring) if z_ring else None)
+    rule, families = mesh_phasing(model, modal)
     return instability_candidates(
         freqs, n_max=n_max,
         mesh_frequency_per_rpm=groups[0].frequency_per_rpm if groups else None,
@@ -543,7 +581,8 @@ def _reference_factor(model: AssembledModel, system: PeriodicGearSystem) -> floa
 def stability_over_speed(model: AssembledModel, speeds_rpm: np.ndarray, *,
                          coupling: DriveCoupling | None = None, n_max: int = 4,
                          refine: bool = True, max_cycles: int = MAX_CYCLES,
-                         max_detuning: float = MAX_DETUNING) -> StabilityChart:
+                         max_detuning: float = MAX_DETUNING,
+                         torque_sign: float = 1.0) -> StabilityChart:
     """Floquet stability chart over input speed, with regions attributed to theory candidates.
 
     Parameters
@@ -559,6 +598,8 @@ def stability_over_speed(model: AssembledModel, speeds_rpm: np.ndarray, *,
         Refine the region boundaries by root finding.
     max_cycles, max_detuning
         Common period of several mesh frequencies (module docstring).
+    torque_sign : float
+        Sense of the mean load (+1: the input drives forward): selects the loaded flanks.
 
     Returns
     -------
@@ -570,10 +611,11 @@ def stability_over_speed(model: AssembledModel, speeds_rpm: np.ndarray, *,
     if speeds.ndim != 1 or speeds.size < 2 or not (speeds > 0).all():
         raise ValueError("speeds_rpm must be an increasing 1-D array of positive speeds")
     system = periodic_system(model, coupling=coupling, max_cycles=max_cycles,
-                             max_detuning=max_detuning)
+                             max_detuning=max_detuning, torque_sign=torque_sign)
     f_per_rpm = _reference_factor(model, system)
     cands = gear_set_candidates(model, n_max=n_max,
-                                speed_range=(float(speeds[0]), float(speeds[-1])))
+                                speed_range=(float(speeds[0]), float(speeds[-1])),
+                                torque_sign=torque_sign)
     return stability_chart(system.at, speeds * f_per_rpm, mesh_frequency_per_rpm=f_per_rpm,
                            candidates=cands, refine=refine, **_chart_metadata(system))
 
@@ -626,14 +668,14 @@ def stability_map(model_for: Callable[[float], AssembledModel], speeds_rpm: np.n
 
 
 def first_order_regions(model: AssembledModel, *, coupling: DriveCoupling | None = None,
-                        l_max: int = 4) -> FirstOrderWidths:
+                        l_max: int = 4, torque_sign: float = 1.0) -> FirstOrderWidths:
     """First-order perturbation widths of the principal and sum-type regions (Hsu 1963).
 
     With several mesh frequencies every group's harmonics give their own rows (their
     ``mesh_frequency`` names the group; widths in Hz of that mesh frequency, speeds from its
     factor), sorted by the lower speed.
     """
-    system = periodic_system(model, coupling=coupling)
+    system = periodic_system(model, coupling=coupling, torque_sign=torque_sign)
     groups = system.groups or model.mesh_frequency_groups()
     if len(groups) < 2:
         k_mean, k_hat = system.harmonics(l_max)

@@ -35,6 +35,7 @@ __all__ = [
     "GearSet",
     "Mesh",
     "Support",
+    "check_ravigneaux_clearances",
     "check_ravigneaux_pairs",
     "check_stepped_planet_angles",
     "compose",
@@ -523,6 +524,83 @@ def _planet_angles(z_sun: int, z_ring: int, n_planets: int | None,
     return angles
 
 
+def _check_ring_and_sun(z_sun: int, z_ring: int, sun_key: str, ring_key: str) -> None:
+    """Signs of the tooth numbers of a sun (external) and a ring (internal)."""
+    if z_ring >= 0:
+        raise ValueError(f"{ring_key} = {z_ring} must be negative (internal toothing)")
+    if z_sun <= 0:
+        raise ValueError(f"{sun_key} = {z_sun} must be positive (external toothing)")
+
+
+def _common_centre_distance(sun: Toothing, ring: Toothing, planet: Toothing, solved: float,
+                            key: str) -> float:
+    """Centre distance shared by the sun-planet and ring-planet meshes (checked)."""
+    a = mesh_geometry(sun, planet).centre_distance
+    a_ring = mesh_geometry(ring, planet).centre_distance
+    if not math.isclose(a, a_ring, rel_tol=1e-6):
+        raise ValueError(
+            f"centre distances differ: sun-planet {a * 1e3:.4f} mm, ring-planet "
+            f"{a_ring * 1e3:.4f} mm; adjust {key} (the solved value would be {solved:.4f})"
+        )
+    return a
+
+
+def check_ravigneaux_clearances(n_pairs: int, *, a_short: float, a_long: float, offset: float,
+                                tip_short: float, tip_long: float, tip_ring: float,
+                                tip_sun_small: float, names: Sequence[str] = (
+                                    "planet_short", "planet_long", "ring", "sun_small"),
+                                ) -> None:
+    """Refuse Ravigneaux pairs whose tip circles collide where no mesh explains it.
+
+    Pair ``i`` has its long planet at ``psi_i = 2 pi i / N`` on radius ``a_long`` and its
+    short planet at ``psi_i + offset`` on ``a_short``. Checked (clearance > 0): the short
+    planets against the ring's tip circle (``r_a,ring - (a_short + r_a,short)``), every two
+    planets that do not mesh (the short planet and the long planets of the other pairs, the
+    short planets, the long planets: centre distance minus both tip radii), and the long
+    planets against the small sun (``a_long - r_a,long - r_a,sun``: the long planet reaches
+    into the plane of the short planet and the small sun). The short planet and the large sun
+    lie in different planes.
+
+    Raises
+    ------
+    ValueError
+        Naming the two bodies (with the pair number), their clearance [mm] and how it follows.
+    """
+    short, long_, ring, sun = names
+    gap = tip_ring - (a_short + tip_short)
+    if gap <= 0.0:
+        raise ValueError(
+            f"Ravigneaux set cannot be built: {short} (every pair) collides with the {ring}: "
+            f"clearance r_a,ring - (a_short + r_a,short) = {tip_ring * 1e3:.4f} - "
+            f"({a_short * 1e3:.4f} + {tip_short * 1e3:.4f}) = {gap * 1e3:.4f} mm (must be "
+            "> 0); use a smaller short planet or small sun, or a larger ring"
+        )
+    gap = a_long - tip_long - tip_sun_small
+    if gap <= 0.0:
+        raise ValueError(
+            f"Ravigneaux set cannot be built: {long_} (every pair) collides with the {sun}: "
+            f"clearance a_long - r_a,long - r_a,sun_small = {gap * 1e3:.4f} mm (must be > 0)"
+        )
+    planets = []
+    for i in range(n_pairs):
+        psi = 2 * math.pi * i / n_pairs
+        planets.append((f"{long_}{i + 1}", a_long * math.cos(psi), a_long * math.sin(psi),
+                        tip_long, i))
+        planets.append((f"{short}{i + 1}", a_short * math.cos(psi + offset),
+                        a_short * math.sin(psi + offset), tip_short, i))
+    for k, (n1, x1, y1, r1, i1) in enumerate(planets):
+        for n2, x2, y2, r2, i2 in planets[k + 1:]:
+            if i1 == i2:
+                continue  # the short and long planet of one pair mesh
+            gap = math.hypot(x2 - x1, y2 - y1) - r1 - r2
+            if gap <= 0.0:
+                raise ValueError(
+                    f"Ravigneaux set cannot be built: the tip circles of {n1} and {n2} "
+                    f"overlap: clearance (centre distance - both tip radii) {gap * 1e3:.4f} mm "
+                    f"(must be > 0); use fewer pairs or smaller planets"
+                )
+
+
 def simple_planetary(*, z_sun: int, z_ring: int, module: float, sun: Body, ring: Body,
                      carrier: Body, planet: Body, sun_mesh: MeshSpec, ring_mesh: MeshSpec,
                      z_planet: int | None = None, n_planets: int | None = None,
@@ -586,6 +664,10 @@ def wolfrom(*, z_sun: int, z_ring1: int, z_ring2: int, z_planet1: int, z_planet2
             ring1_mesh: MeshSpec | None = None, ring2_mesh: MeshSpec | None = None,
             n_planets: int = 3, pressure_angle: float = math.radians(20.0),
             face_width: float = 0.02, module2: float | None = None, step_offset: float = 0.0,
+            helix_angle: float = 0.0, helix_angle2: float | None = None,
+            profile_shift_sun: float = 0.0, profile_shift_ring1: float = 0.0,
+            profile_shift_planet1: float | None = None, profile_shift_ring2: float = 0.0,
+            profile_shift_planet2: float = 0.0,
             fixed: str = "ring1", input: str = "sun", output: str = "ring2",
             name: str = "wolfrom", config: dict | None = None) -> GearSet:
     """A Wolfrom set: sun, stepped planets (``z_planet1`` meshing sun and fixed ring 1,
@@ -597,13 +679,24 @@ def wolfrom(*, z_sun: int, z_ring1: int, z_ring2: int, z_planet1: int, z_planet2
     toothing to a tooth of the second (a manufacturing choice, measured in the planet's
     positive rotation sense); every stepped planet is identical.
 
+    Helical gears follow the hand rules of :func:`simple_planetary`: ``helix_angle`` is the
+    sun's (> 0 right hand); the planet's first toothing and ring 1 get the opposite hand (an
+    external pair has opposite hands, the ring its planet's). ``helix_angle2`` is the helix
+    angle of the planet's second toothing, signed with its hand, which ring 2 shares; by
+    default the first toothing's (``-helix_angle``). Profile shifts (DIN 3960 signs):
+    ``profile_shift_planet1`` is solved so that sun and ring 1 share the centre distance
+    unless given (then they must agree); the second step meshes ring 2 at that centre
+    distance with ``profile_shift_ring2`` and ``profile_shift_planet2``.
+
     Raises
     ------
     ValueError
         If the planets cannot be assembled: ``(z_s + |z_r1|) psi / 2 pi`` must be an integer
         at every planet angle ``psi`` (step 1) and, for identical stepped planets,
         ``(z_s z_p2 + |z_r2| z_p1) psi / (2 pi gcd(z_p1, z_p2))`` too (step 2; the planet may
-        be inserted turned by any number of step-1 teeth).
+        be inserted turned by any number of step-1 teeth); if neighbouring planets overlap
+        (either step); if the centre distances of sun and ring 1 differ with a given
+        ``profile_shift_planet1``; if a helix angle is out of range (|beta| < 45°).
     """
     if ring1_mesh is None or ring2_mesh is None:
         if ring_mesh is None:
@@ -613,18 +706,39 @@ def wolfrom(*, z_sun: int, z_ring1: int, z_ring2: int, z_planet1: int, z_planet2
     if not math.isfinite(step_offset):
         raise ValueError(f"step_offset = {step_offset!r} must be finite")
     m2 = module if module2 is None else module2
+    _check_ring_and_sun(z_sun, z_ring1, "z_sun", "z_ring1")
+    if z_ring2 >= 0:
+        raise ValueError(f"z_ring2 = {z_ring2} must be negative (internal toothing)")
+    beta1 = -helix_angle  # the planet's first toothing and ring 1: opposite to the sun
+    beta2 = beta1 if helix_angle2 is None else float(helix_angle2)
     common = dict(pressure_angle=pressure_angle, face_width=face_width)
-    t_s = Toothing(z=z_sun, module=module, **common)
-    t_r1 = Toothing(z=z_ring1, module=module, **common)
-    t_p1 = Toothing(z=z_planet1, module=module,
-                    profile_shift=planet_profile_shift(t_s, t_r1, z_planet1), **common)
-    a = mesh_geometry(t_s, t_p1).centre_distance
-    t_p2 = Toothing(z=z_planet2, module=m2, **common)
-    t_r2 = Toothing(z=z_ring2, module=m2, **common)
-    g2 = mesh_geometry(t_r2, t_p2, a)
+    t_s = Toothing(z=z_sun, module=module, helix_angle=helix_angle,
+                   profile_shift=profile_shift_sun, **common)
+    t_r1 = Toothing(z=z_ring1, module=module, helix_angle=beta1,
+                    profile_shift=profile_shift_ring1, **common)
+    solved = planet_profile_shift(t_s, t_r1, z_planet1)
+    t_p1 = Toothing(z=z_planet1, module=module, helix_angle=beta1,
+                    profile_shift=solved if profile_shift_planet1 is None
+                    else profile_shift_planet1, **common)
+    a = _common_centre_distance(t_s, t_r1, t_p1, solved, "profile_shift_planet1")
+    t_p2 = Toothing(z=z_planet2, module=m2, helix_angle=beta2,
+                    profile_shift=profile_shift_planet2, **common)
+    t_r2 = Toothing(z=z_ring2, module=m2, helix_angle=beta2, profile_shift=profile_shift_ring2,
+                    **common)
+    try:
+        g2 = mesh_geometry(t_r2, t_p2, a)
+    except ValueError as exc:
+        raise ValueError(
+            f"ring2-planet mesh at the common centre distance {a * 1e3:.4f} mm: {exc}; adjust "
+            "module2, helix_angle2_deg or the step-2 profile shifts (profile_shift_ring2, "
+            "profile_shift_planet2)"
+        ) from None
     if g2.contact_ratio < 1:
         raise ValueError("ring2-planet contact ratio below 1 at the common centre distance")
     angles = _planet_angles(z_sun, z_ring1, n_planets, None)
+    for t_p in (t_p1, t_p2):  # neighbouring planets must not overlap in either step
+        check_planet_angles(z_sun, z_ring1, angles, centre_distance=a,
+                            planet_tip_radius=t_p.tip_radius)
     check_stepped_planet_angles(z_sun, z_ring2, z_planet1, z_planet2, angles)
     sun_b, r1, r2 = (replace(b, role="central") for b in (sun, ring1, ring2))
     car_b = replace(carrier, role="carrier")
@@ -674,7 +788,10 @@ def ravigneaux(*, z_sun_small: int, z_sun_large: int, z_ring: int, z_planet_shor
                carrier: Body, planet_short: Body, planet_long: Body, sun_mesh: MeshSpec,
                ring_mesh: MeshSpec, planet_mesh: MeshSpec, n_pairs: int = 3,
                pressure_angle: float = math.radians(20.0), face_width: float = 0.02,
-               planet_mesh_phases: Sequence[float] | None = None,
+               planet_mesh_phases: Sequence[float] | None = None, helix_angle: float = 0.0,
+               profile_shift_sun_small: float = 0.0, profile_shift_sun_large: float = 0.0,
+               profile_shift_ring: float = 0.0, profile_shift_planet_short: float = 0.0,
+               profile_shift_planet_long: float | None = None,
                fixed: str = "sun_large", input: str = "sun_small", output: str = "ring",
                name: str = "ravigneaux", config: dict | None = None) -> GearSet:
     """A Ravigneaux set: small sun – short planets – long planets – ring, large sun – long
@@ -686,13 +803,29 @@ def ravigneaux(*, z_sun_small: int, z_sun_large: int, z_ring: int, z_planet_shor
     :func:`gearvib.assembly.assemble`; ``planet_mesh_phases`` (one mesh position per pair,
     cycles) overrides those of the planet-planet meshes.
 
+    Helical gears follow the hand rules of :func:`simple_planetary`: ``helix_angle`` is the
+    small sun's (> 0 right hand); the short planet has the opposite hand, the long planet
+    (external mate of the short one) the small sun's, the large sun the opposite, and the ring
+    the long planet's. Profile shifts (DIN 3960 signs): ``profile_shift_planet_long`` is
+    solved so that large sun and ring share the centre distance unless given (then they must
+    agree); the short planet meshes the small sun and the long planet at their zero-backlash
+    centre distances with ``profile_shift_planet_short``.
+
+    The tip circles are checked for collisions that the meshes do not explain: every short
+    planet against the ring and against the planets of the neighbouring pairs, the long
+    planets against each other and against the small sun (in the plane of the planet-planet
+    mesh). The short planet and the large sun are taken to lie in different planes, as in
+    every Ravigneaux set.
+
     Raises
     ------
     ValueError
         If the short and long planets cannot mesh, or the ``n_pairs`` equally spaced pairs
         cannot be assembled: ``(z_sun_large + |z_ring|) / n_pairs`` (long planets between
         large sun and ring) and ``(z_sun_small + z_sun_large) / n_pairs`` (a pair turned by
-        one spacing must fit both suns through the short planet) must be integers.
+        one spacing must fit both suns through the short planet) must be integers; if two tip
+        circles overlap (the message names both bodies and the clearance); if the centre
+        distances of large sun and ring differ with a given ``profile_shift_planet_long``.
     """
     check_ravigneaux_pairs(z_sun_small, z_sun_large, z_ring, n_pairs)
     if planet_mesh_phases is not None:
@@ -700,15 +833,23 @@ def ravigneaux(*, z_sun_small: int, z_sun_large: int, z_ring: int, z_planet_shor
         if len(planet_mesh_phases) != n_pairs or not all(map(math.isfinite,
                                                               planet_mesh_phases)):
             raise ValueError(f"planet_mesh_phases needs {n_pairs} finite values (one per pair)")
+    _check_ring_and_sun(z_sun_large, z_ring, "z_sun_large", "z_ring")
+    if z_sun_small <= 0:
+        raise ValueError(f"z_sun_small = {z_sun_small} must be positive (external toothing)")
     common = dict(module=module, pressure_angle=pressure_angle, face_width=face_width)
-    t_s1 = Toothing(z=z_sun_small, **common)
-    t_s2 = Toothing(z=z_sun_large, **common)
-    t_r = Toothing(z=z_ring, **common)
-    t_ps = Toothing(z=z_planet_short, **common)
-    t_pl = Toothing(z=z_planet_long, profile_shift=planet_profile_shift(t_s2, t_r,
-                                                                         z_planet_long),
+    h = helix_angle  # small sun and long planet; short planet, large sun: -h; ring: +h
+    t_s1 = Toothing(z=z_sun_small, helix_angle=h, profile_shift=profile_shift_sun_small,
                     **common)
-    a_l = mesh_geometry(t_s2, t_pl).centre_distance
+    t_s2 = Toothing(z=z_sun_large, helix_angle=-h, profile_shift=profile_shift_sun_large,
+                    **common)
+    t_r = Toothing(z=z_ring, helix_angle=h, profile_shift=profile_shift_ring, **common)
+    t_ps = Toothing(z=z_planet_short, helix_angle=-h, profile_shift=profile_shift_planet_short,
+                    **common)
+    solved = planet_profile_shift(t_s2, t_r, z_planet_long)
+    t_pl = Toothing(z=z_planet_long, helix_angle=h,
+                    profile_shift=solved if profile_shift_planet_long is None
+                    else profile_shift_planet_long, **common)
+    a_l = _common_centre_distance(t_s2, t_r, t_pl, solved, "profile_shift_planet_long")
     a_s = mesh_geometry(t_s1, t_ps).centre_distance
     d = mesh_geometry(t_ps, t_pl).centre_distance
     cos_d = (a_s**2 + a_l**2 - d**2) / (2 * a_s * a_l)
@@ -716,6 +857,10 @@ def ravigneaux(*, z_sun_small: int, z_sun_large: int, z_ring: int, z_planet_shor
         raise ValueError("Ravigneaux: short and long planet cannot mesh at these centre "
                          "distances (check tooth numbers)")
     offset = math.acos(cos_d)
+    check_ravigneaux_clearances(
+        n_pairs, a_short=a_s, a_long=a_l, offset=offset, tip_short=t_ps.tip_radius,
+        tip_long=t_pl.tip_radius, tip_ring=t_r.tip_radius, tip_sun_small=t_s1.tip_radius,
+        names=(planet_short.name, planet_long.name, ring.name, sun_small.name))
     sun1, sun2, ring_b = (replace(b, role="central") for b in (sun_small, sun_large, ring))
     car_b = replace(carrier, role="carrier")
     structures, pp = [], []

@@ -6,40 +6,62 @@ Generic API on plain arrays and callables (no dependency on :mod:`gearvib`):
 * :func:`instability_candidates`, :class:`MeshPhasingRule`, :func:`first_order_widths`,
   :func:`rectangular_wave_harmonics` -- theory (centres, selection rules, widths);
 * :func:`stability_chart` -- Floquet over a mesh-frequency grid (Ince-Strutt charts);
-* :func:`label_peaks` -- label spectral peaks with natural-frequency combinations;
-* :func:`detect_resonances` -- find and classify spots in an rpm-frequency map.
+* :func:`runup_growth` -- how much an unstable band can grow while a run-up crosses it;
+* :func:`label_peaks` -- identify spectral peaks with theory and catalogue lines (tolerance,
+  coincidence odds, unexplained peaks);
+* :func:`detect_resonances` -- find and classify the rises of a run-up map (forced resonance,
+  parametric instability, unexplained).
 """
 
 from analysis.instability.chart import StabilityChart, stability_chart
 from analysis.instability.floquet import FloquetResult, PiecewiseConstant, floquet
-from analysis.instability.labels import PeakLabels, PeakMatch, label_peaks
-from analysis.instability.resonances import Resonances, detect_resonances
+from analysis.instability.growth import GrowthTable, UnstableBand, runup_growth, unstable_bands
+from analysis.instability.labels import PeakLabels, PeakMatch, label_peaks, theory_lines
+from analysis.instability.resonances import (
+    FORCED,
+    PARAMETRIC,
+    UNEXPLAINED,
+    Crossing,
+    Resonances,
+    detect_resonances,
+)
 from analysis.instability.theory import (
     Candidates,
     FirstOrderWidths,
     MeshPhasingRule,
     first_order_widths,
     instability_candidates,
+    natural_frequencies,
     rectangular_wave_harmonics,
     rectangular_wave_pieces,
 )
 
 __all__ = [
+    "FORCED",
+    "PARAMETRIC",
+    "UNEXPLAINED",
     "Candidates",
+    "Crossing",
     "FirstOrderWidths",
     "FloquetResult",
+    "GrowthTable",
     "MeshPhasingRule",
     "PeakLabels",
     "PeakMatch",
     "PiecewiseConstant",
     "Resonances",
     "StabilityChart",
+    "UnstableBand",
     "detect_resonances",
     "first_order_widths",
     "floquet",
     "instability_candidates",
     "label_peaks",
+    "natural_frequencies",
     "rectangular_wave_harmonics",
     "rectangular_wave_pieces",
+    "runup_growth",
     "stability_chart",
+    "theory_lines",
+    "unstable_bands",
 ]

@@ -14,7 +14,12 @@ from typing import Any
 
 import numpy as np
 
-from analysis.checks import require_finite, require_positive
+from analysis.checks import (
+    require_finite,
+    require_mass_matrix,
+    require_positive,
+    require_square,
+)
 
 __all__ = ["FloquetResult", "PiecewiseConstant", "floquet"]
 
@@ -195,31 +200,6 @@ class FloquetResult:
         from analysis.instability.plots import plot_floquet
 
         return plot_floquet(self, ax=ax)
-
-
-def _as_square(a: Any, name: str, n: int | None = None) -> np.ndarray:
-    arr = require_finite(a, name)
-    if arr.ndim == 0:
-        arr = arr.reshape(1, 1)
-    if arr.ndim != 2 or arr.shape[0] != arr.shape[1]:
-        raise ValueError(f"{name} must be a square (n, n) matrix; got shape {arr.shape}")
-    if n is not None and arr.shape[0] != n:
-        raise ValueError(
-            f"{name} has shape {arr.shape} but M is ({n}, {n}); all matrices must have the "
-            "same size"
-        )
-    return arr
-
-
-def _check_mass(M: Any) -> np.ndarray:
-    m = _as_square(M, "M")
-    if not np.allclose(m, m.T, rtol=1e-10, atol=1e-14 * np.abs(m).max()):
-        raise ValueError("M must be symmetric (M == M.T within 1e-10 relative)")
-    try:
-        np.linalg.cholesky(m)
-    except np.linalg.LinAlgError:
-        raise ValueError("M must be positive definite (all eigenvalues > 0)") from None
-    return m
 
 
 def _state_matrices(minv: np.ndarray, c: np.ndarray, ks: np.ndarray) -> np.ndarray:
@@ -409,9 +389,9 @@ def floquet(
     them by about ``sqrt(delta)``; choose ``tol`` accordingly (default 1e-7).
     """
     T = require_positive(period, "period")
-    m = _check_mass(M)
+    m = require_mass_matrix(M)
     n = m.shape[0]
-    c = _as_square(C, "C", n)
+    c = require_square(C, "C", n)
     minv = np.linalg.solve(m, np.eye(n))
     if method not in ("auto", "exact", "magnus"):
         raise ValueError(f"method = {method!r} is not admissible: use 'auto', 'exact' or 'magnus'")
@@ -440,8 +420,8 @@ def floquet(
                 "method = 'exact' needs K as a PiecewiseConstant; for a callable K use 'magnus'"
             )
         use = "magnus"
-        k0 = _as_square(kfun(0.0), "K(0)", n)
-        kT = _as_square(kfun(T), "K(period)", n)
+        k0 = require_square(kfun(0.0), "K(0)", n)
+        kT = require_square(kfun(T), "K(period)", n)
         scale = max(_frob(k0), _frob(kT), 1e-300)
         if _frob(kT - k0) > periodicity_rtol * scale:
             raise ValueError(

@@ -1,166 +1,127 @@
-"""Label spectral peaks with natural-frequency combinations and mesh harmonics.
+"""Label spectral peaks with theory and catalogue lines, in the paper's list style.
 
-Produces lists in the style used in run-up reports, e.g. ``"300 Hz ≈ f2/4 ≈ f3/6"``,
-``"1650 Hz ≈ (f2 + f3)/2"``, ``"3600 Hz ≈ 2 f3 ≈ 2 f4"`` or ``"1280 Hz ≈ 2 f_mesh"``.
+``label_peaks`` produces lists such as ``"620 Hz ≈ f2/2"``, ``"1650 Hz ≈ (f2 + f3)/2"`` or
+``"1280 Hz ≈ 2 f_mesh ≈ f2"``, but only for candidates inside a window derived from the
+spectral resolution and the uncertainties of the natural frequencies and the speed; every match
+states the chance that it is a coincidence, and a peak that nothing explains is reported as
+unexplained. The machinery is :func:`analysis.identification.identify_peaks`; this module adds
+the theory candidates of :mod:`analysis.instability.theory` (with the planetary selection rules).
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from analysis.checks import require_finite, require_positive
-from analysis.instability.theory import _cluster, _positive_frequencies
+from analysis.checks import require_positive
+from analysis.identification import (
+    CandidateLines,
+    LineMatch,
+    PeakIdentification,
+    catalogue_lines,
+    identify_peaks,
+    mesh_lines,
+    modal_lines,
+    ratio_expression,
+)
+from analysis.instability.theory import Candidates, natural_frequencies
 
-__all__ = ["PeakLabels", "PeakMatch", "label_peaks"]
+__all__ = ["PeakLabels", "PeakMatch", "label_peaks", "theory_lines"]
 
-_KIND_RANK = {"natural": 0, "mesh": 1, "harmonic": 2, "subharmonic": 3, "sum": 4}
+PeakLabels = PeakIdentification
+"""Result of :func:`label_peaks` (an :class:`analysis.identification.PeakIdentification`)."""
+
+PeakMatch = LineMatch
+"""One candidate explanation (an :class:`analysis.identification.LineMatch`)."""
 
 
-@dataclass(frozen=True)
-class PeakMatch:
-    """One theory expression matching a peak.
+def theory_lines(candidates: Candidates, *, names: Sequence[str] | None = None,
+                 uncertainty: float = 0.01, natural: bool = True, allowed_only: bool = True,
+                 repeat_rtol: float = 1e-6) -> CandidateLines:
+    """Candidate lines from theory candidates (``2 f_i / n``, ``(f_i + f_j) / n``).
 
-    Attributes
+    Parameters
     ----------
-    expression : str
-        E.g. ``"f2/4"``, ``"2 f3"``, ``"(f2 + f3)/2"``, ``"2 f_mesh"``.
-    value_hz : float
-        Value of the expression [Hz].
-    relative_error : float
-        ``|peak - value| / value``.
-    kind : str
-        ``"natural"`` (f_i), ``"subharmonic"`` (f_i/n), ``"harmonic"`` (n f_i), ``"sum"``
-        ((f_i + f_j)/n) or ``"mesh"`` (n f_mesh).
-    order : int
-        ``n``.
-    modes : tuple of int
-        Zero-based mode indices involved (empty for mesh harmonics).
+    candidates : Candidates
+        From :func:`analysis.instability.instability_candidates` (with selection rules).
+    names : sequence of str, optional
+        Mode names (default ``f1, f2, ...``), one per natural frequency of the candidates.
+    uncertainty : float
+        Relative uncertainty of the natural frequencies.
+    natural : bool
+        Add the natural frequencies themselves (family ``"natural"``).
+    allowed_only : bool
+        Leave out candidates a selection rule suppresses.
+    repeat_rtol : float
+        Natural frequencies equal within this tolerance are one degenerate cluster
+        (written ``f3 ≈ f4``), as in the candidates.
+
+    Returns
+    -------
+    CandidateLines
+        Families ``natural``, ``principal``, ``sum`` (and ``difference`` if listed).
     """
-
-    expression: str
-    value_hz: float
-    relative_error: float
-    kind: str
-    order: int
-    modes: tuple[int, ...]
-
-
-def _fmt_hz(f: float) -> str:
-    return f"{f:.0f} Hz" if abs(f) >= 100 else f"{f:.3g} Hz"
-
-
-@dataclass(frozen=True)
-class PeakLabels:
-    """Theory matches for a list of peaks.
-
-    Attributes
-    ----------
-    peak_frequencies_hz : ndarray
-        Peak frequencies [Hz].
-    matches : tuple of tuple of PeakMatch
-        For every peak, the matching expressions (sorted by order, then kind and modes).
-    tolerance : float
-        Relative tolerance used.
-    """
-
-    peak_frequencies_hz: np.ndarray
-    matches: tuple[tuple[PeakMatch, ...], ...]
-    tolerance: float
-
-    def __len__(self) -> int:
-        return int(self.peak_frequencies_hz.size)
-
-    def label(self, i: int) -> str:
-        """Label of peak ``i``, e.g. ``"300 Hz ≈ f2/4 ≈ f3/6"`` (``"... : no match"``)."""
-        head = _fmt_hz(float(self.peak_frequencies_hz[i]))
-        if not self.matches[i]:
-            return f"{head}: no match"
-        return " ≈ ".join([head, *(m.expression for m in self.matches[i])])
-
-    @property
-    def labels(self) -> list[str]:
-        """All labels, one per peak."""
-        return [self.label(i) for i in range(len(self))]
-
-    def __str__(self) -> str:
-        return "\n".join(self.labels)
-
-    def to_dataset(self):
-        """Table as :class:`xarray.Dataset` with dimension ``peak``."""
-        import xarray as xr
-
-        best = [min(m, key=lambda x: x.relative_error) if m else None for m in self.matches]
-
-        def v(x, units, long_name):
-            return ("peak", x, {"units": units, "long_name": long_name})
-
-        return xr.Dataset(
-            {
-                "peak_frequency": v(self.peak_frequencies_hz, "Hz", "peak frequency"),
-                "label": v(np.asarray(self.labels, dtype=str), "1", "theory label"),
-                "n_matches": v(np.asarray([len(m) for m in self.matches]), "1",
-                               "number of matching expressions"),
-                "best_expression": v(np.asarray([b.expression if b else "" for b in best],
-                                                dtype=str), "1", "closest expression"),
-                "best_relative_error": v(np.asarray([b.relative_error if b else np.nan
-                                                     for b in best]), "1",
-                                         "relative error of closest expression"),
-            },
-            coords={"peak": ("peak", np.arange(len(self)),
-                             {"units": "1", "long_name": "peak index"})},
-            attrs={"tolerance": self.tolerance},
-        )
-
-    def plot(self, frequency_hz: Any = None, amplitude: Any = None, ax=None):
-        """Mark labelled peaks (optionally over a spectrum).
-
-        Delegates to :func:`analysis.instability.plots.plot_peak_labels`.
-        """
-        from analysis.instability.plots import plot_peak_labels
-
-        return plot_peak_labels(self, frequency_hz, amplitude, ax=ax)
-
-
-def _expressions(f: np.ndarray, names: Sequence[str], f_mesh: float | None, n_max: int,
-                 repeat_rtol: float) -> list[tuple[float, str, str, int, tuple[int, ...]]]:
-    out = []
-    for i, fi in enumerate(f):
-        out.append((fi, names[i], "natural", 1, (i,)))
-        for n in range(2, n_max + 1):
-            out.append((fi / n, f"{names[i]}/{n}", "subharmonic", n, (i,)))
-            out.append((fi * n, f"{n} {names[i]}", "harmonic", n, (i,)))
-    cluster_of = {}
-    for c, members in enumerate(_cluster(f, repeat_rtol)):
-        for i in members:
-            cluster_of[i] = c
-    for i in range(f.size):
-        for j in range(i + 1, f.size):
-            if cluster_of[i] == cluster_of[j]:
-                continue  # (f3 + f4)/n with f3 = f4 is already 2 f3 / n
-            for n in range(1, n_max + 1):
-                s = f"{names[i]} + {names[j]}"
-                out.append(((f[i] + f[j]) / n, s if n == 1 else f"({s})/{n}", "sum", n, (i, j)))
-    if f_mesh is not None:
-        for n in range(1, n_max + 1):
-            out.append((n * f_mesh, "f_mesh" if n == 1 else f"{n} f_mesh", "mesh", n, ()))
-    return out
+    u = require_positive(uncertainty, "uncertainty", allow_zero=True)
+    fn = np.asarray(candidates.natural_frequencies_hz, dtype=float)
+    labels = list(names) if names is not None else [f"f{i + 1}" for i in range(fn.size)]
+    if len(labels) != fn.size:
+        raise ValueError(f"names has {len(labels)} entries; the candidates have {fn.size} "
+                         "natural frequencies")
+    rtol = require_positive(repeat_rtol, "repeat_rtol", allow_zero=True)
+    cluster = {i: [j for j in range(fn.size) if abs(fn[j] - fn[i]) <= rtol * fn[i]]
+               for i in range(fn.size)}
+    rows: list[tuple[float, str, str]] = []
+    for r in range(len(candidates)):
+        if allowed_only and not candidates.allowed[r]:
+            continue
+        kind, n = str(candidates.kind[r]), int(candidates.n[r])
+        ci, cj = cluster[int(candidates.mode_i[r])], cluster[int(candidates.mode_j[r])]
+        if kind == "principal":
+            if n == 2:
+                continue  # the principal region n = 2 sits at f_i: the natural line
+            expr = " ≈ ".join(ratio_expression(2, n, labels[i]) for i in ci)
+        else:
+            op = "-" if kind == "difference" else "+"
+            parts = [f"{labels[j]} {op} {labels[i]}" if op == "-" else
+                     f"{labels[min(i, j)]} + {labels[max(i, j)]}" for i in ci for j in cj]
+            expr = " ≈ ".join(p if n == 1 else f"({p})/{n}" for p in parts)
+        rows.append((float(candidates.f_mesh_hz[r]), kind, expr))
+    if natural:
+        seen: set[int] = set()
+        for i in range(fn.size):
+            if i not in seen:
+                seen.update(cluster[i])
+                rows.append((float(fn[cluster[i]].mean()), "natural",
+                             " ≈ ".join(labels[j] for j in cluster[i])))
+    n_rows = len(rows)
+    return CandidateLines(value=np.asarray([r[0] for r in rows], dtype=float),
+                          family=np.asarray([r[1] for r in rows], dtype=object),
+                          expression=np.asarray([r[2] for r in rows], dtype=object),
+                          uncertainty=np.full(n_rows, u),
+                          locked=np.full(n_rows, "frequency", dtype=object))
 
 
 def label_peaks(
     peak_frequencies_hz: Any,
     natural_frequencies_hz: Any,
     *,
+    resolution_hz: float | None = None,
+    peak_widths_hz: Any = None,
     mesh_frequency_hz: float | None = None,
-    n_max: int = 6,
-    tolerance: float = 0.03,
+    catalogue: Any = None,
+    speed_rpm: float | None = None,
+    candidates: Candidates | None = None,
+    n_max: int = 4,
+    natural_uncertainty: float = 0.01,
+    speed_uncertainty: float = 1e-3,
+    tolerance: float | None = None,
     names: Sequence[str] | None = None,
     repeat_rtol: float = 1e-6,
+    band: tuple[float, float] | None = None,
 ) -> PeakLabels:
-    """Match spectral peaks to natural-frequency combinations and mesh harmonics.
+    """Identify spectral peaks with natural-frequency combinations and kinematic lines.
 
     Parameters
     ----------
@@ -168,52 +129,69 @@ def label_peaks(
         Peak frequencies [Hz] (> 0).
     natural_frequencies_hz : array_like
         Natural frequencies [Hz] (> 0).
+    resolution_hz : float, optional
+        Resolution of the spectrum [Hz]: the peak-position uncertainty is half of it (or the
+        -3 dB half-width in ``peak_widths_hz`` if larger). Required unless ``tolerance``.
+    peak_widths_hz : array_like, optional
+        -3 dB half-width of every peak [Hz] (broad run-up humps are uncertain by that much).
     mesh_frequency_hz : float, optional
-        Mesh frequency [Hz] of the spectrum (constant-speed segment); adds ``n f_mesh``.
+        Mesh frequency of a constant-speed spectrum: adds ``m f_mesh`` (without a catalogue).
+    catalogue : KinematicCatalogue, optional
+        Kinematic catalogue; its visible lines at ``speed_rpm`` are candidates too.
+    speed_rpm : float, optional
+        Reference speed of the catalogue [min-1] (default: the catalogue's).
+    candidates : Candidates, optional
+        Theory candidates with selection rules (:func:`instability_candidates`); when given
+        they replace the plain ``2 f_i / n`` and ``(f_i + f_j) / n`` lists (suppressed
+        candidates are left out).
     n_max : int
-        Largest ``n`` in ``f_i/n``, ``n f_i``, ``(f_i + f_j)/n`` and ``n f_mesh``.
-    tolerance : float
-        Relative tolerance: a peak ``p`` matches a value ``v`` if ``|p - v| <= tolerance v``.
+        Largest ``n`` of ``2 f_i / n`` and ``(f_i + f_j) / n``.
+    natural_uncertainty : float
+        Relative uncertainty of the natural frequencies (model vs. reality).
+    speed_uncertainty : float
+        Relative uncertainty of the speed (catalogue and mesh lines).
+    tolerance : float, optional
+        Fixed relative window ``|p - v| <= tolerance v`` instead of the derived one.
     names : sequence of str, optional
         Mode names (default ``f1, f2, ...``).
     repeat_rtol : float
-        Natural frequencies equal within this relative tolerance are a repeated pair; both are
-        listed (``"f3 ≈ f4"``), but their sum is not (it equals ``2 f3``).
+        Natural frequencies equal within this relative tolerance form a degenerate pair
+        (``f3 ≈ f4``).
+    band : (float, float), optional
+        Band of the coincidence statistics [Hz].
 
     Returns
     -------
     PeakLabels
-
-    Notes
-    -----
-    The expressions are those of Mathieu-type theory for a parametrically excited system
-    (Nayfeh & Mook 1979, ch. 5): in the ``n``-th principal region, ``f_mesh ~ 2 f_i/n``, the
-    response contains ``f_i`` and its combinations with mesh harmonics, so peaks appear at
-    ``f_i/n``, ``n f_i`` and at sum combinations ``(f_i + f_j)/n``. A label only states
-    numerical coincidence within ``tolerance``; several expressions may match one peak.
+        ``.labels`` in the paper's style, ``.matches`` ranked, ``.coincidence`` per peak,
+        ``.coverage`` of the band (the rate at which random peaks get a label).
     """
-    p = require_finite(peak_frequencies_hz, "peak_frequencies_hz").ravel()
-    if np.any(p <= 0):
-        raise ValueError("peak_frequencies_hz must be > 0")
-    f = _positive_frequencies(natural_frequencies_hz, "natural_frequencies_hz")
-    if int(n_max) != n_max or n_max < 1:
-        raise ValueError(f"n_max = {n_max!r} is not admissible: must be an integer >= 1")
-    tol = require_positive(tolerance, "tolerance")
-    if tol >= 0.5:
-        raise ValueError(f"tolerance = {tolerance!r} is not admissible: must be < 0.5 "
-                         "(relative)")
-    fm = require_positive(mesh_frequency_hz, "mesh_frequency_hz") if mesh_frequency_hz else None
-    labels = list(names) if names is not None else [f"f{i + 1}" for i in range(f.size)]
-    if len(labels) != f.size:
-        raise ValueError(f"names has {len(labels)} entries; natural_frequencies_hz has {f.size}")
-    exprs = _expressions(f, labels, fm, int(n_max),
-                         require_positive(repeat_rtol, "repeat_rtol", allow_zero=True))
-    values = np.asarray([e[0] for e in exprs])
-    matches = []
-    for pk in p:
-        rel = np.abs(pk - values) / values
-        hit = [PeakMatch(exprs[k][1], float(values[k]), float(rel[k]), exprs[k][2], exprs[k][3],
-                         exprs[k][4]) for k in np.flatnonzero(rel <= tol)]
-        hit.sort(key=lambda m: (m.order, _KIND_RANK[m.kind], m.modes))
-        matches.append(tuple(hit))
-    return PeakLabels(peak_frequencies_hz=p, matches=tuple(matches), tolerance=tol)
+    fn = natural_frequencies(natural_frequencies_hz)
+    if tolerance is not None:
+        tol = require_positive(tolerance, "tolerance")
+        if tol >= 0.5:
+            raise ValueError(f"tolerance = {tolerance!r} is not admissible: must be < 0.5 "
+                             "(relative)")
+        u_fn = u_sp = tol
+        res, factor = 1e-9, 1e-9
+    else:
+        if resolution_hz is None:
+            raise ValueError("give resolution_hz (the spectrum's resolution [Hz]) or an "
+                             "explicit relative tolerance")
+        res, factor = require_positive(resolution_hz, "resolution_hz"), 0.5
+        u_fn = require_positive(natural_uncertainty, "natural_uncertainty", allow_zero=True)
+        u_sp = require_positive(speed_uncertainty, "speed_uncertainty", allow_zero=True)
+    if candidates is not None:
+        lines = [theory_lines(candidates, names=names, uncertainty=u_fn,
+                              repeat_rtol=repeat_rtol)]
+    else:
+        lines = [modal_lines(fn, names=names, n_max=n_max, uncertainty=u_fn,
+                             repeat_rtol=repeat_rtol)]
+    if catalogue is not None:
+        lines.append(catalogue_lines(catalogue, speed_rpm=speed_rpm,
+                                     speed_uncertainty=u_sp))
+    elif mesh_frequency_hz:
+        lines.append(mesh_lines(require_positive(mesh_frequency_hz, "mesh_frequency_hz"),
+                                harmonics=7, uncertainty=u_sp))
+    return identify_peaks(peak_frequencies_hz, lines, resolution=res, resolution_factor=factor,
+                          peak_widths=peak_widths_hz if tolerance is None else None, band=band)

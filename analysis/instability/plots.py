@@ -109,30 +109,44 @@ def plot_peak_labels(labels: Any, frequency_hz: Any = None, amplitude: Any = Non
     return fig
 
 
-def plot_resonances(resonances: Any, map_ds: Any = None, ax: Any = None):
-    """Detected spots over the rpm-frequency map with mesh-order rays."""
+def plot_resonances(resonances: Any, map_ds: Any = None, ax: Any = None, *,
+                    orders: Any = range(1, 8), natural_frequencies_hz: Any = ()):
+    """Rises over the rpm-frequency map, marked by mechanism (the paper's Figure 11 layout).
+
+    Speed is vertical, frequency horizontal; the mesh-order rays are dashed, the natural
+    frequencies dotted. Forced resonances are circles, parametric instabilities squares,
+    unexplained rises grey crosses.
+    """
     fig, ax = _axes(ax)
+    h = resonances.mesh_frequency_per_rpm
     if map_ds is not None:
         amp = map_ds["amplitude"].transpose("time", "frequency").values
-        db = 20 * np.log10(np.maximum(amp, 1e-12 * max(float(amp.max()), 1e-300)))
-        mesh = ax.pcolormesh(map_ds["rpm"].values, map_ds["frequency"].values, db.T,
-                             shading="nearest", cmap="viridis")
-        fig.colorbar(mesh, ax=ax, label="amplitude [dB]")
+        if str(map_ds.attrs.get("scale", "linear")) == "dB":
+            db = amp
+        else:
+            db = 20 * np.log10(np.maximum(amp, 1e-12 * max(float(amp.max()), 1e-300)))
+        top = float(db.max())
+        mesh = ax.pcolormesh(map_ds["frequency"].values, map_ds["rpm"].values, db,
+                             shading="nearest", cmap="viridis", vmin=top - 60.0, vmax=top)
+        fig.colorbar(mesh, ax=ax, label="level [dB]")
         rpm = np.asarray(map_ds["rpm"].values)
         fmax = float(map_ds["frequency"].values.max())
-        for o in range(1, 8):
-            ax.plot(rpm, o * resonances.mesh_frequency_per_rpm * rpm, color="w", lw=0.5,
-                    alpha=0.5)
-        ax.set_ylim(0, fmax)
-    styles = {"forced": ("o", "C1"), "parametric": ("s", "C3"), "unclassified": ("x", "0.8")}
+        for o in orders:
+            ax.plot(o * h * rpm, rpm, color="w", lw=0.6, ls="--", alpha=0.6)
+        ax.set_xlim(0, fmax)
+        ax.set_ylim(float(rpm.min()), float(rpm.max()))
+    for fn in np.atleast_1d(np.asarray(natural_frequencies_hz, dtype=float)):
+        ax.axvline(fn, color="C1", lw=0.7, ls=":")
+    styles = {"forced": ("o", "C1"), "parametric": ("s", "C3"), "unexplained": ("x", "0.85")}
     for key, (marker, color) in styles.items():
-        m = np.asarray([str(s).startswith(key) for s in resonances.mechanism], dtype=bool)
+        m = np.asarray([str(x).startswith(key) for x in resonances.mechanism], dtype=bool)
         if m.any():
-            ax.plot(resonances.rpm[m], resonances.frequency[m], marker, color=color, mfc="none",
-                    ms=10, linestyle="none", label=key)
-    ax.set_xlabel("input speed [min-1]")
-    ax.set_ylabel("frequency [Hz]")
-    ax.set_title("Detected resonances")
+            ax.plot(resonances.frequency[m], resonances.rpm[m], marker, color=color,
+                    mfc="none", ms=9, mew=1.4, linestyle="none",
+                    label=f"{key} ({int(m.sum())})")
+    ax.set_xlabel("frequency [Hz]")
+    ax.set_ylabel("speed [min-1]")
+    ax.set_title("Detected rises by mechanism")
     if len(resonances):
-        ax.legend(loc="upper left", fontsize="small")
+        ax.legend(loc="lower right", fontsize="small")
     return fig

@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 import scipy.linalg
 
-from analysis.checks import require_finite, require_positive
+from analysis.checks import require_finite, require_mass_matrix, require_positive, require_square
 
 __all__ = [
     "Candidates",
@@ -27,6 +27,7 @@ __all__ = [
     "MeshPhasingRule",
     "first_order_widths",
     "instability_candidates",
+    "natural_frequencies",
     "rectangular_wave_harmonics",
     "rectangular_wave_pieces",
 ]
@@ -66,6 +67,19 @@ def _positive_frequencies(values: Any, name: str) -> np.ndarray:
             "(remove rigid-body modes first)"
         )
     return f
+
+
+def natural_frequencies(values: Any, name: str = "natural_frequencies_hz") -> np.ndarray:
+    """Checked natural frequencies: a 1-D float array, every entry finite and > 0.
+
+    Parameters
+    ----------
+    values : array_like
+        Natural frequencies [Hz].
+    name : str
+        Parameter name for the error message.
+    """
+    return _positive_frequencies(values, name)
 
 
 @dataclass(frozen=True)
@@ -608,12 +622,11 @@ def first_order_widths(
     :func:`instability_candidates`). Higher-order regions (``n``-th region of one harmonic)
     need higher-order perturbation or :func:`analysis.instability.floquet.floquet`.
     """
-    from analysis.instability.floquet import _as_square, _check_mass
 
-    m = _check_mass(M)
+    m = require_mass_matrix(M)
     n = m.shape[0]
-    c = _as_square(C, "C", n)
-    k0 = _as_square(K_mean, "K_mean", n)
+    c = require_square(C, "C", n)
+    k0 = require_square(K_mean, "K_mean", n)
     if not np.allclose(k0, k0.T, rtol=1e-10, atol=1e-14 * np.abs(k0).max()):
         raise ValueError("K_mean must be symmetric")
     kh = np.asarray(K_harmonics, dtype=complex)

@@ -3,12 +3,15 @@
 Every reader in :mod:`analysis.readers` returns an :class:`xarray.Dataset` built by
 :func:`build_dataset`, so that measured and simulated data look the same downstream:
 
-* coordinate ``time`` -- float64 seconds, uniform sampling, no NaN, ``units="s"``;
+* coordinate ``time`` -- float64 seconds, uniform sampling, no NaN; a CF time coordinate
+  (``units="seconds since <time_coverage_start or 1970-01-01T00:00:00Z>"``,
+  ``standard_name="time"``, ``axis="T"``, see :mod:`analysis.cf`);
 * one data variable per channel with dims ``("time",)`` carrying ``units`` (a UDUNITS string such
   as ``"m s-2"``, ``"Pa"``, ``"N"``, ``"V"``, ``"min-1"``, ``"rad"``, ``"1"``), ``long_name`` and
   channel metadata (``source_channel``, ``sensitivity``, ...);
-* global attributes ``Conventions="CF-1.11"``, ``source_format``, ``source_file``,
-  ``sample_rate_hz`` and whatever the file states (``title``, ``time_coverage_start``, ...).
+* global attributes ``Conventions="CF-1.11"``, ``history``, ``source_format``,
+  ``source_file``, ``sample_rate_hz`` and whatever the file states (``title``,
+  ``time_coverage_start``, ...).
 
 Attribute values are restricted to what netCDF can store (str, int, float, 1-D numeric arrays);
 bool becomes int8, dict becomes a JSON string and None is dropped.
@@ -27,6 +30,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+from analysis.cf import is_elapsed_seconds, time_attrs
 from analysis.checks import require_positive
 
 __all__ = [
@@ -292,10 +296,14 @@ def build_dataset(
     ------
     ReaderError
         No channels, an empty channel, a non-finite sample (naming channel and sample index),
-        channels of unequal length.
+        channels of unequal length, a sample rate that is not finite and > 0 or a time axis
+        that overflows.
     """
-    fs = require_positive(sample_rate_hz, "sample_rate_hz")
     where = f" in {source_file}" if source_file else ""
+    try:
+        fs = require_positive(sample_rate_hz, "sample_rate_hz")
+    except (TypeError, ValueError) as exc:
+        raise ReaderError(f"{exc}{where}") from None
     if not channels:
         raise ReaderError(f"no channels found{where}; a recording needs at least one channel")
     arrays = [_channel_array(ch, source_file) for ch in channels]
@@ -307,7 +315,13 @@ def build_dataset(
             "number of samples at the same sample rate"
         )
     n = arrays[0].size
-    time = float(start_time) + np.arange(n, dtype=np.float64) / fs
+    with np.errstate(over="ignore", invalid="ignore"):
+        time = float(start_time) + np.arange(n, dtype=np.float64) / fs
+    if not np.isfinite(time[-1]):
+        raise ReaderError(
+            f"sample rate {fs!r} Hz and start time {start_time!r} s{where} give a time axis "
+            "that is not finite"
+        )
     names = sanitize_names(ch.name for ch in channels)
     data_vars = {}
     for var, ch, arr in zip(names, channels, arrays, strict=True):
@@ -321,7 +335,13 @@ def build_dataset(
     gattrs.update(
         {"source_format": source_format, "source_file": str(source_file), "sample_rate_hz": fs}
     )
-    coords = {"time": ("time", time, {"units": "s", "long_name": time_long_name})}
+    if not str(gattrs.get("title", "")).strip():  # CF 2.6.2: a non-empty title
+        gattrs["title"] = "measured recording"  # source_format and source_file say which
+    gattrs.setdefault(  # the file it came from: source_format, source_file
+        "history", "read by analysis.readers (gearvib project) into the common layout"
+    )
+    start = gattrs.get("time_coverage_start")
+    coords = {"time": ("time", time, time_attrs(time_long_name, str(start) if start else None))}
     ds = xr.Dataset(data_vars, coords=coords, attrs=clean_attrs(gattrs))
     validate_dataset(ds)
     return ds
@@ -347,8 +367,11 @@ def validate_dataset(ds: xr.Dataset, *, name: str = "dataset") -> xr.Dataset:
         raise ReaderError(
             f"{name}: 'time' has dtype {t.dtype}; it must be float seconds (units='s')"
         )
-    if t.attrs.get("units") != "s":
-        raise ReaderError(f"{name}: 'time' units are {t.attrs.get('units')!r}; must be 's'")
+    if not is_elapsed_seconds(t.attrs.get("units")):
+        raise ReaderError(
+            f"{name}: 'time' units are {t.attrs.get('units')!r}; must be seconds ('s' or "
+            "'seconds since <reference>')"
+        )
     if t.size >= 2:
         try:
             sample_rate(t.values, name=f"{name}: time", rtol=1e-6)

@@ -1,7 +1,7 @@
 """MATLAB .mat reader and writer (v4 to v7.2 via :func:`scipy.io.loadmat`, v7.3 via h5py).
 
-Every numeric vector in the file is a channel; a numeric matrix gives one channel per column
-(samples along the longer dimension), named ``<variable>_1``, ``<variable>_2``, ... Numeric
+Every non-empty numeric vector in the file is a channel; a numeric matrix gives one channel per
+column (samples along the longer dimension), named ``<variable>_1``, ``<variable>_2``, ... Numeric
 scalars are metadata (one of them may be the sample rate). An optional struct variable
 ``units`` maps channel variable names to unit labels (written by :func:`write_mat`).
 MATLAB v7.3 files (HDF5; told apart by the ``MATLAB 7.3 MAT-file`` header text) are decoded
@@ -20,6 +20,7 @@ import numpy as np
 import xarray as xr
 
 from analysis.checks import sample_rate
+from analysis.readers.integrity import describe, reading
 from analysis.readers.layout import (
     ChannelData,
     ReaderError,
@@ -28,6 +29,7 @@ from analysis.readers.layout import (
     validate_dataset,
 )
 from analysis.readers.mat73 import is_mat73, load_mat73
+from analysis.readers.matcheck import check_mat
 
 __all__ = ["read_mat", "write_mat"]
 
@@ -35,18 +37,25 @@ _FS_NAMES = ("fs", "Fs", "FS", "sample_rate", "sample_rate_hz", "samplerate", "S
 
 
 def _load(p: Path) -> tuple[dict[str, Any], str]:
-    """Variables of the file (as ``loadmat(squeeze_me=True)`` gives them) and the format tag."""
+    """Variables of the file (as ``loadmat(squeeze_me=True)`` gives them) and the format tag.
+
+    v4-v7.2 files are walked by :func:`~analysis.readers.matcheck.check_mat` first, so that
+    scipy never sees a structure it could crash or over-allocate on; whatever scipy still
+    raises, and its warning about an unreadable variable (which it would otherwise return as
+    a string), become :class:`ReaderError`.
+    """
     from scipy.io import loadmat
 
     if is_mat73(p):
         return load_mat73(p), "mat73"
-    try:
-        return loadmat(p, squeeze_me=True, chars_as_strings=True), "mat"
-    except NotImplementedError:
-        # scipy saw the v7.3 version field under a header text that does not say so
+    if check_mat(p).version == "7.3":  # the version field says HDF5, the header text does not
         return load_mat73(p), "mat73"
-    except (ValueError, OSError, TypeError, EOFError) as exc:
-        raise ReaderError(f"{p}: not a readable MAT file (truncated or corrupt?): {exc}") from None
+    with reading(p, "MAT") as notes:
+        loaded = loadmat(p, squeeze_me=True, chars_as_strings=True, spmatrix=False)
+    damage = [n for n in notes.warnings if "nreadable variable" in n or "uplicate variable" in n]
+    if damage:
+        raise ReaderError(f"{p}: not a readable MAT file: {describe(Exception(damage[0]))}")
+    return loaded, "mat"
 
 
 def _units_struct(value: object) -> dict[str, str]:
@@ -80,7 +89,7 @@ def read_mat(
     time_variable : str, optional
         Name of a uniformly sampled time vector [s]; it becomes the ``time`` coordinate.
     variables : sequence of str, optional
-        Variables to read as channels (default: every numeric vector/matrix).
+        Variables to read as channels (default: every non-empty numeric vector/matrix).
     units : str, sequence or mapping, optional
         One unit for all channels, one per channel, or variable name -> unit; default from a
         ``units`` struct in the file, else ``"1"``.
@@ -126,6 +135,9 @@ def read_mat(
     if isinstance(fs, str):
         if fs not in scalars:
             raise ReaderError(f"{p}: fs = {fs!r} is not a numeric scalar in the file")
+        if not (np.isfinite(scalars[fs]) and scalars[fs] > 0):
+            raise ReaderError(f"{p}: the sample rate {fs} = {scalars[fs]!r} in the file is "
+                              "not finite and > 0")  # fmt: skip
         fs = scalars[fs]
     if fs is not None:
         if rate is not None and abs(rate - fs) > 1e-6 * fs:
@@ -139,12 +151,19 @@ def read_mat(
                 f"time_variable='<time vector>' (variables: {sorted(content)})"
             )
         rate = scalars[found[0]]
+        if not (np.isfinite(rate) and rate > 0):
+            raise ReaderError(
+                f"{p}: the sample rate {found[0]} = {rate!r} in the file is not finite and > 0"
+            )
     skip = {time_variable, *_FS_NAMES}
     if variables is None:
         names = [
             k
             for k, v in content.items()
-            if k not in skip and np.ndim(v) in (1, 2) and np.asarray(v).dtype.kind in "iuf"
+            if k not in skip
+            and np.ndim(v) in (1, 2)
+            and np.asarray(v).dtype.kind in "iuf"
+            and np.size(v) > 0  # MATLAB's [] is not a recording
         ]
     else:
         missing = [v for v in variables if v not in content]
@@ -179,7 +198,8 @@ def read_mat(
         ud, factor = to_udunits(label)
         ch.units = ud
         if factor != 1.0:
-            ch.values = np.asarray(ch.values, dtype=float) * factor
+            with np.errstate(over="ignore", invalid="ignore"):  # NaN/inf: reported by channel
+                ch.values = np.asarray(ch.values, dtype=float) * factor
             ch.attrs["source_units"] = str(label)
     attrs = {"mat_scalar_" + k: v for k, v in scalars.items() if k not in _FS_NAMES}
     return build_dataset(

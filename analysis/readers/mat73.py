@@ -31,6 +31,7 @@ from typing import Any
 
 import numpy as np
 
+from analysis.readers.integrity import describe, file_size, format_bytes, require_memory
 from analysis.readers.layout import ReaderError
 
 __all__ = ["MAT73_HEADER_TEXT", "MatlabObject", "is_mat73", "load_mat73"]
@@ -39,6 +40,7 @@ __all__ = ["MAT73_HEADER_TEXT", "MatlabObject", "is_mat73", "load_mat73"]
 MAT73_HEADER_TEXT = b"MATLAB 7.3 MAT-file"
 _HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"
 _USERBLOCK = 512  # MATLAB's userblock; HDF5 also looks at 0 and further powers of two
+_ZLIB_MAX_RATIO = 1032  # deflate's largest compression ratio
 
 _NUMERIC: dict[str, type[np.generic]] = {
     "double": np.float64,
@@ -299,6 +301,35 @@ def _file_order(h5py: Any, root: Any, names: list[str]) -> list[str]:
     return sorted(names, key=addr.__getitem__)
 
 
+def _check_sizes(h5py: Any, fh: Any, p: Path) -> None:
+    """Refuse datasets whose declared size the file cannot hold, and files that need more
+    memory than available, before anything is read.
+
+    Uncompressed data must lie in the file; gzip (deflate) cannot compress more than 1032:1.
+    """
+    size = file_size(p)
+    total = 0
+
+    def visit(name: str, obj: Any) -> None:
+        nonlocal total
+        if not isinstance(obj, h5py.Dataset):
+            return
+        nbytes = int(obj.size) * int(obj.dtype.itemsize)
+        compression = obj.compression
+        limit = {None: size, "gzip": _ZLIB_MAX_RATIO * size}.get(compression)
+        if limit is not None and nbytes > limit + (1 << 20):
+            raise ReaderError(
+                f"{p}: dataset {name!r} declares shape {obj.shape} ({format_bytes(nbytes)}) "
+                f"in a file of {format_bytes(size)}"
+                + (" (zlib compresses at most 1032:1)" if compression else "")
+                + ": the file is truncated or corrupt"
+            )
+        total += nbytes
+
+    fh.visititems(visit)
+    require_memory(2 * total, p, f"the variables ({format_bytes(total)} declared)")
+
+
 def load_mat73(path: str | os.PathLike[str]) -> dict[str, Any]:
     """Read every variable of a MATLAB v7.3 file.
 
@@ -332,10 +363,13 @@ def load_mat73(path: str | os.PathLike[str]) -> dict[str, Any]:
     h5py = _import_h5py()
     try:
         with h5py.File(p, "r") as fh:
+            _check_sizes(h5py, fh, p)
             decoder = _Decoder(h5py, fh)
             names = _file_order(h5py, fh, [k for k in fh if not k.startswith("#")])
             return {name: decoder.decode(fh[name]) for name in names}
     except ReaderError:
         raise
-    except (OSError, RuntimeError, KeyError, ValueError, TypeError, UnicodeError) as exc:
-        raise _unreadable(p, exc) from None
+    except MemoryError:
+        raise _unreadable(p, "it needs more memory than is available") from None
+    except Exception as exc:  # h5py raises assorted errors on damaged files
+        raise _unreadable(p, describe(exc)) from None

@@ -2,15 +2,62 @@
 
 from __future__ import annotations
 
+import math
 import os
 import tempfile
 from pathlib import Path
 
+import netCDF4
+import numpy as np
 import xarray as xr
 
+from analysis.cf import labels_from_cf
+from analysis.readers.cdf3 import check_cdf3, is_cdf3
+from analysis.readers.integrity import file_size, format_bytes, reading, require_memory
 from analysis.readers.layout import ReaderError, clean_attrs, validate_dataset
 
 __all__ = ["read_netcdf", "write_netcdf"]
+
+_ZLIB_MAX_RATIO = 1032  # deflate's largest compression ratio (258-byte matches in 2 bits)
+
+
+def _declared_bytes(nc: netCDF4.Dataset) -> int:
+    """Bytes the variables of the root group declare (strings count 8 bytes per element)."""
+    total = 0
+    for var in nc.variables.values():
+        count = math.prod(int(n) for n in var.shape)
+        itemsize = var.dtype.itemsize if isinstance(var.dtype, np.dtype) else 8
+        total += count * max(itemsize, 1)
+    return total
+
+
+def _check_sizes(p: Path) -> None:
+    """Refuse a header whose declared sizes the file cannot hold or memory cannot take.
+
+    netCDF-3 headers are walked by :func:`~analysis.readers.cdf3.check_cdf3` before the C
+    library parses them (it allocates what the header declares). netCDF-4 (HDF5) data may be
+    compressed, but zlib cannot compress more than 1032:1, so a file whose variables use no
+    other compression filter cannot declare more than 1032 times its size; and the declared
+    data must fit into memory.
+    """
+    size = file_size(p)
+    if is_cdf3(p):
+        check_cdf3(p)
+    with reading(p, "netCDF"), netCDF4.Dataset(p, "r") as nc:
+        file_format = str(nc.file_format)
+        declared = _declared_bytes(nc)
+        other_filters = any(
+            any((var.filters() or {}).get(k) for k in ("szip", "zstd", "bzip2", "blosc"))
+            for var in nc.variables.values()
+        )
+    bounded = file_format.startswith("NETCDF4") and not other_filters
+    if bounded and declared > _ZLIB_MAX_RATIO * size + (1 << 20):
+        raise ReaderError(
+            f"{p}: the {file_format} file declares {format_bytes(declared)} of variable "
+            f"data in {format_bytes(size)}, more than zlib can compress into it (1032:1): "
+            "its header is corrupt (or its variables were never written)"
+        )
+    require_memory(2 * declared, p, f"the variables ({format_bytes(declared)} declared)")
 
 
 def read_netcdf(path: str | os.PathLike[str]) -> xr.Dataset:
@@ -31,18 +78,20 @@ def read_netcdf(path: str | os.PathLike[str]) -> xr.Dataset:
     FileNotFoundError
         The file does not exist.
     ReaderError
-        The file is not readable netCDF (truncated/corrupt) or does not follow the layout.
+        The file is not readable netCDF (truncated/corrupt), declares more data than a
+        netCDF-3 file holds or than memory takes (checked before anything is loaded), a data
+        checksum fails (files written by :func:`write_netcdf` carry Fletcher-32 checksums),
+        or it does not follow the layout.
     """
     p = Path(path)
     if not p.is_file():
         raise FileNotFoundError(f"netCDF file not found: {p}")
-    try:
-        with xr.open_dataset(p, engine="netcdf4", decode_timedelta=False) as ds:
-            ds = ds.load()
-    except (OSError, ValueError, RuntimeError) as exc:
-        raise ReaderError(
-            f"{p}: not a readable netCDF file (truncated or corrupt?): {exc}"
-        ) from None
+    _check_sizes(p)
+    with (
+        reading(p, "netCDF"),
+        xr.open_dataset(p, engine="netcdf4", decode_times=False, decode_timedelta=False) as ds,
+    ):
+        ds = labels_from_cf(ds.load())
     ds.attrs.setdefault("source_file", str(p))
     return validate_dataset(ds, name=str(p))
 
@@ -72,6 +121,8 @@ def write_netcdf(ds: xr.Dataset, path: str | os.PathLike[str], *, compress: bool
     -----
     Always uses ``engine="netcdf4"`` and ``_FillValue=None`` on the coordinates and on the
     data variables (the layout forbids NaN), see engineering notes A1, pitfalls 1 and 4.
+    Numeric arrays carry HDF5 Fletcher-32 checksums, so that a corrupted chunk is reported
+    by :func:`read_netcdf` instead of being read as wrong numbers.
     Attributes are cleaned first (bool -> int8, dict -> JSON, None dropped).
     """
     target = Path(path)
@@ -83,8 +134,10 @@ def write_netcdf(ds: xr.Dataset, path: str | os.PathLike[str], *, compress: bool
     encoding: dict[str, dict[str, object]] = {}
     for v in out.variables:
         enc: dict[str, object] = {"_FillValue": None}
-        if compress and v in out.data_vars and out[v].dtype.kind in "iuf":
-            enc.update(zlib=True, complevel=4, shuffle=True)
+        if out[v].dtype.kind in "iuf" and out[v].ndim:
+            enc["fletcher32"] = True  # a checksum per chunk: corruption is found on reading
+            if compress and v in out.data_vars:
+                enc.update(zlib=True, complevel=4, shuffle=True)
         encoding[str(v)] = enc
     directory = target.parent if str(target.parent) else Path(".")
     # the temporary file is named like gearvib's (.<name>.gearvib-<host>-<pid>-<8 chars>.tmp),

@@ -14,8 +14,9 @@ Field names follow pyuff's dictionaries (``func_type``, ``abscissa_inc``, ``num_
 from __future__ import annotations
 
 import datetime as _dt
+import mmap
 import os
-import warnings
+import re
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -23,6 +24,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+from analysis.readers.integrity import file_size, reading, require_memory
 from analysis.readers.layout import ChannelData, ReaderError, build_dataset, to_udunits
 
 __all__ = ["read_uff"]
@@ -30,6 +32,7 @@ __all__ = ["read_uff"]
 _TIME_RESPONSE = 1  # record 6, field 1: function type 1 = general or time response
 _ABSCISSA_TIME = 17  # record 8, field 1: specific data type 17 = time
 _DT_RTOL = 1e-5  # record 7 prints the increment as E13.5: ~6 significant digits
+_DELIMITER = re.compile(rb"    -1(?=\r|\n|\Z| {74})")  # where pyuff splits blocks
 
 
 def _import_pyuff() -> Any:
@@ -62,6 +65,87 @@ def _nice_rate(dt: float) -> float:
     return float(fs_int) if fs_int > 0 and abs(fs_int * dt - 1.0) < _DT_RTOL else fs
 
 
+def _channel(
+    p: Path, k: int, r: dict[str, Any], rates: dict[int, tuple[float, int, str]]
+) -> ChannelData:
+    """The channel of dataset-58 record ``r`` (set ``k``); its interval goes into ``rates``."""
+    label = _clean(r.get("rsp_ent_name", "")) or _clean(r.get("id1", "")) or f"set{k}"
+    where = f"{p}: set {k} ({label!r})"
+    if int(r.get("func_type", -1)) != _TIME_RESPONSE:
+        raise ReaderError(
+            f"{where} has function type {r.get('func_type')}; only 1 (time response) "
+            "can be read as a time history"
+        )
+    ab_type = int(r.get("abscissa_spec_data_type", 0))
+    ab_unit = _clean(r.get("abscissa_axis_units_lab", "")).lower()
+    if ab_type != _ABSCISSA_TIME and not (ab_type == 0 and ab_unit in ("s", "sec", "")):
+        raise ReaderError(
+            f"{where}: abscissa data type {ab_type} ({ab_unit or 'no unit'}); only 17 "
+            "(time, seconds) is admissible"
+        )
+    data = np.asarray(r["data"])
+    n_decl = int(r.get("num_pts", data.size))
+    if data.size != n_decl:
+        raise ReaderError(
+            f"{where} declares {n_decl} samples but holds {data.size} (truncated file?)"
+        )
+    if np.iscomplexobj(data):
+        raise ReaderError(f"{where} holds complex data; a time history must be real")
+    if int(r.get("abscissa_spacing", 1)) == 1:
+        dt = float(r["abscissa_inc"])
+    else:
+        x = np.asarray(r["x"], dtype=float)
+        dt = float((x[-1] - x[0]) / (x.size - 1)) if x.size > 1 else float("nan")
+        if x.size > 1 and np.max(np.abs(np.diff(x) - dt)) > _DT_RTOL * dt:
+            raise ReaderError(f"{where} has an uneven abscissa; resample it first")
+    if not np.isfinite(dt) or dt <= 0:
+        raise ReaderError(f"{where}: sample interval {dt!r} s is not positive")
+    rates[k] = (dt, data.size, label)
+    units_lab = _clean(r.get("ordinate_axis_units_lab", ""))
+    ud, factor = to_udunits(units_lab)
+    attrs: dict[str, Any] = {
+        "uff_set": k,
+        "uff_id1": _clean(r.get("id1", "")),
+        "rsp_node": int(r.get("rsp_node", 0)),
+        "rsp_dir": int(r.get("rsp_dir", 0)),
+        "uff_ordinate_spec_data_type": int(r.get("ordinate_spec_data_type", 0)),
+    }
+    if factor != 1.0 or (units_lab and ud != units_lab):
+        attrs["source_units"] = units_lab
+    axis = _clean(r.get("ordinate_axis_lab", ""))
+    long_name = f"{label} ({axis})" if axis and axis != label else label
+    with np.errstate(over="ignore", invalid="ignore"):  # NaN/inf: reported by channel
+        values = data.astype(np.float64) * factor
+    return ChannelData(label, values, ud, long_name, attrs)
+
+
+def _check_blocks(p: Path) -> None:
+    """Refuse a file whose ``-1`` block delimiters do not pair up (a set cut by truncation).
+
+    Every UFF dataset starts and ends with a line holding ``    -1``; pyuff pairs them up and
+    silently drops an unpaired last one, i.e. the set a truncation cut. The file is searched
+    through :mod:`mmap`; pyuff itself holds the file and its values in memory (about eight
+    times the file size for ASCII files), which is checked first.
+    """
+    size = file_size(p)
+    require_memory(8 * size, p, "pyuff's parse of the file")
+    if size == 0:
+        raise ReaderError(f"{p}: the file is empty")
+    with open(p, "rb") as fh, mmap.mmap(fh.fileno(), 0, access=mmap.ACCESS_READ) as buf:
+        marks = [m.end() for m in _DELIMITER.finditer(buf)]
+        rest = len(buf[marks[-1] :].strip()) if marks else 0
+    if len(marks) % 2:
+        raise ReaderError(
+            f"{p}: {len(marks)} '-1' block delimiters; every UFF dataset is enclosed by two, so "
+            "the last dataset is incomplete: the file is truncated or corrupt"
+        )
+    if rest:
+        raise ReaderError(
+            f"{p}: {rest} bytes after the last dataset's closing '-1': the file is "
+            "corrupt (or a truncated dataset has lost its delimiters)"
+        )
+
+
 def read_uff(path: str | os.PathLike[str], sets: Sequence[int] | None = None) -> xr.Dataset:
     """Read the dataset-58/58b time histories of a UFF/UNV file.
 
@@ -85,23 +169,22 @@ def read_uff(path: str | os.PathLike[str], sets: Sequence[int] | None = None) ->
     ImportError
         pyuff is not installed (``pip install "gearvib[uff]"``).
     ReaderError
-        No dataset 58 in the file (truncated, corrupt or another UFF type), a set that is not a
-        time response, a set holding fewer samples than it declares, sets with different
-        sample intervals or lengths (named, with the ``sets=`` hint), complex data, NaN.
+        No dataset 58 in the file (truncated, corrupt or another UFF type), unpaired ``-1``
+        block delimiters or text after the last block (a truncated or corrupt file), a set
+        that is not a time response, a set holding fewer samples than it declares, sets with
+        different sample intervals or lengths (named, with the ``sets=`` hint), complex data,
+        NaN, not enough memory for pyuff's parse (about eight times the file size).
     """
     pyuff = _import_pyuff()
     p = Path(path)
     if not p.is_file():
         raise FileNotFoundError(f"UFF file not found: {p}")
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            uff = pyuff.UFF(str(p))
-            types = list(np.atleast_1d(uff.get_set_types()).astype(int))
-            idx58 = [i for i, t in enumerate(types) if t == 58]
-            records = [uff.read_sets(i) for i in idx58]
-    except Exception as exc:  # pyuff raises assorted errors on damaged files
-        raise ReaderError(f"{p}: not a readable UFF file (truncated or corrupt?): {exc}") from None
+    _check_blocks(p)
+    with reading(p, "UFF"):
+        uff = pyuff.UFF(str(p))
+        types = list(np.atleast_1d(uff.get_set_types()).astype(int))
+        idx58 = [i for i, t in enumerate(types) if t == 58]
+        records = [uff.read_sets(i) for i in idx58]
     if not records:
         raise ReaderError(
             f"{p}: no dataset 58/58b time history found (set types present: {types or 'none'}); "
@@ -115,54 +198,9 @@ def read_uff(path: str | os.PathLike[str], sets: Sequence[int] | None = None) ->
     else:
         chosen = list(range(len(records)))
     channels, rates = [], {}
-    for k in chosen:
-        r = records[k]
-        label = _clean(r.get("rsp_ent_name", "")) or _clean(r.get("id1", "")) or f"set{k}"
-        where = f"{p}: set {k} ({label!r})"
-        if int(r.get("func_type", -1)) != _TIME_RESPONSE:
-            raise ReaderError(
-                f"{where} has function type {r.get('func_type')}; only 1 (time response) "
-                "can be read as a time history"
-            )
-        ab_type = int(r.get("abscissa_spec_data_type", 0))
-        ab_unit = _clean(r.get("abscissa_axis_units_lab", "")).lower()
-        if ab_type != _ABSCISSA_TIME and not (ab_type == 0 and ab_unit in ("s", "sec", "")):
-            raise ReaderError(
-                f"{where}: abscissa data type {ab_type} ({ab_unit or 'no unit'}); only 17 "
-                "(time, seconds) is admissible"
-            )
-        data = np.asarray(r["data"])
-        n_decl = int(r.get("num_pts", data.size))
-        if data.size != n_decl:
-            raise ReaderError(
-                f"{where} declares {n_decl} samples but holds {data.size} (truncated file?)"
-            )
-        if np.iscomplexobj(data):
-            raise ReaderError(f"{where} holds complex data; a time history must be real")
-        if int(r.get("abscissa_spacing", 1)) == 1:
-            dt = float(r["abscissa_inc"])
-        else:
-            x = np.asarray(r["x"], dtype=float)
-            dt = float((x[-1] - x[0]) / (x.size - 1)) if x.size > 1 else float("nan")
-            if x.size > 1 and np.max(np.abs(np.diff(x) - dt)) > _DT_RTOL * dt:
-                raise ReaderError(f"{where} has an uneven abscissa; resample it first")
-        if not np.isfinite(dt) or dt <= 0:
-            raise ReaderError(f"{where}: sample interval {dt!r} s is not positive")
-        rates[k] = (dt, data.size, label)
-        units_lab = _clean(r.get("ordinate_axis_units_lab", ""))
-        ud, factor = to_udunits(units_lab)
-        attrs: dict[str, Any] = {
-            "uff_set": k,
-            "uff_id1": _clean(r.get("id1", "")),
-            "rsp_node": int(r.get("rsp_node", 0)),
-            "rsp_dir": int(r.get("rsp_dir", 0)),
-            "uff_ordinate_spec_data_type": int(r.get("ordinate_spec_data_type", 0)),
-        }
-        if factor != 1.0 or (units_lab and ud != units_lab):
-            attrs["source_units"] = units_lab
-        axis = _clean(r.get("ordinate_axis_lab", ""))
-        long_name = f"{label} ({axis})" if axis and axis != label else label
-        channels.append(ChannelData(label, data.astype(np.float64) * factor, ud, long_name, attrs))
+    with reading(p, "UFF"):  # fields of a damaged set may not convert
+        for k in chosen:
+            channels.append(_channel(p, k, records[k], rates))
     dts = {dt for dt, _, _ in rates.values()}
     if max(dts) - min(dts) > _DT_RTOL * min(dts):
         desc = "; ".join(f"set {k} {lab!r}: dt = {dt:g} s" for k, (dt, _, lab) in rates.items())

@@ -8,43 +8,17 @@ files it is in *unit per count* (the true n-bit integer code, e.g. -8388608..838
 from __future__ import annotations
 
 import os
-import struct
-import warnings
 from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
 import xarray as xr
 
+from analysis.readers.integrity import reading
 from analysis.readers.layout import ChannelData, ReaderError, build_dataset, validate_dataset
+from analysis.readers.riff import WAVE_FORMAT_IEEE_FLOAT, read_samples, wav_layout
 
 __all__ = ["read_wav", "write_wav"]
-
-
-def _bits_per_sample(path: Path) -> int | None:
-    """Container bits per sample from the ``fmt `` chunk (valid bits for WAVE_FORMAT_EXTENSIBLE)."""
-    with path.open("rb") as f:
-        head = f.read(12)
-        if len(head) < 12 or head[8:12] != b"WAVE":
-            return None
-        while True:
-            hdr = f.read(8)
-            if len(hdr) < 8:
-                return None
-            cid, size = hdr[:4], struct.unpack("<I", hdr[4:])[0]
-            if cid == b"fmt ":
-                body = f.read(size)
-                if len(body) < 16:
-                    return None
-                fmt_tag, bits = (
-                    struct.unpack("<H", body[:2])[0],
-                    struct.unpack("<H", body[14:16])[0],
-                )
-                if fmt_tag == 0xFFFE and len(body) >= 20:
-                    valid = struct.unpack("<H", body[18:20])[0]
-                    return valid or bits
-                return bits
-            f.seek(size + (size & 1), os.SEEK_CUR)
 
 
 def _per_channel(value: float | str | Sequence, n: int, name: str) -> list:
@@ -64,10 +38,15 @@ def read_wav(
 ) -> xr.Dataset:
     """Read a PCM or float WAV file into the common layout.
 
+    The container (RIFF, big-endian RIFX, RF64/BW64 for files beyond 4 GiB) is parsed by
+    :mod:`analysis.readers.riff`, which checks every declared size against the file before
+    reading: a truncated or corrupt file is refused, never read with fewer samples.
+
     Parameters
     ----------
     path : path-like
-        WAV file (PCM 8/16/24/32/64-bit integer or 32/64-bit float).
+        WAV file: PCM integer (1 to 64 valid bits, e.g. 8/16/24/32-bit) or 32/64-bit float,
+        also as ``WAVE_FORMAT_EXTENSIBLE``.
     calibration : float or sequence of float, optional
         Scale factor, one for all channels or one per channel: *unit per count* for integer
         files, *unit per full scale* for float files. Default 1.0 (raw counts / full scale).
@@ -86,24 +65,18 @@ def read_wav(
     Raises
     ------
     ReaderError
-        Corrupt/truncated file, or a channel-name count that does not match the file.
+        Truncated file (a data chunk or RIFF size beyond the end of the file, a partial
+        frame), corrupt or unsupported header fields (named with the admissible values), not
+        enough memory for the samples, or a channel-name count that does not match the file.
     ValueError
         Non-positive/non-finite calibration.
     """
-    from scipy.io import wavfile
-
     p = Path(path)
     if not p.is_file():
         raise FileNotFoundError(f"WAV file not found: {p}")
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", wavfile.WavFileWarning)
-            fs, data = wavfile.read(p)
-        bits = _bits_per_sample(p)
-    except (ValueError, EOFError, OSError, struct.error) as exc:
-        raise ReaderError(f"{p}: not a readable WAV file (truncated or corrupt?): {exc}") from None
-    data = data.reshape(data.shape[0], -1) if data.ndim else data.reshape(0, 1)
-    n_ch = data.shape[1]
+    with reading(p, "WAV"):
+        layout = wav_layout(p)
+    n_ch = layout.channels
     names = (
         list(channel_names) if channel_names is not None else [f"ch{i + 1}" for i in range(n_ch)]
     )
@@ -111,38 +84,34 @@ def read_wav(
         raise ReaderError(f"{p}: file has {n_ch} channel(s) but {len(names)} channel_names given")
     cals = _per_channel(calibration, n_ch, "calibration")
     units = _per_channel(unit, n_ch, "unit")
-    kind = data.dtype.kind
-    container = data.dtype.itemsize * 8
-    if bits is None or bits > container:
-        bits = container
+    is_float = layout.format_tag == WAVE_FORMAT_IEEE_FLOAT
+    for i, cal in enumerate(cals):
+        c = float(cal)
+        if not np.isfinite(c) or c == 0.0:
+            raise ValueError(
+                f"calibration = {cal!r} for channel {names[i]!r}: must be finite and != 0"
+            )
+    with reading(p, "WAV"):
+        data = read_samples(p, layout)
     channels = []
     for i in range(n_ch):
         cal = float(cals[i])
-        if not np.isfinite(cal) or cal == 0.0:
-            raise ValueError(
-                f"calibration = {cals[i]!r} for channel {names[i]!r}: must be finite, != 0"
-            )
-        raw = data[:, i]
-        if kind == "u":  # 8-bit WAV is unsigned with offset 128
-            counts = raw.astype(np.float64) - 2.0 ** (container - 1)
-        elif kind == "i":
-            counts = (raw >> (container - bits)).astype(np.float64)  # undo left-justification
-        else:
-            counts = raw.astype(np.float64)
         channels.append(
             ChannelData(
                 names[i],
-                counts * cal,
+                data[:, i] * cal,
                 units=str(units[i]),
                 attrs={
                     "calibration": cal,
-                    "calibration_basis": "unit per full scale" if kind == "f" else "unit per count",
-                    "wav_bits_per_sample": int(bits),
+                    "calibration_basis": "unit per full scale" if is_float else "unit per count",
+                    "wav_bits_per_sample": int(layout.valid_bits),
                     "source_channel_index": i,
                 },
             )
         )
-    return build_dataset(channels, float(fs), source_format="wav", source_file=str(p))
+    return build_dataset(
+        channels, float(layout.sample_rate), source_format="wav", source_file=str(p)
+    )
 
 
 def write_wav(

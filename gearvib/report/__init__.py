@@ -10,7 +10,9 @@ Typical use::
 
 Modules: :mod:`~gearvib.report.study` (recipes), :mod:`~gearvib.report.runner` (run and build),
 :mod:`~gearvib.report.figures` (content and figures), :mod:`~gearvib.report.compare` (case
-comparison), :mod:`~gearvib.report.html`, :mod:`~gearvib.report.pdf` (writers).
+comparison), :mod:`~gearvib.report.document` (what both writers share: figure images,
+placeholders), :mod:`~gearvib.report.html`, :mod:`~gearvib.report.pdf` (writers; the PDF is
+typeset with ReportLab), :mod:`~gearvib.report.wording` (counts with their nouns).
 """
 
 from gearvib.report.compare import Comparison, compare_cases

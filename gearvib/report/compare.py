@@ -25,6 +25,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from gearvib.report.figures import CaseAnalysis, ResonanceRegion
+from gearvib.report.wording import count
 
 __all__ = ["Comparison", "FloquetChange", "RegionChange", "compare_cases"]
 
@@ -259,8 +260,8 @@ def compare_cases(reference: CaseAnalysis, other: CaseAnalysis, *, rpm_tol: floa
 
     claims: list[tuple[str, bool | None, str]] = []
     explanation: list[str] = []
-    region_text = (f"{b}: {n_oth} sun-mesh resonance regions (total {e_oth:.1f} dB) against "
-                   f"{n_ref} in {a} (total {e_ref:.1f} dB)")
+    region_text = (f"{b}: {count(n_oth, 'sun-mesh resonance region')} (total {e_oth:.1f} dB) "
+                   f"against {n_ref} in {a} (total {e_ref:.1f} dB)")
     worse = [c for c in changes if c.status in ("stronger", "appeared")]
     better = [c for c in changes if c.status in ("weaker", "vanished")]
     phasing = (p2p[0] is not None and p2p[1] is not None and
@@ -283,7 +284,7 @@ def compare_cases(reference: CaseAnalysis, other: CaseAnalysis, *, rpm_tol: floa
                        f"lowest natural frequency {other.natural_frequencies_hz.min():.0f} Hz "
                        f"in {b} against {reference.natural_frequencies_hz.min():.0f} Hz in {a}; "
                        f"{other.natural_frequencies_hz.size} against "
-                       f"{reference.natural_frequencies_hz.size} elastic modes"))
+                       f"{count(reference.natural_frequencies_hz.size, 'elastic mode')}"))
         if floq:
             wider = [c for c in floq if c.status == "wider"]
             new = [c for c in floq if c.status == "appeared"]
@@ -292,13 +293,14 @@ def compare_cases(reference: CaseAnalysis, other: CaseAnalysis, *, rpm_tol: floa
                            bool(wider) and len(wider) >= len(matched) / 2,
                            f"{len(wider)} of {len(matched)} matched Floquet intervals wider"))
             claims.append(("new instability regions appear", bool(new),
-                           f"{len(new)} Floquet intervals only in {b}"))
+                           f"{count(len(new), 'Floquet interval')} only in {b}"))
         else:
             claims.append(("instability regions become wider / new ones appear", None,
                            "no Floquet charts to compare"))
         claims.append(("new resonance regions in the sonogram",
                        any(c.status == "appeared" for c in changes),
-                       f"{sum(c.status == 'appeared' for c in changes)} regions only in {b}"))
+                       f"{count(sum(c.status == 'appeared' for c in changes), 'region')} only in "
+                       f"{b}"))
 
     if phasing:
         if fewer_or_weaker:

@@ -34,7 +34,9 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import xarray as xr
 
+from analysis.identification import peak_half_widths
 from analysis.instability import (
+    UNEXPLAINED,
     Candidates,
     PeakLabels,
     Resonances,
@@ -44,13 +46,15 @@ from analysis.instability import (
 )
 from analysis.maps import RpmFrequencyMap, RpmOrderMap, rpm_frequency_map, rpm_order_map
 from analysis.plots import rpm_frequency_map_figure, rpm_order_map_figure
+from analysis.runup import MapFeatures, map_features
 from analysis.spectrum import Peaks, Spectrum, find_peaks, spectrum, to_db
 from gearvib.assembly import assemble
 from gearvib.config import config_hash, gearset_from_dict
 from gearvib.modal import ModalResult, modal_analysis
 from gearvib.model import AssembledModel
 from gearvib.report.study import AnalysisSettings
-from gearvib.stability import first_order_regions, stability_over_speed
+from gearvib.report.wording import count
+from gearvib.stability import first_order_regions, mesh_phasing, stability_over_speed
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -70,15 +74,20 @@ __all__ = [
     "spectra_figure",
     "stability_figure",
     "summed_sun_stiffness",
-    "table_figure",
     "tooth_force_figure",
 ]
 
 PAPER_SPEEDS_RPM = (1500.0, 2600.0, 3100.0)
 """Sun speeds at which the paper reads resonances off Figure 11 (case 1) [min^-1]."""
 
+RISE_HEADER = ("speed", "f [Hz]", "on", "rise [dB]", "mechanism: cause", "chance", "evidence")
+"""Columns of the tables of classified rises."""
+
 _STIFFNESS_CYCLES = 3
-_SPOT_RANGE_DB = 30.0  # spots more than this below the map maximum are background clutter
+# the planet-mode signal (difference of two planets' sun-mesh forces) of a symmetric simulation
+# starts at round-off; it is analysed only when a Floquet band lets it grow by this much
+_PLANET_SIGNAL_GROWTH_DB = 40.0
+_SPOT_RANGE_DB = 40.0  # rises more than this below the map maximum are background clutter
 _MIN_SPOT_FRACTION = 0.15  # spots below 0.15 x the lowest natural frequency: near-DC content
 _REGION_GAP = 0.03  # spots closer than 3 % of the top speed belong to one resonance region
 _RPM_MIN_FRACTION = 0.02  # order tracking needs rpm > 0: skip the first 2 % of the speed range
@@ -159,25 +168,7 @@ class ResonanceRegion:
     @property
     def classified(self) -> bool:
         """True if at least one spot is a forced resonance or a parametric instability."""
-        return any(not m.startswith("unclassified") for m in self.mechanisms)
-
-
-def _above_floor(res: Resonances, map_ds: xr.Dataset, range_db: float, f_min: float
-                 ) -> Resonances:
-    """Spots within ``range_db`` of the map maximum and at ``f_min`` [Hz] or above."""
-    if not len(res):
-        return res
-    amp = map_ds["amplitude"].transpose("time", "frequency").values
-    it = np.clip(np.searchsorted(map_ds["time"].values, res.time), 0, amp.shape[0] - 1)
-    jf = np.clip(np.searchsorted(map_ds["frequency"].values, res.frequency), 0,
-                 amp.shape[1] - 1)
-    level = amp[it, jf]
-    keep = (level >= float(amp.max()) * 10 ** (-range_db / 20.0)) & (res.frequency >= f_min)
-    return Resonances(time=res.time[keep], rpm=res.rpm[keep], frequency=res.frequency[keep],
-                      f_mesh=res.f_mesh[keep], order=res.order[keep],
-                      mechanism=res.mechanism[keep], mode=res.mode[keep],
-                      strength_db=res.strength_db[keep], note=res.note[keep],
-                      mesh_frequency_per_rpm=res.mesh_frequency_per_rpm)
+        return any(not m.startswith(UNEXPLAINED) for m in self.mechanisms)
 
 
 def resonance_regions(res: Resonances, *, rpm_gap: float) -> list[ResonanceRegion]:
@@ -214,7 +205,7 @@ def resonance_regions(res: Resonances, *, rpm_gap: float) -> list[ResonanceRegio
         best = int(idx[np.argmax(res.strength_db[idx])])
         mech = []
         for i in idx[np.argsort(res.strength_db[idx])[::-1]]:
-            m = str(res.mechanism[i]) + (f" ({res.mode[i]})" if res.mode[i] else "")
+            m = str(res.mechanism[i]) + (f" ({res.cause[i]})" if res.cause[i] else "")
             if m not in mech:
                 mech.append(m)
         out.append(ResonanceRegion(
@@ -292,7 +283,12 @@ class CaseAnalysis:
     frequency_max_hz : float
         Upper frequency of spectra and sonogram.
     resonances : Resonances
-        Spots detected in ``fmap`` (within 30 dB of the map maximum).
+        Rises detected in ``fmap`` and their mechanisms.
+    planet_resonances : Resonances or None
+        Rises of the difference of the first two sun-mesh forces (only the planet modes), when
+        a Floquet-unstable band grows by at least 40 dB in the run.
+    features : MapFeatures or None
+        Order-locked rays and frequency-locked lines of the sonogram.
     regions : list of ResonanceRegion
         The spots grouped into speed regions.
     candidates : Candidates
@@ -343,6 +339,8 @@ class CaseAnalysis:
     def several_mesh_frequencies(self) -> bool:
         """True when the gear set has more than one mesh frequency."""
         return len(self.mesh_frequencies) > 1
+    planet_resonances: Resonances | None = None
+    features: MapFeatures | None = None
 
     @property
     def speed_range(self) -> tuple[float, float]:
@@ -362,13 +360,54 @@ class CaseAnalysis:
                          f"{f_ref_hi * f / self.mesh_frequency_per_rpm:.1f}"
                          for name, f in self.mesh_frequencies)
 
-    def resonance_rows(self) -> list[tuple[str, ...]]:
-        """Rows of the resonance table (formatted strings)."""
-        r = self.resonances
-        return [(f"{r.rpm[i]:.0f}", f"{r.f_mesh[i]:.0f}", f"{r.frequency[i]:.0f}",
-                 str(r.order[i]) if r.order[i] else "–", str(r.mode[i]) or "–",
-                 f"{r.strength_db[i]:.1f}", str(r.mechanism[i]), str(r.note[i]))
+    def resonance_rows(self, planet: bool = False) -> list[tuple[str, ...]]:
+        """Rows of the resonance table (formatted strings; see :data:`RISE_HEADER`).
+
+        Parameters
+        ----------
+        planet : bool
+            Rows of the planet-mode signal instead of the tooth force.
+        """
+        r = self.planet_resonances if planet else self.resonances
+        if r is None:
+            return []
+        feature = {"natural frequency": "f_i", "spot": "spot"}
+        return [(f"{r.rpm[i]:.0f}", f"{r.frequency[i]:.0f}",
+                 f"k={r.order[i]}" if r.order[i] else feature.get(str(r.feature[i]), "–"),
+                 f"{r.strength_db[i]:.1f}",
+                 str(r.mechanism[i]).split()[0] + (f": {r.cause[i]}" if r.cause[i] else ""),
+                 f"{100 * r.coincidence[i]:.0f} %", str(r.note[i]))
                 for i in range(len(r))]
+
+    def peak_rows(self) -> list[tuple[str, ...]]:
+        """Rows of the identified-peak table (formatted strings)."""
+        rows = []
+        for fsp in self.spectra:
+            lab = fsp.labels
+            for i in range(len(lab)):
+                best = lab.matches[i][0] if lab.matches[i] else None
+                rows.append((fsp.mesh, lab.label(i),
+                             f"{best.deviation:+.0f}" if best else "–",
+                             f"± {best.tolerance:.0f}" if best else "–",
+                             f"{100 * lab.coincidence[i]:.0f} %"))
+        return rows
+
+    def crossing_rows(self) -> list[tuple[str, ...]]:
+        """Predicted crossings of the mesh orders with the natural frequencies."""
+        return [(f"{c.harmonic} × f_mesh = {c.mode}", f"{c.frequency_hz:.0f}", f"{c.rpm:.0f}",
+                 c.status + (f" ({c.strength_db:.1f} dB)" if c.status == "rise" else ""))
+                for c in self.resonances.crossings]
+
+    def growth_rows(self) -> list[tuple[str, ...]]:
+        """Growth of every Floquet-unstable band during this run."""
+        g = self.resonances.growth
+        if g is None:
+            return []
+        return [(f"{g.lower_rpm[i]:.0f}–{g.upper_rpm[i]:.0f}", str(g.label[i]) or "–",
+                 f"{1e3 * g.time_in_band[i]:.1f}", f"{g.peak_growth_rate[i]:.3g}",
+                 f"{g.growth_db[i]:.1f}",
+                 "develops" if g.can_grow[i] else f"too fast: {g.advice[i]}")
+                for i in range(len(g))]
 
     def region_rows(self) -> list[tuple[str, ...]]:
         """Rows of the Floquet region table (formatted strings)."""
@@ -595,8 +634,9 @@ def _parameters(ds: xr.Dataset, caller: dict, model: AssembledModel | None, run:
                 rows.append((f"mesh {m['name']}",
                              f"contact ratio {m['contact_ratio']:.3f}, phase lag "
                              f"{m.get('phase_lag', 0.0):.4f} cycles"))
-        rows.append(("degrees of freedom", f"{model.n_dof} ({model.n_mesh} meshes, "
-                                           f"{len(model.bearing_names)} elastic bearings)"))
+        rows.append(("degrees of freedom",
+                     f"{model.n_dof} ({count(model.n_mesh, 'mesh', 'meshes')}, "
+                     f"{count(len(model.bearing_names), 'elastic bearing')})"))
     if len(mesh_freqs) > 1:
         groups = {g.name: g for g in model.mesh_frequency_groups()} if model is not None else {}
         for name, f in mesh_freqs:
@@ -761,9 +801,9 @@ def analyse_case(ds: xr.Dataset, *, name: str | None = None,
                      "assuming one rigid-body mode (f1)")
     gs_name = caller.get("gearset", {}).get("name", "") if isinstance(
         caller.get("gearset"), dict) else ""
-    case = name or str(caller.get("case", "")) or gs_name or str(ds.attrs.get("title", "run"))
-    label = str(caller.get("label", "")) or (
-        caller.get("gearset", {}).get("title", "") if gs_name else "") or case
+    gs_title = caller.get("gearset", {}).get("title", "") if gs_name else ""
+    case = name or str(caller.get("case", "")) or gs_name or "run"
+    label = str(caller.get("label", "")) or str(gs_title) or gs_name or case
     run = _run_settings(caller, ds)
     f_per_rpm = mesh_freqs[0][1]
     meshes = [str(m) for m in ds["mesh"].values]
@@ -777,27 +817,49 @@ def analyse_case(ds: xr.Dataset, *, name: str | None = None,
                                             0.5 * fs)
     fmax = min(fmax, 0.5 * fs)
 
+    # theory candidates in the run-up range (with the mesh-phasing selection rule)
+    span = (float(run["speed_start_rpm"]), float(run["speed_end_rpm"]))
+    if model is None and len(mesh_freqs) > 1:
+        candidates = _stored_candidates(fn, names, mesh_freqs, span, settings.n_max)
+        cnote = "theory candidates without the planetary mesh-phasing selection rule"
+    else:
+        candidates, cnote = _candidates(model, modal, fn, names, f_per_rpm, span,
+                                        settings.n_max)
+    if cnote:
+        notes.append(cnote)
+    if len(mesh_freqs) > 1:
+        notes.append(f"resonance rises are classified against the mesh orders of "
+                     f"{mesh_freqs[0][0]} (the reference); the order lines of every mesh "
+                     "frequency are drawn on the sonogram")
+
     # (c) spectra of the planet-tooth forces over the whole run-up, labelled peaks
     spectra = []
     seg = int(min(ds.sizes["time"], round(fs / max(settings.map_resolution_hz / 4, 1.0))))
     for mesh in [m for m in (sun[:1] + ring[:1]) if m] or [force_mesh]:
         x = _signed_force(ds, mesh)
-        sp = spectrum(x - x.mean(), fs, window="hann", scaling="peak", segment_length=seg,
+        sp = spectrum(x - x.mean(), fs, window="hann", amplitude="peak", segment_length=seg,
                       overlap=0.5, units="N", name=f"tooth force {mesh}")
         band = sp.frequency <= fmax
         floor = float(np.median(sp.values[band])) if band.any() else 0.0
-        pk = find_peaks(sp, prominence_db=1.5, max_peaks=4 * settings.spectrum_peaks,
-                        min_distance_hz=max(3 * sp.resolution_hz, 20.0), threshold=2 * floor)
+        # humps of the run-up spectrum, not the ripple of the mesh harmonics sweeping by
+        pk = find_peaks(sp, prominence_db=3.0, max_peaks=4 * settings.spectrum_peaks,
+                        min_distance_hz=max(3 * sp.bin_spacing_hz, fmax / 40.0),
+                        threshold=2 * floor)
         keep = (pk.frequency > 0.5 * settings.map_resolution_hz) & (pk.frequency <= fmax)
         order = np.argsort(pk.amplitude[keep])[::-1][: settings.spectrum_peaks]
         sel = np.sort(np.flatnonzero(keep)[order])
         pk = Peaks(pk.frequency[sel], pk.amplitude[sel], pk.bin_frequency[sel],
                    pk.bin_value[sel], pk.scaling, pk.units, pk.window)
-        labels = label_peaks(pk.frequency, fn, n_max=6, tolerance=settings.tolerance,
-                             names=names) if len(pk) and fn.size else label_peaks(
-            np.array([1.0]), np.array([1.0]))
-        if not (len(pk) and fn.size):
-            labels = PeakLabels(np.zeros(0), (), settings.tolerance)
+        if len(pk) and fn.size:
+            # a run-up spectrum has broad humps: each peak is uncertain by its -3 dB half-width
+            widths = peak_half_widths(sp.frequency, to_db(sp.values, sp.amplitude), pk.frequency)
+            labels = label_peaks(pk.frequency, fn, resolution_hz=sp.enbw_hz,
+                                 peak_widths_hz=widths, candidates=candidates, names=names,
+                                 natural_uncertainty=settings.tolerance,
+                                 band=(0.5 * settings.map_resolution_hz, fmax))
+        else:
+            labels = PeakLabels(peaks=np.zeros(0), matches=(), coincidence=np.zeros(0),
+                                peak_uncertainty=np.zeros(0))
         spectra.append(ForceSpectrum(mesh, sp, pk, labels))
 
     # (d) summed sun-mesh stiffness
@@ -828,38 +890,54 @@ def analyse_case(ds: xr.Dataset, *, name: str | None = None,
         except ValueError as exc:
             notes.append(f"rpm-order map not available: {exc}")
 
-    # (f) resonances in the map, against the theory candidates
-    span = (float(run["speed_start_rpm"]), float(run["speed_end_rpm"]))
-    if model is None and len(mesh_freqs) > 1:
-        candidates = _stored_candidates(fn, names, mesh_freqs, span, settings.n_max)
-        cnote = "theory candidates without the planetary mesh-phasing selection rule"
-    else:
-        candidates, cnote = _candidates(model, modal, fn, names, f_per_rpm, span,
-                                        settings.n_max)
-    if cnote:
-        notes.append(cnote)
-    if len(mesh_freqs) > 1:
-        notes.append(f"resonance spots are classified against the mesh orders of "
-                     f"{mesh_freqs[0][0]} (the reference); the order lines of every mesh "
-                     "frequency are drawn on the sonogram")
-    map_ds = fmap.to_dataset().sel(frequency=slice(0.0, fmax))
-    resonances = detect_resonances(
-        map_ds, natural_frequencies_hz=fn, mesh_frequency_per_rpm=f_per_rpm,
-        orders=range(1, settings.orders + 1), candidates=candidates,
-        threshold_db=settings.threshold_db, tolerance=settings.tolerance,
-        n_max=settings.n_max, names=names)
-    resonances = _above_floor(resonances, map_ds, _SPOT_RANGE_DB,
-                              _MIN_SPOT_FRACTION * float(fn.min()) if fn.size else 0.0)
-    regions = resonance_regions(resonances, rpm_gap=_REGION_GAP * float(run["speed_end_rpm"]))
-
-    # (g) Floquet stability over the run-up speed range
+    # (f) Floquet stability over the run-up speed range
     chart = None
     first_order: list[tuple[str, ...]] = []
+    rule, families = None, None
     if model is not None:
         chart, why = _stability(model, run, settings)
         if why:
             notes.append(why)
         first_order = _first_order_rows(model, run, settings)
+        rule, families = mesh_phasing(model, modal)
+
+    # (g) resonances of the map: forced (rays x natural frequencies), parametric (growing
+    # Floquet bands), unexplained
+    map_ds = fmap.to_dataset().sel(frequency=slice(0.0, fmax))
+    frame_rpm = np.asarray(map_ds["rpm"].values)
+    try:
+        features: MapFeatures | None = map_features(
+            map_ds, frames=frame_rpm > _RPM_MIN_FRACTION * float(frame_rpm.max()))
+    except ValueError as exc:  # e.g. a constant-speed run: rays and lines coincide
+        features = None
+        notes.append(f"rays and vertical lines not separated: {exc}")
+    resonances = detect_resonances(
+        map_ds, natural_frequencies_hz=fn, mesh_frequency_per_rpm=f_per_rpm, features=features,
+        orders=range(1, settings.orders + 1), names=names, candidates=candidates,
+        chart=chart, mode_families=families, mesh_harmonic_rule=rule,
+        speed_profile=(t, rpm), threshold_db=settings.threshold_db,
+        natural_uncertainty=settings.tolerance, dynamic_range_db=_SPOT_RANGE_DB,
+        frequency_range=(_MIN_SPOT_FRACTION * float(fn.min()) if fn.size else 0.0, fmax))
+    regions = resonance_regions(resonances, rpm_gap=_REGION_GAP * float(run["speed_end_rpm"]))
+    planet_res = None
+    if (resonances.growth is not None and len(resonances.growth)
+            and float(resonances.growth.growth_db.max()) >= _PLANET_SIGNAL_GROWTH_DB
+            and len(sun) >= 2 and force_mesh == sun[0]):
+        # the planet modes cancel in one mesh force when the planets are in phase; the
+        # difference of two planets' forces holds only them (their parametric growth)
+        xd = _signed_force(ds, sun[0]) - _signed_force(ds, sun[1])
+        dmap = rpm_frequency_map(xd - xd.mean(), None, rpm, time=t,
+                                 resolution=settings.map_resolution_hz, window="hann",
+                                 overlap=settings.map_overlap, amplitude="rms", units="N",
+                                 name=f"tooth force {sun[0]} - {sun[1]}")
+        planet_res = detect_resonances(
+            dmap.to_dataset().sel(frequency=slice(0.0, fmax)), natural_frequencies_hz=fn,
+            mesh_frequency_per_rpm=f_per_rpm, orders=range(1, settings.orders + 1), names=names,
+            candidates=candidates, chart=chart, mode_families=families,
+            mesh_harmonic_rule=rule, speed_profile=(t, rpm),
+            threshold_db=settings.threshold_db, natural_uncertainty=settings.tolerance,
+            dynamic_range_db=_SPOT_RANGE_DB,
+            frequency_range=(_MIN_SPOT_FRACTION * float(fn.min()) if fn.size else 0.0, fmax))
 
     # (h) provenance (no dates: same input, same report)
     gs_cfg = caller.get("gearset")
@@ -888,7 +966,8 @@ def analyse_case(ds: xr.Dataset, *, name: str | None = None,
         spectra=spectra, stiffness=stiff, fmap=fmap, omap=omap, frequency_max_hz=fmax,
         resonances=resonances, regions=regions, candidates=candidates, chart=chart, run=run,
         settings=settings,
-        notes=notes, provenance=prov, first_order=first_order,
+        notes=notes, provenance=prov, first_order=first_order, planet_resonances=planet_res,
+        features=features,
     )
 
 
@@ -978,20 +1057,24 @@ def spectra_figure(ca: CaseAnalysis, *, figsize: tuple[float, float] = (8.0, 6.5
     for ax, fsp in zip(axes, ca.spectra, strict=True):
         sp = fsp.spectrum
         band = sp.frequency <= ca.frequency_max_hz
-        ax.plot(sp.frequency[band], to_db(sp.values[band], sp.scaling), lw=0.7)
+        ax.plot(sp.frequency[band], to_db(sp.values[band], sp.amplitude), lw=0.7)
         if len(fsp.peaks):
-            y = to_db(fsp.peaks.amplitude, sp.scaling)
+            y = to_db(fsp.peaks.amplitude, sp.amplitude)
             ax.plot(fsp.peaks.frequency, y, "v", color="C3", ms=4)
             for i, (f, v) in enumerate(zip(fsp.peaks.frequency, y, strict=True)):
+                st = fsp.labels.status[i] if i < len(fsp.labels) else "unexplained"
                 m = fsp.labels.matches[i] if i < len(fsp.labels) else ()
-                text = f"{f:.0f}" + (f"\n≈ {m[0].expression}" if m else "")
+                text = f"{f:.0f}" + (f"\n≈ {m[0].expression}" if st == "explained" else
+                                     "\n?" if st == "unexplained" else "\n~")
                 ax.annotate(text, (f, v), xytext=(0, 4), textcoords="offset points",
                             ha="center", fontsize=6.5)
         for fn in ca.natural_frequencies_hz:
             ax.axvline(fn, color="C1", lw=0.7, ls=":")
         ax.set_xlim(0, ca.frequency_max_hz)
+        lo, hi = ax.get_ylim()
+        ax.set_ylim(lo, hi + 0.25 * (hi - lo))  # room for the peak labels below the title
         ax.set_ylabel("peak amplitude\n[dB re 1 N]")
-        ax.set_title(f"{fsp.mesh}: {sp.window}, Δf = {sp.resolution_hz:.3g} Hz, "
+        ax.set_title(f"{fsp.mesh}: {sp.window}, Δf = {sp.bin_spacing_hz:.3g} Hz, "
                      f"{sp.n_averages} averages", fontsize=9)
         ax.grid(True, alpha=0.3)
     axes[-1].set_xlabel("frequency [Hz]  (dotted: natural frequencies)")
@@ -1028,8 +1111,9 @@ def sonogram_figure(ca: CaseAnalysis, *, figsize: tuple[float, float] = (7.5, 6.
     """Rpm-frequency map of a tooth force with mesh orders and natural frequencies (Fig. 11).
 
     Speed is on the vertical axis; the inclined dashed lines are the orders 1..N of the mesh
-    frequency, the dotted vertical lines the natural frequencies; circles mark the detected
-    resonances and red bands the speed ranges the Floquet analysis finds unstable.
+    frequency, the dotted vertical lines the natural frequencies; circles mark forced
+    resonances, squares parametric instabilities, grey crosses unexplained rises, and red bands
+    the speed ranges the Floquet analysis finds unstable.
     """
     orders = list(range(1, ca.settings.orders + 1))
     several = ca.several_mesh_frequencies
@@ -1042,9 +1126,14 @@ def sonogram_figure(ca: CaseAnalysis, *, figsize: tuple[float, float] = (7.5, 6.
     if several:
         _order_line_families(ax, ca, orders)
     r = ca.resonances
-    if len(r):
-        ax.plot(r.frequency, r.rpm, "o", mfc="none", mec="r", ms=9, lw=0,
-                label="detected resonance")
+    for key, (marker, color, text) in {
+            "forced": ("o", "r", "forced resonance"),
+            "parametric": ("s", "m", "parametric instability"),
+            "unexplained": ("x", "0.85", "unexplained rise")}.items():
+        m = np.asarray([str(x).startswith(key) for x in r.mechanism], dtype=bool)
+        if m.any():
+            ax.plot(r.frequency[m], r.rpm[m], marker, mfc="none", mec=color, mew=1.4, ms=9,
+                    lw=0, label=f"{text} ({int(m.sum())})")
     if ca.chart is not None:
         for k, reg in enumerate(ca.chart.region_table):
             ax.axhspan(reg["lower"] / ca.mesh_frequency_per_rpm,
@@ -1179,39 +1268,6 @@ def _short(name: str) -> str:
     return f"s{name[6:]}" if name.startswith("stage ") else name
 
 
-def table_figure(title: str, header: Sequence[str], rows: Sequence[Sequence[str]], *,
-                 notes: Sequence[str] = (), figsize: tuple[float, float] = (8.27, 11.69),
-                 fontsize: float = 7.0) -> list[Figure]:
-    """A table drawn as monospaced text, split over as many pages as needed (for the PDF).
-
-    Returns
-    -------
-    list of Figure
-        One A4 portrait figure per page.
-    """
-    cols = [list(map(str, header))] + [list(map(str, r)) for r in rows]
-    widths = [min(max(len(r[j]) for r in cols), 48) for j in range(len(header))]
-
-    def fmt(r: Sequence[str]) -> str:
-        return "  ".join(c[:w].ljust(w) for c, w in zip(r, widths, strict=True)).rstrip()
-
-    lines = [fmt(cols[0]), "-" * min(sum(widths) + 2 * len(widths), 160)]
-    lines += [fmt(r) for r in cols[1:]] or ["(none)"]
-    for n in notes:
-        lines += ["", *textwrap.wrap(n, 110)]
-    per_page = 78
-    pages = [lines[i:i + per_page] for i in range(0, len(lines), per_page)] or [[]]
-    figs = []
-    for p, chunk in enumerate(pages):
-        fig = _figure(figsize)
-        suffix = f" ({p + 1}/{len(pages)})" if len(pages) > 1 else ""
-        fig.text(0.05, 0.97, title + suffix, fontsize=11, weight="bold", va="top")
-        fig.text(0.05, 0.94, "\n".join(chunk), family="monospace", fontsize=fontsize,
-                 va="top")
-        figs.append(fig)
-    return figs
-
-
 # --------------------------------------------------------------------------- document
 
 
@@ -1276,7 +1332,8 @@ def report_sections(cases: Sequence[CaseAnalysis], comparisons: Sequence[Any] = 
     """
     s: dict[str, list[Block]] = {k: [] for k in SECTION_IDS}
     for ca in cases:
-        s["parameters"] += [Block("heading", f"{ca.name}: {ca.label}"),
+        s["parameters"] += [Block("heading", ca.name if ca.label in ("", ca.name)
+                                  else f"{ca.name}: {ca.label}"),
                             _table(f"Gear set and run of {ca.name}", ("parameter", "value"),
                                    ca.parameters)]
         s["parameters"] += [Block("text", f"Note ({ca.name}): {n}") for n in ca.notes]
@@ -1290,11 +1347,18 @@ def report_sections(cases: Sequence[CaseAnalysis], comparisons: Sequence[Any] = 
                                     figure=lambda ca=ca: tooth_force_figure(ca))]
         s["spectra"] += [
             Block("figure", f"{ca.name}: spectra of the planet-tooth forces over the whole "
-                  "run-up; peaks labelled with natural-frequency combinations.",
+                  "run-up; peaks labelled with their best theory candidate ('?': "
+                  "unexplained; '~': ambiguous, the peak is so broad that a random peak would "
+                  "match as easily).",
                   figure=lambda ca=ca: spectra_figure(ca)),
-            _table(f"Labelled peaks of {ca.name} (paper style, tolerance "
-                   f"{100 * ca.settings.tolerance:g} %)", ("mesh", "peak"),
-                   [(fsp.mesh, lab) for fsp in ca.spectra for lab in fsp.labels.labels])]
+            Block("text", f"{ca.name}: candidates are the natural frequencies, 2 f_i/n and "
+                  "(f_i + f_j)/n allowed by the mesh phasing; a candidate's window is the "
+                  f"peak's -3 dB half-width + {100 * ca.settings.tolerance:g} % of its value; "
+                  "'chance' is how often a random peak there would get a label. A peak is "
+                  "ambiguous when a random one would match as easily (broad run-up humps)."),
+            _table(f"Peaks of {ca.name}",
+                   ("mesh", "peak", "deviation of the best [Hz]", "window [Hz]", "chance"),
+                   ca.peak_rows())]
         s["sonograms"] += [
             Block("heading", ca.name),
             Block("text", _mesh_frequency_text(ca)),
@@ -1307,29 +1371,64 @@ def report_sections(cases: Sequence[CaseAnalysis], comparisons: Sequence[Any] = 
                   + (" of every mesh frequency (" + ", ".join(
                       f"{_short(n)} = {n}" for n, _ in ca.mesh_frequencies) + ")"
                      if ca.several_mesh_frequencies else "")
-                  + ", dotted vertical lines = natural frequencies, circles "
-                  "= detected resonances.", figure=lambda ca=ca: sonogram_figure(ca)),
+                  + ", dotted vertical lines = natural frequencies, circles = forced "
+                  "resonances, squares = parametric instabilities, crosses = unexplained "
+                  "rises.", figure=lambda ca=ca: sonogram_figure(ca)),
             Block("figure", f"{ca.name}: rpm-order map of the same force.",
                   figure=lambda ca=ca: order_map_figure(ca))]
+        res = ca.resonances
         s["resonances"] += [
             Block("heading", ca.name),
-            Block("text", f"{ca.name}: {len(ca.resonances)} resonance spots (rise ≥ "
-                  f"{ca.settings.threshold_db:g} dB above the background, within "
-                  f"{_SPOT_RANGE_DB:g} dB of the map maximum, above "
-                  f"{_MIN_SPOT_FRACTION:g} × the lowest natural frequency) in "
-                  f"{len(ca.regions)} speed regions; "
-                  f"{sum(r.classified for r in ca.regions)} regions contain a classified "
-                  "spot (forced resonance or parametric instability)."),
+            Block("text", f"{ca.name}: {res.summary()}. Rises of at least "
+                  f"{ca.settings.threshold_db:g} dB along the mesh orders 1–{ca.settings.orders} "
+                  "(where the orders are resolved), along the natural frequencies and as "
+                  f"isolated spots within {_SPOT_RANGE_DB:g} dB of the map maximum; "
+                  f"{count(len(ca.regions), 'speed region')}. Explanations: a mesh order "
+                  "crossing a natural frequency (forced resonance; tolerance "
+                  f"{100 * ca.settings.tolerance:g} % of the natural frequency plus the rise "
+                  "width), a Floquet-unstable band that grows in this run (parametric "
+                  "instability); 'chance' is how often a random rise would get the same "
+                  "explanation. In the tables 'on' is the mesh order k of the ray or f_i (along "
+                  "a natural frequency)."),
+            *[Block("text", f"{ca.name}: {n}") for n in res.notes
+              if not n.startswith("rays analysed")],
+            *([Block("text", f"{ca.name}: features of the map (median over the frames): "
+                     "order-locked rays (orders of the input; k = mesh harmonic): " + (", ".join(
+                         f"{o:.4g} (k = {o / (60 * ca.mesh_frequency_per_rpm):.2f})"
+                         for o in ca.features.orders) or "none") + "; frequency-locked "
+                     "vertical lines: " + (", ".join(
+                         f"{f:.0f} Hz" for f in ca.features.frequencies) or "none") + ".")]
+              if ca.features is not None else []),
             _table(f"Identified resonance regions of {ca.name}",
-                   ("speed [min⁻¹]", "peak speed", "f [Hz]", "rise [dB]", "spots",
-                    "mechanisms (mode)"),
+                   ("speed [min⁻¹]", "peak speed", "f [Hz]", "rise [dB]", "rises",
+                    "mechanisms (cause)"),
                    [(f"{r.rpm_low:.0f}–{r.rpm_high:.0f}", f"{r.rpm_peak:.0f}",
                      f"{r.frequency_hz:.0f}", f"{r.strength_db:.1f}", str(r.n_spots),
                      "; ".join(r.mechanisms[:3])) for r in ca.regions]),
-            _table(f"Classified resonance spots of {ca.name}",
-                   ("speed", "f_mesh [Hz]", "f [Hz]", "order", "mode", "rise [dB]",
-                    "mechanism", "note"),
-                   [row for row in ca.resonance_rows() if row[6] != "unclassified"])]
+            _table(f"Rises of {ca.name}", RISE_HEADER, ca.resonance_rows()),
+            Block("text", f"{ca.name}: every crossing of a mesh order with a natural frequency "
+                  "in the run, at the speed f_i / (k × f_mesh per min⁻¹), and what the map "
+                  "shows there."),
+            _table(f"Crossings in {ca.name}",
+                   ("crossing", "f_i [Hz]", "speed [min⁻¹]", "found"), ca.crossing_rows())]
+        pr = ca.planet_resonances
+        if pr is not None:
+            s["resonances"] += [
+                Block("text", f"{ca.name}: planet modes. A Floquet-unstable band grows by "
+                      f"at least {_PLANET_SIGNAL_GROWTH_DB:g} dB in this run, so the difference of "
+                      f"the tooth forces {ca.sun_meshes[0]} − "
+                      f"{ca.sun_meshes[1]} is analysed too: it holds only the planet modes, "
+                      "which in-phase mesh harmonics do not force and whose growth is too small "
+                      f"to show in a single mesh force. {pr.summary()}."),
+                _table(f"Planet-mode rises of {ca.name}", RISE_HEADER,
+                       ca.resonance_rows(planet=True))]
+        if ca.growth_rows():
+            s["resonances"] += [Block(
+                "text", f"{ca.name}: growth of every Floquet-unstable band during this run, "
+                "exp(time in band × growth rate); a band 'develops' with at least 20 dB."),
+                _table(f"Band growth in {ca.name}",
+                       ("band [min⁻¹]", "candidate", "time in band [ms]", "growth rate [1/s]",
+                        "growth [dB]", "verdict"), ca.growth_rows())]
         s["stability"] += [Block("heading", ca.name)]
         if ca.chart is not None:
             s["stability"] += [

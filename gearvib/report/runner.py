@@ -31,6 +31,7 @@ from gearvib.config import gearset_from_dict
 from gearvib.io import GearvibFileError, atomic_write, read_run, write_netcdf
 from gearvib.modal import modal_analysis
 from gearvib.report.compare import Comparison, compare_cases
+from gearvib.report.document import FigureImages
 from gearvib.report.figures import CaseAnalysis, analyse_case, report_sections
 from gearvib.report.html import render_html
 from gearvib.report.pdf import write_pdf
@@ -146,6 +147,12 @@ def _caller(ds: xr.Dataset) -> dict:
     return inner if isinstance(inner, dict) else {}
 
 
+def _gearset(ds: xr.Dataset) -> dict:
+    """The gear-set description stored in a run (``{}`` if none)."""
+    gs = _caller(ds).get("gearset")
+    return gs if isinstance(gs, dict) else {}
+
+
 def _load_inputs(inputs: Sequence[RunInput]) -> list[tuple[str, xr.Dataset]]:
     if isinstance(inputs, str | os.PathLike | xr.Dataset):
         inputs = [inputs]
@@ -164,7 +171,8 @@ def _load_inputs(inputs: Sequence[RunInput]) -> list[tuple[str, xr.Dataset]]:
             where = f"{item}" if stem else "the dataset"
             raise GearvibFileError(f"{where} is not a gearvib run-up (no normal_force / "
                                    "input_speed)")
-        name = str(_caller(ds).get("case", "")) or stem or str(ds.attrs.get("title", "run"))
+        name = (str(_caller(ds).get("case", "")) or stem or str(_gearset(ds).get("name", ""))
+                or "run")
         out.append((name, ds))
     seen: dict[str, int] = {}
     unique = []
@@ -172,6 +180,32 @@ def _load_inputs(inputs: Sequence[RunInput]) -> list[tuple[str, xr.Dataset]]:
         seen[name] = seen.get(name, 0) + 1
         unique.append((name if seen[name] == 1 else f"{name}-{seen[name]}", ds))
     return unique
+
+
+def _default_title(runs: Sequence[tuple[str, xr.Dataset]]) -> str:
+    """Report title from the gear sets of the runs (their title, else their names)."""
+    sets: dict[str, str] = {}
+    for name, ds in runs:
+        gs = _gearset(ds)
+        key = str(gs.get("name", "")) or name
+        sets.setdefault(key, str(gs.get("title", "")))
+    if len(sets) == 1:
+        ((key, gs_title),) = sets.items()
+        return f"Order-analysis report: {gs_title or key}"
+    return "Order-analysis report: " + ", ".join(sets)
+
+
+def _subtitle(cases: Sequence[CaseAnalysis]) -> str:
+    """The line under the title: the cases (with their labels) and their run-ups."""
+    named = [c.name if c.label in ("", c.name) else f"{c.name} ({c.label})" for c in cases]
+    runs = [f"{c.run['speed_start_rpm']:g} → {c.run['speed_end_rpm']:g} min⁻¹ in "
+            f"{c.run['duration']:g} s" for c in cases]
+    if len(cases) == 1:
+        return f"Case {named[0]}. Run-up {runs[0]}."
+    if len(set(runs)) == 1:
+        return f"Cases: {'; '.join(named)}. Run-up of each case {runs[0]}."
+    return (f"Cases: {'; '.join(named)}. Run-up "
+            + ", ".join(f"{c.name}: {r}" for c, r in zip(cases, runs, strict=True)) + ".")
 
 
 def build_report(paths_or_datasets: Sequence[RunInput] | RunInput, out_dir: str | os.PathLike,
@@ -219,19 +253,17 @@ def build_report(paths_or_datasets: Sequence[RunInput] | RunInput, out_dir: str 
     ref = reference or str(study.get("reference", "")) or names[0]
     if ref not in names:
         ref = names[0]
-    title = title or str(study.get("title", "")) or ("gearvib report: " + ", ".join(names))
+    title = title or str(study.get("title", "")) or _default_title(runs)
     cases: list[CaseAnalysis] = [analyse_case(ds, name=n, settings=analysis) for n, ds in runs]
     ref_case = next(c for c in cases if c.name == ref)
     comparisons = tuple(compare_cases(ref_case, c) for c in cases if c is not ref_case)
     sections = report_sections(cases, comparisons)
-    subtitle = "Cases: " + "; ".join(f"{c.name} ({c.label})" for c in cases) + ". " + \
-        "Run-up " + ", ".join(f"{c.name}: {c.run['speed_start_rpm']:g} → "
-                              f"{c.run['speed_end_rpm']:g} min⁻¹ in {c.run['duration']:g} s"
-                              for c in cases) + "."
+    subtitle = _subtitle(cases)
     html_path, pdf_path = out / "report.html", out / "report.pdf"
-    text = render_html(sections, title=title, subtitle=subtitle)
+    images = FigureImages()  # every figure is drawn once, for both documents
+    text = render_html(sections, title=title, subtitle=subtitle, images=images)
     pages = atomic_write(pdf_path, lambda tmp: write_pdf(sections, tmp, title=title,
-                                                    subtitle=subtitle))
+                                                    subtitle=subtitle, images=images))
     atomic_write(html_path, lambda tmp: tmp.write_text(text, encoding="utf-8"))
     log.info("report written: %s, %s (%d pages)", html_path, pdf_path, pages)
     return ReportPaths(html=html_path, pdf=pdf_path, pdf_pages=int(pages),  # type: ignore[arg-type]

@@ -187,7 +187,8 @@ class AnalysisSettings:
     threshold_db : float
         Minimum rise above the background of a detected resonance [dB].
     tolerance : float
-        Relative tolerance of peak labels and resonance classification.
+        Relative uncertainty of the natural frequencies in the peak identification and the
+        resonance classification (their windows; see docs/catalogue-identification.md).
     frequency_max_hz : float
         Upper frequency of the sonogram and spectra [Hz] (0: automatic, 2.2 x the highest
         natural frequency, at most fs/2).
@@ -252,7 +253,7 @@ class Study:
     Attributes
     ----------
     title : str
-        Report title.
+        Report title (empty: from the gear sets' titles or names).
     cases : tuple of Case
         The gear sets, in report order (names unique).
     run : RunSettings
@@ -302,7 +303,7 @@ class Study:
         names : sequence of str
             Preset names or gear-set TOML paths.
         title : str, optional
-            Report title (default: the names joined).
+            Report title (default: from the gear sets' titles or names).
         analysis : AnalysisSettings, optional
             Analysis settings.
         **run : float
@@ -320,7 +321,7 @@ class Study:
             raise ConfigError("names must be a list of preset names or TOML paths")
         cases = tuple(Case(name=Path(n).stem if n.endswith(".toml") else n, config=str(n))
                       for n in names)
-        return cls(title=title or "gearvib study: " + ", ".join(c.name for c in cases),
+        return cls(title=title or "",
                    cases=cases, run=settings, analysis=analysis or AnalysisSettings())
 
     def with_duration(self, duration: float) -> Study:
@@ -422,7 +423,7 @@ def load_study(path: str | Path) -> Study:
                           "{name = ..., config = ...}")
     base = p.resolve().parent
     cases = tuple(_case(t, i, base) for i, t in enumerate(cases_t))
-    title = st.get("title", p.stem)
+    title = st.get("title", "")
     if not isinstance(title, str):
         raise ConfigError("[study].title must be a string")
     if not isinstance(st.get("description", ""), str):

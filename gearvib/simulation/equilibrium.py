@@ -1,4 +1,11 @@
-"""Static (quasi-static) equilibrium at the start of a run, with the piecewise-linear contacts."""
+"""Static (quasi-static) equilibrium at the start of a run, with the piecewise-linear contacts.
+
+Every mesh has two lines of action: ``vl`` (left flank, ``system.mesh_vectors``) and ``vr``
+(right flank, ``system.back_vectors``, the mirror-image line). The contact law is that of the
+kernel: left flank in contact iff ``vl.q > j/2``, right flank iff ``vr.q < -j/2``. When the two
+lines coincide (``vr is vl``: rigid in-plane bearings) the sums are formed as before back lines
+existed (``v^T (F_L + F_R)``), so such runs start from the same state bit for bit.
+"""
 
 from __future__ import annotations
 
@@ -16,12 +23,22 @@ MAX_NEWTON = 200
 """Iterations of the damped Newton method on the potential energy (fallback solver)."""
 
 
-def _contact_state(d: np.ndarray, j: np.ndarray) -> np.ndarray:
-    """Flank-contact state per mesh: bit 0 left flank, bit 1 right flank (0: in the backlash)."""
-    return (d > j / 2).astype(np.int64) + 2 * (d < -j / 2).astype(np.int64)
+def _contact_state(dl: np.ndarray, dr: np.ndarray, j: np.ndarray) -> np.ndarray:
+    """Flank-contact state per mesh: bit 0 left flank, bit 1 right flank (0: in the backlash).
+
+    ``dl``, ``dr``: deflections along the left and the right flank's line of action.
+    """
+    return (dl > j / 2).astype(np.int64) + 2 * (dr < -j / 2).astype(np.int64)
 
 
-def _state_solve(a0, f, mr, v, j, kl, kr, k_in, free_rigid, state):
+def _force_sum(vl, vr, fl, fr):
+    """Generalised mesh force ``vl^T F_L + vr^T F_R`` (one product when the lines coincide)."""
+    if vr is vl:
+        return vl.T @ (fl + fr)
+    return vl.T @ fl + vr.T @ fr
+
+
+def _state_solve(a0, f, mr, vl, vr, j, kl, kr, k_in, free_rigid, state):
     """Linear solution with the flanks of ``state`` in contact (one active-set step).
 
     Returns ``q, acc, a, b, resid, new_state`` with ``a q + m_r acc = b`` the linear system of
@@ -33,8 +50,8 @@ def _state_solve(a0, f, mr, v, j, kl, kr, k_in, free_rigid, state):
     b = f.copy()
     left = (state & 1).astype(bool)
     right = (state & 2).astype(bool)
-    a += (v[left].T * kl[left]) @ v[left] + (v[right].T * kr[right]) @ v[right]
-    b += v[left].T @ (kl[left] * j[left] / 2) - v[right].T @ (kr[right] * j[right] / 2)
+    a += (vl[left].T * kl[left]) @ vl[left] + (vr[right].T * kr[right]) @ vr[right]
+    b += vl[left].T @ (kl[left] * j[left] / 2) - vr[right].T @ (kr[right] * j[right] / 2)
     if free_rigid:
         # equilibrated: acceleration column and pin row scaled to the stiffness
         big = np.abs(a).max() + 1e-300
@@ -50,32 +67,41 @@ def _state_solve(a0, f, mr, v, j, kl, kr, k_in, free_rigid, state):
     else:
         q = np.linalg.lstsq(a, b, rcond=None)[0]
         resid = a @ q - b
-    return q, acc, a, b, resid, _contact_state(v @ q, j)
+    return q, acc, a, b, resid, _contact_state(vl @ q, vr @ q, j)
 
 
-def _flank_forces(d, j, kl, kr):
+def _flank_forces(dl, dr, j, kl, kr):
     """Left (>= 0) and right (<= 0) flank forces of the static contact law."""
-    return kl * np.maximum(d - j / 2, 0.0), -kr * np.maximum(-d - j / 2, 0.0)
+    return kl * np.maximum(dl - j / 2, 0.0), -kr * np.maximum(-dr - j / 2, 0.0)
 
 
-def _line_minimum(a0p, g0p, d, c, j, kl, kr) -> float:
+def _line_minimum(a0p, g0p, dl, dr, cl, cr, j, kl, kr, same: bool) -> float:
     """Exact minimiser ``t > 0`` of the energy along a descent direction ``p``.
 
-    ``phi'(t) = t p.A.p + g0.p + sum_m c_m F_m(d_m + t c_m)`` is piecewise linear and
-    non-decreasing (convex energy); its root is found between the breakpoints where a flank
-    opens or closes. ``inf`` if it stays negative (the energy is unbounded along ``p``).
+    ``phi'(t) = t p.A.p + g0.p + sum_m [cl_m F_L,m(dl_m + t cl_m) + cr_m F_R,m(dr_m + t cr_m)]``
+    (``cl = vl.p``, ``cr = vr.p``; ``same``: one line of action, ``cr = cl``) is piecewise
+    linear and non-decreasing (convex energy); its root is found between the breakpoints where
+    a flank opens or closes. ``inf`` if it stays negative (the energy is unbounded along
+    ``p``).
     """
-    mask = c != 0.0
-    cm, dm, jm, klm, krm = c[mask], d[mask], j[mask], kl[mask], kr[mask]
-    with np.errstate(divide="ignore"):
-        brk = np.concatenate([(jm / 2 - dm) / cm, (-jm / 2 - dm) / cm])
-    brk = np.unique(brk[brk > 0.0])
+    mask = (cl != 0.0) if same else (cl != 0.0) | (cr != 0.0)
+    cm, dm, jm, klm, krm = cl[mask], dl[mask], j[mask], kl[mask], kr[mask]
+    cmr, dmr = cr[mask], dr[mask]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        brk = np.concatenate([(jm / 2 - dm) / cm, (-jm / 2 - dmr) / cmr])
+    brk = np.unique(brk[np.isfinite(brk) & (brk > 0.0)])
 
     def slope_and_value(t: float) -> tuple[float, float]:
         dd = dm + t * cm
-        fl, fr = _flank_forces(dd, jm, klm, krm)
-        val = t * a0p + g0p + float(cm @ (fl + fr))
-        stiff = a0p + float(np.sum(cm * cm * (klm * (dd > jm / 2) + krm * (dd < -jm / 2))))
+        ddr = dmr + t * cmr
+        fl, fr = _flank_forces(dd, ddr, jm, klm, krm)
+        if same:
+            val = t * a0p + g0p + float(cm @ (fl + fr))
+            stiff = a0p + float(np.sum(cm * cm * (klm * (dd > jm / 2) + krm * (dd < -jm / 2))))
+        else:
+            val = t * a0p + g0p + float(cm @ fl + cmr @ fr)
+            stiff = a0p + float(np.sum(cm * cm * klm * (dd > jm / 2)
+                                       + cmr * cmr * krm * (ddr < -jm / 2)))
         return val, stiff
 
     t0 = 0.0
@@ -90,12 +116,12 @@ def _line_minimum(a0p, g0p, d, c, j, kl, kr) -> float:
     return np.inf
 
 
-def _energy_solve(a0, f, mr, rigid, v, j, kl, kr, k_in, free_rigid, max_iter):
+def _energy_solve(a0, f, mr, rigid, vl, vr, j, kl, kr, k_in, free_rigid, max_iter):
     """Damped Newton method on the potential energy (symmetric ``a0``).
 
     The static problem is the minimum of the convex, piecewise-quadratic energy
-    ``E(q) = q.a0.q / 2 - f.q + sum_m [k_L (d_m - j/2)_+^2 + k_R (-d_m - j/2)_+^2] / 2``: its
-    gradient is the residual of the contact law. Newton steps use the flanks in contact at the
+    ``E(q) = q.a0.q / 2 - f.q + sum_m [k_L (vl_m.q - j/2)_+^2 + k_R (-vr_m.q - j/2)_+^2] / 2``:
+    its gradient is the residual of the contact law. Newton steps use the flanks in contact at the
     current iterate; meshes inside the backlash get a small regularising stiffness so that a
     member that floats in its backlash does not make the step singular; every step is followed
     by the exact line minimum of ``E``, so the energy decreases monotonically and the active
@@ -113,9 +139,14 @@ def _energy_solve(a0, f, mr, rigid, v, j, kl, kr, k_in, free_rigid, max_iter):
         acc = float(rigid @ f) / float(rigid @ mr)
         f_eff = f - mr * acc
         free[k_in] = False
+    same = vr is vl
     reg = 1e-3 * 0.5 * (kl + kr)
-    # start from the bonded solution: every mesh a bilateral spring without backlash
-    h0 = a0 + (v.T * (0.5 * (kl + kr))) @ v
+    # start from the bonded solution: every mesh a bilateral spring without backlash (half
+    # of each flank on its line of action)
+    if same:
+        h0 = a0 + (vl.T * (0.5 * (kl + kr))) @ vl
+    else:
+        h0 = a0 + (vl.T * (0.5 * kl)) @ vl + (vr.T * (0.5 * kr)) @ vr
     q = np.zeros(n)
     h0f = h0[np.ix_(free, free)]
     q[free] = np.linalg.lstsq(h0f, f_eff[free], rcond=None)[0]
@@ -131,20 +162,22 @@ def _energy_solve(a0, f, mr, rigid, v, j, kl, kr, k_in, free_rigid, max_iter):
         )
     history = []
     for _ in range(max_iter):
-        d = v @ q
-        fl, fr = _flank_forces(d, j, kl, kr)
-        g = a0 @ q - f_eff + v.T @ (fl + fr)
-        if np.abs(g[free]).max() <= 1e-12 * (scale + np.abs(v.T @ (fl - fr)).max()):
+        dl, dr = vl @ q, vr @ q
+        fl, fr = _flank_forces(dl, dr, j, kl, kr)
+        g = a0 @ q - f_eff + _force_sum(vl, vr, fl, fr)
+        if np.abs(g[free]).max() <= 1e-12 * (scale + np.abs(_force_sum(vl, vr, fl, -fr)).max()):
             return q, acc, None
-        history.append(_contact_state(d, j))
-        on_l, on_r = d > j / 2, d < -j / 2
+        history.append(_contact_state(dl, dr, j))
+        on_l, on_r = dl > j / 2, dr < -j / 2
         off = ~(on_l | on_r)
-        h = (a0 + (v[on_l].T * kl[on_l]) @ v[on_l] + (v[on_r].T * kr[on_r]) @ v[on_r]
-             + (v[off].T * reg[off]) @ v[off])
+        h = (a0 + (vl[on_l].T * kl[on_l]) @ vl[on_l] + (vr[on_r].T * kr[on_r]) @ vr[on_r]
+             + (vl[off].T * reg[off]) @ vl[off])
         p = np.zeros(n)
         p[free] = np.linalg.lstsq(h[np.ix_(free, free)], -g[free], rcond=None)[0]
-        c = v @ p
-        t = _line_minimum(float(p @ a0 @ p), float(p @ (a0 @ q - f_eff)), d, c, j, kl, kr)
+        cl = vl @ p
+        cr = cl if same else vr @ p
+        t = _line_minimum(float(p @ a0 @ p), float(p @ (a0 @ q - f_eff)), dl, dr, cl, cr, j,
+                          kl, kr, same)
         if not np.isfinite(t):
             raise SimulationError(
                 "no static equilibrium at t = 0: the initial load is not balanced (a member is "
@@ -164,7 +197,7 @@ class _NoConvergence(Exception):
     """The contact sets cycle; ``args[0]`` lists the indices of the meshes that switch."""
 
 
-def _active_set(a0, f, mr, v, j, kl, kr, k_in, free_rigid, state, max_iter):
+def _active_set(a0, f, mr, vl, vr, j, kl, kr, k_in, free_rigid, state, max_iter):
     """Active-set iterations (Newton's method on the piecewise-linear equations) from ``state``.
 
     Returns the solution ``(q, acc, a, b, resid)`` or None (a contact state repeats, or a
@@ -173,7 +206,8 @@ def _active_set(a0, f, mr, v, j, kl, kr, k_in, free_rigid, state, max_iter):
     seen = set()
     history = []
     for _ in range(max_iter):
-        q, acc, a, b, resid, new = _state_solve(a0, f, mr, v, j, kl, kr, k_in, free_rigid, state)
+        q, acc, a, b, resid, new = _state_solve(a0, f, mr, vl, vr, j, kl, kr, k_in, free_rigid,
+                                                state)
         history.append(state)
         if np.array_equal(new, state):
             return ((q, acc, a, b, resid) if _balanced(a, b, q, resid) else None), history
@@ -184,7 +218,7 @@ def _active_set(a0, f, mr, v, j, kl, kr, k_in, free_rigid, state, max_iter):
     return None, [*history, new]
 
 
-def _contact_solve(a0, f, mr, rigid, v, j, kl, kr, k_in, free_rigid, max_iter):
+def _contact_solve(a0, f, mr, rigid, vl, vr, j, kl, kr, k_in, free_rigid, max_iter):
     """Solution of the piecewise-linear static problem at fixed flank stiffness.
 
     First the plain active-set iteration from every left flank in contact: exact and fast when
@@ -197,25 +231,25 @@ def _contact_solve(a0, f, mr, rigid, v, j, kl, kr, k_in, free_rigid, max_iter):
     iteration again, which ends in one step at the exact piecewise-linear solution. A member
     that floats in its backlash (no exact linear solution) keeps the energy minimum.
     """
-    n_mesh = v.shape[0]
-    sol, hist1 = _active_set(a0, f, mr, v, j, kl, kr, k_in, free_rigid,
+    n_mesh = vl.shape[0]
+    sol, hist1 = _active_set(a0, f, mr, vl, vr, j, kl, kr, k_in, free_rigid,
                              np.ones(n_mesh, dtype=np.int64), max_iter)
     if sol is not None:
         return sol
     a_sym = 0.5 * (a0 + a0.T)
     symmetric = np.allclose(a0, a_sym, rtol=0.0, atol=1e-12 * (np.abs(a0).max() + 1e-300))
-    q_e, acc_e, hist_e = _energy_solve(a_sym, f, mr, rigid, v, j, kl, kr, k_in, free_rigid,
-                                       MAX_NEWTON)
-    state = _contact_state(v @ q_e, j)
-    sol, hist2 = _active_set(a0, f, mr, v, j, kl, kr, k_in, free_rigid, state, max_iter)
+    q_e, acc_e, hist_e = _energy_solve(a_sym, f, mr, rigid, vl, vr, j, kl, kr, k_in,
+                                       free_rigid, MAX_NEWTON)
+    state = _contact_state(vl @ q_e, vr @ q_e, j)
+    sol, hist2 = _active_set(a0, f, mr, vl, vr, j, kl, kr, k_in, free_rigid, state, max_iter)
     if sol is not None:
         return sol
     if symmetric and hist_e is None:
         a = a0.copy()
         b = f.copy()
         left, right = (state & 1).astype(bool), (state & 2).astype(bool)
-        a += (v[left].T * kl[left]) @ v[left] + (v[right].T * kr[right]) @ v[right]
-        b += v[left].T @ (kl[left] * j[left] / 2) - v[right].T @ (kr[right] * j[right] / 2)
+        a += (vl[left].T * kl[left]) @ vl[left] + (vr[right].T * kr[right]) @ vr[right]
+        b += vl[left].T @ (kl[left] * j[left] / 2) - vr[right].T @ (kr[right] * j[right] / 2)
         resid = a @ q_e + mr * acc_e - b
         if free_rigid:
             resid = np.append(resid, 0.0)
@@ -311,7 +345,8 @@ def static_equilibrium(
     mr = mass @ rigid
     if not free_rigid:
         f = f - mr * rigid_acceleration
-    v = system.mesh_vectors
+    vl = system.mesh_vectors
+    vr = vl if system.mesh_back_vectors is None else system.mesh_back_vectors
     j = system.backlash
     q = np.zeros(n)
     k_seen: list[np.ndarray] = []
@@ -326,7 +361,7 @@ def static_equilibrium(
             break
         k_seen.append(k_now)
         try:
-            q, acc, a, b, resid = _contact_solve(a0, f, mr, rigid, v, j, kl, kr, k_in,
+            q, acc, a, b, resid = _contact_solve(a0, f, mr, rigid, vl, vr, j, kl, kr, k_in,
                                                  free_rigid, max_iter)
         except _NoConvergence as exc:
             names = list(mesh_names) if mesh_names is not None else None

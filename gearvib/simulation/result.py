@@ -10,6 +10,7 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 import xarray as xr
 
+from analysis.cf import time_attrs
 from gearvib import __version__
 from gearvib import kernels as kn
 from gearvib.model import AssembledModel
@@ -45,6 +46,11 @@ def model_sha256(model: AssembledModel) -> str:
     ):
         a = np.ascontiguousarray(getattr(model, name), dtype=np.float64)
         h.update(name.encode())
+        h.update(str(a.shape).encode())
+        h.update(a.tobytes())
+    if model.mesh_back_vectors is not None:  # distinct back-flank lines of action
+        a = np.ascontiguousarray(model.mesh_back_vectors, dtype=np.float64)
+        h.update(b"mesh_back_vectors")
         h.update(str(a.shape).encode())
         h.update(a.tobytes())
     names = [
@@ -158,7 +164,12 @@ class RunUpResult:
         return hashlib.sha256(self.config_json.encode()).hexdigest()
 
     def to_dataset(self) -> xr.Dataset:
-        """CF-1.11 annotated dataset (float64 data, ``time`` in s, netCDF-safe attributes)."""
+        """CF-1.11 annotated dataset (float64 data, netCDF-safe attributes).
+
+        ``time`` holds float seconds since the start of the run, as a CF time coordinate
+        (``units = "seconds since 1970-01-01T00:00:00Z"``, ``standard_name``, ``axis``; the
+        epoch is a conventional origin, see :mod:`analysis.cf`).
+        """
 
         def var(
             dims: tuple[str, ...], data: np.ndarray, units: str, long_name: str, quantity: str
@@ -171,7 +182,11 @@ class RunUpResult:
 
         t = ("time",)
         coords = {
-            "time": var(t, self.time, "s", "time since start of run", "time"),
+            "time": xr.Variable(
+                t,
+                np.ascontiguousarray(self.time),
+                {**time_attrs("time since start of run"), "gearvib_quantity": "time"},
+            ),
             "mesh": xr.Variable(
                 ("mesh",),
                 np.array(self.mesh_names, dtype=str),
@@ -281,6 +296,7 @@ class RunUpResult:
         attrs = {
             "Conventions": "CF-1.11",
             "title": self.title,
+            "history": f"run-up simulated by gearvib {__version__} (gearvib.simulate)",
             "source": f"gearvib {__version__}",
             "gearvib_version": __version__,
             "integrator": INTEGRATOR,
@@ -356,7 +372,8 @@ def build_result(
         at = time if setup.drive == "torque" else qd[:, k_in]  # motor: its characteristic
         drive_torque = np.interp(at, system.torque_table[0], system.torque_table[1])
     if natural_frequencies is None:
-        nat = elastic_frequencies(undamped_frequencies(model.mass, model.mean_stiffness_matrix()))
+        k_mean = model.mean_stiffness_matrix(setup.torque_sign)  # the loaded flanks
+        nat = elastic_frequencies(undamped_frequencies(model.mass, k_mean), model.mass, k_mean)
     else:
         nat = np.asarray(natural_frequencies, dtype=float)
     if isinstance(config, str):

@@ -45,6 +45,10 @@ def check_model(model: AssembledModel) -> None:
         a = np.asarray(getattr(model, name))
         if a.shape != (n, n) or not np.all(np.isfinite(a)):
             raise ValueError(f"model.{name} must be a finite ({n}, {n}) array")
+    for name in ("mesh_vectors", "back_vectors"):
+        vec = np.asarray(getattr(model, name), dtype=float)
+        if vec.shape != (model.n_mesh, n) or not np.all(np.isfinite(vec)):
+            raise ValueError(f"model.{name} must be a finite ({model.n_mesh}, {n}) array")
     for name in ("mesh_stiffness_tables", "mesh_back_tables"):
         tab = np.asarray(getattr(model, name), dtype=float)
         if tab.ndim != 2 or tab.shape[0] != model.n_mesh or tab.shape[1] < 1:
@@ -90,6 +94,10 @@ class RunSetup:
         Load-torque coefficients at the output member.
     drive : str
         ``"speed"``, ``"torque"`` or ``"motor"``.
+    torque_sign : float
+        Sense of the mean load at ``t = 0`` (+1: the input drives forward; -1: the load torque
+        reversed): selects the loaded flanks of the mean system
+        (:meth:`AssembledModel.mesh_contacts`).
     """
 
     system: kn.KernelSystem
@@ -103,21 +111,24 @@ class RunSetup:
     coupling: DriveCoupling | None
     load: tuple[float, float, float]
     drive: str
+    torque_sign: float = 1.0
 
 
-def default_coupling(model: AssembledModel) -> DriveCoupling:
+def default_coupling(model: AssembledModel, torque_sign: float = 1.0) -> DriveCoupling:
     """The default drive coupling of speed-driven runs.
 
     Its rigid-body mode (all members turning on the coupling) lies at
     :data:`COUPLING_FREQUENCY_FRACTION` x the lowest elastic natural frequency of the mean
-    system, critically damped: ``k = J_eff w_c**2``, ``c = 2 J_eff w_c`` with ``J_eff`` the
-    inertia of the kinematic motion reduced to the input member.
+    system (the flanks in contact at the mean load of sense ``torque_sign``, both flanks of a
+    preloaded mesh: :meth:`AssembledModel.mesh_contacts`), critically damped:
+    ``k = J_eff w_c**2``, ``c = 2 J_eff w_c`` with ``J_eff`` the inertia of the kinematic
+    motion reduced to the input member.
     """
     rigid = model.rigid_body_velocity()
     k_in = int(model.rotation_dofs[model.input_member])
-    f_el = elastic_frequencies(
-        undamped_frequencies(np.asarray(model.mass, float), model.mean_stiffness_matrix())
-    )
+    mass = np.asarray(model.mass, float)
+    k_mean = model.mean_stiffness_matrix(torque_sign)
+    f_el = elastic_frequencies(undamped_frequencies(mass, k_mean), mass, k_mean)
     if f_el.size == 0:
         raise ValueError("the model has no elastic mode to choose a drive coupling from")
     j_eff = float(rigid @ model.mass @ rigid) / rigid[k_in] ** 2
@@ -188,7 +199,8 @@ def prepare_run(
         if t_load != 0.0 and k_out < 0:
             raise ValueError(f"output member {model.output_member!r} has no rotation coordinate")
         load = (t_load, 0.0, 0.0)
-        coupling = conditions.coupling or default_coupling(model)
+        torque_sign = -1.0 if t_load < 0 else 1.0
+        coupling = conditions.coupling or default_coupling(model, torque_sign)
         fpar[kn.FP_KC] = coupling.stiffness
         fpar[kn.FP_CC] = coupling.damping
         speed_max = float(np.abs(w).max())
@@ -211,8 +223,11 @@ def prepare_run(
             mass[k_out, k_out] += conditions.load_inertia
         load = conditions.load_torque
         omega0 = conditions.start_rpm * RAD_S_PER_RPM
+        t_in = float(np.interp(0.0 if drive == "torque" else omega0, torque_tab[0],
+                               torque_tab[1]))
+        torque_sign = -1.0 if t_in < 0 else 1.0
         alpha0 = 0.0
-        k_mean = model.mean_stiffness_matrix()
+        k_mean = model.mean_stiffness_matrix(torque_sign)
         free_rigid = bool(
             np.abs(k_mean @ rigid).max() <= 1e-9 * np.abs(k_mean).max() * np.abs(rigid).max()
         )
@@ -244,6 +259,7 @@ def prepare_run(
         speed_table=speed_tab,
         torque_table=torque_tab,
         deflection_limit=np.full(model.n_mesh, np.inf),
+        mesh_back_vectors=model.mesh_back_vectors,
     )
     return RunSetup(
         system,
@@ -257,4 +273,5 @@ def prepare_run(
         coupling,
         tuple(float(x) for x in load),
         drive,
+        torque_sign,
     )

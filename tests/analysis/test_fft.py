@@ -232,3 +232,15 @@ def test_rfft_plan_and_out_with_scipy_fallback(monkeypatch):
     back = np.empty((3, 200))
     assert gfft.irfft(out, n=200, out=back) is back
     np.testing.assert_allclose(back, x, rtol=0, atol=1e-12)
+
+
+def test_environment_forces_the_scipy_backend():
+    # GEARVIB_FFT=scipy: the GPL-free path even with pyFFTW installed (README, licences)
+    import os
+    import subprocess
+    import sys
+
+    code = "import analysis.fft as f, numpy as np; print(f.backend(), f.rfft(np.ones(8))[0].real)"
+    env = {**os.environ, "GEARVIB_FFT": "scipy"}
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env)
+    assert out.stdout.split() == ["scipy", "8.0"], out.stderr

@@ -35,7 +35,7 @@ def test_angle_from_speed_is_exact_for_linear_ramp():
 
 def test_resample_reproduces_known_order_signal():
     t, _rpm, theta, x = _runup()
-    sig = resample_to_angle(x, t, theta, 64, max_order=20.0, units="N", name="force")
+    sig = resample_to_angle(x, FS, theta, 64, max_order=20.0, units="N", name="force")
     ref = sum(a * np.sin(o * sig.angle + 0.3 * o) for o, a in AMPS.items())
     inner = slice(5 * 64, -5 * 64)  # skip 5 revolutions of filter edge effects at each end
     err = np.max(np.abs(sig.values[inner] - ref[inner]))
@@ -49,26 +49,29 @@ def test_resample_reproduces_known_order_signal():
 
 
 def test_resample_removes_orders_above_nyquist_instead_of_aliasing():
-    t, _rpm, theta, _ = _runup(n1=2400.0)  # order 45 stays below fs/2 in the input
+    _t, _rpm, theta, _ = _runup(n1=2400.0)  # order 45 stays below fs/2 in the input
     # order 45 would alias to order 64 - 45 = 19 at 64 samples/rev without filtering
     x = np.sin(45 * theta)
-    sig = resample_to_angle(x, t, theta, 64, max_order=20.0)
+    sig = resample_to_angle(x, FS, theta, 64, max_order=20.0)
     inner = sig.values[5 * 64 : -5 * 64]
     assert np.sqrt(np.mean(inner**2)) < 1e-3
 
 
 def test_resample_multichannel():
-    t, _rpm, theta, x = _runup(duration=2.0, n1=2000.0)
+    _t, _rpm, theta, x = _runup(duration=2.0, n1=2000.0)
     both = np.stack([x, 2 * x])
-    sig = resample_to_angle(both, t, theta, 32)
+    sig = resample_to_angle(both, FS, theta, 32)
     assert sig.values.shape[0] == 2
     np.testing.assert_allclose(sig.values[1], 2 * sig.values[0], rtol=1e-10, atol=1e-12)
 
 
 def test_order_spectrum_amplitudes():
-    t, rpm, _, x = _runup()
-    osp = order_spectrum(x, t, rpm, orders_resolution=0.25, scaling="rms", units="N")
-    assert osp.resolution_orders == pytest.approx(0.25, rel=0.02)
+    _t, rpm, _, x = _runup()
+    osp = order_spectrum(x, FS, rpm, resolution=1.0, amplitude="rms", units="N")
+    # resolution = the flat-top's ENBW (3.77 lines), as in the maps; line spacing 1/3.77
+    assert osp.resolution_orders == pytest.approx(1.0, rel=0.02)
+    assert osp.bin_spacing_orders == pytest.approx(1 / 3.7702, rel=0.02)
+    assert osp.resolution_orders == pytest.approx(osp.enbw_orders)
     for o, a in AMPS.items():
         k = int(np.argmin(np.abs(osp.order - o)))
         assert 20 * np.log10(osp.values[k] / (a / np.sqrt(2))) == pytest.approx(0, abs=0.05)
@@ -126,26 +129,27 @@ def test_order_errors():
     back = theta.copy()
     back[100] = back[99]
     with pytest.raises(ValueError, match="strictly increasing"):
-        resample_to_angle(x, t, back, 32)
+        resample_to_angle(x, FS, back, 32)
     with pytest.raises(ValueError, match="samples_per_rev"):
-        resample_to_angle(x, t, theta, 2)
+        resample_to_angle(x, FS, theta, 2)
     with pytest.raises(ValueError, match="max_order"):
-        resample_to_angle(x, t, theta, 32, max_order=20)
+        resample_to_angle(x, FS, theta, 32, max_order=20)
     with pytest.raises(ValueError, match="mismatch"):
-        resample_to_angle(x[:-1], t, theta, 32)
+        resample_to_angle(x[:-1], FS, theta, 32)
     bad = x.copy()
     bad[3] = np.nan
     with pytest.raises(ValueError, match="non-finite"):
-        resample_to_angle(bad, t, theta, 32)
+        resample_to_angle(bad, FS, theta, 32)
     with pytest.raises(ValueError, match="rpm must be > 0"):
-        order_spectrum(x, t, np.where(t > 0.5, 0.0, rpm), orders_resolution=0.5)
+        order_spectrum(x, FS, np.where((t > 0.4) & (t < 0.5), 0.0, rpm), resolution=2.0)
     with pytest.raises(ValueError, match="time"):
         angle_from_speed(t[::-1], rpm)
     with pytest.raises(ValueError, match="revolutions"):
-        order_spectrum(x, t, rpm, orders_resolution=0.001)
-    with pytest.raises(ValueError, match="speed range too wide"):
+        order_spectrum(x, FS, rpm, resolution=0.001)
+    with pytest.raises(ValueError, match=r"speed range too wide.*min_rpm"):
         tt = np.arange(4096) / 4096.0
-        resample_to_angle(np.sin(tt), tt, angle_from_speed(tt, 1 + 6000 * tt), 64)
+        th = angle_from_speed(tt, 1 + 6000 * tt)
+        resample_to_angle(np.sin(tt), angle=th, samples_per_rev=64, time=tt, min_rpm=0.0)
     with pytest.raises(ValueError, match="bandwidth"):
         order_cuts(x, FS, rpm, [3], bandwidth=1e-4)
 
@@ -209,7 +213,7 @@ def test_blockwise_resampling_equals_whole_record(n0, n1, spr, mo):
     # block 7 puts a block boundary (and the overlap of its neighbours) every 7 samples, so
     # comparing every sample checks every boundary
     for block in (None, 7, 100):
-        sig = resample_to_angle(x, t, theta, spr, mo, block_size=block)
+        sig = resample_to_angle(x, FS, theta, spr, mo, block_size=block)
         assert sig.values.shape == ref.shape
         np.testing.assert_allclose(sig.values, ref, rtol=0, atol=tol)
         np.testing.assert_allclose(sig.time, ref_t, rtol=1e-14)
@@ -221,13 +225,13 @@ def test_blockwise_resampling_multichannel_with_offset():
     both = np.stack([5.0 + x, np.cumsum(rng.standard_normal(t.size)) * 0.01])
     ref, _ = _whole_record_resample(both, t, theta, 32)
     for block in (13, 500):
-        sig = resample_to_angle(both.astype(np.float32), t, theta, 32, block_size=block)
+        sig = resample_to_angle(both.astype(np.float32), FS, theta, 32, block_size=block)
         ref32, _ = _whole_record_resample(both.astype(np.float32), t, theta, 32)
         scale = np.max(np.abs(ref32), axis=-1, keepdims=True)
         assert np.max(np.abs(sig.values - ref32) / scale) < 1e-12
         assert np.max(np.abs(sig.values - ref) / scale) < 1e-6  # float32 input
     with pytest.raises(ValueError, match="block_size"):
-        resample_to_angle(x, t, theta, 32, block_size=0)
+        resample_to_angle(x, FS, theta, 32, block_size=0)
 
 
 def test_order_spectrum_blockwise_equals_single_block():
@@ -235,11 +239,11 @@ def test_order_spectrum_blockwise_equals_single_block():
 
     t, rpm, _, x = _runup(duration=4.0)
     x = x + 0.2 * np.random.default_rng(5).standard_normal(t.size)
-    for kw in ({}, {"samples_per_rev": 32, "scaling": "peak"}, {"scaling": "psd"}):
-        one = order_spectrum(x, t, rpm, orders_resolution=0.25, block_size=10**9, **kw)
+    for kw in ({}, {"samples_per_rev": 32, "amplitude": "peak"}, {"amplitude": "density"}):
+        one = order_spectrum(x, FS, rpm, resolution=1.0, block_size=10**9, **kw)
         # one segment per block, and blocks of a few segments
         for block in (150, 1000):
-            osp = order_spectrum(x, t, rpm, orders_resolution=0.25, block_size=block, **kw)
+            osp = order_spectrum(x, FS, rpm, resolution=1.0, block_size=block, **kw)
             np.testing.assert_allclose(osp.values, one.values, rtol=1e-12)
             assert osp.n_averages == one.n_averages
             assert osp.to_dataset().attrs == one.to_dataset().attrs
@@ -250,8 +254,8 @@ def test_order_spectrum_blockwise_equals_single_block():
             ref,
             float(spr),
             window="flattop",
-            scaling=kw.get("scaling", "rms"),
-            segment_length=round(spr / 0.25),
+            amplitude=kw.get("amplitude", "rms"),
+            segment_length=one.segment_length,
             overlap=0.5,
         )
         np.testing.assert_allclose(one.values, whole.values, rtol=1e-10, atol=1e-13)
@@ -296,10 +300,10 @@ def test_order_spectrum_and_cuts_memory_is_bounded():
     # the record's length, the largest allocation beyond the input is a few blocks (here
     # about 0.3x one float64 channel, a fixed ~5 MB). Holding the low-passed signal, the
     # angle or the time axis of the whole record would each take 1x.
-    fs, t, rpm, x = _long_record()
+    fs, _t, rpm, x = _long_record()
     channel = 8 * x.size
     sampling = {"samples_per_rev": 32, "max_order": 10.0}
-    peak, _ = _peak_bytes(lambda: order_spectrum(x, t, rpm, orders_resolution=0.25, **sampling))
+    peak, _ = _peak_bytes(lambda: order_spectrum(x, FS, rpm, resolution=1.0, **sampling))
     assert peak < 0.75 * channel
     peak, cut = _peak_bytes(lambda: order_cuts(x, fs, rpm, [3, 7], **sampling))
     assert peak < 0.75 * channel

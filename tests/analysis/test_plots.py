@@ -61,13 +61,13 @@ def test_map_figures(runup, tmp_path):
 
 
 def test_cut_level_order_spectrum_and_campbell_figures(runup, tmp_path):
-    t, rpm, x = runup
+    _t, rpm, x = runup
     cut = order_cuts(x, FS, rpm, [3, 7])
     fig = cut.plot(labels=["3×", "7×"], db=True)
     assert [ln.get_label() for ln in fig.axes[0].lines] == ["3×", "7×"]
     _check(fig, tmp_path, "cuts")
     _check(overall_level(x, FS, rpm, scale="dB").plot(), tmp_path, "overall")
-    _check(order_spectrum(x, t, rpm, orders_resolution=0.5).plot(), tmp_path, "orderspec")
+    _check(order_spectrum(x, FS, rpm, resolution=2.0).plot(), tmp_path, "orderspec")
     fig = campbell([100.0, 250.0], [3, 7], (600, 2400)).plot()
     assert len(fig.axes[0].lines) >= 4
     _check(fig, tmp_path, "campbell")

@@ -364,9 +364,15 @@ def test_nan_channel_error(tmp_path):
 
 
 def test_empty_channel_error(tmp_path):
-    kind, msg = _messages(tmp_path, {"fs": 100.0, "acc": np.zeros(0)})
+    kind, msg = _messages(tmp_path, {"fs": 100.0, "acc": np.zeros(0)}, variables=["acc"])
     assert kind is ReaderError
     assert "'acc' in <file> is empty" in msg
+
+
+def test_empty_variables_are_not_channels(tmp_path):
+    """MATLAB's [] (an empty variable) is skipped when the channels are found automatically."""
+    for ds in _both(tmp_path, {"fs": 100.0, "none": np.zeros(0), "acc": np.ones(5)}):
+        assert list(ds.data_vars) == ["acc"]
 
 
 def test_rate_mismatch_error(tmp_path):

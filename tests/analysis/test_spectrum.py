@@ -66,38 +66,39 @@ def test_kaiser_matches_scipy_and_window_figures():
 def test_sine_amplitude_on_and_off_bin(window, offset, scaling):
     amp = 2.5
     f0 = (300 + offset) * FS / N
-    s = spectrum(_sine(f0, amp), FS, window=window, scaling=scaling)
+    s = spectrum(_sine(f0, amp), FS, window=window, amplitude=scaling)
     expected = {"peak": amp, "rms": amp / np.sqrt(2), "power": amp**2 / 2}[scaling]
     p = find_peaks(s, max_peaks=1)
     assert len(p) == 1
     assert p.amplitude[0] == pytest.approx(expected, rel=1e-3)
-    assert p.frequency[0] == pytest.approx(f0, abs=1e-3 * s.resolution_hz)
+    assert p.frequency[0] == pytest.approx(f0, abs=1e-3 * s.bin_spacing_hz)
     if offset == 0.0:  # on bin, the raw bin value is already exact
         assert s.values[300] == pytest.approx(expected, rel=1e-9)
 
 
 def test_flattop_scalloping_below_0p01_db_and_hann_needs_correction():
     f0 = 300.5 * FS / N
-    ft = spectrum(_sine(f0, 1.0), FS, window="flattop", scaling="peak")
-    hn = spectrum(_sine(f0, 1.0), FS, window="hann", scaling="peak")
+    ft = spectrum(_sine(f0, 1.0), FS, window="flattop", amplitude="peak")
+    hn = spectrum(_sine(f0, 1.0), FS, window="hann", amplitude="peak")
     assert abs(to_db(ft.values.max(), "peak")) < 0.01
     assert to_db(hn.values.max(), "peak") == pytest.approx(-1.42, abs=0.01)  # Hann scalloping
 
 
 def test_hann_interpolation_agrees_with_grandke_formula():
     f0 = 211.3 * FS / N
-    s = spectrum(_sine(f0), FS, window="hann", scaling="peak")
+    s = spectrum(_sine(f0), FS, window="hann", amplitude="peak")
     k = int(np.argmax(s.values))
     alpha = s.values[k + 1] / s.values[k]
     delta = (2 * alpha - 1) / (alpha + 1)  # Grandke (1983), valid for the Hann window
     p = s.peaks(max_peaks=1)
-    assert p.frequency[0] == pytest.approx((k + delta) * s.resolution_hz, abs=1e-6)
+    assert p.frequency[0] == pytest.approx((k + delta) * s.bin_spacing_hz, abs=1e-6)
 
 
 def test_zero_padding_keeps_amplitude_and_reports_bin_spacing():
     f0 = 123.71
-    s = spectrum(_sine(f0, 1.5, n=1000), FS, window="hann", nfft=4000, scaling="peak")
-    assert s.resolution_hz == pytest.approx(FS / 4000)
+    s = spectrum(_sine(f0, 1.5, n=1000), FS, window="hann", nfft=4000, amplitude="peak")
+    assert s.bin_spacing_hz == pytest.approx(FS / 4000)
+    assert s.resolution_hz == s.enbw_hz == pytest.approx(1.5 * FS / 1000)  # RBW = ENBW
     assert s.enbw_hz == pytest.approx(1.5 * FS / 1000)
     p = s.peaks(max_peaks=1)
     assert p.amplitude[0] == pytest.approx(1.5, rel=1e-3)
@@ -107,19 +108,19 @@ def test_zero_padding_keeps_amplitude_and_reports_bin_spacing():
 def test_dc_reads_constant_and_power_matches_numpy_reference():
     rng = np.random.default_rng(0)
     x = 0.7 + rng.standard_normal(512)
-    s = spectrum(x, FS, window="rectangular", scaling="power")
+    s = spectrum(x, FS, axis=-1, window="rectangular", amplitude="power")
     X = np.fft.rfft(x)
     ref = np.abs(X) ** 2 / 512**2
     ref[1:-1] *= 2
     np.testing.assert_allclose(s.values, ref, rtol=1e-12)
-    assert spectrum(np.full(64, 0.7), FS, scaling="peak").values[0] == pytest.approx(0.7)
-    assert spectrum(np.full(64, 0.7), FS, scaling="rms").values[0] == pytest.approx(0.7)
+    assert spectrum(np.full(64, 0.7), FS, amplitude="peak").values[0] == pytest.approx(0.7)
+    assert spectrum(np.full(64, 0.7), FS, amplitude="rms").values[0] == pytest.approx(0.7)
 
 
 def test_welch_psd_matches_scipy_welch():
     rng = np.random.default_rng(1)
     x = rng.standard_normal(20000)
-    s = spectrum(x, FS, window="hann", scaling="psd", segment_length=1024, overlap=0.5)
+    s = spectrum(x, FS, window="hann", amplitude="density", segment_length=1024, overlap=0.5)
     f, p = scipy.signal.welch(
         x,
         FS,
@@ -138,7 +139,7 @@ def test_white_noise_psd_level():
     rng = np.random.default_rng(2)
     sigma, fs = 0.8, 2048.0
     x = sigma * rng.standard_normal(400 * 512)
-    s = spectrum(x, fs, window="hann", scaling="psd", segment_length=512, overlap=0.5)
+    s = spectrum(x, fs, window="hann", amplitude="density", segment_length=512, overlap=0.5)
     inner = s.values[5:-5]
     # mean over ~250 bins of a ~800-average estimate: relative std ~ 0.1 / sqrt(250) ~ 0.4 %
     assert inner.mean() == pytest.approx(sigma**2 / (fs / 2), rel=0.02)
@@ -149,25 +150,26 @@ def test_parseval_power_and_psd():
     rng = np.random.default_rng(3)
     x = rng.standard_normal(8192) * 1.3
     ms = float(np.mean(x**2))
-    psd = spectrum(x, FS, window="rectangular", scaling="psd")
-    assert psd.values.sum() * psd.resolution_hz == pytest.approx(ms, rel=1e-10)
-    pw = spectrum(x, FS, window="rectangular", scaling="power")
+    psd = spectrum(x, FS, axis=-1, window="rectangular", amplitude="density")
+    assert psd.values.sum() * psd.bin_spacing_hz == pytest.approx(ms, rel=1e-10)
+    pw = spectrum(x, FS, axis=-1, window="rectangular", amplitude="power")
     assert pw.values.sum() == pytest.approx(ms, rel=1e-10)
     # with a window, the power summed over bins / ENBW (in bins) estimates the mean square
-    y = spectrum(x, FS, window="hann", scaling="power", segment_length=512)
-    enbw_bins = y.enbw_hz / y.resolution_hz
+    y = spectrum(x, FS, axis=-1, window="hann", amplitude="power", segment_length=512)
+    enbw_bins = y.enbw_hz / y.bin_spacing_hz
     assert y.values.sum() / enbw_bins == pytest.approx(ms, rel=0.03)
 
 
 def test_nd_input_and_max_average():
     x = np.stack([_sine(100.0, 1.0), _sine(100.0, 3.0)])[None]  # shape (1, 2, N)
-    s = spectrum(x, FS, window="flattop", scaling="peak", segment_length=1024)
+    s = spectrum(x, FS, axis=-1, window="flattop", amplitude="peak", segment_length=1024)
     assert s.values.shape == (1, 2, 513)
     np.testing.assert_allclose(s.values.max(axis=-1)[0], [1.0, 3.0], rtol=1e-3)
     burst = np.zeros(N)
     burst[:1024] = _sine(100.0, 2.0, n=1024)
-    mean = spectrum(burst, FS, window="flattop", segment_length=1024, overlap=0.0)
-    peak = spectrum(burst, FS, window="flattop", segment_length=1024, overlap=0.0, average="max")
+    kw = {"window": "flattop", "segment_length": 1024, "overlap": 0.0, "amplitude": "peak"}
+    mean = spectrum(burst, FS, **kw)
+    peak = spectrum(burst, FS, average="max", **kw)
     assert peak.values.max() == pytest.approx(2.0, rel=1e-3)
     assert mean.values.max() == pytest.approx(2.0 / 2, rel=1e-3)  # sqrt(mean power over 4)
     with pytest.raises(ValueError, match="channel"):
@@ -184,7 +186,7 @@ def test_dataarray_input_uses_time_coordinate_and_units():
         attrs={"units": "m s-2"},
         name="acc",
     )
-    s = spectrum(da.transpose("time", "channel"), scaling="rms")
+    s = spectrum(da.transpose("time", "channel"), amplitude="rms")
     assert s.fs == pytest.approx(FS)
     assert s.dims == ("channel",)
     assert s.units == "m s-2"
@@ -194,15 +196,15 @@ def test_dataarray_input_uses_time_coordinate_and_units():
         assert "long_name" in ds[v].attrs
     assert ds["spectrum"].attrs["units"] == "m s-2"
     assert ds["frequency"].attrs["units"] == "Hz"
-    assert ds.attrs["resolution_hz"] == pytest.approx(FS / N)
-    assert spectrum(da, scaling="power").units == "(m s-2)^2"
+    assert ds.attrs["bin_spacing_hz"] == pytest.approx(FS / N)
+    assert spectrum(da, amplitude="power").units == "(m s-2)^2"
     with pytest.raises(ValueError, match="sample-rate mismatch"):
         spectrum(da, 999.0)
 
 
 def test_peaks_options_and_dataset():
     x = _sine(100.0, 1.0) + _sine(103.0, 0.5) + _sine(300.0, 0.01)
-    s = spectrum(x, FS, window="hann", scaling="peak")
+    s = spectrum(x, FS, axis=-1, window="hann", amplitude="peak")
     p_all = s.peaks(prominence_db=20)
     assert np.any(np.abs(p_all.frequency - 300.0) < 0.1)
     p_thr = s.peaks(threshold=0.1, prominence_db=6)
@@ -221,7 +223,7 @@ def test_peaks_options_and_dataset():
     [
         ({"window": "gauss"}, "window"),
         ({"window": ("hann", 3.0)}, "kaiser"),
-        ({"scaling": "amplitude"}, "scaling"),
+        ({"amplitude": "amplitude"}, "amplitude"),
         ({"average": "median"}, "average"),
         ({"overlap": 1.0}, "overlap"),
         ({"segment_length": 10**6}, "segment_length"),
@@ -242,7 +244,7 @@ def test_bad_signals_raise():
         spectrum(np.ones((2, 0)), FS)
     with pytest.raises(ValueError, match="fs"):
         spectrum(np.ones(100), -1.0)
-    with pytest.raises(ValueError, match="fs is required"):
+    with pytest.raises(ValueError, match=r"or time \(s\) is required"):
         spectrum(np.ones(100))
     with pytest.raises(ValueError, match="real"):
         spectrum(np.ones(100) + 1j, FS)
@@ -277,11 +279,12 @@ def test_batched_blocks_match_frame_by_frame(monkeypatch, average, block):
         x,
         FS,
         window="hann",
-        scaling="power",
+        amplitude="power",
         segment_length=900,
         nfft=1000,
         overlap=0.3,
         average=average,
+        axis=-1,
     )
     w = get_window("hann", 900)
     ref = _welch_one_by_one(x, 900, 630, 1000, "hann", average) / w.sum() ** 2
@@ -293,10 +296,11 @@ def test_batched_blocks_match_frame_by_frame(monkeypatch, average, block):
 def test_block_size_does_not_change_results_beyond_rounding(monkeypatch):
     rng = np.random.default_rng(13)
     x = rng.standard_normal((3, 20000))
-    default = spectrum(x, FS, segment_length=1024).values
+    default = spectrum(x, FS, axis=-1, segment_length=1024).values
     for block in (1, 1 << 12, 1 << 22):
         monkeypatch.setattr(spmod, "_BLOCK_ELEMENTS", block)
-        np.testing.assert_allclose(spectrum(x, FS, segment_length=1024).values, default, rtol=1e-13)
+        again = spectrum(x, FS, axis=-1, segment_length=1024).values
+        np.testing.assert_allclose(again, default, rtol=1e-13)
     # each channel alone equals its row of the multi-channel result
     for i in range(3):
         np.testing.assert_allclose(
@@ -309,8 +313,8 @@ def test_zero_padding_survives_shared_plan_buffers():
     # columns that a later zero-padded call relies on being zero.
     rng = np.random.default_rng(14)
     x = rng.standard_normal(40 * 512)
-    spectrum(x, FS, segment_length=1024, overlap=0.5)  # fills every column of the plan
-    s = spectrum(x, FS, window="hann", scaling="power", segment_length=1000, nfft=1024)
+    spectrum(x, FS, axis=-1, segment_length=1024, overlap=0.5)  # fills every column of the plan
+    s = spectrum(x, FS, axis=-1, window="hann", amplitude="power", segment_length=1000, nfft=1024)
     ref = (
         _welch_one_by_one(x, 1000, 500, 1024, "hann", "mean") / get_window("hann", 1000).sum() ** 2
     )
@@ -335,25 +339,25 @@ def test_integer_and_float32_input_are_windowed_in_float64():
 def test_scipy_fallback_gives_the_same_spectrum(monkeypatch):
     rng = np.random.default_rng(16)
     x = rng.standard_normal((2, 30000))
-    kwargs = {"segment_length": 2048, "nfft": 2500, "scaling": "psd"}
-    ours = spectrum(x, FS, **kwargs).values
-    peak_hold = spectrum(x, FS, average="max", **kwargs).values
+    kwargs = {"segment_length": 2048, "nfft": 2500, "amplitude": "density"}
+    ours = spectrum(x, FS, axis=-1, **kwargs).values
+    peak_hold = spectrum(x, FS, axis=-1, average="max", **kwargs).values
     monkeypatch.setattr(gfft, "_pyfftw", None)
     assert gfft.backend() == "scipy"
-    np.testing.assert_allclose(spectrum(x, FS, **kwargs).values, ours, rtol=1e-12)
+    np.testing.assert_allclose(spectrum(x, FS, axis=-1, **kwargs).values, ours, rtol=1e-12)
     np.testing.assert_allclose(
-        spectrum(x, FS, average="max", **kwargs).values, peak_hold, rtol=1e-12
+        spectrum(x, FS, axis=-1, average="max", **kwargs).values, peak_hold, rtol=1e-12
     )
 
 
 def test_workers_do_not_change_results():
     x = np.random.default_rng(17).standard_normal((2, 50000))
-    one = spectrum(x, FS, segment_length=4096, workers=1).values
+    one = spectrum(x, FS, axis=-1, segment_length=4096, workers=1).values
     np.testing.assert_allclose(
-        spectrum(x, FS, segment_length=4096, workers=2).values, one, rtol=1e-12
+        spectrum(x, FS, axis=-1, segment_length=4096, workers=2).values, one, rtol=1e-12
     )
     with pytest.raises(ValueError, match="workers"):
-        spectrum(x, FS, segment_length=4096, workers=0)
+        spectrum(x, FS, axis=-1, segment_length=4096, workers=0)
 
 
 _DETERMINISM_SCRIPT = """
@@ -363,7 +367,8 @@ x = np.random.default_rng(18).standard_normal((2, 150000))
 h = hashlib.sha256()
 for seg, nfft, avg in ((256, None, "mean"), (4096, None, "max"), (16384, 20000, "mean"),
                        (65536, None, "mean"), (None, None, "mean")):
-    h.update(spectrum(x, 51200.0, segment_length=seg, nfft=nfft, average=avg).values.tobytes())
+    s = spectrum(x, 51200.0, axis=-1, segment_length=seg, nfft=nfft, average=avg)
+    h.update(s.values.tobytes())
 print(h.hexdigest())
 """
 

@@ -98,7 +98,27 @@ def test_imports_run_one_way():
     for m in MODULES:
         visit(m, [])
     # the layering this package promises: a module imports only modules listed before it
-    layers = ["checks", "fft", "windows", "levels", "plots", "spectrum", "resample", "frames",
-              "maps", "orders"]
+    layers = ["checks", "jit", "fft", "windows", "levels", "plots", "inputs", "spectrum",
+              "sinc", "resample", "frames", "maps", "orders", "accessor"]
     for i, m in enumerate(layers):
         assert not graph[m] & set(layers[i + 1 :]), f"{m} imports {graph[m] & set(layers[i:])}"
+
+
+def _all_modules() -> list[Path]:
+    """Every module of both packages (gearvib and analysis, sub-packages included)."""
+    import gearvib
+
+    roots = [PACKAGE, Path(gearvib.__file__).parent]
+    return sorted(p for root in roots for p in root.rglob("*.py"))
+
+
+def test_no_private_names_imported_anywhere():
+    """No module of gearvib or analysis imports another module's private (``_name``) names."""
+    bad = []
+    for path in _all_modules():
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.ImportFrom) and (node.module or "").split(".")[0] in (
+                    "gearvib", "analysis"):
+                bad += [f"{path.name}: from {node.module} import {a.name}" for a in node.names
+                        if a.name.startswith("_") and not a.name.startswith("__")]
+    assert not bad, bad

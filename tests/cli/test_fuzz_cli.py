@@ -74,6 +74,10 @@ simulate_args = st.tuples(config, output_file, options(
                                      "20000"])
 modes_args = st.tuples(config, options(["--json", "--carrier-speed", "--colour"])).map(
     lambda t: ["modes", t[0], *t[1]])
+catalogue_args = st.tuples(config, options(["--speed", "--reference", "--mesh-harmonics",
+                                            "--harmonics", "--sidebands", "--json"]),
+                           st.sampled_from([[], ["--speed", "1500"]])).map(
+    lambda t: ["catalogue", t[0], *t[2], *t[1]])
 preset_args = st.one_of(st.sampled_from([[], ["paper-case1"], ["nope"], ["a", "b"]]),
                         st.lists(st.text(max_size=6), max_size=2)).map(
     lambda t: ["preset", *t])
@@ -86,9 +90,9 @@ report_args = st.tuples(report_inputs, output_dir, options(
 demo_args = st.tuples(output_dir, options(["--duration", "-q", "--overwrite", "--colour"])).map(
     lambda t: ["demo", "-o", t[0], *t[1]])
 other_args = st.one_of(st.just([]), st.lists(st.sampled_from(
-    ["bogus", "--version", "--help", "-x", "simulate", "modes"]), max_size=2))
-argv = st.one_of(simulate_args, simulate_args, modes_args, preset_args, report_args, demo_args,
-                 other_args)
+    ["bogus", "--version", "--help", "-x", "simulate", "modes", "catalogue"]), max_size=2))
+argv = st.one_of(simulate_args, simulate_args, modes_args, catalogue_args, preset_args,
+                 report_args, demo_args, other_args)
 
 
 def _fake_run_study(study, out_dir, *, progress=True, duration=None):

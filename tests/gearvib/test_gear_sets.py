@@ -60,13 +60,14 @@ def test_ravigneaux_assembly_conditions(monkeypatch):
         ravigneaux_set(z_r=-85, z_pl=24)
     # the tooth-by-tooth assembly (builder check switched off) agrees with the condition,
     # also where (z_s1 - z_s2) / N would say the opposite: with 4 pairs z_s1 = 29 fits
-    # (64/4; -6/4) and z_s1 = 31 does not (66/4; -4/4)
+    # (68/4; -10/4) and z_s1 = 31 does not (70/4; -8/4); a set whose four pairs fit on the
+    # carrier (tip circles clear)
     import gearvib.structure as st
 
     monkeypatch.setattr(st, "check_ravigneaux_pairs", lambda *a: None)
-    assemble(ravigneaux_set(z_s1=29, z_s2=35, z_r=-85, z_pl=25, n_pairs=4))
+    assemble(ravigneaux_set(z_s1=29, z_s2=39, z_r=-85, z_pl=23, n_pairs=4))
     with pytest.raises(ValueError, match=r"mesh 'sun_large-long2' cannot be assembled"):
-        assemble(ravigneaux_set(z_s1=31, z_s2=35, z_r=-85, z_pl=25, n_pairs=4))
+        assemble(ravigneaux_set(z_s1=31, z_s2=39, z_r=-85, z_pl=23, n_pairs=4))
 
 
 @pytest.mark.parametrize(
@@ -209,7 +210,7 @@ def test_planet_planet_phases_against_tooth_profiles():
     back by z_s1 dpsi / z_ps, and the planet-planet position (which runs backwards in the
     forward motion, gear1 = short planet) grows by z_s1 dpsi / 2 pi: with 4 pairs at 90 deg and
     z_s1 = 29, +7.25 = +0.25 cycles per pair."""
-    gs = ravigneaux_set(z_s1=29, z_s2=35, z_r=-85, z_pl=25, n_pairs=4, elastic=True)
+    gs = ravigneaux_set(z_s1=29, z_s2=39, z_r=-85, z_pl=23, n_pairs=4, elastic=True)
     model = assemble(gs)
     s0 = dict(zip(model.mesh_names, model.mesh_position_offsets, strict=True))
     gamma_s = _tooth_angle_for(model, gs, "sun_small-short1", "short1", s0["sun_small-short1"])
@@ -230,7 +231,7 @@ def test_planet_planet_phases_against_tooth_profiles():
         assert (s0[f"short{i}-long{i}"] - s0["short1-long1"]) % 1.0 == pytest.approx(
             0.25 * (i - 1) % 1.0, abs=1e-9)
     # a user phase overrides the derived one and leaves the others alone
-    user = assemble(ravigneaux_set(z_s1=29, z_s2=35, z_r=-85, z_pl=25, n_pairs=4,
+    user = assemble(ravigneaux_set(z_s1=29, z_s2=39, z_r=-85, z_pl=23, n_pairs=4,
                                    planet_mesh_phases=[0.1, 0.2, 0.3, 0.4]))
     s1 = dict(zip(user.mesh_names, user.mesh_position_offsets, strict=True))
     assert [s1[f"short{i}-long{i}"] for i in range(1, 5)] == pytest.approx([0.1, 0.2, 0.3, 0.4])

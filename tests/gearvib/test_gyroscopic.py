@@ -178,6 +178,8 @@ def referenced_system(setup, model: AssembledModel) -> kn.KernelSystem:
         gyroscopic=gyro,
         centripetal=cent,
         mesh_vectors=np.hstack([s.mesh_vectors, pad]),
+        mesh_back_vectors=(None if s.mesh_back_vectors is None
+                           else np.hstack([s.mesh_back_vectors, pad])),
         mesh_position_vectors=np.hstack([s.mesh_position_vectors, pad]),
         f_const=np.append(s.f_const, 0.0),
     )

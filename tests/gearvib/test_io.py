@@ -60,7 +60,9 @@ def test_cf_encodings(tmp_path: Path, dataset: xr.Dataset) -> None:
         assert nc.data_model == "NETCDF4"
         for name in ("time", "input_speed", "normal_force", "natural_frequency"):
             assert "_FillValue" not in nc[name].ncattrs(), name
-        assert nc["time"].units == "s"
+        assert nc["time"].units == "seconds since 1970-01-01T00:00:00Z"  # CF time (analysis.cf)
+        assert (nc["time"].standard_name, nc["time"].axis) == ("time", "T")
+        assert "mesh" not in nc.variables and "mesh_label" in nc.variables  # CF labels
         assert nc["normal_force"].filters()["zlib"]
         assert nc["normal_force"].chunking()[-1] == dataset.sizes["time"]
         assert nc.Conventions == "CF-1.11"

@@ -350,8 +350,8 @@ def test_mesh_frequency_and_speed_outputs() -> None:
         if name not in ("mesh", "flank", "bearing", "member", "translation_dof"):
             assert "units" in var.attrs, name
         assert "long_name" in var.attrs, name
-    assert ds.time.attrs["units"] == "s"
-    assert ds.attrs["Conventions"] == "CF-1.11"
+    assert ds.time.attrs["units"] == "seconds since 1970-01-01T00:00:00Z"  # see analysis.cf
+    assert ds.attrs["Conventions"] == "CF-1.11" and ds.attrs["history"]
 
 
 def test_paper_case1_tooth_force_spectrum_at_1500_rpm() -> None:

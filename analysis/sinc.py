@@ -1,0 +1,277 @@
+"""Compiled kernels of the angular resampling: band-limited interpolation and FIR decimation.
+
+:func:`interpolate` evaluates a record at fractional sample positions with the 24-tap
+Kaiser-windowed sinc of :mod:`analysis.resample` (beta 7, rows normalised to unit DC gain:
+amplitude error below 0.01 dB up to 0.4 ``fs``). The kernel's 24 weights are smooth functions
+of the fractional position ``f`` in ``[0, 1)``; they are tabulated once as polynomials of
+degree 4 on 256 pieces of ``[0, 1)`` (Chebyshev fits, converted to powers of the local
+variable; 240 kB), which reproduce the exact kernel to 2e-15, so that a weight costs four
+multiply-adds instead of a Bessel series, a sine and a division. The weights of a position
+are computed once and applied to every channel. :func:`decimate` is the zero-phase
+polyphase FIR that low-passes the fine angle grid and keeps every ``over``-th sample (as
+``scipy.signal.resample_poly(x, 1, over, window=fir)``).
+
+The kernels are ``numba.njit(cache=True, error_model="numpy")`` (no zero-division checks;
+none can occur), without ``fastmath``; they loop over channels in the outer loop and
+accumulate in a fixed order, so each channel's result is the same whether it is processed
+alone or with others, bit for bit.
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+
+from analysis.jit import prepare_cache
+
+prepare_cache(__file__)  # before the decorators below: numba resolves its cache folder there
+
+__all__ = ["HALF_TAPS", "decimate", "interpolate", "kernel_table", "positions"]
+
+#: Half length of the interpolation kernel (taps -11 .. 12 around the position).
+HALF_TAPS = 12
+_BETA = 7.0
+_PIECES = 256
+_DEGREE = 4
+
+
+def exact_kernel(frac: np.ndarray) -> np.ndarray:
+    """Normalised Kaiser-sinc weights ``(len(frac), 24)`` for taps ``-11 .. 12``."""
+    taps = np.arange(-HALF_TAPS + 1, HALF_TAPS + 1)
+    tau = np.asarray(frac, dtype=float)[:, None] - taps[None, :]
+    z = np.clip(1.0 - (tau / HALF_TAPS) ** 2, 0.0, None)
+    h = np.i0(_BETA * np.sqrt(z)) * np.sinc(tau)
+    return h / h.sum(axis=1, keepdims=True)
+
+
+def kernel_table(pieces: int = _PIECES, degree: int = _DEGREE) -> np.ndarray:
+    """Polynomial coefficients ``(pieces, degree + 1, 24)`` of the kernel weights.
+
+    On piece ``p`` (``f`` in ``[p / P, (p + 1) / P)``) with ``u = 2 (f P - p) - 1`` in
+    ``[-1, 1)``, weight ``k`` is ``sum_d table[p, d, k] u**d``.
+    """
+    nodes = np.cos(np.pi * (np.arange(3 * degree) + 0.5) / (3 * degree))
+    table = np.zeros((pieces, degree + 1, 2 * HALF_TAPS))
+    for p in range(pieces):
+        f = (p + 0.5 + 0.5 * nodes) / pieces
+        cheb = np.polynomial.chebyshev.chebfit(nodes, exact_kernel(f), degree)
+        for k in range(2 * HALF_TAPS):
+            mono = np.polynomial.chebyshev.cheb2poly(cheb[:, k])
+            table[p, : mono.size, k] = mono
+    return table
+
+
+_TABLE = kernel_table()
+
+
+@numba.njit(cache=True, error_model="numpy")  # no zero-division checks (none can occur)
+def _interpolate(x, start, n_total, pos, table, out):  # pragma: no cover - compiled
+    n_ch = x.shape[0]
+    pieces = table.shape[0]
+    n_taps = table.shape[2]
+    w = np.empty(n_taps)
+    prod = np.empty(n_taps)
+    for i in range(pos.size):
+        ib = int(pos[i])
+        if pos[i] < ib:  # floor for negative positions
+            ib -= 1
+        frac = pos[i] - ib
+        p = int(frac * pieces)
+        if p >= pieces:
+            p = pieces - 1
+        u = 2.0 * (frac * pieces - p) - 1.0
+        tp = table[p]
+        c0 = tp[0]
+        c1 = tp[1]
+        c2 = tp[2]
+        c3 = tp[3]
+        c4 = tp[4]
+        first = ib - HALF_TAPS + 1
+        inside = first >= 0 and first + n_taps <= n_total
+        if inside and n_ch == 1:  # one channel: weights and products in one pass
+            seg = x[0, first - start : first - start + n_taps]
+            for k in range(n_taps):
+                prod[k] = ((((c4[k] * u + c3[k]) * u + c2[k]) * u + c1[k]) * u + c0[k]) * seg[k]
+            a0 = 0.0
+            a1 = 0.0
+            a2 = 0.0
+            a3 = 0.0
+            for kk in range(n_taps // 4):
+                k = 4 * kk
+                a0 += prod[k]
+                a1 += prod[k + 1]
+                a2 += prod[k + 2]
+                a3 += prod[k + 3]
+            out[0, i] = (a0 + a1) + (a2 + a3)
+            continue
+        for k in range(n_taps):  # Horner, degree 4 (the table's), vectorised over the taps
+            w[k] = (((c4[k] * u + c3[k]) * u + c2[k]) * u + c1[k]) * u + c0[k]
+        if inside:
+            # products in one vectorised pass, then four partial sums in a fixed order
+            # (no serial chain of additions); n_taps is a multiple of 4
+            o = first - start
+            for c in range(n_ch):
+                seg = x[c, o : o + n_taps]
+                for k in range(n_taps):
+                    prod[k] = w[k] * seg[k]
+                a0 = 0.0
+                a1 = 0.0
+                a2 = 0.0
+                a3 = 0.0
+                for kk in range(n_taps // 4):
+                    k = 4 * kk
+                    a0 += prod[k]
+                    a1 += prod[k + 1]
+                    a2 += prod[k + 2]
+                    a3 += prod[k + 3]
+                out[c, i] = (a0 + a1) + (a2 + a3)
+        else:  # near the ends of the record: samples beyond them equal the end samples
+            for c in range(n_ch):
+                a0 = 0.0
+                a1 = 0.0
+                a2 = 0.0
+                a3 = 0.0
+                for kk in range(n_taps // 4):
+                    for q in range(4):
+                        j = first + 4 * kk + q
+                        if j < 0:
+                            j = 0
+                        elif j > n_total - 1:
+                            j = n_total - 1
+                        v = w[4 * kk + q] * x[c, j - start]
+                        if q == 0:
+                            a0 += v
+                        elif q == 1:
+                            a1 += v
+                        elif q == 2:
+                            a2 += v
+                        else:
+                            a3 += v
+                out[c, i] = (a0 + a1) + (a2 + a3)
+
+
+def interpolate(
+    x: np.ndarray, pos: np.ndarray, start: int = 0, n_total: int | None = None
+) -> np.ndarray:
+    """Band-limited interpolation of ``x`` (channels, samples) at fractional positions ``pos``.
+
+    ``x`` holds the samples ``start, start + 1, ...`` of a record of ``n_total`` samples
+    (default: ``x`` is the whole record) and must cover every sample the kernel reaches
+    (``floor(pos) - 11 .. floor(pos) + 12``, clipped to the record); samples beyond the ends of
+    the record are taken equal to the end samples.
+
+    Returns
+    -------
+    numpy.ndarray
+        Shape ``(channels, len(pos))``, float64.
+    """
+    x2 = np.ascontiguousarray(np.asarray(x, dtype=np.float64).reshape(-1, x.shape[-1]))
+    n = start + x2.shape[1] if n_total is None else int(n_total)
+    p = np.ascontiguousarray(pos, dtype=np.float64)
+    out = np.empty((x2.shape[0], p.size))
+    _interpolate(x2, int(start), n, p, _TABLE, out)
+    return out
+
+
+@numba.njit(cache=True, error_model="numpy")  # no zero-division checks (none can occur)
+def _positions(th, t, first, dphi, f0, t_first, fs, pos, tq):  # pragma: no cover - compiled
+    # tq[i] = numpy.interp(first + dphi * (f0 + i), th, t), the same operations in the same
+    # order, found by one forward sweep (the angles increase); pos = (tq - t_first) * fs
+    m = th.size
+    j = 0
+    for i in range(pos.size):
+        phi = first + dphi * float(f0 + i)
+        if phi >= th[m - 1]:
+            v = t[m - 1]
+        elif phi < th[0]:
+            v = t[0]
+        else:
+            while th[j + 1] <= phi:
+                j += 1
+            slope = (t[j + 1] - t[j]) / (th[j + 1] - th[j])
+            v = slope * (phi - th[j]) + t[j]
+        tq[i] = v
+        pos[i] = (v - t_first) * fs
+
+
+def positions(
+    th: np.ndarray, t: np.ndarray, first: float, dphi: float, f0: int, count: int,
+    t_first: float, fs: float,
+) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    """Instants and fractional sample positions of the angles ``first + dphi * (f0 + i)``.
+
+    ``th`` (increasing) and ``t`` are the angle and time of the samples around them; the
+    instants are their linear interpolation (as :func:`numpy.interp`), the positions
+    ``(instant - t_first) * fs``.
+
+    Returns
+    -------
+    pos, tq : numpy.ndarray
+        Positions [samples] and instants [s], ``count`` each.
+    """
+    pos = np.empty(int(count))
+    tq = np.empty(int(count))
+    _positions(
+        np.ascontiguousarray(th, dtype=np.float64), np.ascontiguousarray(t, dtype=np.float64),
+        float(first), float(dphi), int(f0), float(t_first), float(fs), pos, tq,
+    )  # fmt: skip
+    return pos, tq
+
+
+@numba.njit(cache=True, error_model="numpy")  # no zero-division checks (none can occur)
+def _decimate(fine, fir, over, first, out):  # pragma: no cover - compiled
+    # Output j is sum_k fir[k] fine[(first + j) over + half - k]. With half - k = q over + r
+    # (0 <= r < over) that is sum_k fir[k] s_r[first + j + q], s_r[m] = fine[m over + r]: the
+    # fine samples are split into `over` contiguous phase streams once, and every tap adds a
+    # contiguous, vectorisable multiple of one stream to a chunk of outputs (taps in a fixed
+    # order, so the result does not depend on the chunking or on the other channels).
+    n_ch = fine.shape[0]
+    n_fine = fine.shape[1]
+    n_taps = fir.size
+    n_out = out.shape[1]
+    half = (n_taps - 1) // 2
+    q_min = (half - (n_taps - 1)) // over
+    q_max = half // over
+    length = n_out + q_max - q_min
+    streams = np.empty((over, length))
+    chunk = 1024
+    acc = np.empty(chunk)
+    for c in range(n_ch):
+        base = first + q_min
+        for r in range(over):  # s_r[m] = fine[(base + m) over + r], zero beyond the ends
+            m_lo = max(0, -base)
+            m_hi = min(length, (n_fine - 1 - r) // over - base + 1)
+            streams[r, :] = 0.0
+            if m_hi > m_lo:
+                g0 = (base + m_lo) * over + r
+                streams[r, m_lo:m_hi] = fine[c, g0 : g0 + (m_hi - m_lo - 1) * over + 1 : over]
+        for j0 in range(0, n_out, chunk):
+            j1 = min(n_out, j0 + chunk)
+            n = j1 - j0
+            for j in range(n):
+                acc[j] = 0.0
+            a = acc[:n]
+            for k in range(n_taps):
+                d = half - k
+                q = d // over
+                r = d - q * over
+                off = j0 + q - q_min
+                seg = streams[r, off : off + n]  # slices: no index checks, vectorised
+                f = fir[k]
+                for j in range(n):
+                    a[j] += f * seg[j]
+            for j in range(n):
+                out[c, j0 + j] = acc[j]
+
+
+def decimate(fine: np.ndarray, fir: np.ndarray, over: int, first: int, count: int) -> np.ndarray:
+    """Zero-phase FIR low-pass and decimation by ``over`` of ``fine`` (channels, samples).
+
+    Output sample ``j`` is ``sum_k fir[k] fine[(first + j) over + (len(fir) - 1) / 2 - k]``,
+    with zeros beyond the ends of ``fine`` (``len(fir)`` odd): samples ``first .. first +
+    count - 1`` of ``scipy.signal.resample_poly(fine, 1, over, window=fir)``.
+    """
+    f2 = np.ascontiguousarray(fine, dtype=np.float64).reshape(-1, fine.shape[-1])
+    out = np.empty((f2.shape[0], int(count)))
+    _decimate(f2, np.ascontiguousarray(fir, dtype=np.float64), int(over), int(first), out)
+    return out

@@ -1,0 +1,146 @@
+"""What the HTML and the PDF writer share: figure images and the few presentation rules.
+
+Both writers render the same list of :class:`~gearvib.report.figures.Section` objects (built by
+:func:`gearvib.report.figures.report_sections`), block by block: headings, paragraphs, tables
+(caption, header, rows) and figures (caption, figure builder). This module holds what must be
+identical in both documents beyond the blocks themselves:
+
+* :class:`FigureImages` calls each figure builder once and keeps the figure as PNG at every
+  resolution the writers ask for (the HTML embeds :data:`HTML_DPI`, the PDF :data:`PDF_DPI`), so
+  the two documents show the same pictures and no figure is computed twice. PNGs are written
+  without the ``Software`` tag: the same input gives the same bytes.
+* the text of an empty table (:data:`EMPTY_TABLE`), of a figure that could not be drawn
+  (:func:`missing_figure_text`), the closing line (:func:`footer_text`) and which paragraphs
+  are emphasised (:func:`is_emphasised`).
+"""
+
+from __future__ import annotations
+
+import io
+from collections.abc import Iterable
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
+from gearvib import __version__
+from gearvib.report.figures import Block
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+__all__ = [
+    "EMPTY_TABLE",
+    "HTML_DPI",
+    "PDF_DPI",
+    "FigureImage",
+    "FigureImages",
+    "figure_png",
+    "footer_text",
+    "is_emphasised",
+    "missing_figure_text",
+]
+
+EMPTY_TABLE = "(none)"
+"""The single cell of a table without rows."""
+
+HTML_DPI = 100
+"""Resolution of the PNGs embedded in the HTML report [dots per inch of the figure size]."""
+
+PDF_DPI = 200
+"""Resolution of the PNGs placed in the PDF report (the figure is scaled to the text width,
+about 6.9 in, so a 8 in wide figure prints at about 230 dpi)."""
+
+
+def figure_png(fig: Figure, *, dpi: int = HTML_DPI) -> bytes:
+    """PNG bytes of a figure, without the ``Software`` metadata (deterministic)."""
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=dpi, metadata={"Software": None})
+    return buf.getvalue()
+
+
+@dataclass(frozen=True)
+class FigureImage:
+    """One report figure as PNG.
+
+    Attributes
+    ----------
+    width_in, height_in : float
+        Figure size [in]; the PNG at ``dpi`` has ``round(width_in * dpi)`` pixels across.
+    png : dict of int to bytes
+        PNG bytes per resolution [dpi].
+    """
+
+    width_in: float
+    height_in: float
+    png: dict[int, bytes] = field(repr=False)
+
+    @property
+    def aspect(self) -> float:
+        """Height over width."""
+        return self.height_in / self.width_in
+
+    def at(self, dpi: int) -> bytes:
+        """PNG bytes at ``dpi`` (one of the resolutions the figure was rendered at).
+
+        Raises
+        ------
+        KeyError
+            The figure was not rendered at ``dpi``.
+        """
+        try:
+            return self.png[dpi]
+        except KeyError:
+            raise KeyError(f"figure rendered at {sorted(self.png)} dpi, not {dpi}") from None
+
+
+class FigureImages:
+    """Builds each figure block once and keeps its PNGs for the HTML and PDF writers.
+
+    Parameters
+    ----------
+    dpis : iterable of int
+        Resolutions to render every figure at (default: :data:`HTML_DPI` and
+        :data:`PDF_DPI`).
+    """
+
+    def __init__(self, dpis: Iterable[int] = (HTML_DPI, PDF_DPI)) -> None:
+        self.dpis = tuple(sorted({int(d) for d in dpis}))
+        if not self.dpis or min(self.dpis) < 10 or max(self.dpis) > 1200:
+            raise ValueError(f"dpis must be resolutions in [10, 1200] dpi, got {self.dpis}")
+        # keyed by id(block); the block is kept alive next to its image so the id stays unique
+        self._cache: dict[int, tuple[Block, FigureImage | None]] = {}
+
+    def get(self, block: Block) -> FigureImage | None:
+        """The rendered figure of a ``"figure"`` block (None when it has no figure).
+
+        Raises
+        ------
+        ValueError
+            ``block`` is not a figure block.
+        """
+        if block.kind != "figure":
+            raise ValueError(f"expected a figure block, got a {block.kind!r} block")
+        hit = self._cache.get(id(block))
+        if hit is not None and hit[0] is block:
+            return hit[1]
+        fig = block.figure() if block.figure is not None else None
+        image = None
+        if fig is not None:
+            w, h = (float(v) for v in fig.get_size_inches())
+            image = FigureImage(w, h, {d: figure_png(fig, dpi=d) for d in self.dpis})
+        self._cache[id(block)] = (block, image)
+        return image
+
+
+def missing_figure_text(block: Block) -> str:
+    """What stands in place of a figure that could not be drawn."""
+    return f"{block.text} (not available)"
+
+
+def is_emphasised(block: Block, section_id: str) -> bool:
+    """True for a paragraph shown in bold: the verdict of a case comparison."""
+    return block.kind == "text" and section_id == "comparison" and "reproduce" in block.text
+
+
+def footer_text() -> str:
+    """The closing line of the report."""
+    return f"Generated by gearvib {__version__}. Same input files, same report."

@@ -1,0 +1,150 @@
+"""Files every tool reads pass a real CF checker (issue #14): the IOOS compliance-checker at
+CF-1.11 on a gearvib run file and on the output of every reader, and cf_xarray finds the axes.
+
+The checker reports by priority; the tests require no message at any priority (errors,
+warnings and recommendations alike) and no exception inside the checker.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from analysis.cf import labels_from_cf, labels_to_cf
+from analysis.readers import (
+    ChannelData,
+    build_dataset,
+    read,
+    write_csv,
+    write_mat,
+    write_netcdf,
+    write_wav,
+)
+from tests.analysis.test_readers import UFF_DIR, _uff_set, _write_tdms, _write_uff
+
+pytestmark = pytest.mark.filterwarnings("ignore::DeprecationWarning")  # the checker's own
+compliance_checker = pytest.importorskip("compliance_checker")
+cf_xarray = pytest.importorskip("cf_xarray")
+
+
+def cf_messages(path: Path, tmp_path: Path) -> list[str]:
+    """Every message of the IOOS compliance-checker at CF-1.11 for ``path``."""
+    from compliance_checker.runner import CheckSuite, ComplianceChecker
+
+    CheckSuite.load_all_available_checkers()
+    report = tmp_path / f"{path.stem}-cf.json"
+    ComplianceChecker.run_checker(
+        str(path), ["cf:1.11"], 0, "normal", output_filename=str(report), output_format="json"
+    )
+    result = json.loads(report.read_text())["cf:1.11"]
+    messages = [
+        f"{c['name']}: {m}"
+        for level in ("high_priorities", "medium_priorities", "low_priorities")
+        for c in result[level]
+        for m in c["msgs"]
+    ]
+    if result.get("errors"):  # exceptions raised inside the checker
+        messages += [f"checker exception: {e}" for e in result["errors"]]
+    return messages
+
+
+def _check_file(path: Path, tmp_path: Path) -> None:
+    assert cf_messages(path, tmp_path) == []
+    with xr.open_dataset(path, engine="netcdf4") as ds:  # default decoding, as any tool
+        assert ds.cf.axes["T"] == ["time"]
+        assert np.issubdtype(ds["time"].dtype, np.datetime64)
+
+
+def test_run_file_passes_the_cf_checker(tmp_path):
+    from gearvib.assembly import assemble
+    from gearvib.config import load_gearset
+    from gearvib.io import read_run
+    from gearvib.io import write_netcdf as write_run
+    from gearvib.simulate import SpeedRamp, simulate
+
+    run = simulate(assemble(load_gearset("paper-case1")), SpeedRamp(0.0, 3000.0, 0.02))
+    ds = run.to_dataset()
+    path = write_run(ds, tmp_path / "run.nc")
+    _check_file(path, tmp_path)
+    back = read_run(path)  # float seconds and string labels as coordinates again
+    xr.testing.assert_identical(back, ds)
+    assert back.normal_force.sel(mesh=str(ds.mesh.values[0]), flank="left").size > 0
+    # the analysis functions take the decoded file as well (time since the first sample)
+    with xr.open_dataset(path, engine="netcdf4") as decoded:
+        force = labels_from_cf(decoded)["normal_force"].sel(flank="left").isel(mesh=0)
+        s = force.gearvib.spectrum()
+    assert s.fs == pytest.approx(float(ds.attrs["fs_out"]))
+
+
+def _sample() -> xr.Dataset:
+    fs = 2048.0
+    t = np.arange(2048) / fs
+    return build_dataset(
+        [
+            ChannelData("ring x", 3.0 * np.sin(2 * np.pi * 50 * t), "m s-2"),
+            ChannelData("tacho", np.sign(np.sin(2 * np.pi * 20 * t)), "V"),
+        ],
+        fs,
+        source_format="test",
+        attrs={"title": "sample", "time_coverage_start": "2024-05-01T10:00:00"},
+    )
+
+
+def _reader_file(kind: str, tmp_path: Path) -> Path:
+    ds = _sample()
+    if kind == "netcdf":
+        return write_netcdf(ds, tmp_path / "in.nc")
+    if kind == "wav":
+        write_wav(ds, tmp_path / "in.wav")
+        return tmp_path / "in.wav"
+    if kind == "csv":
+        write_csv(ds, tmp_path / "in.csv")
+        return tmp_path / "in.csv"
+    if kind == "mat":
+        write_mat(ds, tmp_path / "in.mat")
+        return tmp_path / "in.mat"
+    if kind == "mat73":
+        pytest.importorskip("h5py")
+        from tests.analysis.test_readers_mat73 import savemat73
+
+        t = np.arange(512) / 1024.0
+        return savemat73(tmp_path / "in73.mat", {"acc": np.sin(2 * np.pi * 30 * t), "fs": 1024.0})
+    if kind == "uff":
+        pytest.importorskip("pyuff")
+        return _write_uff(tmp_path / "in.uff", [_uff_set(0), _uff_set(1, binary=1)])
+    if kind == "uff-measured":
+        pytest.importorskip("pyuff")
+        path = UFF_DIR / "MPSTD_Set001_2024_10_08_10_27_07.uff"
+        if not path.is_file():
+            pytest.skip("shared UFF files not found")
+        return path
+    pytest.importorskip("nptdms")
+    return _write_tdms(
+        tmp_path / "in.tdms",
+        [("rig", "acc", np.sin(np.arange(400) / 7.0), {"wf_increment": 1e-3, "unit_string": "g"})],
+    )
+
+
+@pytest.mark.parametrize(
+    "kind", ["netcdf", "wav", "csv", "mat", "mat73", "uff", "uff-measured", "tdms"]
+)
+def test_reader_output_passes_the_cf_checker(kind, tmp_path):
+    path = _reader_file(kind, tmp_path)
+    ds = read(path, time_column="time") if kind == "csv" else read(path)
+    assert ds["time"].attrs["standard_name"] == "time" and ds.attrs["history"]
+    assert ds.cf.axes["T"] == ["time"]
+    _check_file(write_netcdf(ds, tmp_path / f"{kind}.nc"), tmp_path)
+
+
+def test_labels_round_trip():
+    ds = xr.Dataset(
+        {"f": (("mesh", "time"), np.ones((2, 3)), {"units": "N", "long_name": "force"})},
+        coords={"mesh": ("mesh", ["sun-planet1", "ring-planet1"], {"long_name": "mesh"})},
+    )
+    cf = labels_to_cf(ds)
+    assert "mesh" not in cf.variables and cf["mesh_label"].dims == ("mesh",)
+    xr.testing.assert_identical(labels_from_cf(cf), ds)
