@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import contextlib
 import logging
+import math
 import os
 import sys
 import tempfile
@@ -24,6 +25,7 @@ from pathlib import Path
 
 import xarray as xr
 
+from gearvib import tempfiles
 from gearvib.assembly import assemble
 from gearvib.config import gearset_from_dict
 from gearvib.io import GearvibFileError, atomic_write, read_run, write_netcdf
@@ -33,7 +35,7 @@ from gearvib.report.document import FigureImages
 from gearvib.report.figures import CaseAnalysis, analyse_case, report_sections
 from gearvib.report.html import render_html
 from gearvib.report.pdf import write_pdf
-from gearvib.report.study import AnalysisSettings, Study, resolve_run
+from gearvib.report.study import AnalysisSettings, Study, check_report_size, resolve_run
 from gearvib.simulate import SimulationError, SpeedRamp, simulate
 
 __all__ = ["ReportPaths", "StudyResult", "build_report", "check_output_dir", "run_study"]
@@ -121,7 +123,8 @@ def check_output_dir(out_dir: str | os.PathLike) -> Path:
         raise ValueError(f"cannot create output folder {str(p)!r}: {str(q)!r} is a file")
     try:
         p.mkdir(parents=True, exist_ok=True)
-        fd, probe = tempfile.mkstemp(dir=p, prefix=".gearvib-write-test-")
+        fd, probe = tempfile.mkstemp(dir=p, prefix=tempfiles.prefix("write-test"),
+                                     suffix=".tmp")
         os.close(fd)
         os.unlink(probe)
     except OSError as exc:
@@ -236,6 +239,13 @@ def build_report(paths_or_datasets: Sequence[RunInput] | RunInput, out_dir: str 
         The output folder is not usable (before any computation).
     """
     runs = _load_inputs(paths_or_datasets)  # type: ignore[arg-type]
+    for name, ds in runs:  # before any analysis: the maps must fit into memory
+        t = ds["time"].values
+        fs = float(1.0 / (t[1] - t[0])) if t.size > 1 and t[1] > t[0] else 1.0
+        stored = _caller(ds).get("analysis")
+        settings = analysis or (AnalysisSettings.from_dict(stored) if isinstance(stored, dict)
+                                else AnalysisSettings())
+        check_report_size(t.size, fs, settings, f"run {name!r}")
     out = check_output_dir(out_dir)
     first = _caller(runs[0][1])
     study = first.get("study", {}) if isinstance(first.get("study"), dict) else {}
@@ -298,7 +308,10 @@ def run_study(study: Study, out_dir: str | os.PathLike, *, progress: bool = True
     for case in study.cases:  # check every description before the first (long) simulation
         cfg, base = case.load()
         gs = gearset_from_dict(cfg, base=base)
-        prepared.append((case, cfg, base, gs, resolve_run(study.run, cfg)))
+        run = resolve_run(study.run, cfg)
+        check_report_size(math.floor(run["duration"] * run["fs_out"]) + 1, run["fs_out"],
+                          study.analysis, f"case {case.name!r}")
+        prepared.append((case, cfg, base, gs, run))
     runs: dict[str, Path] = {}
     sim_time: dict[str, float] = {}
     n_steps = len(prepared) + 1

@@ -21,7 +21,9 @@ the recipe), optional run settings shared by all cases and optional analysis set
     stability_points = 300
 
 Every table is checked like :mod:`gearvib.config`: an unknown key is an error naming the key and
-the admissible ones.
+the admissible ones, and every value is type- and range-checked (:data:`ANALYSIS_LIMITS`).
+:func:`check_report_size` refuses maps whose frames would not fit into memory before a run is
+simulated or analysed.
 """
 
 from __future__ import annotations
@@ -34,13 +36,17 @@ from pathlib import Path
 from typing import Any
 
 from gearvib.config import ConfigError, check_keys, list_presets, load_config
+from gearvib.memory import require_memory
+from gearvib.simulation.settings import MAX_DURATION, MAX_SPEED_RPM, MAX_TORQUE, MIN_DURATION
 
 __all__ = [
+    "ANALYSIS_LIMITS",
     "DEFAULT_RUN",
     "AnalysisSettings",
     "Case",
     "RunSettings",
     "Study",
+    "check_report_size",
     "load_study",
     "resolve_run",
 ]
@@ -55,26 +61,58 @@ _CASE = {"name", "config", "label"}
 _RUN = set(DEFAULT_RUN)
 _ANALYSIS = {"n_max", "stability_points", "map_resolution_hz", "map_overlap", "orders",
              "threshold_db", "tolerance", "frequency_max_hz", "force_mesh", "spectrum_peaks"}
-_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]*$")
+_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,99}$")
+ANALYSIS_LIMITS: dict[str, tuple[float, float]] = {
+    "n_max": (1, 20),
+    "stability_points": (2, 20_000),
+    "orders": (1, 100),
+    "spectrum_peaks": (1, 200),
+    "map_resolution_hz": (1e-3, 1e6),
+    "tolerance": (0.0, 0.5),
+    "threshold_db": (0.0, 200.0),
+    "frequency_max_hz": (0.0, 1e9),
+}
+"""Admissible ranges of the ``[analysis]`` keys (integers: inclusive; ``stability_points``
+bounds the Floquet chart's computing time, about 1-5 ms per point)."""
+_RUN_LIMITS = {"speed_start_rpm": (0.0, MAX_SPEED_RPM), "speed_end_rpm": (0.0, MAX_SPEED_RPM),
+               "duration": (MIN_DURATION, MAX_DURATION), "input_torque": (-MAX_TORQUE, MAX_TORQUE),
+               "fs_out": (0.0, 1e12)}
+"""Ranges of the run settings (as ``[simulation]``, :mod:`gearvib.simulation.settings`)."""
+MAX_CASES = 100
+"""Most cases of one study."""
+MAP_COPIES = 4
+"""Peak memory of a map as multiples of its frames x bins (map, dB, Dataset, image)."""
 
 
-def _number(value: Any, where: str, *, positive: bool = False, minimum: float | None = None
-            ) -> float:
+def _short(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
+def _number(value: Any, where: str, *, positive: bool = False, minimum: float | None = None,
+            maximum: float | None = None) -> float:
     if isinstance(value, bool) or not isinstance(value, int | float):
-        raise ConfigError(f"{where} must be a number, got {value!r}")
-    v = float(value)
+        raise ConfigError(f"{where} must be a number, got {_short(value)}")
+    try:
+        v = float(value)
+    except OverflowError:
+        v = math.inf
     if not math.isfinite(v):
-        raise ConfigError(f"{where} = {value!r}; admissible: a finite number")
+        raise ConfigError(f"{where} = {_short(value)}; admissible: a finite number")
     if positive and not v > 0:
         raise ConfigError(f"{where} = {value!r}; admissible: a number > 0")
     if minimum is not None and v < minimum:
         raise ConfigError(f"{where} = {value!r}; admissible: a number >= {minimum:g}")
+    if maximum is not None and v > maximum:
+        raise ConfigError(f"{where} = {value!r}; admissible: a number <= {maximum:g}")
     return v
 
 
-def _integer(value: Any, where: str, minimum: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, int) or value < minimum:
-        raise ConfigError(f"{where} = {value!r}; admissible: an integer >= {minimum}")
+def _integer(value: Any, where: str, minimum: int, maximum: int | None = None) -> int:
+    if isinstance(value, bool) or not isinstance(value, int) or value < minimum or (
+            maximum is not None and value > maximum):
+        top = f" and <= {maximum}" if maximum is not None else ""
+        raise ConfigError(f"{where} = {_short(value)}; admissible: an integer >= {minimum}{top}")
     return int(value)
 
 
@@ -182,13 +220,18 @@ class AnalysisSettings:
         kw: dict[str, Any] = {}
         for k in ("n_max", "stability_points", "orders", "spectrum_peaks"):
             if k in table:
-                kw[k] = _integer(table[k], f"{where}.{k}", 2 if k == "stability_points" else 1)
+                lo, hi = ANALYSIS_LIMITS[k]
+                kw[k] = _integer(table[k], f"{where}.{k}", int(lo), int(hi))
         for k in ("map_resolution_hz", "tolerance"):
             if k in table:
-                kw[k] = _number(table[k], f"{where}.{k}", positive=True)
+                lo, hi = ANALYSIS_LIMITS[k]
+                kw[k] = _number(table[k], f"{where}.{k}", positive=True,
+                                minimum=lo if k != "tolerance" else None,
+                                maximum=hi if k != "tolerance" else None)
         for k in ("threshold_db", "frequency_max_hz"):
             if k in table:
-                kw[k] = _number(table[k], f"{where}.{k}", minimum=0.0)
+                kw[k] = _number(table[k], f"{where}.{k}", minimum=0.0,
+                                maximum=ANALYSIS_LIMITS[k][1])
         if "map_overlap" in table:
             v = _number(table["map_overlap"], f"{where}.map_overlap", minimum=0.0)
             if v >= 1.0:
@@ -197,7 +240,7 @@ class AnalysisSettings:
         if "tolerance" in kw and kw["tolerance"] >= 0.5:
             raise ConfigError(f"{where}.tolerance = {kw['tolerance']!r}; admissible: < 0.5")
         if "force_mesh" in table:
-            if not isinstance(table["force_mesh"], str):
+            if not isinstance(table["force_mesh"], str) or len(table["force_mesh"]) > 200:
                 raise ConfigError(f"{where}.force_mesh must be a mesh name (string)")
             kw["force_mesh"] = table["force_mesh"]
         return cls(**kw)
@@ -274,6 +317,8 @@ class Study:
         """
         check_keys(run, _RUN, "the run settings")
         settings = RunSettings(**{k: _number(v, k) for k, v in run.items()})
+        if isinstance(names, str) or not isinstance(names, list | tuple):
+            raise ConfigError("names must be a list of preset names or TOML paths")
         cases = tuple(Case(name=Path(n).stem if n.endswith(".toml") else n, config=str(n))
                       for n in names)
         return cls(title=title or "",
@@ -281,8 +326,8 @@ class Study:
 
     def with_duration(self, duration: float) -> Study:
         """A copy whose run-up lasts ``duration`` seconds (same speed range)."""
-        return replace(self, run=replace(self.run, duration=_number(duration, "duration",
-                                                                     positive=True)))
+        return replace(self, run=replace(self.run, duration=_number(
+            duration, "duration", minimum=MIN_DURATION, maximum=MAX_DURATION)))
 
 
 def resolve_run(run: RunSettings, gearset_cfg: dict) -> dict[str, float]:
@@ -297,11 +342,14 @@ def resolve_run(run: RunSettings, gearset_cfg: dict) -> dict[str, float]:
         ``speed_start_rpm``, ``speed_end_rpm``, ``duration``, ``input_torque``, ``fs_out``.
     """
     sim = gearset_cfg.get("simulation", {}) if isinstance(gearset_cfg, dict) else {}
+    if not isinstance(sim, dict):
+        raise ConfigError(f"[simulation] must be a table, got {type(sim).__name__}")
     given = run.to_dict()
     out = {}
     for k, default in DEFAULT_RUN.items():
         v = given.get(k, sim.get(k, default))
-        out[k] = _number(v, f"run setting {k}")
+        lo, hi = _RUN_LIMITS[k]
+        out[k] = _number(v, f"run setting {k}", minimum=lo, maximum=hi)
     if not out["duration"] > 0:
         raise ConfigError(f"duration = {out['duration']!r}; admissible: > 0 s")
     if out["speed_end_rpm"] <= out["speed_start_rpm"] or out["speed_start_rpm"] < 0:
@@ -370,13 +418,16 @@ def load_study(path: str | Path) -> Study:
     if st is None:
         raise ConfigError(f"{p.name}: missing table [study]")
     cases_t = st.get("cases")
-    if not isinstance(cases_t, list) or not cases_t:
-        raise ConfigError("[study].cases must be a non-empty list of {name = ..., config = ...}")
+    if not isinstance(cases_t, list) or not 1 <= len(cases_t) <= MAX_CASES:
+        raise ConfigError(f"[study].cases must be a list of 1..{MAX_CASES} tables "
+                          "{name = ..., config = ...}")
     base = p.resolve().parent
     cases = tuple(_case(t, i, base) for i, t in enumerate(cases_t))
     title = st.get("title", "")
     if not isinstance(title, str):
         raise ConfigError("[study].title must be a string")
+    if not isinstance(st.get("description", ""), str):
+        raise ConfigError("[study].description must be a string")
     run_t = check_keys(doc.get("run", {}), _RUN, "[run]")
     run = RunSettings(**{k: _number(v, f"[run].{k}") for k, v in run_t.items()})
     analysis = AnalysisSettings.from_dict(doc.get("analysis", {}))
@@ -385,3 +436,32 @@ def load_study(path: str | Path) -> Study:
         raise ConfigError("[study].reference must be a case name (string)")
     return Study(title=title, cases=cases, run=run, analysis=analysis, reference=reference,
                  source=p)
+
+
+def check_report_size(n_samples: int, fs: float, settings: AnalysisSettings,
+                      where: str = "the run") -> None:
+    """Refuse maps whose frames would not fit into memory (before simulating or analysing).
+
+    The rpm-frequency map of a run of ``n_samples`` at ``fs`` has ``(n - seg) // hop + 1``
+    frames of ``seg // 2 + 1`` bins, with the Hann window ``seg = 1.5 fs / map_resolution_hz``
+    and ``hop = seg (1 - map_overlap)`` (as :func:`analysis.frames.frame_layout`); the
+    rpm-order map has about as many. An overlap near 1 or a fine resolution of a long run
+    multiplies the frames.
+
+    Raises
+    ------
+    gearvib.memory.RunSizeError
+        Naming ``map_overlap`` and ``map_resolution_hz``, the frames and the memory needed.
+    """
+    n = max(int(n_samples), 1)
+    seg_f = 1.5 * fs / settings.map_resolution_hz
+    seg = max(4, min(n, round(seg_f) if math.isfinite(seg_f) else n))
+    hop = max(1, round(seg * (1.0 - settings.map_overlap)))
+    frames = (n - seg) // hop + 1
+    bins = seg // 2 + 1
+    need = 2 * MAP_COPIES * 8 * frames * bins  # rpm-frequency and rpm-order map
+    require_memory(need, f"the maps of {where} ({frames} frames of {bins} bins: "
+                   f"map_overlap = {settings.map_overlap:g}, map_resolution_hz = "
+                   f"{settings.map_resolution_hz:g} over {n} samples at {fs:g} Hz)",
+                   "lower [analysis].map_overlap (0.9 gives a smooth map) or coarsen "
+                   "map_resolution_hz")
