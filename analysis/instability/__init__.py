@@ -14,7 +14,12 @@ Generic API on plain arrays and callables (no dependency on :mod:`gearvib`):
 """
 
 from analysis.instability.chart import StabilityChart, stability_chart
-from analysis.instability.floquet import FloquetResult, PiecewiseConstant, floquet
+from analysis.instability.floquet import (
+    FloquetResult,
+    PiecewiseConstant,
+    PiecewiseSmooth,
+    floquet,
+)
 from analysis.instability.growth import GrowthTable, UnstableBand, runup_growth, unstable_bands
 from analysis.instability.labels import PeakLabels, PeakMatch, label_peaks, theory_lines
 from analysis.instability.resonances import (
@@ -49,6 +54,7 @@ __all__ = [
     "PeakLabels",
     "PeakMatch",
     "PiecewiseConstant",
+    "PiecewiseSmooth",
     "Resonances",
     "StabilityChart",
     "UnstableBand",

@@ -36,7 +36,6 @@ fraction of the analysed speed range of its feature covered by the explaining wi
 
 from __future__ import annotations
 
-import dataclasses
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -342,35 +341,6 @@ def _settle_time(lv: MapLevels, band: np.ndarray, frames: np.ndarray, threshold:
     return t_set, why
 
 
-def _band_label(lo_hz: float, hi_hz: float, fn: np.ndarray, fnames: list[str],
-                clusters: list[list[int]], fam_p: list[int] | None,
-                rule: MeshPhasingRule | None, n_max: int = 12) -> str:
-    """Theory candidate (``2 f_i/n`` or ``(f_i + f_j)/n``, ``n <= n_max``) of an unstable band.
-
-    Among the candidates within one band width of the band centre, the one of lowest order
-    ``n`` (the widest region; higher orders are narrower by powers of the stiffness variation),
-    then the nearest; those the mesh-phasing rule suppresses are skipped.
-    """
-    centre, width = 0.5 * (lo_hz + hi_hz), max(hi_hz - lo_hz, 1e-12)
-    best: tuple[tuple[int, float], str] | None = None
-    for a in range(fn.size):
-        for b in range(a, fn.size):
-            for n in range(1, n_max + 1):
-                if fam_p is not None and rule is not None and not rule.allows(
-                        n, fam_p[clusters[a][0]], fam_p[clusters[b][0]]):
-                    continue
-                value = (fn[a] + fn[b]) / n
-                err = abs(value - centre)
-                if err > width or (best is not None and (n, err) >= best[0]):
-                    continue
-                na = fnames[a] if "=" not in fnames[a] else f"({fnames[a]})"
-                nb = fnames[b] if "=" not in fnames[b] else f"({fnames[b]})"
-                lab = (f"2 {na}/{n}" if n > 1 else f"2 {na}") if a == b else (
-                    f"({na} + {nb})/{n}" if n > 1 else f"{na} + {nb}")
-                best = ((n, err), lab)
-    return best[1] if best else ""
-
-
 # ------------------------------------------------------------------------------ detection
 
 
@@ -490,7 +460,6 @@ def detect_resonances(
             raise ValueError("mesh_harmonic_rule needs mode_families, one (kind, p) per natural "
                              "frequency")
         fam_p = [mesh_harmonic_rule.check_family(tuple(x)) for x in mode_families]
-    n_modal = fn.size
     if features is not None:
         # frequency-locked lines the map shows that no natural frequency explains (structural
         # resonances outside the model): they get crossings and tracks of their own
@@ -563,12 +532,8 @@ def detect_resonances(
             tp, rp = speed_profile
         else:
             tp, rp = t, rpm
+        # the bands keep the chart's labels (one attribution, see attribute_region)
         growth = runup_growth(chart, tp, rp, threshold_db=gthr)
-        growth = dataclasses.replace(growth, label=np.asarray(
-            [_band_label(growth.lower_rpm[i] * factor, growth.upper_rpm[i] * factor,
-                         fn[:n_modal], fnames[:n_modal], clusters[:n_modal], fam_p,
-                         mesh_harmonic_rule) or str(growth.label[i])
-             for i in range(len(growth))], dtype=object))
         for i in range(len(growth)):
             state = (f"grows by {growth.growth_db[i]:.0f} dB (time in band "
                      f"{1e3 * growth.time_in_band[i]:.1f} ms x growth rate <= "
@@ -576,7 +541,7 @@ def detect_resonances(
             if not growth.can_grow[i]:
                 state += f": too fast to develop; {growth.advice[i]}"
             notes.append(f"unstable band {growth.lower_rpm[i]:.0f}–{growth.upper_rpm[i]:.0f} "
-                         f"min-1 ({growth.label[i] or 'Floquet'}): {state}")
+                         f"min-1 ({growth.label[i] or 'unattributed'}): {state}")
 
     def developing_band(r: float) -> tuple[int | None, str]:
         """Band containing ``r`` (with a speed tolerance) that grows enough in this run."""
