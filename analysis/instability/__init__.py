@@ -29,6 +29,7 @@ from analysis.instability.resonances import (
     Crossing,
     Resonances,
     detect_resonances,
+    merge_mesh_frequencies,
 )
 from analysis.instability.theory import (
     Candidates,
@@ -63,6 +64,7 @@ __all__ = [
     "floquet",
     "instability_candidates",
     "label_peaks",
+    "merge_mesh_frequencies",
     "natural_frequencies",
     "rectangular_wave_harmonics",
     "rectangular_wave_pieces",

@@ -695,19 +695,24 @@ def floquet(
     order = np.argsort(-np.abs(mu), kind="stable")
     mu = mu[order]
     mmax = float(np.abs(mu[0]))
-    expo = np.log(mu.astype(complex)) / T
+    # a long, strongly damped period can underflow every multiplier to 0: growth rate -inf
+    with np.errstate(divide="ignore", invalid="ignore"):
+        expo = np.log(mu.astype(complex)) / T
+        growth = float(np.log(mmax) / T) if mmax > 0 else -math.inf
+        det = float(np.real(np.linalg.det(phi)))
+        logdet = float(np.linalg.slogdet(phi)[1])
     return FloquetResult(
         multipliers=mu,
         exponents=expo,
         max_modulus=mmax,
-        growth_rate=float(np.log(mmax) / T),
+        growth_rate=growth,
         stable=bool(mmax <= 1.0 + tol),
         monodromy=phi,
         period=T,
         tol=float(tol),
-        det_monodromy=float(np.real(np.linalg.det(phi))),
+        det_monodromy=det,
         liouville_expected=float(np.exp(-T * np.trace(minv @ c))),
-        log_det_monodromy=float(np.linalg.slogdet(phi)[1]),
+        log_det_monodromy=logdet,
         log_liouville_expected=float(-T * np.trace(minv @ c)),
         method=use,
         n_steps=steps,
