@@ -644,8 +644,11 @@ def run_description(run: dict, ds: xr.Dataset | None = None) -> str:
     load = run.get("load_torque")
     load_text = ""
     if isinstance(load, list | tuple):
-        load_text = (f", load torque {load[0]:g} + {load[1]:g} ω + {load[2]:g} ω|ω| N m "
-                     "(ω output speed [rad/s])")
+        terms = [t for t in (f"{load[0]:g}" if load[0] else "",
+                             f"{load[1]:g} ω" if load[1] else "",
+                             f"{load[2]:g} ω|ω|" if load[2] else "") if t]
+        load_text = (f", load torque {' + '.join(terms) or '0'} N m"
+                     + (" (ω output speed [rad/s])" if load[1] or load[2] else ""))
     elif load is not None and drive != "speed":
         load_text = f", load torque {float(load):g} N m"
     if drive == "torque":

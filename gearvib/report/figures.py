@@ -83,29 +83,39 @@ class Label:
     style: dict | None = None
 
 
-def place_labels(fig: Figure, ax: Any, labels: Sequence[Label], *, pad: float = 1.5,
+def place_labels(fig: Figure, ax: Any, labels: Sequence[Any], *, pad: float = 1.5,
                  avoid: Sequence[Any] = ()) -> list[Any]:
     """Annotate ``ax`` with every label that fits without overlapping another.
 
-    The figure is laid out once, then each label is tried at its offsets in turn and kept at the
-    first one where its box (grown by ``pad`` pixels) overlaps no label placed before, no box in
-    ``avoid`` and stays inside the figure; a label that fits nowhere is left out. The layout is
-    then frozen, so the saved figure shows the boxes that were checked.
+    The figure is laid out and drawn once, then each label is tried at its offsets in turn and
+    kept at the first one where its box (grown by ``pad`` pixels) overlaps no label placed
+    before and no artist in ``avoid`` (e.g. the title, a legend), and stays inside the figure;
+    a label that fits nowhere is left out (the tables carry it). The layout is then frozen, so
+    the saved figure shows the boxes that were checked. With ``ax=None``, ``labels`` are
+    ``(axes, Label)`` pairs (labels of several panels placed together).
 
     Returns
     -------
     list
         The annotations placed.
     """
-    renderer = _renderer(fig)
-    placed: list[Any] = list(avoid)
+    items = [(ax, lab) for lab in labels] if ax is not None else list(labels)
+    if not hasattr(fig.canvas, "get_renderer"):
+        from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+        FigureCanvasAgg(fig)
+    fig.canvas.draw()  # the one layout and draw: the text extents below need no other
+    renderer = fig.canvas.get_renderer()
+    fig.set_layout_engine("none")
+    placed: list[Any] = [a.get_window_extent(renderer) for a in avoid
+                         if a is not None and a.get_visible()]
     fig_box = fig.bbox
     out = []
-    for lab in labels:
+    for axes, lab in items:
         for off in lab.offsets:
-            ann = ax.annotate(lab.text, lab.xy, xytext=off, textcoords="offset points",
-                              annotation_clip=False, **(lab.style or {}))
-            box = ann.get_window_extent(renderer).expanded(1.0, 1.0)
+            ann = axes.annotate(lab.text, lab.xy, xytext=off, textcoords="offset points",
+                                annotation_clip=False, **(lab.style or {}))
+            box = ann.get_window_extent(renderer)
             grown = box.padded(pad)
             inside = (box.x0 >= fig_box.x0 and box.x1 <= fig_box.x1 and box.y0 >= fig_box.y0
                       and box.y1 <= fig_box.y1)
@@ -114,29 +124,7 @@ def place_labels(fig: Figure, ax: Any, labels: Sequence[Label], *, pad: float = 
                 out.append(ann)
                 break
             ann.remove()
-    fig.set_layout_engine("none")
     return out
-
-
-def _renderer(fig: Figure) -> Any:
-    """The figure laid out and drawn once on an Agg canvas; its renderer (text extents)."""
-    if not hasattr(fig.canvas, "get_renderer"):
-        from matplotlib.backends.backend_agg import FigureCanvasAgg
-
-        FigureCanvasAgg(fig)
-    fig.canvas.draw()
-    return fig.canvas.get_renderer()
-
-
-def _title_box(fig: Figure, ax: Any) -> list[Any]:
-    return [ax.title.get_window_extent(_renderer(fig))]
-
-
-def _legend_box(fig: Figure, ax: Any) -> list[Any]:
-    leg = ax.get_legend()
-    if leg is None:
-        return []
-    return [leg.get_window_extent(_renderer(fig))]
 
 
 # --------------------------------------------------------------------------- tooth forces
@@ -273,12 +261,7 @@ def spectra_figure(ca: CaseAnalysis, *, ylim: tuple[float, float] | None = None,
                                            ((0, 4), (14, 4), (-14, 4), (0, 16)),
                                            {"ha": "center", "va": "bottom",
                                             "fontsize": 6.5})))
-    placed_boxes: list[Any] = []
-    for ax in axes:
-        placed = place_labels(fig, ax, [lab for a, lab in labels_by_ax if a is ax],
-                              avoid=placed_boxes)
-        r = _renderer(fig)
-        placed_boxes += [p.get_window_extent(r) for p in placed]
+    place_labels(fig, None, labels_by_ax)
     return fig
 
 
@@ -443,7 +426,7 @@ def sonogram_figure(ca: CaseAnalysis, *, level_max: float | None = None,
                facecolor="0.35", labelcolor="w", framealpha=1.0)
     ax.set_title(f"{ca.name}: sonogram of the tooth force {ca.force_mesh} (cf. paper Fig. 11)"
                  f"\n{ca.fmap.window}, RBW {ca.fmap.resolution_hz:.3g} Hz", fontsize=9)
-    place_labels(fig, ax, labels, avoid=_title_box(fig, ax))
+    place_labels(fig, ax, labels, avoid=[ax.title])
     return fig
 
 
@@ -485,7 +468,7 @@ def order_map_figure(ca: CaseAnalysis, *, level_max: float | None = None,
     ax.set_title(f"{ca.name}: rpm-order map of {ca.force_mesh}; mesh orders of "
                  + ("every mesh frequency" if several else f"{ca.groups[0].order:.4g}"),
                  fontsize=9)
-    place_labels(fig, ax, labels, avoid=_title_box(fig, ax))
+    place_labels(fig, ax, labels, avoid=[ax.title])
     return fig
 
 
@@ -550,5 +533,5 @@ def stability_figure(ca: CaseAnalysis, *, figsize: tuple[float, float] = (8.0, 4
                             {"fontsize": 7, "ha": "center", "va": "bottom", "color": "C3",
                              "bbox": {"boxstyle": "round,pad=0.15", "fc": "w", "ec": "C3",
                                       "lw": 0.5, "alpha": 0.85}}))
-    place_labels(fig, ax, labels, avoid=_legend_box(fig, ax))
+    place_labels(fig, ax, labels, avoid=[ax.get_legend()])
     return fig
