@@ -60,12 +60,13 @@ _STUDY = {"title", "cases", "reference", "description"}
 _CASE = {"name", "config", "label"}
 _RUN = set(DEFAULT_RUN)
 _ANALYSIS = {"n_max", "stability_points", "map_resolution_hz", "map_overlap", "orders",
-             "threshold_db", "tolerance", "frequency_max_hz", "force_mesh", "spectrum_peaks"}
+             "threshold_db", "tolerance", "frequency_max_hz", "force_mesh", "spectrum_peaks",
+             "stability"}
 _NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,99}$")
 ANALYSIS_LIMITS: dict[str, tuple[float, float]] = {
     "n_max": (1, 20),
     "stability_points": (2, 20_000),
-    "orders": (1, 100),
+    "orders": (0, 100),
     "spectrum_peaks": (1, 200),
     "map_resolution_hz": (1e-3, 1e6),
     "tolerance": (0.0, 0.5),
@@ -82,6 +83,9 @@ MAX_CASES = 100
 """Most cases of one study."""
 MAP_COPIES = 4
 """Peak memory of a map as multiples of its frames x bins (map, dB, Dataset, image)."""
+STABILITY = ("full", "coarse", "off")
+"""Values of ``[analysis] stability``: the Floquet chart at ``stability_points`` speeds,
+at most 80 speeds with looser accuracy, or none."""
 
 
 def _short(value: Any) -> str:
@@ -178,12 +182,20 @@ class AnalysisSettings:
         Highest order ``n`` of the theory candidates ``2 f_i/n``, ``(f_i + f_j)/n``.
     stability_points : int
         Speeds of the Floquet stability chart over the run-up range (boundaries refined).
+    stability : str
+        ``"full"`` (default): the Floquet chart at ``stability_points`` speeds, ``max|mu|``
+        to 1e-7 near the stability limit; ``"coarse"``: at most 80 speeds, ``max|mu|`` to
+        1e-6, boundaries to 1e-6; ``"off"``: no chart (parametric rises are then judged by
+        the theory candidates alone).
     map_resolution_hz : float
         Resolution bandwidth of the rpm-frequency map [Hz].
     map_overlap : float
         Frame overlap of the maps, in ``[0, 1)``.
     orders : int
-        Mesh orders ``1..orders`` drawn in the sonogram and used for resonance detection.
+        Mesh orders ``1..orders`` of every mesh frequency, drawn in the sonogram and used for
+        resonance detection; 0 (default): per mesh frequency enough orders to reach the
+        highest natural frequency in the map at the top speed, 7 to 20 (7 for the paper's
+        set).
     threshold_db : float
         Minimum rise above the background of a detected resonance [dB].
     tolerance : float
@@ -202,12 +214,18 @@ class AnalysisSettings:
     stability_points: int = 300
     map_resolution_hz: float = 20.0
     map_overlap: float = 0.9
-    orders: int = 7
+    orders: int = 0
     threshold_db: float = 6.0
     tolerance: float = 0.03
     frequency_max_hz: float = 0.0
     force_mesh: str = ""
     spectrum_peaks: int = 10
+    stability: str = "full"
+
+    def __post_init__(self) -> None:
+        if self.stability not in STABILITY:
+            raise ConfigError(f"[analysis].stability = {self.stability!r}; admissible: "
+                              + ", ".join(repr(x) for x in STABILITY))
 
     def to_dict(self) -> dict[str, Any]:
         """All settings as a plain dict."""
@@ -222,6 +240,11 @@ class AnalysisSettings:
             if k in table:
                 lo, hi = ANALYSIS_LIMITS[k]
                 kw[k] = _integer(table[k], f"{where}.{k}", int(lo), int(hi))
+        if "stability" in table:
+            if table["stability"] not in STABILITY:
+                raise ConfigError(f"{where}.stability = {_short(table['stability'])}; "
+                                  "admissible: " + ", ".join(repr(x) for x in STABILITY))
+            kw["stability"] = table["stability"]
         for k in ("map_resolution_hz", "tolerance"):
             if k in table:
                 lo, hi = ANALYSIS_LIMITS[k]
@@ -330,33 +353,58 @@ class Study:
             duration, "duration", minimum=MIN_DURATION, maximum=MAX_DURATION)))
 
 
-def resolve_run(run: RunSettings, gearset_cfg: dict) -> dict[str, float]:
-    """Complete run settings for one gear set.
+def resolve_run(run: RunSettings, gearset_cfg: dict) -> dict[str, Any]:
+    """Complete, checked run settings for one gear set.
 
-    Order of precedence: the study's ``[run]`` value, the gear set's ``[simulation]`` value,
-    :data:`DEFAULT_RUN`. Only the keys of :data:`DEFAULT_RUN` are used from ``[simulation]``.
+    The gear set's ``[simulation]`` table decides the drive (``"speed"``, ``"torque"`` or
+    ``"motor"``, see :mod:`gearvib.simulation.settings`); the study's ``[run]`` values replace
+    its values; :data:`DEFAULT_RUN` fills what neither gives (a speed drive without
+    ``input_torque`` or ``load_torque`` gets the default input torque).
 
     Returns
     -------
     dict
-        ``speed_start_rpm``, ``speed_end_rpm``, ``duration``, ``input_torque``, ``fs_out``.
+        :func:`gearvib.simulation.settings.read_run_settings` of the merged table (``drive``,
+        ``speed_start_rpm``, ``speed_end_rpm``, ``duration``, ``input_torque`` where the drive
+        has one, ``load_torque``, ``motor``, ...) with ``fs_out`` always set.
+
+    Raises
+    ------
+    ConfigError
+        A value is not admissible, or a ``[run]`` value does not apply to the drive (the
+        message names the key, the drive and the admissible range).
     """
+    from gearvib.simulation.settings import read_run_settings
+
     sim = gearset_cfg.get("simulation", {}) if isinstance(gearset_cfg, dict) else {}
     if not isinstance(sim, dict):
         raise ConfigError(f"[simulation] must be a table, got {type(sim).__name__}")
+    sim = dict(sim)
     given = run.to_dict()
-    out = {}
-    for k, default in DEFAULT_RUN.items():
-        v = given.get(k, sim.get(k, default))
-        lo, hi = _RUN_LIMITS[k]
-        out[k] = _number(v, f"run setting {k}", minimum=lo, maximum=hi)
-    if not out["duration"] > 0:
-        raise ConfigError(f"duration = {out['duration']!r}; admissible: > 0 s")
-    if out["speed_end_rpm"] <= out["speed_start_rpm"] or out["speed_start_rpm"] < 0:
+    fs_out = given.pop("fs_out", None)
+    drive = sim.get("drive", "speed")
+    if "input_torque" in given and drive == "motor":
+        raise ConfigError("[run].input_torque does not apply to this gear set: its "
+                          "[simulation] drive is 'motor' (the torque follows the motor "
+                          "characteristic); remove it from [run] or use a speed or torque drive")
+    if drive == "speed" and "input_torque" in given:
+        sim.pop("load_torque", None)  # the study's input torque replaces the set's load
+    if drive == "speed" and not ({"input_torque", "load_torque"} & (set(sim) | set(given))):
+        given["input_torque"] = DEFAULT_RUN["input_torque"]
+    for k in ("speed_start_rpm", "speed_end_rpm", "duration"):
+        if k not in sim and k not in given and (drive == "speed" or k == "duration"):
+            given[k] = DEFAULT_RUN[k]
+    try:
+        out = read_run_settings(sim, given)
+    except ValueError as exc:
+        raise ConfigError(str(exc)) from None
+    out["fs_out"] = _number(fs_out if fs_out is not None else (
+        out.get("fs_out") or DEFAULT_RUN["fs_out"]), "run setting fs_out", positive=True,
+        maximum=_RUN_LIMITS["fs_out"][1])
+    if drive == "speed" and (out["speed_end_rpm"] <= out["speed_start_rpm"]
+                             or out["speed_start_rpm"] < 0):
         raise ConfigError(f"speed range {out['speed_start_rpm']:g} -> {out['speed_end_rpm']:g} "
                           "min-1 is not admissible: need 0 <= start < end (a run-up)")
-    if not out["fs_out"] > 0:
-        raise ConfigError(f"fs_out = {out['fs_out']!r}; admissible: > 0 Hz")
     return out
 
 

@@ -42,7 +42,19 @@ from tests.gearvib.two_stage_sets import other_stage, paper_stage, two_stage_con
 
 REPO = Path(__file__).resolve().parents[2]
 PRESETS = {name: load_config(name)[0] for name in list_presets()}
-RECIPES = {p.name: tomllib.loads(p.read_text()) for p in sorted((REPO / "reports").glob("*.toml"))}
+
+
+def _recipe(path: Path) -> dict:
+    """A recipe with its gear-set files as absolute paths (it is rewritten elsewhere)."""
+    doc = tomllib.loads(path.read_text())
+    for case in doc.get("study", {}).get("cases", []):
+        cfg = case.get("config", "")
+        if cfg.endswith(".toml") and not Path(cfg).is_absolute():
+            case["config"] = str((path.parent / cfg).resolve())
+    return doc
+
+
+RECIPES = {p.name: _recipe(p) for p in sorted((REPO / "reports").glob("*.toml"))}
 # a literature model (type = "general", [[body]] / [[mesh]] / [[coupling]]) and a two-stage set
 # with its own stages, as the tests build them
 PRESETS["general: lin-parker"] = lin_parker()
