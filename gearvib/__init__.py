@@ -2,8 +2,11 @@
 
 The package is layered, and imports flow one way only::
 
-    geometry, kinematics, stiffness  ->  structure, config  ->  assembly  ->  modal
-    ->  kernels  ->  simulation/*  ->  simulate, io  ->  report, cli
+    geometry, kinematics, stiffness  ->  structure, config, memory  ->  assembly  ->  modal
+    ->  kernels  ->  simulation/*  ->  simulate, io  ->  report, outputs, cli
+
+``tempfiles`` and ``interrupts`` (temporary-file names, signals, abandonable I/O) import
+nothing of gearvib but each other and are used from ``io`` upwards.
 
 The separate top-level package :mod:`analysis` (spectra, orders, instability) never imports
 :mod:`gearvib`.

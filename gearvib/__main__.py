@@ -1,7 +1,5 @@
 """``python -m gearvib``: the command-line interface."""
 
-import sys
+from gearvib.cli import run
 
-from gearvib.cli import main
-
-sys.exit(main())
+run()

@@ -65,6 +65,7 @@ from gearvib.geometry import (
 )
 from gearvib.model import AssembledModel
 from gearvib.structure import RIGID, Body, GearSet, Mesh
+from gearvib.teeth import mesh_tooth_map
 
 __all__ = ["LUMPED_RADIUS_TOLERANCE", "N_TABLE", "ResolvedMesh", "assemble", "resolve_mesh"]
 
@@ -551,7 +552,7 @@ def assemble(gs: GearSet, *, n_table: int = N_TABLE) -> AssembledModel:
     }
     if held:  # members at rest in the kinematics through their torsional supports
         meta["kinematics_at_rest"] = list(gs.fixed) + held
-    return AssembledModel(
+    model = AssembledModel(
         dof_names=dof_names,
         dof_units=tuple("rad" if d.endswith(".theta") else "m" for d in dof_names),
         mass=m_red,
@@ -580,7 +581,13 @@ def assemble(gs: GearSet, *, n_table: int = N_TABLE) -> AssembledModel:
         kinematic_ratios=ratios,
         mesh_frequencies_per_rpm=f_per_rpm,
         meta=meta,
+        mesh_teeth=mesh_tooth_map(gs.meshes, bodies, resolved, s0, centre),
     )
+    if gs.faults:
+        model = model.with_faults(gs.faults)
+    if gs.sensors:
+        model = model.with_sensors(gs.sensors)
+    return model
 
 
 BACK_LINE_RTOL = 1e-12

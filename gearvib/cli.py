@@ -1,22 +1,43 @@
 """Command line: ``gearvib demo | modes | catalogue | simulate | preset | report | sweep``.
 
 Every subcommand has ``--help``. Errors are printed as one line on stderr with exit code 2
-(bad input) or 1 (a failed computation); nothing is written half.
+(bad input: a description, a setting, an option, an output that exists or cannot be
+written, a run refused for its size) or 1 (a failed computation: a numerical blow-up, no
+static equilibrium). SIGINT, SIGTERM and SIGHUP stop any command within a second or two with
+exit code 130, 143 or 129, leaving no partial output and no temporary file
+(:mod:`gearvib.interrupts`). Outputs follow one rule (:mod:`gearvib.outputs`): an existing file
+is replaced only with ``--overwrite``, atomically, and every output is checked before the
+work starts.
+
+Each subcommand is one ``_cmd_<name>(args)`` function and one block in :func:`_parser`.
 """
 
 from __future__ import annotations
 
 import argparse
+import math
+import signal
 import sys
+import warnings
 from collections.abc import Sequence
+from typing import NoReturn
 
 from gearvib import __version__
+from gearvib.interrupts import Interrupted, exit_now, pending_signal, signals_as_exceptions
 
-__all__ = ["main"]
+__all__ = ["main", "run"]
 
 
 class CliError(Exception):
     """A user error to print as one line."""
+
+
+class _Parser(argparse.ArgumentParser):
+    """An argument parser whose errors are one line, like every other error of gearvib."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f"gearvib: error: {self.prog}: {_one_line(message)} (see {self.prog} "
+                  "--help)\n")
 
 
 def _cmd_modes(args: argparse.Namespace) -> int:
@@ -51,14 +72,23 @@ def _cmd_catalogue(args: argparse.Namespace) -> int:
     return 0
 
 
+MAX_COUNT = 1000
+"""Largest harmonic or sideband count accepted on the command line."""
+
+
 def _non_negative_int(text: str) -> int:
     try:
         v = int(text)
     except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not an integer") from None
-    if v < 0:
-        raise argparse.ArgumentTypeError(f"{text!r} must be >= 0")
+        raise argparse.ArgumentTypeError(f"{text[:40]!r} is not an integer") from None
+    if not 0 <= v <= MAX_COUNT:
+        raise argparse.ArgumentTypeError(f"{text[:40]!r} is not admissible (admissible: "
+                                         f"0..{MAX_COUNT})")
     return v
+
+
+MAX_RPM = 1e9
+"""Largest speed accepted on the command line [min^-1] (as ``[simulation]``)."""
 
 
 def _speed_range(text: str) -> tuple[float, float]:
@@ -66,26 +96,53 @@ def _speed_range(text: str) -> tuple[float, float]:
         lo, hi = (float(v) for v in text.split(":"))
     except ValueError:
         raise argparse.ArgumentTypeError(
-            f"--speed {text!r}: expected START:END in min-1, e.g. 0:4000") from None
-    if lo < 0 or hi < 0:
-        raise argparse.ArgumentTypeError("--speed: speeds must be >= 0 min-1")
+            f"{text[:40]!r}: expected START:END in min-1, e.g. 0:4000") from None
+    if not all(math.isfinite(v) and 0 <= v <= MAX_RPM for v in (lo, hi)):
+        raise argparse.ArgumentTypeError(f"{text[:40]!r}: speeds must be finite, 0 .. "
+                                         f"{MAX_RPM:g} min-1")
     return lo, hi
 
 
-def _positive(text: str) -> float:
+def _number(text: str, low: float = -math.inf, high: float = math.inf, *,
+            strict: bool = False) -> float:
     try:
         v = float(text)
     except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
-    if not v > 0:
-        raise argparse.ArgumentTypeError(f"{text!r} must be > 0")
+        raise argparse.ArgumentTypeError(f"{text[:40]!r} is not a number") from None
+    if not math.isfinite(v):
+        raise argparse.ArgumentTypeError(f"{text[:40]!r} is not admissible (admissible: a "
+                                         "finite number)")
+    if v < low or (strict and v == low) or v > high:
+        parts = [f"{'>' if strict else '>='} {low:g}" if low > -math.inf else "",
+                 f"<= {high:g}" if high < math.inf else ""]
+        rng = " and ".join(p for p in parts if p)
+        raise argparse.ArgumentTypeError(f"{text[:40]!r} is not admissible (admissible: {rng})")
+    return v
+
+
+def _limits(low: float = -math.inf, high: float = math.inf, *, strict: bool = False):
+    """An argparse type: a finite number in ``[low, high]`` (``strict``: ``> low``)."""
+    def parse(text: str) -> float:
+        return _number(text, low, high, strict=strict)
+
+    parse.__name__ = "number"
+    return parse
+
+
+def _steps(text: str) -> int:
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text[:40]!r} is not an integer") from None
+    if not 1 <= v <= 10**15:
+        raise argparse.ArgumentTypeError(f"{v} is not admissible (admissible: 1..1e15)")
     return v
 
 
 def _positive_int(text: str) -> int:
     v = _non_negative_int(text)
     if v < 1:
-        raise argparse.ArgumentTypeError(f"{text!r} must be >= 1")
+        raise argparse.ArgumentTypeError(f"{text[:40]!r} must be >= 1")
     return v
 
 
@@ -109,34 +166,30 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     from gearvib.assembly import assemble
     from gearvib.config import gearset_from_dict, load_config
     from gearvib.io import write_netcdf
+    from gearvib.outputs import check_output_file
     from gearvib.simulate import simulate
     from gearvib.simulation.settings import conditions_from_settings
 
-    cfg, base = load_config(args.config)
-    out = _check_output_file(args.output)
+    cfg, base = load_config(args.config)  # inputs first, then the output, then the work
     run = run_settings(cfg, args)
-    model = assemble(gearset_from_dict(cfg, base=base))
+    gearset = gearset_from_dict(cfg, base=base)
     cond = conditions_from_settings(run)
+    out, removed = check_output_file(args.output, overwrite=args.overwrite)
+    _report_removed(removed)
+    model = assemble(gearset)
     result = simulate(model, cond, dt=run["dt"], fs_out=run["fs_out"],
                       gyroscopic=run["gyroscopic"], progress=None if not args.quiet else False,
-                      config={"gearset": cfg, "run": run})
+                      config={"gearset": cfg, "run": run}, max_steps=args.max_steps)
     path = write_netcdf(result.to_dataset(), out)
     print(f"wrote {path}")
     return 0
 
 
-def _check_output_file(path: str):
-    from pathlib import Path
-
-    p = Path(path)
-    parent = p.parent if str(p.parent) else Path(".")
-    if not parent.is_dir():
-        raise CliError(f"output folder {str(parent)!r} does not exist")
-    import os
-
-    if not os.access(parent, os.W_OK):
-        raise CliError(f"output folder {str(parent)!r} is not writable")
-    return p
+def _report_removed(removed: Sequence) -> None:
+    if removed:
+        names = ", ".join(p.name for p in removed[:3]) + (" ..." if len(removed) > 3 else "")
+        print(f"gearvib: removed {len(removed)} temporary file(s) of killed runs: {names}",
+              file=sys.stderr)
 
 
 def _cmd_preset(args: argparse.Namespace) -> int:
@@ -156,19 +209,30 @@ def _cmd_preset(args: argparse.Namespace) -> int:
 def _cmd_report(args: argparse.Namespace) -> int:
     from pathlib import Path
 
+    from gearvib.outputs import check_output_folder, removed_if_left_empty
     from gearvib.report import build_report, load_study, run_study
 
     inputs = [Path(i) for i in args.inputs]
     out = Path(args.output)
+    report_files = ["report.html", "report.pdf"]
     if len(inputs) == 1 and inputs[0].suffix == ".toml":
-        result = run_study(load_study(inputs[0]), out, progress=not args.quiet,
-                           duration=args.duration)
-        paths = result.report
+        study = load_study(inputs[0])
+        if args.duration is not None:
+            study = study.with_duration(args.duration)
+        _report_removed(check_output_folder(
+            out, [f"{c.name}.nc" for c in study.cases] + report_files,
+            overwrite=args.overwrite)[1])
+        with removed_if_left_empty(out):
+            paths = run_study(study, out, progress=not args.quiet).report
     else:
         for p in inputs:
             if p.suffix not in (".nc", ".nc4"):
                 raise CliError(f"{str(p)!r}: expected a study .toml or run .nc files")
-        paths = build_report(inputs, out)
+        if args.duration is not None:
+            raise CliError("--duration applies to a study .toml, not to existing runs")
+        _report_removed(check_output_folder(out, report_files, overwrite=args.overwrite)[1])
+        with removed_if_left_empty(out):
+            paths = build_report(inputs, out)
     print(f"report: {paths.html}")
     print(f"        {paths.pdf}")
     return 0
@@ -177,14 +241,19 @@ def _cmd_report(args: argparse.Namespace) -> int:
 def _cmd_demo(args: argparse.Namespace) -> int:
     from pathlib import Path
 
+    from gearvib.outputs import check_output_folder, removed_if_left_empty
     from gearvib.report import Study, run_study
 
     out = Path(args.output)
     study = Study.for_presets(["paper-case1", "paper-case2"],
                               title="gearvib demo: the paper's cases 1 and 2")
+    _report_removed(check_output_folder(
+        out, [f"{c.name}.nc" for c in study.cases] + ["report.html", "report.pdf"],
+        overwrite=args.overwrite)[1])
     print(f"gearvib demo: simulating the paper's run-ups (0 -> 4000 min-1 in "
           f"{args.duration or 1.0:g} s, cases 1 and 2) into {out}/ ...")
-    result = run_study(study, out, progress=not args.quiet, duration=args.duration)
+    with removed_if_left_empty(out):
+        result = run_study(study, out, progress=not args.quiet, duration=args.duration)
     for name, path in result.runs.items():
         print(f"  run {name}: {path}")
     print(f"  report: {result.report.html}")
@@ -243,8 +312,12 @@ def _workers(text: str) -> int:
     return v
 
 
+_OVERWRITE_HELP = ("replace existing output files (atomically, once the new ones are "
+                   "complete); without it an existing output is an error")
+
+
 def _parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(
+    p = _Parser(
         prog="gearvib",
         description="Vibration simulation and order analysis of planetary gear sets.",
     )
@@ -256,7 +329,8 @@ def _parser() -> argparse.ArgumentParser:
                        description="Modal analysis of the mean-stiffness system.")
     m.add_argument("config", help="TOML file or preset name (e.g. paper-case1)")
     m.add_argument("--json", action="store_true", help="print JSON instead of a table")
-    m.add_argument("--carrier-speed", type=float, default=0.0, metavar="RPM",
+    m.add_argument("--carrier-speed", type=_limits(-MAX_RPM, MAX_RPM), default=0.0,
+                   metavar="RPM",
                    help="carrier speed for gyroscopic/centripetal terms [min-1] (default 0)")
     m.set_defaults(func=_cmd_modes)
 
@@ -267,7 +341,8 @@ def _parser() -> argparse.ArgumentParser:
                        "planet-pass sidebands (only those the planet phasing lets through to a "
                        "sensor on the fixed member). Families: see docs/catalogue.md.")
     c.add_argument("config", help="TOML file or preset name")
-    c.add_argument("--speed", type=_positive, required=True, metavar="RPM",
+    c.add_argument("--speed", type=_limits(0.0, MAX_RPM, strict=True), required=True,
+                   metavar="RPM",
                    help="speed of the reference shaft [min-1]")
     c.add_argument("--reference", metavar="MEMBER",
                    help="reference shaft of the orders (default: the input member)")
@@ -288,15 +363,21 @@ def _parser() -> argparse.ArgumentParser:
                        "speeds as a CF netCDF4 file.")
     s.add_argument("config", help="TOML file or preset name")
     s.add_argument("-o", "--output", required=True, help="output .nc file")
+    s.add_argument("-f", "--overwrite", action="store_true", help=_OVERWRITE_HELP)
     s.add_argument("--speed", type=_speed_range, metavar="START:END",
                    help="input speed range [min-1], e.g. 0:4000")
-    s.add_argument("--duration", type=_positive, metavar="S", help="run-up duration [s]")
-    s.add_argument("--fs", dest="fs_out", type=_positive, metavar="HZ",
+    s.add_argument("--duration", type=_limits(1e-6, 1e7), metavar="S",
+                   help="run-up duration [s]")
+    s.add_argument("--fs", dest="fs_out", type=_limits(0.0, 1e12, strict=True), metavar="HZ",
                    help="output sample rate [Hz] (default >= 20 kHz)")
-    s.add_argument("--dt", type=_positive, metavar="S", help="integration step [s] (default: "
+    s.add_argument("--dt", type=_limits(0.0, 1.0, strict=True), metavar="S",
+                   help="integration step [s] (default: "
                    "from the highest natural and mesh frequency)")
-    s.add_argument("--torque", dest="input_torque", type=float, metavar="NM",
+    s.add_argument("--torque", dest="input_torque", type=_limits(-1e12, 1e12), metavar="NM",
                    help="input torque [N m] (default from the description)")
+    s.add_argument("--max-steps", type=_steps, default=None, metavar="N",
+                   help="time budget: refuse runs of more internal steps (default 1e9, about "
+                   "50 min for a small set)")
     s.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     s.set_defaults(func=_cmd_simulate)
 
@@ -313,7 +394,8 @@ def _parser() -> argparse.ArgumentParser:
     r.add_argument("inputs", nargs="+", help="a study .toml, or one or more run .nc files")
     r.add_argument("-o", "--output", default="gearvib-report", help="output folder "
                    "(default ./gearvib-report)")
-    r.add_argument("--duration", type=_positive, metavar="S",
+    r.add_argument("-f", "--overwrite", action="store_true", help=_OVERWRITE_HELP)
+    r.add_argument("--duration", type=_limits(1e-6, 1e7), metavar="S",
                    help="override the run-up duration of a study [s]")
     r.add_argument("-q", "--quiet", action="store_true", help="no progress display")
     r.set_defaults(func=_cmd_report)
@@ -324,7 +406,8 @@ def _parser() -> argparse.ArgumentParser:
                        "torque, and write the netCDF runs and an order-analysis report.")
     d.add_argument("-o", "--output", default="gearvib-demo",
                    help="output folder (default ./gearvib-demo)")
-    d.add_argument("--duration", type=_positive, metavar="S",
+    d.add_argument("-f", "--overwrite", action="store_true", help=_OVERWRITE_HELP)
+    d.add_argument("--duration", type=_limits(1e-6, 1e7), metavar="S",
                    help="run-up duration [s] (default 1; shorter for a quick look)")
     d.add_argument("-q", "--quiet", action="store_true", help="no progress display")
     d.set_defaults(func=_cmd_demo)
@@ -351,22 +434,116 @@ def _parser() -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run the CLI; returns the exit code."""
+    """Run the CLI; returns the exit code.
+
+    SIGINT, SIGTERM and SIGHUP raise :class:`gearvib.interrupts.Interrupted` while a command
+    runs. After the clean-up (temporary files removed, the message printed) the process exits
+    at once with ``128 + signal number`` (``os._exit``): work abandoned by the interrupt (a
+    netCDF write in its worker thread) is not waited for, and the interpreter's shutdown,
+    which takes 0.5-1.3 s once xarray and numba are loaded, is skipped. A signal whose
+    exception library code swallowed or converted ends the command the same way.
+    """
+    with signals_as_exceptions():
+        return _run_command(argv)
+
+
+def run() -> None:
+    """The ``gearvib`` command (console script, ``python -m gearvib``): :func:`main`, then exit.
+
+    The process leaves with ``os._exit`` right after the command, with the signal handlers
+    still active: the interpreter's shutdown (0.5-1.3 s with xarray and numba loaded) is
+    skipped, so a signal cannot arrive in it and end the process with the default action
+    instead of exit code 130/143. Standard streams and logging are flushed first; every output
+    file is complete and closed by then.
+    """
+    import logging
+
+    with signals_as_exceptions():
+        try:
+            code = _run_command(None)
+        except SystemExit as exc:  # --help, --version, option errors
+            code = exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 1)
+            if exc.code is not None and not isinstance(exc.code, int):
+                print(exc.code, file=sys.stderr)
+        if hasattr(signal, "pthread_sigmask"):  # done: a signal from now on changes nothing
+            signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM,
+                                                      *([signal.SIGHUP]
+                                                        if hasattr(signal, "SIGHUP") else [])})
+        logging.shutdown()
+        exit_now(code)
+
+
+def _run_command(argv: Sequence[str] | None) -> int:
+    try:
+        code = _main(argv)
+    except BaseException as exc:
+        sig = pending_signal()
+        if sig is None and isinstance(exc, KeyboardInterrupt):
+            sig = signal.SIGINT
+        if sig is None:
+            raise
+        _exit_interrupted(sig)
+    sig = pending_signal()
+    if sig is not None:  # received, and its exception swallowed by library code
+        _exit_interrupted(sig)
+    return code
+
+
+def _exit_interrupted(signum: int) -> None:
+    try:
+        name = signal.Signals(signum).name
+    except ValueError:
+        name = f"signal {signum}"
+    print(f"gearvib: interrupted by {name} (nothing half-written was kept)", file=sys.stderr)
+    exit_now(128 + signum)
+
+
+def _main(argv: Sequence[str] | None) -> int:
     parser = _parser()
     args = parser.parse_args(argv)
-    try:
-        return int(args.func(args) or 0)
-    except KeyboardInterrupt:
-        print("gearvib: interrupted (nothing half-written was kept)", file=sys.stderr)
-        return 130
-    except (CliError, ValueError, FileNotFoundError, PermissionError, OSError) as exc:
-        print(f"gearvib: error: {_one_line(exc)}", file=sys.stderr)
-        return 2
-    except RuntimeError as exc:  # a failed computation, e.g. a numerical blow-up
+    if getattr(args, "max_steps", 0) is None:
+        from gearvib.simulation.run_size import DEFAULT_MAX_STEPS
+
+        args.max_steps = DEFAULT_MAX_STEPS
+    with warnings.catch_warnings():
+        warnings.showwarning = _show_warning
+        try:
+            return int(args.func(args) or 0)
+        except Exception as exc:
+            sig = pending_signal()
+            if sig is not None:  # an interrupt that library code turned into another error
+                raise Interrupted(sig) from None
+            return _error(exc)
+
+
+def _error(exc: Exception) -> int:
+    """Print a documented error as one line; returns the exit code (re-raises the rest)."""
+    from gearvib.config import ConfigError
+    from gearvib.simulation.errors import SimulationError
+
+    if isinstance(exc, SimulationError):  # a failed computation, e.g. a numerical blow-up
         print(f"gearvib: failed: {_one_line(exc)}", file=sys.stderr)
         return 1
+    if isinstance(exc, CliError | ConfigError | ValueError | OSError):
+        print(f"gearvib: error: {_one_line(exc)}", file=sys.stderr)
+        return 2
+    if isinstance(exc, MemoryError):
+        print("gearvib: failed: out of memory (a size the input checks did not foresee; "
+              "please report it with the command)", file=sys.stderr)
+        return 1
+    if isinstance(exc, RuntimeError):
+        print(f"gearvib: failed: {_one_line(exc)}", file=sys.stderr)
+        return 1
+    raise exc
 
 
-def _one_line(exc: BaseException) -> str:
-    text = str(exc).strip()
-    return text.splitlines()[0] if text else type(exc).__name__
+def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    print(f"gearvib: warning: {_one_line(message)}", file=sys.stderr)
+
+
+def _one_line(exc: BaseException | Warning | str) -> str:
+    """The message on one line, control characters escaped (messages may echo input)."""
+    text = " ".join(str(exc).split())
+    if not text:
+        return type(exc).__name__
+    return "".join(c if c.isprintable() else repr(c)[1:-1] for c in text)

@@ -6,7 +6,9 @@ couplings listed one by one; this is also how a literature model given directly 
 parameters is written). All values are SI (m, kg, kg m^2, N/m, N s/m), angles are in degrees
 in keys ending in ``_deg``. A support stiffness may be ``"rigid"`` (the DOF is removed) or
 ``"free"`` (0). Every table is checked: an unknown key is an error that names the key and the
-admissible ones. See the README for a full example.
+admissible ones, and every value is type- and range-checked (numbers finite, integers such as
+tooth numbers integers -- ``33.9`` and ``"33"`` are refused --, counts and list lengths
+bounded, ``n_planets`` and ``planet_angles_deg`` consistent). See the README for a full example.
 """
 
 from __future__ import annotations
@@ -21,7 +23,9 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
+from gearvib.faults.description import FaultError, faults_from_list
 from gearvib.geometry import Toothing
+from gearvib.sensors.description import SensorError, sensors_from_list
 from gearvib.stiffness import stiffness_from_dict
 from gearvib.structure import (
     RIGID,
@@ -38,6 +42,9 @@ from gearvib.structure import (
 from gearvib.structure import MeshSpec as _MeshSpec
 
 __all__ = [
+    "MAX_LIST",
+    "MAX_PLANETS",
+    "MAX_TEETH",
     "ConfigError",
     "check_keys",
     "config_hash",
@@ -51,13 +58,44 @@ __all__ = [
 
 
 class ConfigError(ValueError):
-    """An invalid gear-set description (names the key and what is admissible)."""
+    """Invalid input: a gear-set description, run settings or a study recipe.
+
+    The message names the key (or command-line option) and what is admissible.
+    """
+
+
+MAX_TEETH = 10_000
+"""Largest tooth number (absolute value) accepted."""
+MAX_PLANETS = 64
+"""Largest number of planets (or planet pairs) accepted."""
+MAX_LIST = 100_000
+"""Longest list of numbers accepted in a description (stiffness curves, tables)."""
+MAX_DAMPING_RATIO = 10.0
+"""Largest mesh damping ratio accepted."""
+MAX_STIFFNESS = 1e40
+"""Largest stiffness [N/m, N m/rad] accepted (a value that large is refused later for the
+steps it needs, naming them; beyond it the matrices overflow)."""
+MAX_DAMPING = 1e12
+"""Largest damping [N s/m, N m s/rad] accepted."""
+MASS_RANGE = (1e-9, 1e9)
+"""Admissible masses [kg] (zero and negative masses get the builder's own message)."""
+INERTIA_RANGE = (1e-15, 1e9)
+"""Admissible moments of inertia [kg m^2]."""
+MIN_LENGTH = 1e-5
+"""Smallest module, face width or radius [m] accepted (0.01 mm)."""
+MAX_SHIFT = 10.0
+"""Largest profile-shift coefficient (absolute value) accepted."""
+MAX_BODIES = 200
+"""Most ``[[body]]``, ``[[mesh]]`` or ``[[coupling]]`` entries accepted."""
+MAX_FOURIER = 1_000
+"""Most Fourier coefficients of a stiffness model (the tables hold 2048 samples per cycle)."""
 
 
 _TOP = {"name", "title", "description", "type", "operation", "geometry", "bodies", "meshes",
-        "body", "mesh", "coupling", "stage1", "stage2", "shaft", "simulation", "references"}
+        "body", "mesh", "coupling", "stage1", "stage2", "shaft", "simulation", "references",
+        "fault", "sensor"}
 _COMMON_TOP = {"name", "title", "description", "type", "simulation", "references", "body",
-               "coupling", "operation"}
+               "coupling", "operation", "fault", "sensor"}
 _TYPE_KEYS = {
     "simple": {"geometry", "bodies", "meshes"},
     "wolfrom": {"geometry", "bodies", "meshes"},
@@ -80,6 +118,7 @@ _MESH_GENERAL = _MESH_SPEC | {"name", "gear1", "gear2", "toothing1", "toothing2"
 _TOOTHING = {"z", "module", "pressure_angle_deg", "helix_angle_deg", "profile_shift",
              "face_width", "addendum", "dedendum"}
 _COUPLING = {"body1", "body2", "stiffness", "damping"}
+_STIFFNESS_TEXT = {"model", "path", "position_unit", "stiffness_unit", "source"}
 _SIMULATION = {"drive", "speed_start_rpm", "speed_end_rpm", "duration", "input_torque",
                "load_torque", "load_inertia", "drive_stiffness", "drive_damping", "motor",
                "fs_out", "dt", "gyroscopic"}
@@ -136,20 +175,66 @@ def _require(table: dict, key: str, where: str) -> Any:
     return table[key]
 
 
-def _number(value: Any, where: str) -> float:
+def _short(value: Any) -> str:
+    """``repr`` of a value, shortened for a one-line message."""
+    text = repr(value)
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
+def _number(value: Any, where: str, *, low: float | None = None, high: float | None = None,
+            strict: bool = False) -> float:
+    """A finite number (a bool, a string or a number beyond the float range is refused).
+
+    ``low``/``high``: admissible bounds (``strict``: ``> low``).
+    """
     if isinstance(value, bool) or not isinstance(value, int | float):
-        raise ConfigError(f"{where} must be a number, got {value!r}")
-    v = float(value)
+        raise ConfigError(f"{where} must be a number, got {_short(value)}")
+    try:
+        v = float(value)
+    except OverflowError:
+        raise ConfigError(f"{where} = {_short(value)} is not admissible (admissible: a finite "
+                          "number)") from None
     if math.isnan(v):
         raise ConfigError(f"{where} is NaN; admissible: a finite number")
+    if not math.isfinite(v):
+        raise ConfigError(f"{where} = {v!r} is not admissible (admissible: a finite number)")
+    if low is not None and (v < low or (strict and v == low)):
+        rel = ">" if strict else ">="
+        raise ConfigError(f"{where} = {v!r} is not admissible (admissible: {rel} {low:g})")
+    if high is not None and v > high:
+        raise ConfigError(f"{where} = {v!r} is not admissible (admissible: <= {high:g})")
     return v
 
 
 def _finite(value: Any, where: str) -> float:
-    v = _number(value, where)
-    if not math.isfinite(v):
-        raise ConfigError(f"{where} = {v!r} is not admissible (admissible: a finite number)")
+    return _number(value, where)
+
+
+def _positive_in(value: Any, where: str, bounds: tuple[float, float]) -> float:
+    """A finite number; positive values must lie in ``bounds`` (zero and negative values are
+    left to the builder, whose message says "must be > 0")."""
+    v = _number(value, where, high=bounds[1])
+    if 0 < v < bounds[0]:
+        raise ConfigError(f"{where} = {v!r} is not admissible (admissible: {bounds[0]:g} .. "
+                          f"{bounds[1]:g})")
     return v
+
+
+def _string(value: Any, where: str) -> str:
+    if not isinstance(value, str) or not value:
+        raise ConfigError(f"{where} must be a non-empty string, got {_short(value)}")
+    return value
+
+
+def _numbers(value: Any, where: str, *, max_len: int = MAX_LIST, min_len: int = 0,
+             magnitude: float | None = None) -> list[float]:
+    """A list of finite numbers of bounded length (and magnitude)."""
+    if not isinstance(value, list | tuple):
+        raise ConfigError(f"{where} must be a list of numbers, got {_short(value)}")
+    if not min_len <= len(value) <= max_len:
+        raise ConfigError(f"{where} has {len(value)} values (admissible: {min_len}..{max_len})")
+    low = -magnitude if magnitude is not None else None
+    return [_number(v, f"{where}[{i}]", low=low, high=magnitude) for i, v in enumerate(value)]
 
 
 def _stiffness_value(value: Any, where: str) -> float:
@@ -158,8 +243,9 @@ def _stiffness_value(value: Any, where: str) -> float:
             return RIGID
         if value == "free":
             return 0.0
-        raise ConfigError(f"{where} = {value!r}: admissible are a number, 'rigid' or 'free'")
-    return _number(value, where)
+        raise ConfigError(f"{where} = {_short(value)}: admissible are a number >= 0, 'rigid' "
+                          "or 'free'")
+    return _number(value, where, low=0.0, high=MAX_STIFFNESS)
 
 
 def _support(table: dict | None, where: str) -> Support:
@@ -169,7 +255,7 @@ def _support(table: dict | None, where: str) -> Support:
     kw = {}
     for k, v in table.items():
         kw[k] = _stiffness_value(v, f"{where}.{k}") if not k.endswith("_damping") else \
-            _number(v, f"{where}.{k}")
+            _number(v, f"{where}.{k}", low=0.0, high=MAX_DAMPING)
     try:
         return Support(**kw)
     except ValueError as exc:
@@ -181,9 +267,10 @@ def _body(name: str, table: dict, role: str, where: str) -> Body:
     try:
         # planet templates get their carrier and angle from the builder
         return Body(name=name, role=role, carrier="carrier" if role == "planet" else None,
-                    mass=_number(_require(table, "mass", where),
-                                                       f"{where}.mass"),
-                    inertia=_number(_require(table, "inertia", where), f"{where}.inertia"),
+                    mass=_positive_in(_require(table, "mass", where), f"{where}.mass",
+                                      MASS_RANGE),
+                    inertia=_positive_in(_require(table, "inertia", where),
+                                         f"{where}.inertia", INERTIA_RANGE),
                     support=_support(table.get("support"), f"{where}.support"))
     except ValueError as exc:
         if isinstance(exc, ConfigError):
@@ -196,8 +283,22 @@ def _stiffness_dict(table: Any, where: str, base: Path | None) -> dict:
     if not isinstance(table, dict):
         raise ConfigError(f"{where} must be a table such as {{model = \"constant\", k = 1e8}}")
     d = dict(table)
-    if "path" in d and base is not None and not Path(d["path"]).is_absolute():
-        d["path"] = str(base / d["path"])
+    for k, v in d.items():  # values: finite numbers, bounded lists, or strings
+        if k in _STIFFNESS_TEXT and not isinstance(v, str):
+            raise ConfigError(f"{where}.{k} must be a string, got {_short(v)}")
+        if isinstance(v, list | tuple):
+            _numbers(v, f"{where}.{k}", max_len=MAX_FOURIER if k in ("cos", "sin")
+                     else MAX_LIST, magnitude=MAX_STIFFNESS)
+        elif isinstance(v, int | float) and not isinstance(v, bool):
+            _number(v, f"{where}.{k}", low=-MAX_STIFFNESS, high=MAX_STIFFNESS)
+        elif not isinstance(v, str | bool):
+            raise ConfigError(f"{where}.{k} must be a number, a string or a list of numbers, "
+                              f"got {_short(v)}")
+    if "path" in d:
+        if not isinstance(d["path"], str) or not d["path"]:
+            raise ConfigError(f"{where}.path must be a file name, got {_short(d['path'])}")
+        if base is not None and not Path(d["path"]).is_absolute():
+            d["path"] = str(base / d["path"])
     return d
 
 
@@ -208,7 +309,7 @@ def _stiffness_table(table: Any, where: str, base: Path | None, deferred: bool):
         return d
     try:
         return stiffness_from_dict(d)
-    except (ValueError, TypeError, KeyError) as exc:
+    except (ValueError, TypeError, KeyError, OverflowError) as exc:
         raise ConfigError(f"{where}: {exc}") from None
 
 
@@ -222,9 +323,12 @@ def _mesh_spec(table: dict, where: str, base: Path | None,
             back_stiffness=_stiffness_table(table["back_stiffness"], f"{where}.back_stiffness",
                                             base, deferred)
             if "back_stiffness" in table else None,
-            backlash=_number(table.get("backlash", 0.0), f"{where}.backlash"),
-            damping=_number(table["damping"], f"{where}.damping") if "damping" in table else None,
-            damping_ratio=_number(table["damping_ratio"], f"{where}.damping_ratio")
+            backlash=_number(table.get("backlash", 0.0), f"{where}.backlash", low=-0.01,
+                             high=0.01),
+            damping=_number(table["damping"], f"{where}.damping", low=0.0, high=MAX_DAMPING)
+            if "damping" in table else None,
+            damping_ratio=_number(table["damping_ratio"], f"{where}.damping_ratio", low=0.0,
+                                  high=MAX_DAMPING_RATIO)
             if "damping_ratio" in table else None,
         )
     except ValueError as exc:
@@ -235,17 +339,19 @@ def _mesh_spec(table: dict, where: str, base: Path | None,
 
 def _toothing(table: dict, where: str) -> Toothing:
     check_keys(table, _TOOTHING, where)
-    kw: dict[str, Any] = {"z": _integer(_require(table, "z", where), f"{where}.z"),
-                          "module": _number(_require(table, "module", where), f"{where}.module")}
+    kw: dict[str, Any] = {"z": _tooth_number(_require(table, "z", where), f"{where}.z"),
+                          "module": _number(_require(table, "module", where), f"{where}.module",
+                                            low=MIN_LENGTH, high=1.0)}
     if "pressure_angle_deg" in table:
         kw["pressure_angle"] = math.radians(_number(table["pressure_angle_deg"],
                                                     f"{where}.pressure_angle_deg"))
     if "helix_angle_deg" in table:
         kw["helix_angle"] = math.radians(_number(table["helix_angle_deg"],
                                                  f"{where}.helix_angle_deg"))
-    for k in ("profile_shift", "face_width", "addendum", "dedendum"):
+    for k, lo, hi in (("profile_shift", -MAX_SHIFT, MAX_SHIFT), ("face_width", MIN_LENGTH, 10.0),
+                      ("addendum", 0.0, 10.0), ("dedendum", 0.0, 10.0)):
         if k in table:
-            kw[k] = _number(table[k], f"{where}.{k}")
+            kw[k] = _number(table[k], f"{where}.{k}", low=lo, high=hi)
     try:
         return Toothing(**kw)
     except ValueError as exc:
@@ -255,20 +361,37 @@ def _toothing(table: dict, where: str) -> Toothing:
 def _operation(cfg: dict) -> dict:
     op = check_keys(_require(cfg, "operation", "the description"), _OPERATION, "[operation]")
     fixed = op.get("fixed", [])
-    fixed = [fixed] if isinstance(fixed, str) else list(fixed)
-    return {"fixed": fixed, "input": _require(op, "input", "[operation]"),
-            "output": _require(op, "output", "[operation]")}
+    if isinstance(fixed, str):
+        fixed = [fixed]
+    if not isinstance(fixed, list) or not all(isinstance(f, str) and f for f in fixed):
+        raise ConfigError(f"[operation].fixed must name a member (a string) or list members, "
+                          f"got {_short(fixed)}")
+    return {"fixed": list(fixed),
+            "input": _string(_require(op, "input", "[operation]"), "[operation].input"),
+            "output": _string(_require(op, "output", "[operation]"), "[operation].output")}
 
 
-def _integer(value: Any, where: str, *, low: int | None = None) -> int:
+def _integer(value: Any, where: str, *, low: int | None = None, high: int | None = None
+             ) -> int:
     """An integer key (a float with a fraction, a bool or a string is refused)."""
     if isinstance(value, bool) or not isinstance(value, int | float) or (
             isinstance(value, float) and not value.is_integer()):
-        raise ConfigError(f"{where} must be an integer, got {value!r}")
+        raise ConfigError(f"{where} must be an integer, got {_short(value)}")
     v = int(value)
     if low is not None and v < low:
-        raise ConfigError(f"{where} = {v} is not admissible (admissible: >= {low})")
+        raise ConfigError(f"{where} = {_short(v)} is not admissible (admissible: >= {low})")
+    if high is not None and v > high:
+        raise ConfigError(f"{where} = {_short(v)} is not admissible (admissible: <= {high})")
     return v
+
+
+def _tooth_number(value: Any, where: str) -> int:
+    """A signed tooth number: an integer, ``3 <= |z| <= MAX_TEETH``."""
+    z = _integer(value, where, low=-MAX_TEETH, high=MAX_TEETH)
+    if abs(z) < 3:
+        raise ConfigError(f"{where} = {z} is not admissible (admissible: 3 <= |z| <= "
+                          f"{MAX_TEETH}, negative for internal toothing)")
+    return z
 
 
 def _builder_meshes(kind: str, meshes_t: dict, base: Path | None) -> dict[str, _MeshSpec]:
@@ -321,9 +444,10 @@ def _builder_set(kind: str, cfg: dict, base: Path | None) -> GearSet:
     if any(f not in own for f in op["fixed"]):
         op["fixed"] = [default["fixed"]]
     g = {k: v for k, v in geo.items()}
-    common: dict[str, Any] = {}
-    if "module" in g:
-        common["module"] = _number(g.pop("module"), "[geometry].module")
+    common: dict[str, Any] = {
+        "module": _number(_require(g, "module", "[geometry]"), "[geometry].module",
+                          low=MIN_LENGTH, high=1.0)}
+    g.pop("module")
     if "pressure_angle_deg" in g:
         common["pressure_angle"] = math.radians(_number(g.pop("pressure_angle_deg"),
                                                         "[geometry].pressure_angle_deg"))
@@ -331,14 +455,25 @@ def _builder_set(kind: str, cfg: dict, base: Path | None) -> GearSet:
         common["helix_angle"] = math.radians(_number(g.pop("helix_angle_deg"),
                                                      "[geometry].helix_angle_deg"))
     if "face_width" in g:
-        common["face_width"] = _number(g.pop("face_width"), "[geometry].face_width")
+        common["face_width"] = _number(g.pop("face_width"), "[geometry].face_width",
+                                       low=MIN_LENGTH, high=10.0)
     name = str(cfg.get("name", kind))
 
     def z(key: str) -> int:
-        return _integer(_require(g, key, "[geometry]"), f"[geometry].{key}")
+        return _tooth_number(_require(g, key, "[geometry]"), f"[geometry].{key}")
 
     def count(key: str, default: int) -> int:
-        return _integer(g.get(key, default), f"[geometry].{key}", low=1)
+        return _integer(g.get(key, default), f"[geometry].{key}", low=1, high=MAX_PLANETS)
+
+    def shift(key: str) -> float:
+        return _number(g[key], f"[geometry].{key}", low=-MAX_SHIFT, high=MAX_SHIFT)
+
+    def pinion(planet: str, ring: str) -> None:
+        # an internal gear meshes only with a pinion of fewer teeth
+        if planet in g and ring in g and z(planet) >= abs(z(ring)):
+            raise ConfigError(f"[geometry].{planet} = {z(planet)} is not admissible with "
+                              f"{ring} = {z(ring)} (admissible: fewer teeth than the ring, "
+                              f"{planet} < {abs(z(ring))})")
 
     def shifts(keys: tuple[str, ...]) -> dict[str, float | None]:
         """Profile shifts (finite numbers; a solved planet shift defaults to None)."""
@@ -348,23 +483,38 @@ def _builder_set(kind: str, cfg: dict, base: Path | None) -> GearSet:
     if len(op["fixed"]) != 1 and kind != "simple":
         raise ConfigError(f"[operation].fixed must name one member for type = {kind!r}, got "
                           f"{op['fixed']!r}")
+    for key in ("pressure_angle_deg", "helix_angle_deg"):
+        if key in geo:
+            _number(geo[key], f"[geometry].{key}", low=-90.0, high=90.0)
+    pinion("z_planet", "z_ring")
+    pinion("z_planet1", "z_ring1")
+    pinion("z_planet2", "z_ring2")
+    pinion("z_planet_long", "z_ring")
     try:
         if kind == "simple":
             angles = g.pop("planet_angles_deg", None)
-            if angles is not None and not isinstance(angles, list):
-                raise ConfigError("[geometry].planet_angles_deg must be a list of angles")
+            if angles is not None:
+                angles = _numbers(angles, "[geometry].planet_angles_deg", min_len=1,
+                                  max_len=MAX_PLANETS)
+                if "n_planets" in g and count("n_planets", 1) != len(angles):
+                    raise ConfigError(
+                        f"[geometry]: n_planets = {count('n_planets', 1)} disagrees with the "
+                        f"{len(angles)} planet_angles_deg; give one of them (or make them "
+                        "agree)")
+            elif "n_planets" not in g:
+                raise ConfigError("missing key 'n_planets' or 'planet_angles_deg' in "
+                                  "[geometry]")
             return simple_planetary(
                 z_sun=z("z_sun"), z_ring=z("z_ring"),
                 z_planet=z("z_planet") if "z_planet" in g else None,
                 n_planets=count("n_planets", 1) if "n_planets" in g else None,
-                planet_angles=[math.radians(_number(a, "[geometry].planet_angles_deg"))
-                               for a in angles] if angles is not None else None,
-                profile_shift_sun=_number(g.get("profile_shift_sun", 0.0),
-                                          "[geometry].profile_shift_sun"),
-                profile_shift_ring=_number(g.get("profile_shift_ring", 0.0),
-                                           "[geometry].profile_shift_ring"),
-                profile_shift_planet=_number(g["profile_shift_planet"],
-                                             "[geometry].profile_shift_planet")
+                planet_angles=[math.radians(a) for a in angles] if angles is not None
+                else None,
+                profile_shift_sun=shift("profile_shift_sun") if "profile_shift_sun" in g
+                else 0.0,
+                profile_shift_ring=shift("profile_shift_ring") if "profile_shift_ring" in g
+                else 0.0,
+                profile_shift_planet=shift("profile_shift_planet")
                 if "profile_shift_planet" in g else None,
                 sun=bodies["sun"], ring=bodies["ring"], carrier=bodies["carrier"],
                 planet=bodies["planet"], sun_mesh=specs["sun"], ring_mesh=specs["ring"],
@@ -374,7 +524,8 @@ def _builder_set(kind: str, cfg: dict, base: Path | None) -> GearSet:
             return wolfrom(
                 z_sun=z("z_sun"), z_ring1=z("z_ring1"), z_ring2=z("z_ring2"),
                 z_planet1=z("z_planet1"), z_planet2=z("z_planet2"),
-                module2=_number(g["module2"], "[geometry].module2") if "module2" in g else None,
+                module2=_number(g["module2"], "[geometry].module2", low=MIN_LENGTH,
+                                high=1.0) if "module2" in g else None,
                 step_offset=math.radians(_finite(g.get("planet_step_offset_deg", 0.0),
                                                  "[geometry].planet_step_offset_deg")),
                 helix_angle2=math.radians(_finite(g["helix_angle2_deg"],
@@ -391,7 +542,7 @@ def _builder_set(kind: str, cfg: dict, base: Path | None) -> GearSet:
             if not isinstance(phases, list):
                 raise ConfigError("[geometry].planet_mesh_phases must be a list (one mesh "
                                   "position per planet pair, cycles)")
-            phases = [_finite(p, "[geometry].planet_mesh_phases") for p in phases]
+            phases = _numbers(phases, "[geometry].planet_mesh_phases", max_len=MAX_PLANETS)
         return ravigneaux(
             z_sun_small=z("z_sun_small"), z_sun_large=z("z_sun_large"), z_ring=z("z_ring"),
             z_planet_short=z("z_planet_short"), z_planet_long=z("z_planet_long"),
@@ -404,7 +555,7 @@ def _builder_set(kind: str, cfg: dict, base: Path | None) -> GearSet:
             output=op["output"], name=name, config=cfg, **common)
     except KeyError as exc:
         raise ConfigError(f"missing key {exc.args[0]!r} in [geometry]") from None
-    except ValueError as exc:
+    except (ValueError, OverflowError) as exc:
         if isinstance(exc, ConfigError):
             raise
         raise ConfigError(str(exc)) from None
@@ -413,8 +564,8 @@ def _builder_set(kind: str, cfg: dict, base: Path | None) -> GearSet:
 def _extra_bodies(cfg: dict, required: bool) -> list[Body]:
     """The ``[[body]]`` list (keys checked; every value type- and range-checked)."""
     table = _require(cfg, "body", "the description") if required else cfg.get("body", [])
-    if not isinstance(table, list):
-        raise ConfigError("[[body]] must be an array of tables")
+    if not isinstance(table, list) or len(table) > MAX_BODIES:
+        raise ConfigError(f"[[body]] must be an array of at most {MAX_BODIES} tables")
     bodies = []
     for i, t in enumerate(table):
         where = f"[[body]] #{i + 1}"
@@ -422,20 +573,23 @@ def _extra_bodies(cfg: dict, required: bool) -> list[Body]:
         name = _require(t, "name", where)
         if not isinstance(name, str) or not name:
             raise ConfigError(f"{where}.name must be a non-empty string, got {name!r}")
-        where = f"[[body]] {name!r}"
-        role = _require(t, "role", where)
+        where = f"[[body]] {_short(name)}"
+        role = _string(_require(t, "role", where), f"{where}.role")
         carrier = t.get("carrier")
         if carrier is not None and not isinstance(carrier, str):
             raise ConfigError(f"{where}.carrier must be the name of a carrier body")
         try:
             bodies.append(Body(
                 name=name, role=role,
-                mass=_number(_require(t, "mass", where), f"{where}.mass"),
-                inertia=_number(_require(t, "inertia", where), f"{where}.inertia"),
+                mass=_positive_in(_require(t, "mass", where), f"{where}.mass", MASS_RANGE),
+                inertia=_positive_in(_require(t, "inertia", where), f"{where}.inertia",
+                                     INERTIA_RANGE),
                 support=_support(t.get("support"), f"{where}.support"),
                 carrier=carrier,
-                angle=math.radians(_number(t.get("angle_deg", 0.0), f"{where}.angle_deg")),
-                radius=_number(t["radius"], f"{where}.radius") if "radius" in t else None))
+                angle=math.radians(_number(t.get("angle_deg", 0.0), f"{where}.angle_deg",
+                                           low=-3600.0, high=3600.0)),
+                radius=_number(t["radius"], f"{where}.radius", low=MIN_LENGTH, high=100.0)
+                if "radius" in t else None))
         except ValueError as exc:
             if isinstance(exc, ConfigError):
                 raise
@@ -446,8 +600,8 @@ def _extra_bodies(cfg: dict, required: bool) -> list[Body]:
 def _couplings(cfg: dict) -> list[Coupling]:
     """The ``[[coupling]]`` list."""
     table = cfg.get("coupling", [])
-    if not isinstance(table, list):
-        raise ConfigError("[[coupling]] must be an array of tables")
+    if not isinstance(table, list) or len(table) > MAX_BODIES:
+        raise ConfigError(f"[[coupling]] must be an array of at most {MAX_BODIES} tables")
     couplings = []
     for i, t in enumerate(table):
         where = f"[[coupling]] #{i + 1}"
@@ -462,7 +616,8 @@ def _couplings(cfg: dict) -> list[Coupling]:
             couplings.append(Coupling(
                 names[0], names[1],
                 _stiffness_value(t.get("stiffness", "rigid"), f"{where}.stiffness"),
-                _number(t.get("damping", 0.0), f"{where}.damping")))
+                _number(t.get("damping", 0.0), f"{where}.damping", low=0.0,
+                        high=MAX_DAMPING)))
         except ValueError as exc:
             if isinstance(exc, ConfigError):
                 raise
@@ -481,27 +636,35 @@ def _with_extras(gs: GearSet, cfg: dict, op: dict | None) -> GearSet:
         return replace(gs, bodies=gs.bodies + tuple(bodies),
                        couplings=gs.couplings + tuple(couplings), fixed=tuple(op["fixed"]),
                        input=op["input"], output=op["output"])
-    except ValueError as exc:
+    except (ValueError, OverflowError) as exc:
         raise ConfigError(str(exc)) from None
 
 
 def _general_set(cfg: dict, base: Path | None) -> GearSet:
     bodies = _extra_bodies(cfg, required=True)
     meshes = []
-    for i, t in enumerate(_require(cfg, "mesh", "the description")):
+    mesh_tables = _require(cfg, "mesh", "the description")
+    if not isinstance(mesh_tables, list) or not 1 <= len(mesh_tables) <= MAX_BODIES:
+        raise ConfigError(f"[[mesh]] must be an array of 1..{MAX_BODIES} tables")
+    for i, t in enumerate(mesh_tables):
         where = f"[[mesh]] #{i + 1}"
         check_keys(t, _MESH_GENERAL, where)
         spec = _mesh_spec({k: v for k, v in t.items() if k in _MESH_SPEC}, where, base)
         kw: dict[str, Any] = {}
-        for k in ("base_radius1", "base_radius2", "centre_distance", "phase"):
+        for k in ("base_radius1", "base_radius2"):
             if k in t:
-                kw[k] = _number(t[k], f"{where}.{k}")
+                kw[k] = _number(t[k], f"{where}.{k}", low=-100.0, high=100.0)
+        if "centre_distance" in t:
+            kw["centre_distance"] = _number(t["centre_distance"], f"{where}.centre_distance",
+                                            high=100.0)
+        if "phase" in t:
+            kw["phase"] = _number(t["phase"], f"{where}.phase")
         for k in ("z1", "z2"):
             if k in t:
-                kw[k] = _integer(t[k], f"{where}.{k}")
-                if kw[k] == 0:
-                    raise ConfigError(f"{where}.{k} = 0 is not admissible (signed tooth number, "
-                                      "negative for an internal gear)")
+                kw[k] = _tooth_number(t[k], f"{where}.{k}")
+        if "z1" in kw and "z2" in kw and kw["z1"] + kw["z2"] == 0:
+            raise ConfigError(f"{where}: z1 = {kw['z1']} and z2 = {kw['z2']} cannot mesh (an "
+                              "internal gear needs more teeth than its pinion)")
         for k in ("tooth_offset1_deg", "tooth_offset2_deg"):
             if k in t:
                 kw[k[:-4]] = math.radians(_finite(t[k], f"{where}.{k}"))
@@ -514,13 +677,14 @@ def _general_set(cfg: dict, base: Path | None) -> GearSet:
         for k in ("toothing1", "toothing2"):
             if k in t:
                 kw[k] = _toothing(t[k], f"{where}.{k}")
+        names = {k: _string(_require(t, k, where), f"{where}.{k}")
+                 for k in ("name", "gear1", "gear2")}
         try:
             meshes.append(Mesh(
-                name=str(_require(t, "name", where)), gear1=str(_require(t, "gear1", where)),
-                gear2=str(_require(t, "gear2", where)), stiffness=spec.stiffness,
+                **names, stiffness=spec.stiffness,
                 back_stiffness=spec.back_stiffness, backlash=spec.backlash,
                 damping=spec.damping, damping_ratio=spec.damping_ratio, **kw))
-        except ValueError as exc:
+        except (ValueError, OverflowError, ZeroDivisionError) as exc:
             raise ConfigError(f"{where}: {exc}") from None
     couplings = _couplings(cfg)
     op = _operation(cfg)
@@ -528,11 +692,33 @@ def _general_set(cfg: dict, base: Path | None) -> GearSet:
         return GearSet(name=str(cfg.get("name", "general")), bodies=tuple(bodies),
                        meshes=tuple(meshes), fixed=tuple(op["fixed"]), input=op["input"],
                        output=op["output"], couplings=tuple(couplings), config=cfg)
-    except ValueError as exc:
+    except (ValueError, OverflowError) as exc:
         raise ConfigError(str(exc)) from None
 
 
 def gearset_from_dict(cfg: dict, *, base: Path | None = None) -> GearSet:
+    """Build a :class:`GearSet` from a description dict (parsed TOML), with its ``[[fault]]``
+    and ``[[sensor]]`` tables (:mod:`gearvib.faults`, :mod:`gearvib.sensors`).
+
+    See :func:`_gearset_from_dict` for the parameters and errors.
+    """
+    return _with_faults_and_sensors(_gearset_from_dict(cfg, base=base), cfg, base)
+
+
+def _with_faults_and_sensors(gs: GearSet, cfg: dict, base: Path | None) -> GearSet:
+    """The ``[[fault]]`` and ``[[sensor]]`` tables of a description added to its gear set
+    (checked here; against the bodies and teeth when the set is assembled)."""
+    if not isinstance(cfg, dict) or ("fault" not in cfg and "sensor" not in cfg):
+        return gs
+    try:
+        faults = faults_from_list(cfg.get("fault"), base=base)
+        sensors = sensors_from_list(cfg.get("sensor"), base=base)
+    except (FaultError, SensorError) as exc:
+        raise ConfigError(str(exc)) from None
+    return replace(gs, faults=gs.faults + faults, sensors=gs.sensors + sensors)
+
+
+def _gearset_from_dict(cfg: dict, *, base: Path | None = None) -> GearSet:
     """Build a :class:`GearSet` from a description dict (parsed TOML).
 
     Parameters
@@ -547,13 +733,20 @@ def gearset_from_dict(cfg: dict, *, base: Path | None = None) -> GearSet:
     ConfigError
         Unknown or missing keys, inadmissible values, or an inconsistent gear set.
     """
+    if not isinstance(cfg, dict):
+        raise ConfigError(f"a description must be a table (dict), got {type(cfg).__name__}")
     cfg = copy.deepcopy(cfg)
     check_keys(cfg, _TOP, "the description (top level)")
     if "simulation" in cfg:
         check_keys(cfg["simulation"], _SIMULATION, "[simulation]")
+    for key in ("name", "title", "description"):
+        if key in cfg and not isinstance(cfg[key], str):
+            raise ConfigError(f"{key} must be a string, got {_short(cfg[key])}")
+    if "references" in cfg and not (isinstance(cfg["references"], str | list)):
+        raise ConfigError("references must be a string or a list")
     kind = cfg.get("type", "simple")
-    if kind not in _TYPE_KEYS:
-        raise ConfigError(f"unknown type {kind!r} (admissible: simple, wolfrom, ravigneaux, "
+    if not isinstance(kind, str) or kind not in _TYPE_KEYS:
+        raise ConfigError(f"unknown type {_short(kind)} (admissible: simple, wolfrom, ravigneaux, "
                           "two-stage, general)")
     check_keys(cfg, _COMMON_TOP | _TYPE_KEYS[kind], f"a description of type = {kind!r}")
     if kind in _GEOMETRY:
@@ -568,15 +761,25 @@ def gearset_from_dict(cfg: dict, *, base: Path | None = None) -> GearSet:
         if "simulation" in stage:
             raise ConfigError(f"[{key}.simulation] is not admissible: give [simulation] once, "
                               "at the top level")
+        for extra in ("fault", "sensor"):
+            if extra in stage:
+                raise ConfigError(f"[[{key}.{extra}]] is not admissible: give [[{extra}]] at "
+                                  "the top level (members named s1.sun, s2.planet1, ...)")
         try:
             stages.append(gearset_from_dict({**stage, "name": key}, base=base))
         except ConfigError as exc:
             raise ConfigError(f"[{key}]: {exc}") from None
     shaft = check_keys(cfg.get("shaft", {}), {"stiffness", "damping"}, "[shaft]")
-    gs = two_stage(stages[0], stages[1], shaft_stiffness=_stiffness_value(
-        shaft.get("stiffness", "rigid"), "[shaft].stiffness"),
-                   shaft_damping=_number(shaft.get("damping", 0.0), "[shaft].damping"),
-                   name=str(cfg.get("name", "two-stage")), config=cfg)
+    try:
+        gs = two_stage(stages[0], stages[1], shaft_stiffness=_stiffness_value(
+            shaft.get("stiffness", "rigid"), "[shaft].stiffness"),
+                       shaft_damping=_number(shaft.get("damping", 0.0), "[shaft].damping",
+                                             low=0.0, high=MAX_DAMPING),
+                       name=str(cfg.get("name", "two-stage")), config=cfg)
+    except (ValueError, OverflowError) as exc:
+        if isinstance(exc, ConfigError):
+            raise
+        raise ConfigError(str(exc)) from None
     return _with_extras(gs, cfg, _operation(cfg) if "operation" in cfg else None)
 
 

@@ -69,10 +69,17 @@ def inverse_involute(value: float) -> float:
         raise ValueError(f"involute value {value!r} is not admissible (admissible: finite, >= 0)")
     if value == 0.0:
         return 0.0
-    # inv is monotonic on [0, pi/2); bracket up to 1.5 rad (inv(1.5) = 12.6)
+    # inv is monotonic on [0, pi/2); bracket up to 1.5 rad (inv(1.5) = 12.6). Near pi/2 the
+    # largest float below it gives inv = 1.6e16: beyond that no angle exists (the loop would
+    # never end)
     hi = 1.5
-    while math.tan(hi) - hi < value:
+    for _ in range(64):
+        if math.tan(hi) - hi >= value:
+            break
         hi = 0.5 * (hi + 0.5 * math.pi)
+    else:
+        raise ValueError(f"involute value {value!r} is not admissible (the angle would be 90°; "
+                         "a profile shift or tooth number out of range)")
     return float(brentq(lambda a: math.tan(a) - a - value, 0.0, hi, xtol=1e-15, rtol=1e-15))
 
 

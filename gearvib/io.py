@@ -4,25 +4,32 @@ The files are NETCDF4 written with the netCDF4 engine (xarray's default engine h
 between releases), zlib-compressed and chunked along ``time``. Coordinates and data that hold no
 NaN get ``_FillValue = None`` (CF forbids missing values in coordinate variables). The write is
 atomic: a temporary file in the destination directory is written, flushed to disk and renamed
-over the destination, so a crash or Ctrl-C never leaves a partial file. String labels (mesh,
-flank, ... names) are written as CF label variables ``<dim>_label`` and restored by
-:func:`read_run`; ``time`` is read as float seconds (see :mod:`analysis.cf`).
+over the destination, so a crash or Ctrl-C never leaves a partial file. The temporary file is
+named ``.<name>.gearvib-<host>-<pid>-<token>.tmp`` (:mod:`gearvib.tempfiles`); netCDF files are
+written and read in a worker thread that an interrupt abandons (:mod:`gearvib.interrupts`
+explains why: xarray's backend locks are not safe against an exception from a signal handler).
+String labels (mesh, flank, ... names) are written as CF label variables ``<dim>_label`` and
+restored by :func:`read_run`; ``time`` is read as float seconds (see :mod:`analysis.cf`).
 """
 
 from __future__ import annotations
 
 import contextlib
 import json
+import math
 import os
-import uuid
 from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import TypeVar
 
+import netCDF4
 import numpy as np
 import xarray as xr
 
 from analysis.cf import labels_from_cf, labels_to_cf
+from gearvib import tempfiles
+from gearvib.interrupts import check_interrupted, run_abandonable
+from gearvib.memory import RunSizeError, format_bytes, require_memory
 
 __all__ = [
     "GearvibFileError",
@@ -35,6 +42,7 @@ __all__ = [
 T = TypeVar("T")
 
 _TIME_CHUNK = 65536
+_ZLIB_MAX_RATIO = 1032  # deflate's largest compression ratio (258-byte matches in 2 bits)
 
 
 class GearvibFileError(OSError):
@@ -109,8 +117,8 @@ def write_netcdf(ds: xr.Dataset, path: str | os.PathLike) -> Path:
 
     Notes
     -----
-    Written through :func:`atomic_write`: nothing half-written is left on any error, including
-    ``KeyboardInterrupt``.
+    Written through :func:`atomic_write` in a worker thread (``abandonable``): nothing
+    half-written is left on any error or interrupt, and an interrupt returns at once.
     """
     dest = Path(path)
     out = labels_to_cf(ds.copy(deep=False))  # string labels: CF label variables, not coordinates
@@ -118,11 +126,12 @@ def write_netcdf(ds: xr.Dataset, path: str | os.PathLike) -> Path:
     for name in out.variables:
         out[name].attrs = sanitize_attrs(out[name].attrs)
     atomic_write(dest, lambda tmp: out.to_netcdf(tmp, engine="netcdf4", format="NETCDF4",
-                                                 encoding=_encoding(out)))
+                                                 encoding=_encoding(out)), abandonable=True)
     return dest
 
 
-def atomic_write(dest: str | os.PathLike, write: Callable[[Path], T]) -> T:
+def atomic_write(dest: str | os.PathLike, write: Callable[[Path], T], *,
+                 abandonable: bool = False) -> T:
     """Write a file atomically: ``write(tmp)`` on a temporary file beside ``dest``, then rename.
 
     Parameters
@@ -132,29 +141,50 @@ def atomic_write(dest: str | os.PathLike, write: Callable[[Path], T]) -> T:
         one is complete.
     write : callable
         ``write(tmp_path)`` writes the whole content to ``tmp_path``; its result is returned.
+    abandonable : bool
+        Run ``write`` and the ``fsync`` in a worker thread that an interrupt abandons
+        (:func:`gearvib.interrupts.run_abandonable`); for library code that is not safe
+        against a ``KeyboardInterrupt`` (netCDF through xarray).
 
     Notes
     -----
-    The temporary file lives in the destination directory (so ``os.replace`` is an atomic
-    rename on the same file system), is fsync-ed before the rename and is removed on any error,
-    including ``KeyboardInterrupt``; the directory is fsync-ed after the rename where possible.
+    The temporary file ``.<name>.gearvib-<host>-<pid>-<token>.tmp``
+    (:func:`gearvib.tempfiles.temp_path`) lives in the destination directory (so
+    ``os.replace`` is an atomic rename on the same file system), is fsync-ed before the rename
+    and is removed on any error, including ``KeyboardInterrupt`` and SIGTERM under the command
+    line; the directory is fsync-ed after the rename where possible. Only SIGKILL can leave
+    it; :func:`gearvib.tempfiles.remove_stale` removes it later.
     """
     dest = Path(dest)
     directory = dest.parent if str(dest.parent) else Path(".")
     if not directory.is_dir():
         raise FileNotFoundError(f"directory of {dest} does not exist")
-    tmp = directory / f".{dest.name}.{uuid.uuid4().hex}.tmp"
-    # O_EXCL: never clobber; mode 0o666 so the process umask applies as for a plain open()
-    os.close(os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666))
+    if dest.is_dir():
+        raise IsADirectoryError(f"{dest} is a directory (give a file name)")
+    tmp = tempfiles.temp_path(dest)
+    tempfiles.register(tmp)
     try:
-        result = write(tmp)
-        with open(tmp, "rb+") as fh:
-            os.fsync(fh.fileno())
+        # O_EXCL: never clobber; mode 0o666 so the process umask applies as for a plain open()
+        os.close(os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666))
+
+        def body() -> T:
+            out = write(tmp)
+            with open(tmp, "rb+") as fh:
+                os.fsync(fh.fileno())
+            return out
+
+        result = run_abandonable(body) if abandonable else body()
+        check_interrupted()  # nothing is committed after a signal, even a swallowed one
         os.replace(tmp, dest)
-    except BaseException:
+    except BaseException as exc:
         with contextlib.suppress(OSError):
             tmp.unlink()
+        if isinstance(exc, Exception):
+            tempfiles.unregister(tmp)
+        # else (an interrupt): abandoned work may still create it; it stays listed for the
+        # removal just before a forced exit (gearvib.interrupts.exit_now)
         raise
+    tempfiles.unregister(tmp)
     with contextlib.suppress(OSError):  # persist the rename (POSIX); not possible everywhere
         dir_fd = os.open(directory, os.O_RDONLY)
         try:
@@ -162,6 +192,19 @@ def atomic_write(dest: str | os.PathLike, write: Callable[[Path], T]) -> T:
         finally:
             os.close(dir_fd)
     return result
+
+
+def _declared_bytes(nc: netCDF4.Dataset) -> int:
+    """Bytes the variables of every group declare (strings count 8 bytes per element)."""
+    total = 0
+    groups = [nc]
+    while groups:
+        g = groups.pop()
+        groups.extend(g.groups.values())
+        for var in g.variables.values():
+            itemsize = var.dtype.itemsize if isinstance(var.dtype, np.dtype) else 8
+            total += math.prod(int(n) for n in var.shape) * max(itemsize, 1)
+    return total
 
 
 def read_run(path: str | os.PathLike) -> xr.Dataset:
@@ -180,15 +223,35 @@ def read_run(path: str | os.PathLike) -> xr.Dataset:
     Raises
     ------
     GearvibFileError
-        If the file is missing, is not readable netCDF, or was not written by gearvib (no
-        ``source`` attribute starting with ``"gearvib"``). The message names the path.
+        If the file is missing, is not readable netCDF, was not written by gearvib (no
+        ``source`` attribute starting with ``"gearvib"``), or its header declares more data
+        than the file can hold (zlib compresses at most 1032:1). The message names the path.
+    gearvib.memory.RunSizeError
+        The declared data do not fit into the memory available (checked before loading).
     """
     p = Path(path)
     if not p.is_file():
         raise GearvibFileError(f"gearvib run file not found: {p}")
-    try:
+
+    def load() -> xr.Dataset:
+        # the declared sizes first, with netCDF4 directly: xarray would load the index
+        # coordinates (time) while opening, whatever size the header claims
+        with netCDF4.Dataset(p, "r") as nc:
+            declared = _declared_bytes(nc)
+        size = p.stat().st_size
+        if declared > _ZLIB_MAX_RATIO * size + 2**20:
+            raise GearvibFileError(
+                f"{p} declares {format_bytes(declared)} of data in {format_bytes(size)}, more "
+                "than zlib can compress into it: its header is corrupt")
+        require_memory(2 * declared, f"reading {p} ({format_bytes(declared)} declared)",
+                       "the run is too large for this machine")
         with xr.open_dataset(p, engine="netcdf4", decode_times=False) as ds:
-            loaded = labels_from_cf(ds.load())  # float seconds; labels as coordinates again
+            return labels_from_cf(ds.load())  # float seconds; labels as coordinates again
+
+    try:
+        loaded = run_abandonable(load)  # see gearvib.interrupts: xarray's locks and Ctrl-C
+    except (GearvibFileError, RunSizeError):
+        raise
     except Exception as exc:
         raise GearvibFileError(f"cannot read {p} as netCDF: {exc}") from exc
     if not str(loaded.attrs.get("source", "")).startswith("gearvib"):

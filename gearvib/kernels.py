@@ -21,9 +21,10 @@ position uses the actual rotation angles, so vibration feeds back into the mesh 
 A mesh whose back line equals its left line (every mesh of a model with rigid in-plane
 bearings) takes the one-line path: ``delta_R = delta`` and the force ``(F_L + F_R) v_m``, the
 same floating-point operations as before back lines existed, so such runs are unchanged bit for
-bit. Per-tooth models added later belong in the stiffness lookup (``k_L``, ``k_R``) of
-:func:`_rhs`; the contact law and the force directions stay in :func:`flank_forces_two_lines`
-and the force loop.
+bit. A mesh with local tooth faults or manufacturing errors (:mod:`gearvib.faults.law`) is
+evaluated tooth pair by tooth pair (:func:`_faulty_flanks`) while a faulty pair is in contact
+or the mesh has deviations; its force acts along the same vectors. Healthy meshes never enter
+that path, so runs without faults are unchanged bit for bit.
 
 Drive (``ipar[IP_MODE]``):
 
@@ -45,8 +46,9 @@ Classical RK4 with a fixed step ``dt``. The stiffness tables of rectangular or s
 models jump at the tooth-pair changes; a stage that straddles a jump costs RK4 its order. The
 ends of every jump segment of the tables are found once (:func:`jump_positions`); at the start
 of each step the mesh positions are extrapolated linearly and the step is split into RK4
-sub-steps that end exactly at the predicted crossings (:func:`integrate_chunk`). Samples stay on
-the fixed grid.
+sub-steps that end exactly at the predicted crossings (:func:`integrate_chunk`). Faulty meshes
+add their own jump positions, once per period of their faulty teeth (a sorted list searched by
+bisection). Samples stay on the fixed grid.
 
 Layouts
 -------
@@ -157,6 +159,11 @@ class KernelSystem:
         Blow-up threshold on ``|delta_m|`` and ``|delta_R,m|`` [m].
     mesh_back_vectors : ndarray, shape (n_mesh, n), optional
         ``u_m``, the right (back) flank's line of action; None: the same as ``v_m``.
+    fault_records, fault_ints, fault_vals : ndarray, optional
+        Faulty meshes (:meth:`gearvib.faults.law.FaultLaw.pack`): the record start of every
+        mesh in ``fault_ints`` (-1: healthy) and the integer and float data.
+    fault_jumps : dict of int to ndarray, optional
+        Extra per-cycle jump positions of faulty meshes [cycles, 0..1).
     """
 
     minv: np.ndarray
@@ -178,13 +185,17 @@ class KernelSystem:
     torque_table: np.ndarray
     deflection_limit: np.ndarray
     mesh_back_vectors: np.ndarray | None = None
+    fault_records: np.ndarray | None = None
+    fault_ints: np.ndarray | None = None
+    fault_vals: np.ndarray | None = None
+    fault_jumps: dict | None = None
 
     def __post_init__(self) -> None:
         for f in fields(self):
             a = getattr(self, f.name)
-            if a is None:
+            if a is None or f.name == "fault_jumps":
                 continue
-            dtype = np.int64 if f.name == "ipar" else np.float64
+            dtype = np.int64 if f.name in ("ipar", "fault_records", "fault_ints") else np.float64
             setattr(self, f.name, np.ascontiguousarray(a, dtype=dtype))
         n = self.minv.shape[0]
         n_mesh = self.mesh_vectors.shape[0]
@@ -228,29 +239,41 @@ H_NMESH = 1
 H_IPAR = 2
 _INT_BLOCKS = (
     "lp", "li", "cp", "ci", "gp", "gi", "ii", "oi", "vp", "vi", "fp", "fi", "pp", "pi", "bp",
-    "rflag", "rvp", "rvi", "rfp", "rfi",
+    "rflag", "rvp", "rvi", "rfp", "rfi", "frec", "fint",
 )
 _FLOAT_BLOCKS = (
     "acc0", "lv", "cv", "gv", "iv", "ov", "vv", "fv", "pv", "s0", "bl", "mc", "fpar", "limit",
-    "bv", "rvv", "rfv",
+    "bv", "rvv", "rfv", "fval",
 )
 (
     H_LP, H_LI, H_CP, H_CI, H_GP, H_GI, H_II, H_OI, H_VP, H_VI, H_FP, H_FI, H_PP, H_PI, H_BP,
-    H_RFLAG, H_RVP, H_RVI, H_RFP, H_RFI,
+    H_RFLAG, H_RVP, H_RVI, H_RFP, H_RFI, H_FREC, H_FINT,
 ) = range(H_IPAR + N_IPAR, H_IPAR + N_IPAR + len(_INT_BLOCKS))
 (
     H_ACC0, H_LV, H_CV, H_GV, H_IV, H_OV, H_VV, H_FV, H_PV, H_S0, H_BL, H_MC, H_FPAR, H_LIMIT,
-    H_BV, H_RVV, H_RFV,
+    H_BV, H_RVV, H_RFV, H_FVAL,
 ) = range(H_LP + len(_INT_BLOCKS), H_LP + len(_INT_BLOCKS) + len(_FLOAT_BLOCKS))
-H_NI = H_RFV + 1  # number of entries of the sparse input column
-H_NO = H_RFV + 2  # ... and of the output column
-N_HEADER = H_RFV + 3
+H_NI = H_FVAL + 1  # number of entries of the sparse input column
+H_NO = H_FVAL + 2  # ... and of the output column
+N_HEADER = H_FVAL + 3
+
+# record of a faulty mesh in the fault integer block (gearvib.faults.law.FaultLaw.pack); int
+# entries that are offsets point into the fault int block or (``*V``) the fault float block
+(F_NU, F_NSLOT, F_Z1, F_S1, F_T1, F_Z2, F_S2, F_T2, F_PAIRV, F_PROF1, F_SHIFT1V, F_PROF2,
+ F_SHIFT2V, F_PROFV, F_NECC, F_ECCI, F_ECCV, F_CONSTV, F_NEV, F_EVV, F_ALWAYS, F_NPER, F_SHARED,
+ F_EPSV, F_NEED, F_PERIOD, F_EXIT) = range(27)
 
 #: A table segment whose stiffness changes by more than this fraction of the table's range
 #: within one table interval is a jump (e.g. the tooth-pair changes of a rectangular model).
 JUMP_FRACTION = 0.05
 #: At most this many jump segments per mesh are located; tables with more are smooth enough.
 MAX_JUMPS_PER_MESH = 32
+#: Margin [mesh cycles] around a step's extrapolated mesh positions within which a faulty
+#: pair in contact switches a faulty mesh to its pair law.
+NEED_MARGIN = 0.1
+#: An eccentricity angle within this distance [rad] of its cached reference gets its cosine
+#: and sine from a Taylor series of the difference (exact to rounding).
+ECC_TAYLOR_RANGE = 0.05
 
 
 def jump_positions(left: np.ndarray, right: np.ndarray) -> list[np.ndarray]:
@@ -306,11 +329,12 @@ def pack(system: KernelSystem) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.n
         state ``y``), ``cent = M^-1 K_Omega``, ``gyro = -M^-1 G`` (columns index ``qdot``), the
         sparse columns ``M^-1 e`` of the input and output coordinates, the mesh vectors ``v_m``,
         the rows ``(M^-1 v_m)^T``, the mesh-position vectors ``w_m``, the jump counts, a flag
-        per mesh (1: distinct back line), and the back-flank vectors ``u_m`` and rows
-        ``(M^-1 u_m)^T`` (empty rows for the meshes without a distinct back line).
+        per mesh (1: distinct back line), the back-flank vectors ``u_m`` and rows
+        ``(M^-1 u_m)^T`` (empty rows for the meshes without a distinct back line), the fault
+        record of every mesh (-1: healthy) and the fault integer data.
     floats : ndarray
         ``M^-1 f_const``, the CSR data of the operators above, ``s0``, backlash, mesh damping,
-        ``fpar``, the deflection limits and the jump positions.
+        ``fpar``, the deflection limits, the jump positions and the fault float data.
     tables : ndarray, shape (2, n_mesh, n_table)
         Left and right flank stiffness tables.
     speed_table, torque_table : ndarray
@@ -338,6 +362,12 @@ def pack(system: KernelSystem) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.n
     fp, fi, fv = csr((minv @ system.mesh_vectors.T).T)
     pp, pi, pv = csr(system.mesh_position_vectors)
     jumps = jump_positions(system.left_tables, system.right_tables)
+    for m, extra in (system.fault_jumps or {}).items():
+        jumps[m] = np.unique(np.concatenate([jumps[m], np.asarray(extra, dtype=np.float64)]))
+    frec = (np.full(n_mesh, -1, dtype=np.int64) if system.fault_records is None
+            else system.fault_records)
+    fint = np.zeros(0, dtype=np.int64) if system.fault_ints is None else system.fault_ints
+    fval = np.zeros(0) if system.fault_vals is None else system.fault_vals
     bp = np.concatenate([[0], np.cumsum([j.size for j in jumps])]).astype(np.int64)
     bv = np.concatenate([np.zeros(0), *jumps])
     distinct = system.distinct_back_lines()
@@ -346,11 +376,11 @@ def pack(system: KernelSystem) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.n
     rvp, rvi, rvv = csr(back)
     rfp, rfi, rfv = csr((minv @ back.T).T)
     int_blocks = [lp, li, cp, ci, gp, gi, ii, oi, vp, vi, fp, fi, pp, pi, bp,
-                  rflag, rvp, rvi, rfp, rfi]
+                  rflag, rvp, rvi, rfp, rfi, frec, fint]
     float_blocks = [
         minv @ system.f_const, lv, cv, gv, iv, ov, vv, fv, pv, system.mesh_position_offsets,
         system.backlash, system.mesh_damping, system.fpar, system.deflection_limit, bv,
-        rvv, rfv,
+        rvv, rfv, fval,
     ]
     header = np.zeros(N_HEADER, dtype=np.int64)
     header[H_N] = n
@@ -372,9 +402,12 @@ def pack(system: KernelSystem) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.n
     return ints, floats, tables, system.speed_table, system.torque_table
 
 
-MESH_OUT_COLUMNS = 7
+MESH_OUT_COLUMNS = 18
 """Columns of the per-mesh scratch ``mesh_out``: ``F_L, -F_R, k_eff, state, delta, s,
-delta_R``."""
+delta_R``; for a faulty mesh whether its pair law is needed during the current step (set
+before every step by :func:`_split_times`; 1 is always correct), the cycle range that flag was
+found for, an interval of mesh positions free of its long-period jump positions, and two
+reference angles of its eccentricities with their cosines and sines (columns 12-17)."""
 
 
 def n_signals(n_dof: int, n_mesh: int) -> int:
@@ -529,6 +562,251 @@ def _table_at(tab: np.ndarray, t: float) -> float:
 
 
 @njit(cache=True)
+def _pairs_needed(ints, vals, rec, lo, hi):
+    """A faulty mesh needs its pair law somewhere in ``lo <= s <= hi``: it has deviations, or a
+    pair with a faulty tooth is in contact there, within :data:`NEED_MARGIN` (its table over
+    the period of the faulty teeth, read in floating point: no integer division)."""
+    r = ints[H_FINT] + rec
+    if ints[r + F_ALWAYS] != 0:
+        return True
+    period = ints[r + F_PERIOD]
+    need = ints[H_FINT] + ints[r + F_NEED]
+    # a margin of a tenth of a cycle covers the difference between the extrapolated and the
+    # actual mesh positions of the stages (entries of faulty pairs end sub-steps exactly)
+    for c in range(int(np.floor(lo - NEED_MARGIN)), int(np.floor(hi + NEED_MARGIN)) + 1):
+        x = float(c)
+        k = int(x - period * np.floor(x / period))
+        if k >= period:
+            k -= period
+        elif k < 0:
+            k += period
+        if ints[need + k] != 0:
+            return True
+    return False
+
+
+@njit(cache=True, inline="always")
+def _cos_sin(ang, mesh_out, m, term):
+    """``cos(ang), sin(ang)`` from a reference angle cached in ``mesh_out[m, 12:18]`` (two
+    terms per mesh): degree-9 Taylor series of the small difference (< ECC_TAYLOR_RANGE rad,
+    truncation below 1e-18), else computed and cached as the new reference."""
+    if term > 1:
+        return np.cos(ang), np.sin(ang)
+    c0 = 12 + 3 * term
+    dlt = ang - mesh_out[m, c0]
+    if abs(dlt) < ECC_TAYLOR_RANGE:  # NaN (no reference yet) fails the test
+        d2 = dlt * dlt
+        cd = 1.0 - d2 * (0.5 - d2 * (1.0 / 24.0 - d2 * (1.0 / 720.0 - d2 / 40320.0)))
+        sd = dlt * (1.0 - d2 * (1.0 / 6.0 - d2 * (1.0 / 120.0 - d2 * (1.0 / 5040.0
+                                                                        - d2 / 362880.0))))
+        cr = mesh_out[m, c0 + 1]
+        sr = mesh_out[m, c0 + 2]
+        return cr * cd - sr * sd, sr * cd + cr * sd
+    ca = np.cos(ang)
+    sa = np.sin(ang)
+    mesh_out[m, c0] = ang
+    mesh_out[m, c0 + 1] = ca
+    mesh_out[m, c0 + 2] = sa
+    return ca, sa
+
+
+@njit(cache=True, inline="always")
+def _presence(i, i0, w, nper, ce):
+    """Weight of pair slot ``i`` (path position ``u = frac(s) + i``) at cell ``i0`` with
+    weight ``w`` of the cycle: 1 inside the path, ramping in over the last cell before entry
+    (slot -1) and out over the cell ``ce`` that holds the contact ratio."""
+    if i < 0:
+        return w if i0 == nper - 1 else 0.0
+    iu = i0 + i * nper
+    if iu < ce:
+        return 1.0
+    if iu == ce:
+        return 1.0 - w
+    return 0.0
+
+
+@njit(cache=True)
+def _faulty_flanks(ints, vals, tables, m, rec, y, s, d, dd, dr, ddr, half, damping,
+                   mesh_out):
+    """Contact law of a faulty mesh, tooth pair by tooth pair (:mod:`gearvib.faults.law`).
+
+    Returns ``(f_left, f_right, k_eff, state)`` like :func:`flank_forces_two_lines`.
+    """
+    fi0 = ints[H_FINT]
+    fv0 = ints[H_FVAL]
+    n = ints[H_N]
+    r = fi0 + rec
+    # mesh-wide deviations: rigid pin errors and eccentricities
+    cv = fv0 + ints[r + F_CONSTV]
+    el = vals[cv]
+    er = vals[cv + 1]
+    edl = 0.0
+    edr = 0.0
+    n_ecc = ints[r + F_NECC]
+    if n_ecc > 0:
+        ei = fi0 + ints[r + F_ECCI]
+        ev = fv0 + ints[r + F_ECCV]
+        for e in range(n_ecc):
+            dg = ints[ei + 2 * e]
+            dc = ints[ei + 2 * e + 1]
+            ang = 0.0
+            rate = 0.0
+            if dg >= 0:
+                ang += y[dg]
+                rate += y[n + dg]
+            if dc >= 0:
+                ang -= y[dc]
+                rate -= y[n + dc]
+            ca, sa = _cos_sin(ang, mesh_out, m, e)
+            # amp cos(ang + phase) with cos(phase), sin(phase) stored: one cos, sin per angle
+            al = vals[ev + 6 * e]
+            cl = vals[ev + 6 * e + 1]
+            sl = vals[ev + 6 * e + 2]
+            ar = vals[ev + 6 * e + 3]
+            cr = vals[ev + 6 * e + 4]
+            sr = vals[ev + 6 * e + 5]
+            el += al * (ca * cl - sa * sl)
+            er += ar * (ca * cr - sa * sr)
+            edl -= al * (sa * cl + ca * sl) * rate
+            edr -= ar * (sa * cr + ca * sr) * rate
+    z1 = ints[r + F_Z1]
+    z2 = ints[r + F_Z2]
+    if z1 <= 0 and z2 <= 0:  # the same offset on every pair: the table law, shifted
+        i0t, i1t, wt = _interp_cell(tables.shape[2], s)
+        kl = (1.0 - wt) * tables[0, m, i0t] + wt * tables[0, m, i1t]
+        kr = (1.0 - wt) * tables[1, m, i0t] + wt * tables[1, m, i1t]
+        return flank_forces_two_lines(d + el, dd + edl, dr + er, ddr + edr, kl, kr, 2.0 * half,
+                                      damping)
+    nu = ints[r + F_NU]
+    nper = ints[r + F_NPER]
+    nslot = ints[r + F_NSLOT]
+    ce = ints[r + F_EXIT]
+    sg1 = ints[r + F_S1]
+    sg2 = ints[r + F_S2]
+    p1 = fi0 + ints[r + F_PROF1]
+    p2 = fi0 + ints[r + F_PROF2]
+    sf = np.floor(s)
+    frac = s - sf
+    x0 = frac * nper
+    i0 = int(x0)
+    w = x0 - i0
+    if i0 >= nper:
+        i0 = 0
+        w = 0.0
+    # presence of the pair slots: the next pair (slot -1) ramps in over the last cell of the
+    # cycle, a pair ramps out over the cell that holds the contact ratio (as the table ramps)
+    psum = 0.0
+    for i in range(-1, nslot + 1):
+        psum += _presence(i, i0, w, nper, ce)
+    # teeth of the next pair (counter floor(s) + 1; floating-point modulo: no integer
+    # division); each older pair steps back by the sign
+    k1 = 0
+    k2 = 0
+    if z1 > 0:
+        x = sg1 * (sf + 1.0) + ints[r + F_T1]
+        k1 = int(x - z1 * np.floor(x / z1))
+        if k1 >= z1:
+            k1 -= z1
+        elif k1 < 0:
+            k1 += z1
+    if z2 > 0:
+        x = sg2 * (sf + 1.0) + ints[r + F_T2]
+        k2 = int(x - z2 * np.floor(x / z2))
+        if k2 >= z2:
+            k2 -= z2
+        elif k2 < 0:
+            k2 += z2
+    shared = ints[r + F_SHARED] != 0
+    share_l = 0.0
+    share_r = 0.0
+    if shared and psum > 0.0:
+        i1 = i0 + 1
+        if i1 == nper:
+            i1 = 0
+        share_l = ((1.0 - w) * tables[0, m, i0] + w * tables[0, m, i1]) / psum
+        share_r = ((1.0 - w) * tables[1, m, i0] + w * tables[1, m, i1]) / psum
+    pv = fv0 + ints[r + F_PAIRV]
+    prv = fv0 + ints[r + F_PROFV]
+    h1 = fv0 + ints[r + F_SHIFT1V]
+    h2 = fv0 + ints[r + F_SHIFT2V]
+    f_el = 0.0
+    f_er = 0.0
+    ke = 0.0
+    on_l = False
+    on_r = False
+    for i in range(-1, nslot + 1):
+        pres = _presence(i, i0, w, nper, ce)
+        if pres > 0.0:
+            # path position u = frac + i on the sampled grid; the entering pair (u < 0) takes
+            # the values at u = 0
+            idx = 0
+            wi = 0.0
+            if i >= 0:
+                idx = i0 + i * nper
+                wi = w
+            if shared:
+                kl = share_l * pres
+                kr = share_r * pres
+            else:
+                kl = ((1.0 - wi) * vals[pv + idx] + wi * vals[pv + idx + 1]) * pres
+                kr = ((1.0 - wi) * vals[pv + nu + idx] + wi * vals[pv + nu + idx + 1]) * pres
+            ol = el
+            orr = er
+            for g in range(2):
+                if g == 0:
+                    if z1 <= 0:
+                        continue
+                    sh = vals[h1 + k1]
+                    prof = ints[p1 + k1]
+                else:
+                    if z2 <= 0:
+                        continue
+                    sh = vals[h2 + k2]
+                    prof = ints[p2 + k2]
+                ol += sh
+                orr += sh
+                if prof >= 0:
+                    b = prv + prof * 4 * nu + idx
+                    kl *= (1.0 - wi) * vals[b] + wi * vals[b + 1]
+                    kr *= (1.0 - wi) * vals[b + nu] + wi * vals[b + nu + 1]
+                    ol -= (1.0 - wi) * vals[b + 2 * nu] + wi * vals[b + 2 * nu + 1]
+                    orr += (1.0 - wi) * vals[b + 3 * nu] + wi * vals[b + 3 * nu + 1]
+            if kl > 0.0 and d + ol > half:
+                f_el += kl * (d + ol - half)
+                ke += kl
+                on_l = True
+            if kr > 0.0 and dr + orr < -half:
+                f_er += kr * (dr + orr + half)
+                ke += kr
+                on_r = True
+        # the next older pair
+        k1 -= sg1
+        if k1 < 0:
+            k1 += z1
+        elif k1 >= z1:
+            k1 -= z1
+        k2 -= sg2
+        if k2 < 0:
+            k2 += z2
+        elif k2 >= z2:
+            k2 -= z2
+    fl = 0.0
+    fr = 0.0
+    st = 0
+    if on_l:
+        fl = f_el + damping * (dd + edl)
+        if fl < 0.0:
+            fl = 0.0
+        st += 1
+    if on_r:
+        fr = f_er + damping * (ddr + edr)
+        if fr > 0.0:
+            fr = 0.0
+        st += 2
+    return fl, fr, ke, st
+
+
+@njit(cache=True)
 def _rhs(t, y, dy, mesh_out, ints, vals, tables, speed_tab, torque_tab):
     """Right-hand side ``dy = f(t, y)``; ``mesh_out[m] = (F_L, -F_R, k_eff, state, delta, s,
     delta_R)``.
@@ -613,6 +891,7 @@ def _rhs(t, y, dy, mesh_out, ints, vals, tables, speed_tab, torque_tab):
     rfp = ints[H_RFP]
     rfi = ints[H_RFI]
     rfv = ints[H_RFV]
+    frec = ints[H_FREC]
     for m in range(n_mesh):
         d = 0.0
         dd = 0.0
@@ -633,11 +912,17 @@ def _rhs(t, y, dy, mesh_out, ints, vals, tables, speed_tab, torque_tab):
         s = vals[s0 + m]
         for p in range(ints[pp + m], ints[pp + m + 1]):
             s += vals[pv + p] * y[ints[pi + p]]
-        i0, i1, w = _interp_cell(n_table, s)
-        kl = (1.0 - w) * tables[0, m, i0] + w * tables[0, m, i1]
-        kr = (1.0 - w) * tables[1, m, i0] + w * tables[1, m, i1]
-        fl, fr, ke, st = flank_forces_two_lines(d, dd, dr, ddr, kl, kr, vals[bl + m],
-                                                vals[mc + m])
+        rec = ints[frec + m]
+        if rec >= 0 and mesh_out[m, 7] != 0.0:
+            # a mesh with faults, a faulty pair in contact (or deviations): pair by pair
+            fl, fr, ke, st = _faulty_flanks(ints, vals, tables, m, rec, y, s, d, dd, dr, ddr,
+                                            0.5 * vals[bl + m], vals[mc + m], mesh_out)
+        else:
+            i0, i1, w = _interp_cell(n_table, s)
+            kl = (1.0 - w) * tables[0, m, i0] + w * tables[0, m, i1]
+            kr = (1.0 - w) * tables[1, m, i0] + w * tables[1, m, i1]
+            fl, fr, ke, st = flank_forces_two_lines(d, dd, dr, ddr, kl, kr, vals[bl + m],
+                                                    vals[mc + m])
         if two_lines:
             if fl != 0.0:
                 for p in range(ints[fp + m], ints[fp + m + 1]):
@@ -667,20 +952,42 @@ def evaluate_rhs(t: float, y: np.ndarray, system: tuple) -> tuple[np.ndarray, np
     -------
     dy : ndarray, shape (2 n,)
         ``[qdot, qddot]``.
-    mesh_out : ndarray, shape (n_mesh, MESH_OUT_COLUMNS)
+    mesh_out : ndarray, shape (n_mesh, 7)
         Per mesh ``F_left, -F_right, k_eff, contact state, delta``, the mesh position ``s`` and
-        ``delta_R``.
+        ``delta_R`` (the first columns of the kernels' scratch).
     """
     ints, vals, tables, speed_tab, torque_tab = system
     dy = np.empty(2 * ints[H_N])
-    mesh_out = np.empty((ints[H_NMESH], MESH_OUT_COLUMNS))
+    mesh_out = np.zeros((ints[H_NMESH], MESH_OUT_COLUMNS))
+    mesh_out[:, 7] = 1.0  # faulty meshes: the pair law (exact everywhere)
+    mesh_out[:, 12] = np.nan  # no cached eccentricity angles
+    mesh_out[:, 15] = np.nan
     _rhs(t, y, dy, mesh_out, ints, vals, tables, speed_tab, torque_tab)
-    return dy, mesh_out
+    return dy, mesh_out[:, :7].copy()
 
 
 def work_shape(n_dof: int, n_mesh: int) -> tuple[int, int]:
     """Shape of the ``work`` buffer of :func:`integrate_chunk`."""
     return 6, max(2 * n_dof, 4 * n_mesh + 4)
+
+
+@njit(cache=True, inline="always")
+def _insert_split(splits, count, tau, dt, tol):
+    """Insert ``tau`` into the sorted ``splits[:count]`` unless out of ``(0, dt)``, a time this
+    close is there already or the list is full; returns the new count."""
+    if not (tol < tau < dt - tol):
+        return count
+    j = count
+    while j > 0 and splits[j - 1] > tau:
+        j -= 1
+    if (j > 0 and tau - splits[j - 1] <= tol) or (j < count and splits[j] - tau <= tol):
+        return count
+    if count == splits.shape[0]:
+        return count
+    for r in range(count, j, -1):
+        splits[r] = splits[r - 1]
+    splits[j] = tau
+    return count + 1
 
 
 @njit(cache=True)
@@ -689,7 +996,9 @@ def _split_times(y, dt, ints, vals, mesh_out, splits):
 
     The mesh positions ``mesh_out[:, 5]`` (left there by the right-hand side evaluated at the
     start of the step, state ``y``) are extrapolated linearly with their rates ``w_m . qdot``;
-    the sorted, de-duplicated times go to ``splits`` (as many as it holds). Returns their count.
+    the sorted, de-duplicated times go to ``splits`` (as many as it holds). Faulty meshes add
+    their long-period jump positions (sorted, one period of their faulty teeth; found by
+    bisection). Returns their count.
     """
     n = ints[H_N]
     pp = ints[H_PP]
@@ -697,42 +1006,74 @@ def _split_times(y, dt, ints, vals, mesh_out, splits):
     pv = ints[H_PV]
     bp = ints[H_BP]
     bv = ints[H_BV]
-    cap = splits.shape[0]
+    frec = ints[H_FREC]
+    fi0 = ints[H_FINT]
+    fv0 = ints[H_FVAL]
     tol = 1e-9 * dt
     count = 0
     for m in range(ints[H_NMESH]):
         b0 = ints[bp + m]
         b1 = ints[bp + m + 1]
-        if b1 == b0:
+        rec = ints[frec + m]
+        n_ev = 0
+        if rec >= 0:
+            n_ev = ints[fi0 + rec + F_NEV]
+        elif b1 == b0:
             continue
         s = mesh_out[m, 5]
         sd = 0.0
         for p in range(ints[pp + m], ints[pp + m + 1]):
             sd += vals[pv + p] * y[n + ints[pi + p]]
-        if sd == 0.0:
-            continue
         s_end = s + sd * dt
         lo = min(s, s_end)
         hi = max(s, s_end)
+        if rec >= 0:  # the pair law of a faulty mesh during this step (cached per cycle)
+            flo = np.floor(lo - NEED_MARGIN)
+            fhi = np.floor(hi + NEED_MARGIN)
+            if not (mesh_out[m, 8] == flo and mesh_out[m, 9] == fhi):
+                mesh_out[m, 7] = 1.0 if _pairs_needed(ints, vals, rec, lo, hi) else 0.0
+                mesh_out[m, 8] = flo
+                mesh_out[m, 9] = fhi
+        if sd == 0.0:
+            continue
         base = np.floor(lo)
         for k in range(int(np.floor(hi) - base) + 1):
             for q in range(b0, b1):
                 tau = (base + k + vals[bv + q] - s) / sd
-                if not (tol < tau < dt - tol):
-                    continue
-                # insert into the sorted list unless a time this close is there already
-                j = count
-                while j > 0 and splits[j - 1] > tau:
-                    j -= 1
-                if (j > 0 and tau - splits[j - 1] <= tol) or (j < count and splits[j] - tau <= tol):
-                    continue
-                if count == cap:
-                    continue
-                for r in range(count, j, -1):
-                    splits[r] = splits[r - 1]
-                splits[j] = tau
-                count += 1
+                count = _insert_split(splits, count, tau, dt, tol)
+        # long-period positions, unless the step lies inside the event-free interval found
+        # last time (columns 10, 11)
+        if n_ev > 0 and not (mesh_out[m, 10] < lo and hi < mesh_out[m, 11]):
+            ev = fv0 + ints[fi0 + rec + F_EVV]
+            period = vals[ev]
+            for kp in range(int(np.floor(lo / period)), int(np.floor(hi / period)) + 1):
+                off = kp * period
+                a = _first_beyond(vals, ev + 1, n_ev, lo - off)
+                while a < n_ev and vals[ev + 1 + a] + off < hi:
+                    count = _insert_split(splits, count, (vals[ev + 1 + a] + off - s) / sd,
+                                          dt, tol)
+                    a += 1
+            off = np.floor(hi / period) * period
+            a = _first_beyond(vals, ev + 1, n_ev, hi - off)
+            mesh_out[m, 11] = (vals[ev + 1 + a] + off if a < n_ev
+                               else vals[ev + 1] + off + period)
+            mesh_out[m, 10] = (vals[ev + a] + off if a > 0
+                               else vals[ev + n_ev] + off - period)
     return count
+
+
+@njit(cache=True, inline="always")
+def _first_beyond(vals, start, count, x):
+    """Index of the first of ``vals[start : start + count]`` (sorted) that exceeds ``x``."""
+    a = 0
+    b = count
+    while a < b:
+        mid = (a + b) // 2
+        if vals[start + mid] <= x:
+            a = mid + 1
+        else:
+            b = mid
+    return a
 
 
 @njit(cache=True)
@@ -810,6 +1151,14 @@ def integrate_chunk(
     n2 = 2 * n
     status[0] = STATUS_OK
     status[1] = first_step + n_steps
+    for m in range(n_mesh):
+        mesh_out[m, 7] = 1.0  # until the first step decides (the pair law is exact anywhere)
+        mesh_out[m, 8] = np.nan  # no cached cycle range, no event-free interval
+        mesh_out[m, 9] = np.nan
+        mesh_out[m, 10] = np.nan
+        mesh_out[m, 11] = np.nan
+        mesh_out[m, 12] = np.nan
+        mesh_out[m, 15] = np.nan
     for step in range(n_steps):
         g = first_step + step
         t = g * dt

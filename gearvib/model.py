@@ -244,6 +244,16 @@ class AssembledModel:
         Deflection along the right (back) flank's line of action, the mirror image of the left
         one (:mod:`gearvib.assembly`); None when it equals :attr:`mesh_vectors` (no in-plane
         translation of a meshing gear is a coordinate). Use :attr:`back_vectors`.
+    mesh_teeth : ndarray of int64, shape (n_mesh, 4), optional
+        Tooth map (:mod:`gearvib.teeth`): pair-counter sign and tooth in pair 0 of gear1 and
+        gear2; which teeth are in contact follows from the mesh position. None for a model not
+        built by :func:`gearvib.assembly.assemble` (then local tooth faults cannot be placed).
+    faults : tuple of Fault
+        Local tooth faults and manufacturing errors (:mod:`gearvib.faults`); the arrays above
+        describe the healthy gear set (except the backlash, which a planet-specific backlash
+        error changes), and the run applies the faults. Empty: a healthy set.
+    sensors : tuple
+        Virtual sensors on the housing and the tacho (:mod:`gearvib.sensors`), computed by a run.
     """
 
     dof_names: tuple[str, ...]
@@ -274,8 +284,13 @@ class AssembledModel:
     mesh_frequencies_per_rpm: np.ndarray
     meta: dict = field(default_factory=dict)
     mesh_back_vectors: np.ndarray | None = None
+    mesh_teeth: np.ndarray | None = None
+    faults: tuple = ()
+    sensors: tuple = ()
 
     def __post_init__(self) -> None:
+        object.__setattr__(self, "faults", tuple(self.faults))
+        object.__setattr__(self, "sensors", tuple(self.sensors))
         if self.mesh_back_vectors is not None:
             back = np.ascontiguousarray(self.mesh_back_vectors, dtype=float)
             if back.shape != np.shape(self.mesh_vectors):
@@ -295,6 +310,38 @@ class AssembledModel:
         if np.any(f[np.isfinite(f)] < 0) or np.any(np.isinf(f)):
             raise ValueError("mesh_frequencies_per_rpm must be finite and >= 0 (or NaN)")
         object.__setattr__(self, "mesh_frequencies_per_rpm", f)
+
+    def with_faults(self, faults) -> AssembledModel:
+        """This model with local tooth faults and manufacturing errors added.
+
+        Parameters
+        ----------
+        faults : sequence of Fault or dict
+            Descriptions (:mod:`gearvib.faults`) or ``[[fault]]`` tables; they are added to
+            the model's own and checked against it (members, teeth, meshes). A planet-specific
+            backlash changes :attr:`mesh_backlash`; every other fault is applied by the run.
+
+        Raises
+        ------
+        gearvib.faults.FaultError
+            Naming the fault and what is not admissible.
+        """
+        from gearvib.faults.apply import add_faults  # the fault layer builds on this module
+
+        return add_faults(self, faults)
+
+    def with_sensors(self, sensors) -> AssembledModel:
+        """This model with virtual sensors (accelerometers on the housing, a tacho) added.
+
+        Parameters
+        ----------
+        sensors : sequence of HousingSensor, Tacho or dict
+            Descriptions (:mod:`gearvib.sensors`) or ``[[sensor]]`` tables, checked against
+            the model.
+        """
+        from gearvib.sensors.apply import add_sensors
+
+        return add_sensors(self, sensors)
 
     @property
     def mesh_frequency_per_rpm(self) -> float:

@@ -27,7 +27,9 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 
 from gearvib import kernels as kn
+from gearvib.config import ConfigError
 from gearvib.model import AssembledModel
+from gearvib.sensors.signal import add_sensor_signals
 from gearvib.simulation.conditions import (
     RAD_S_PER_RPM,
     Conditions,
@@ -49,6 +51,12 @@ from gearvib.simulation.run_setup import (
     default_coupling,
     prepare_run,
 )
+from gearvib.simulation.run_size import (
+    DEFAULT_MAX_STEPS,
+    MAX_KERNEL_STEPS,
+    RunSize,
+    check_run_size,
+)
 from gearvib.simulation.step import (
     DEFAULT_FS_OUT,
     MIN_STEPS_PER_NATURAL_PERIOD,
@@ -62,6 +70,7 @@ __all__ = [
     "CHUNK_DURATION",
     "COUPLING_FREQUENCY_FRACTION",
     "DEFAULT_FS_OUT",
+    "DEFAULT_MAX_STEPS",
     "INTEGRATOR",
     "MIN_STEPS_PER_NATURAL_PERIOD",
     "STEPS_PER_MESH_CYCLE",
@@ -70,12 +79,14 @@ __all__ = [
     "DriveCoupling",
     "MotorDriven",
     "RunSetup",
+    "RunSize",
     "RunUpResult",
     "SimulationError",
     "SpeedRamp",
     "SpeedTable",
     "StepChoice",
     "TorqueDriven",
+    "check_run_size",
     "choose_step",
     "decimation_filter",
     "default_coupling",
@@ -129,13 +140,17 @@ def simulate(
     progress: bool | None = None,
     config: Mapping | str | None = None,
     natural_frequencies: Sequence[float] | None = None,
+    max_steps: int = DEFAULT_MAX_STEPS,
 ) -> RunUpResult:
     """Simulate a run-up (or run-down, or torque-driven run) of an assembled gear set.
 
     Parameters
     ----------
     model : AssembledModel
-        The gear set (:func:`gearvib.assembly.assemble`).
+        The gear set (:func:`gearvib.assembly.assemble`). Its local tooth faults and
+        manufacturing errors (``model.faults``, :mod:`gearvib.faults`) act in the run; its
+        virtual sensors (``model.sensors``, :mod:`gearvib.sensors`) are computed from the
+        stored forces and added to the result.
     conditions : SpeedRamp, SpeedTable, TorqueDriven or MotorDriven
         Operating conditions. Speed-driven runs prescribe the input angle ``phi(t)`` through a
         :class:`DriveCoupling`; by default its frequency (rigid-body mode on the coupling) is
@@ -157,6 +172,9 @@ def simulate(
         model meta data are used by default.
     natural_frequencies : sequence of float, optional
         Natural frequencies [Hz] to store; by default computed from the mean system.
+    max_steps : int
+        Time budget: the largest number of internal steps accepted (default 1e9, about 50 min
+        for a small set); a longer run is refused before it starts.
 
     Returns
     -------
@@ -165,7 +183,11 @@ def simulate(
     Raises
     ------
     ValueError
-        Invalid model (e.g. negative stiffness tables), conditions or step.
+        Invalid model (e.g. negative stiffness tables), conditions or step;
+        :class:`gearvib.config.ConfigError` for a step or output rate that is not admissible.
+    gearvib.memory.RunSizeError
+        (a ``ConfigError``) More internal steps than ``max_steps``, or arrays larger than the
+        memory available (checked before allocating; the message names the parameter).
     SimulationError
         Numerical blow-up (the message states the simulated time and the likely cause) or no
         static equilibrium.
@@ -176,8 +198,13 @@ def simulate(
     system = setup.system
     n, nm = model.n_dof, model.n_mesh
     run_duration = setup.duration if duration is None else float(duration)
-    if run_duration is None or not run_duration > 0:
-        raise ValueError("give a duration > 0 (the conditions define none)")
+    if run_duration is None or not (run_duration > 0 and math.isfinite(run_duration)):
+        raise ConfigError(f"duration = {run_duration!r} s is not admissible (admissible: > 0, "
+                          "finite; the conditions define none)")
+    if isinstance(max_steps, bool) or not isinstance(max_steps, int | np.integer) or not (
+            1 <= max_steps <= 10**15):
+        raise ConfigError(f"max_steps = {max_steps!r} is not admissible (admissible: an "
+                          "integer in 1..1e15)")
 
     k_max = stiffest_matrix(model, setup.torque_sign)
     if setup.drive == "speed":
@@ -187,12 +214,19 @@ def simulate(
     f_nat_max = float(f_nat.max()) if f_nat.size else 0.0
     f_rpm = model.mesh_frequencies_per_rpm
     f_mesh_max = float(np.nanmax(f_rpm, initial=0.0)) * setup.speed_max / RAD_S_PER_RPM
-    step = choose_step(f_nat_max, f_mesh_max, dt=dt, fs_out=fs_out)
+    step = choose_step(f_nat_max, f_mesh_max, dt=dt, fs_out=fs_out,
+                       speed_max_rpm=setup.speed_max / RAD_S_PER_RPM)
+    nsig = kn.n_signals(n, nm)
+    check_run_size(step, run_duration, n_dof=n, n_mesh=nm, n_signals=nsig,
+                   n_stored=nsig + 2 * nm + len(model.bearing_names) + 4,
+                   max_steps=int(max_steps), speed_max_rpm=setup.speed_max / RAD_S_PER_RPM,
+                   dt_given=dt is not None, fs_out_given=fs_out is not None)
     taps = decimation_filter(step.decimation)
     half = (taps.size - 1) // 2
     dec = step.decimation
 
     qd0 = setup.rigid * setup.omega0
+    law = setup.faults
     q0, acc0 = static_equilibrium(
         system,
         setup.mass,
@@ -201,6 +235,8 @@ def simulate(
         rigid_acceleration=setup.alpha0,
         free_rigid=setup.free_rigid,
         mesh_names=model.mesh_names,
+        flank_law=None if law is None else (
+            lambda q, first: law.flank_law(model, q, system.backlash, first)),
     )
     delta0 = np.abs(system.mesh_vectors @ q0)
     if system.mesh_back_vectors is not None:  # the static deflection of the loaded line
@@ -213,7 +249,6 @@ def simulate(
     n_out = math.floor(run_duration * step.fs_out + 1e-9) + 1
     last_sample = (n_out - 1) * dec + half
     chunk = max(round(CHUNK_DURATION / step.dt), 2 * half + dec + 1)
-    nsig = kn.n_signals(n, nm)
     buf = np.empty((chunk + 2 * half + dec + 1, nsig))
     out = np.empty((n_out, nsig))
     work = np.empty(kn.work_shape(n, nm))
@@ -240,21 +275,24 @@ def simulate(
         while g <= last_sample:
             t_chunk = _time.perf_counter()
             m = min(chunk, last_sample + 1 - g)
-            kn.integrate_chunk(
-                y,
-                g,
-                m,
-                step.dt,
-                sys_tuple,
-                buf,
-                fill,
-                flank_state,
-                changes,
-                (n_out - 1) * dec,
-                work,
-                mesh_out,
-                status,
-            )
+            for off in range(0, m, MAX_KERNEL_STEPS):  # back in Python often (interrupts)
+                kn.integrate_chunk(
+                    y,
+                    g + off,
+                    min(MAX_KERNEL_STEPS, m - off),
+                    step.dt,
+                    sys_tuple,
+                    buf,
+                    fill + off,
+                    flank_state,
+                    changes,
+                    (n_out - 1) * dec,
+                    work,
+                    mesh_out,
+                    status,
+                )
+                if status[0] != kn.STATUS_OK:
+                    break
             if status[0] != kn.STATUS_OK:
                 raise SimulationError(
                     _blow_up_message(status[1] * step.dt, int(status[0]), setup, step, gyroscopic)
@@ -295,7 +333,7 @@ def simulate(
     ang, spd = reference(np.arange(n_out) * (dec * step.dt))
     out[:, :n] += ang[:, None] * rigid
     out[:, n : 2 * n] += spd[:, None] * rigid
-    return build_result(
+    result = build_result(
         model,
         conditions,
         setup,
@@ -309,3 +347,7 @@ def simulate(
         natural_frequencies,
         _time.perf_counter() - wall0,
     )
+    if model.sensors:
+        result = add_sensor_signals(result, model)
+        result.wall_time = _time.perf_counter() - wall0
+    return result

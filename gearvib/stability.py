@@ -49,6 +49,7 @@ from analysis.instability import (
     FirstOrderWidths,
     MeshPhasingRule,
     PiecewiseConstant,
+    PiecewiseSmooth,
     StabilityChart,
     first_order_widths,
     instability_candidates,
@@ -59,6 +60,8 @@ from gearvib.model import AssembledModel, MeshContacts, MeshFrequencyGroup
 from gearvib.simulate import DriveCoupling, default_coupling
 
 __all__ = [
+    "ATTRIBUTION_N_MAX",
+    "CHART_ACCURACY",
     "MAX_CYCLES",
     "MAX_DETUNING",
     "CommonPeriod",
@@ -79,6 +82,37 @@ MAX_DETUNING = 1e-3
 """Default largest admissible relative detuning of a mesh frequency (commensurate approximation)."""
 
 _EXACT_RTOL = 1e-9
+_MAX_KINKS = 64  # a table with more slope changes per cycle is treated as smooth
+_BANDWIDTH_RTOL = 1e-6  # harmonics below this fraction of the largest one are negligible
+
+
+def _kinks(table: np.ndarray) -> np.ndarray | None:
+    """Mesh positions [cycles] where the linear interpolant of a table changes slope.
+
+    None when there are more than :data:`_MAX_KINKS` (a smooth table: every sample is one).
+    """
+    d2 = np.roll(table, -1) - 2.0 * table + np.roll(table, 1)
+    scale = float(np.max(np.abs(table))) if table.size else 0.0
+    idx = np.flatnonzero(np.abs(d2) > 1e-9 * scale)
+    if idx.size > _MAX_KINKS:
+        return None
+    return idx / table.size
+
+
+def _bandwidth_grid(table: np.ndarray) -> np.ndarray:
+    """Uniform grid [cycles] for a smooth table: 8 points per period of its highest harmonic.
+
+    The highest harmonic is the last one above :data:`_BANDWIDTH_RTOL` of the largest; the grid
+    has 16 to 512 points per cycle. It only places the sub-steps of the Floquet product
+    (:class:`~analysis.instability.PiecewiseSmooth`), whose number is refined until the result
+    converges.
+    """
+    amp = np.abs(np.fft.rfft(table)[1:])
+    keep = np.flatnonzero(amp > _BANDWIDTH_RTOL * amp.max()) if amp.size and amp.max() > 0 \
+        else np.zeros(0, dtype=int)
+    l_max = int(keep[-1]) + 1 if keep.size else 1
+    n = int(np.clip(8 * l_max, 16, 512))
+    return np.arange(n) / n
 
 
 def _runs(table: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
@@ -319,6 +353,50 @@ class PeriodicGearSystem:
         """Cycle-mean stiffness matrix."""
         return self.stiffness + self._contact_matrix(self.tables.mean(axis=1))
 
+    def stiffness_batch(self, t: np.ndarray, mesh_frequency: float) -> np.ndarray:
+        """``K`` at an array of times [s] at constant reference mesh frequency [Hz].
+
+        Returns an array ``(len(t), n, n)``; the same values as :meth:`stiffness_at`.
+        """
+        t = np.asarray(t, dtype=float).ravel()
+        cm = self.contact_mesh
+        s = (self.model.mesh_position_offsets[cm][None, :]
+             + self.rates[cm][None, :] * (mesh_frequency * t[:, None]))
+        values = self.mesh_stiffness_values(s)
+        return self.stiffness[None] + np.einsum("kc,cij->kij", values, self._outer)
+
+    @cached_property
+    def _outer(self) -> np.ndarray:
+        v = self.contact_vectors
+        return np.einsum("ci,cj->cij", v, v)
+
+    @cached_property
+    def _smooth_edges(self) -> np.ndarray:
+        """Breakpoints [reference mesh cycles] of ``K`` over one period, for tables that are
+        not piecewise constant: every slope change of every contact's interpolated table
+        (a trapezoid has 8 per cycle), or a grid sized by the bandwidth of a smooth table."""
+        length = self.period.reference_cycles
+        cuts = [np.array([0.0, float(length)])]
+        cm = self.contact_mesh
+        for table, s0, rate in zip(self.tables, self.model.mesh_position_offsets[cm],
+                                   self.rates[cm], strict=True):
+            if rate == 0.0 or np.ptp(table) <= 1e-12 * max(float(np.max(np.abs(table))),
+                                                           1e-300):
+                continue
+            b = _kinks(table)
+            if b is None:
+                b = _bandwidth_grid(table)
+            if b.size == 0:
+                continue
+            k = np.arange(math.floor(min(s0, s0 + rate * length)) - 1,
+                          math.ceil(max(s0, s0 + rate * length)) + 1)
+            u = ((b[None, :] + k[:, None]) - s0) / rate
+            cuts.append(u[(u > 0) & (u < length)])
+        edges = np.unique(np.concatenate(cuts))
+        edges = edges[np.concatenate([[True], np.diff(edges) > 1e-12 * length])]
+        edges[-1] = float(length)
+        return edges
+
     @cached_property
     def _pieces(self) -> tuple[np.ndarray, np.ndarray] | None:
         """Piece lengths [reference mesh cycles] and stiffness matrices over one period."""
@@ -351,7 +429,10 @@ class PeriodicGearSystem:
         ``mesh_frequency`` is the reference (first) mesh frequency [Hz]; the period is
         :attr:`period` ``.reference_cycles`` of its cycles. Piecewise-constant tables
         (rectangular stiffness) give an exact :class:`~analysis.instability.PiecewiseConstant`
-        (pieces computed once per system); otherwise ``K`` is a callable.
+        (pieces computed once per system); other tables a
+        :class:`~analysis.instability.PiecewiseSmooth` with the slope changes of every
+        contact's table as breakpoints (piecewise linear between them: trapezoidal, tabulated
+        and ISO stiffness), or a grid sized by the bandwidth of a smooth table.
         """
         if not mesh_frequency > 0:
             raise ValueError(f"mesh_frequency = {mesh_frequency} must be > 0")
@@ -362,8 +443,11 @@ class PeriodicGearSystem:
             durations = lengths / mesh_frequency
             durations[-1] = period - durations[:-1].sum()
             return self.mass, self.damping, PiecewiseConstant(durations, mats), period
+        edges = self._smooth_edges / mesh_frequency
+        edges[-1] = period
         return (self.mass, self.damping,
-                lambda t: self.stiffness_at(t, mesh_frequency), period)
+                PiecewiseSmooth(edges, lambda t: self.stiffness_batch(t, mesh_frequency)),
+                period)
 
     def harmonics(self, l_max: int = 4, group: int = 0) -> tuple[np.ndarray, np.ndarray]:
         """``(K_mean, K_hat)``: Fourier coefficients of ``K`` over one cycle of a mesh frequency.
@@ -578,11 +662,26 @@ def _reference_factor(model: AssembledModel, system: PeriodicGearSystem) -> floa
     return f
 
 
+ATTRIBUTION_N_MAX = 10
+"""Highest order ``n`` of the candidates Floquet regions are attributed to (a region of order 7
+such as ``2 f2/7`` exists in the paper's case 1; the table shows ``n <= n_max`` plus the
+candidates a region is attributed to)."""
+
+CHART_ACCURACY = {"multiplier_atol": 1e-7, "unity_margin": 0.01}
+"""Accuracy of the Floquet evaluations of a chart over speed (stiffness tables that are not
+piecewise constant): ``max|mu|`` to 1e-7 near the stability limit, to 1 % of its distance from
+1 elsewhere (growth rates to about 1 %)."""
+
+
 def stability_over_speed(model: AssembledModel, speeds_rpm: np.ndarray, *,
                          coupling: DriveCoupling | None = None, n_max: int = 4,
                          refine: bool = True, max_cycles: int = MAX_CYCLES,
                          max_detuning: float = MAX_DETUNING,
-                         torque_sign: float = 1.0) -> StabilityChart:
+                         torque_sign: float = 1.0, candidates: Candidates | None = None,
+                         modal: ModalResult | None = None,
+                         floquet_options: dict | None = None, workers: int | None = 1,
+                         progress: bool | None = False, xtol_rel: float = 1e-8
+                         ) -> StabilityChart:
     """Floquet stability chart over input speed, with regions attributed to theory candidates.
 
     Parameters
@@ -593,13 +692,31 @@ def stability_over_speed(model: AssembledModel, speeds_rpm: np.ndarray, *,
     coupling : DriveCoupling, optional
         Drive coupling at the input (default: the simulation's).
     n_max : int
-        Highest order of the theory candidates.
+        Highest order of the theory candidates listed; regions are attributed to candidates up
+        to order ``max(n_max, ATTRIBUTION_N_MAX)``.
     refine : bool
         Refine the region boundaries by root finding.
     max_cycles, max_detuning
         Common period of several mesh frequencies (module docstring).
     torque_sign : float
         Sense of the mean load (+1: the input drives forward): selects the loaded flanks.
+    candidates : Candidates, optional
+        The candidates to attribute the regions to (default:
+        :func:`gear_set_candidates` up to ``max(n_max, ATTRIBUTION_N_MAX)`` over the speeds;
+        pass the table the caller shows, so that every label is one of its rows).
+    modal : ModalResult, optional
+        Modes of the mean system (default: computed). Their shapes decide which candidate the
+        growing Floquet solution belongs to.
+    floquet_options : dict, optional
+        Options of :func:`analysis.instability.floquet` (default :data:`CHART_ACCURACY`).
+    workers : int or None
+        Processes for the evaluations (None: every core available); see
+        :func:`analysis.instability.stability_chart`. Results do not depend on it.
+    progress : bool or None
+        Progress bar (None: on a terminal only).
+    xtol_rel : float
+        Relative tolerance of the refined boundaries (1e-8: 4e-5 min^-1 at 4000 min^-1,
+        finer than ``max|mu|`` to :data:`CHART_ACCURACY` places them).
 
     Returns
     -------
@@ -613,11 +730,22 @@ def stability_over_speed(model: AssembledModel, speeds_rpm: np.ndarray, *,
     system = periodic_system(model, coupling=coupling, max_cycles=max_cycles,
                              max_detuning=max_detuning, torque_sign=torque_sign)
     f_per_rpm = _reference_factor(model, system)
-    cands = gear_set_candidates(model, n_max=n_max,
-                                speed_range=(float(speeds[0]), float(speeds[-1])),
-                                torque_sign=torque_sign)
+    modal = modal or modal_analysis(model, torque_sign=torque_sign)
+    if candidates is None:  # a little beyond the speeds: centres may lie just outside a region
+        candidates = gear_set_candidates(model, modal, n_max=max(n_max, ATTRIBUTION_N_MAX),
+                                         speed_range=(0.97 * float(speeds[0]),
+                                                      1.03 * float(speeds[-1])),
+                                         torque_sign=torque_sign)
+    keep = np.array([k != "rigid-body" for k in modal.kinds], dtype=bool)
+    shapes = np.real(modal.shapes[:, keep])
+    names = [f"f{i + 1}" for i in np.flatnonzero(keep)]
+    if shapes.shape[1] != candidates.natural_frequencies_hz.size:
+        shapes, names = None, None  # candidates of other modes: frequency relation only
+    opts = dict(CHART_ACCURACY if floquet_options is None else floquet_options)
     return stability_chart(system.at, speeds * f_per_rpm, mesh_frequency_per_rpm=f_per_rpm,
-                           candidates=cands, refine=refine, **_chart_metadata(system))
+                           candidates=candidates, refine=refine, mode_shapes=shapes,
+                           mode_names=names, floquet_options=opts, workers=workers,
+                           progress=progress, xtol_rel=xtol_rel, **_chart_metadata(system))
 
 
 def stability_map(model_for: Callable[[float], AssembledModel], speeds_rpm: np.ndarray,

@@ -518,6 +518,10 @@ class PairSuperposition(MeshStiffness):
 
 _POSITION_UNITS = ("path_fraction", "base_pitch")
 _STIFFNESS_UNITS = ("N/m", "N/(mm um)", "N/(mm µm)")
+CSV_MAX_BYTES = 16 * 2**20
+"""Largest stiffness CSV file read [bytes]."""
+CSV_MAX_ROWS = 100_000
+"""Most data rows of a stiffness CSV file."""
 
 
 class TabulatedPair(PairSuperposition):
@@ -712,12 +716,27 @@ class TabulatedPair(PairSuperposition):
             ("position_column", position_column),
             ("stiffness_column", stiffness_column),
         ):
-            if isinstance(c, bool) or not isinstance(c, int | np.integer) or c < 0:
-                raise ValueError(f"{name} = {c!r} is not admissible (admissible: integer >= 0)")
+            if isinstance(c, bool) or not isinstance(c, int | np.integer) or not 0 <= c < 1000:
+                raise ValueError(f"{name} = {c!r} is not admissible (admissible: integer "
+                                 "0..999)")
         rows: list[tuple[float, float]] = []
         need = max(position_column, stiffness_column) + 1
-        with p.open(newline="", encoding="utf-8-sig") as fh:
-            lines = fh.read().splitlines()
+        try:
+            size = p.stat().st_size
+            if size > CSV_MAX_BYTES:
+                raise ValueError(f"stiffness CSV file {str(p)!r} has {size} bytes (admissible: "
+                                 f"<= {CSV_MAX_BYTES}; a single-pair curve has a few hundred "
+                                 "rows)")
+            with p.open(newline="", encoding="utf-8-sig") as fh:
+                lines = fh.read(CSV_MAX_BYTES + 1).splitlines()
+        except UnicodeDecodeError as exc:
+            raise ValueError(f"stiffness CSV file {str(p)!r} is not a UTF-8 text file (byte "
+                             f"{exc.start} cannot be decoded)") from None
+        except OSError as exc:
+            raise ValueError(f"stiffness CSV file {str(p)!r} cannot be read "
+                             f"({exc.strerror or type(exc).__name__})") from None
+        # errors name the file, the line and the column, never the file's content (the TOML
+        # may point to any file)
         for lineno, raw in enumerate(lines, start=1):
             line = raw.strip()
             if not line or line.startswith("#"):
@@ -725,23 +744,32 @@ class TabulatedPair(PairSuperposition):
             if ";" in line:
                 fields = [f.strip().replace(",", ".") for f in line.split(";")]
             elif "," in line:
-                fields = [f.strip() for f in next(csv.reader([line]))]
+                try:
+                    fields = [f.strip() for f in next(csv.reader([line]))]
+                except csv.Error:
+                    fields = [line]
             else:
                 fields = line.split()
-            try:
-                if len(fields) < need:
-                    raise IndexError
-                pos = float(fields[position_column])
-                stf = float(fields[stiffness_column])
-            except (ValueError, IndexError) as exc:
+            bad = None
+            values = []
+            for col in (position_column, stiffness_column):
+                if col >= len(fields) or not _isnum(fields[col]):
+                    bad = col
+                    break
+                values.append(float(fields[col]))
+            if bad is not None:
                 if not rows and not any(_isnum(f) for f in fields):
                     continue  # header line(s) before the data
                 raise ValueError(
-                    f"{p.name}, line {lineno}: cannot read a number in column "
-                    f"{position_column if isinstance(exc, IndexError) else stiffness_column} "
-                    f"from {raw!r} (need {need} numeric columns)"
-                ) from exc
-            rows.append((pos, stf))
+                    f"stiffness CSV file {str(p)!r}, line {lineno}, column {bad + 1}: "
+                    + ("missing" if bad >= len(fields) else "not a number")
+                    + f" (need {need} numeric columns; position column {position_column + 1}, "
+                    f"stiffness column {stiffness_column + 1}, counted from 1)"
+                )
+            rows.append((values[0], values[1]))
+            if len(rows) > CSV_MAX_ROWS:
+                raise ValueError(f"stiffness CSV file {str(p)!r} has more than {CSV_MAX_ROWS} "
+                                 "rows (admissible: a single-pair curve)")
         if len(rows) < 2:
             raise ValueError(
                 f"{p.name}: found {len(rows)} numeric rows with {need} columns "
@@ -964,7 +992,7 @@ def stiffness_from_dict(
     if not isinstance(d, dict):
         raise ValueError(f"stiffness table must be a dict, got {type(d).__name__}")
     model = d.get("model")
-    if model not in _KEYS:
+    if not isinstance(model, str) or model not in _KEYS:
         raise ValueError(
             f"stiffness model {model!r} is unknown (admissible: {', '.join(sorted(_KEYS))})"
         )

@@ -351,6 +351,11 @@ class GearSet:
         Shafts joining members of different stages.
     config : dict
         The description this set was built from (kept for provenance).
+    faults : tuple of Fault
+        Local tooth faults and manufacturing errors (:mod:`gearvib.faults`), checked and
+        applied by :func:`gearvib.assembly.assemble` and the run.
+    sensors : tuple
+        Virtual sensors (:mod:`gearvib.sensors`) that a run computes.
     """
 
     name: str
@@ -361,8 +366,27 @@ class GearSet:
     output: str
     couplings: tuple[Coupling, ...] = ()
     config: dict = field(default_factory=dict, compare=False)
+    faults: tuple = ()
+    sensors: tuple = ()
+
+    def with_faults(self, faults) -> GearSet:
+        """This gear set with faults added (descriptions or ``[[fault]]`` tables).
+
+        Checked against the set's bodies and teeth when it is assembled.
+        """
+        from gearvib.faults.description import faults_from_list
+
+        return replace(self, faults=self.faults + faults_from_list(list(faults)))
+
+    def with_sensors(self, sensors) -> GearSet:
+        """This gear set with virtual sensors added (descriptions or ``[[sensor]]`` tables)."""
+        from gearvib.sensors.description import sensors_from_list
+
+        return replace(self, sensors=self.sensors + sensors_from_list(list(sensors)))
 
     def __post_init__(self) -> None:
+        object.__setattr__(self, "faults", tuple(self.faults))
+        object.__setattr__(self, "sensors", tuple(self.sensors))
         names = [b.name for b in self.bodies]
         dup = {n for n in names if names.count(n) > 1}
         if dup:

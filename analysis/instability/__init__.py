@@ -14,7 +14,12 @@ Generic API on plain arrays and callables (no dependency on :mod:`gearvib`):
 """
 
 from analysis.instability.chart import StabilityChart, stability_chart
-from analysis.instability.floquet import FloquetResult, PiecewiseConstant, floquet
+from analysis.instability.floquet import (
+    FloquetResult,
+    PiecewiseConstant,
+    PiecewiseSmooth,
+    floquet,
+)
 from analysis.instability.growth import GrowthTable, UnstableBand, runup_growth, unstable_bands
 from analysis.instability.labels import PeakLabels, PeakMatch, label_peaks, theory_lines
 from analysis.instability.resonances import (
@@ -24,6 +29,7 @@ from analysis.instability.resonances import (
     Crossing,
     Resonances,
     detect_resonances,
+    merge_mesh_frequencies,
 )
 from analysis.instability.theory import (
     Candidates,
@@ -49,6 +55,7 @@ __all__ = [
     "PeakLabels",
     "PeakMatch",
     "PiecewiseConstant",
+    "PiecewiseSmooth",
     "Resonances",
     "StabilityChart",
     "UnstableBand",
@@ -57,6 +64,7 @@ __all__ = [
     "floquet",
     "instability_candidates",
     "label_peaks",
+    "merge_mesh_frequencies",
     "natural_frequencies",
     "rectangular_wave_harmonics",
     "rectangular_wave_pieces",

@@ -3,10 +3,25 @@
 A one-parameter chart (mesh frequency) gives the unstable intervals with refined boundaries;
 a two-parameter chart is an Ince-Strutt diagram (e.g. mesh frequency against stiffness
 variation or damping).
+
+Every unstable interval is attributed to the theory candidate whose frequency relation holds
+there (:func:`attribute_region`): its centre ``2 f_i/n`` or ``(f_i + f_j)/n`` must lie inside
+the interval widened by a small relative tolerance, and -- when the mode shapes are given --
+its modes must carry the growing Floquet solution. An interval no candidate explains stays
+*unattributed* (label ``""``); the nearest candidate is never taken as such.
+
+Grid points and boundary refinements are independent Floquet evaluations; with
+``workers > 1`` they run in a process pool (forked, so the system callable is not pickled)
+when the first evaluation shows that the chart takes long enough to pay for it. The results
+do not depend on the number of workers.
 """
 
 from __future__ import annotations
 
+import multiprocessing
+import os
+import signal
+import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -18,9 +33,27 @@ from analysis.checks import require_finite, require_monotonic, require_positive
 from analysis.instability.floquet import floquet
 from analysis.instability.theory import Candidates
 
-__all__ = ["StabilityChart", "stability_chart"]
+__all__ = ["ATTRIBUTION_RTOL", "StabilityChart", "attribute_region", "stability_chart"]
 
 SystemAt = Callable[..., tuple[Any, Any, Any, float]]
+
+ATTRIBUTION_RTOL = 0.01
+"""Relative tolerance by which a candidate centre may lie outside an unstable interval: the
+centres ``2 f_i/n``, ``(f_i + f_j)/n`` come from the mean-stiffness modes, and the regions of a
+strongly varying stiffness sit up to about 0.6 % away from them (the paper's case 2: the sum
+region (f2 + f3)/2 at 3550-3565 min-1, its centre at 3586 min-1)."""
+
+MODE_SHARE_MIN = 0.3
+"""Smallest share of the growing Floquet solution's modal energy that a candidate's modes
+must carry together to explain an interval (when mode shapes are given)."""
+
+CLUSTER_SHARE_MIN = 0.03
+"""... and each of its two modes (clusters of repeated modes) of a sum-type candidate."""
+
+SHARE_TIE = 0.05
+"""Candidates whose modes carry within this share of the best one are ranked by order n."""
+
+_PARALLEL_MIN_S = 3.0  # a chart expected to take less runs in this process
 
 
 @dataclass(frozen=True)
@@ -50,6 +83,11 @@ class StabilityChart:
         Each mesh frequency divided by the reference (kinematic ratios).
     method : str
         How the system with several mesh frequencies was made periodic (see the caller).
+    candidates : Candidates or None
+        The theory candidates the intervals were attributed to (each region's
+        ``candidate_index`` is a row of this table, -1 when unattributed).
+    notes : tuple of str
+        Remarks (e.g. evaluations whose error estimate exceeds the requested accuracy).
     """
 
     mesh_frequencies_hz: np.ndarray
@@ -64,6 +102,8 @@ class StabilityChart:
     mesh_frequency_names: tuple[str, ...] = ()
     mesh_frequency_ratios: tuple[float, ...] = ()
     method: str = ""
+    candidates: Candidates | None = None
+    notes: tuple[str, ...] = ()
 
     @property
     def unstable(self) -> np.ndarray:
@@ -77,10 +117,12 @@ class StabilityChart:
         (boundaries refined by root finding unless the interval touches the grid end, flagged by
         ``lower_open``/``upper_open``), ``lower_speed``/``upper_speed`` [min-1] (NaN without a
         speed factor), ``peak_growth_rate`` [1/s], ``peak_max_modulus``, ``candidate`` (label of
-        the nearest allowed theory candidate by centre, "" if none given; with several mesh
+        the theory candidate whose relation holds in the interval, see
+        :func:`attribute_region`; "" when none does or none were given; with several mesh
         frequencies the label names the one it belongs to, ``"2 f3/4 [stage 2]"``),
-        ``candidate_f_mesh`` [Hz] (its centre on the grid's mesh frequency), and ``parameter``
-        for two-parameter charts. With several mesh frequencies, ``group_lower`` and
+        ``candidate_f_mesh`` [Hz] (its centre on the grid's mesh frequency), ``evidence``
+        (why, or the modes that carry the growing solution) and ``parameter`` for
+        two-parameter charts. With several mesh frequencies, ``group_lower`` and
         ``group_upper`` (dimensions ``region``, ``mesh_frequency_group``) give the boundaries
         in every mesh frequency [Hz].
         """
@@ -111,8 +153,10 @@ class StabilityChart:
             "peak_growth_rate": v(col("peak_growth_rate"), "s-1", "largest growth rate on grid"),
             "peak_max_modulus": v(col("peak_max_modulus"), "1", "largest max|mu| on grid"),
             "candidate": v(col("candidate", object).astype(str), "1",
-                           "nearest theory candidate (by centre)"),
+                           "theory candidate whose relation holds in the interval"),
             "candidate_f_mesh": v(col("candidate_f_mesh"), "Hz", "centre of that candidate"),
+            "evidence": v(np.asarray([r.get("evidence", "") for r in t], dtype=object)
+                          .astype(str), "1", "why the candidate holds (or none does)"),
         }
         if self.parameter_values is not None:
             data["parameter"] = v(col("parameter"), self.parameter_units, self.parameter_name)
@@ -189,6 +233,212 @@ def _call(system_at: SystemAt, f: float, p: Any) -> tuple:
     return M, C, K, T
 
 
+# ------------------------------------------------------------------------- parallel map
+
+_TASK: Callable[[Any], Any] | None = None  # set in the parent just before the pool forks
+
+
+def _run_task(item: Any) -> Any:
+    assert _TASK is not None
+    return _TASK(item)
+
+
+def _ignore_sigint() -> None:  # workers: Ctrl-C is the parent's to handle (it terminates them)
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def default_workers() -> int:
+    """Cores this process may use (``os.sched_getaffinity``, else ``os.cpu_count``)."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # not on Linux
+        return max(1, os.cpu_count() or 1)
+
+
+def _map(func: Callable[[Any], Any], items: Sequence[Any], *, workers: int, bar: Any) -> list:
+    """``[func(x) for x in items]``, in a forked process pool when ``workers > 1``.
+
+    The pool is terminated on any error or Ctrl-C (nothing keeps running); the order of the
+    results is that of ``items``.
+    """
+    global _TASK
+    if workers <= 1 or len(items) < 2 or "fork" not in multiprocessing.get_all_start_methods():
+        out = []
+        for x in items:
+            out.append(func(x))
+            bar.update(1)
+        return out
+    _TASK = func
+    pool = multiprocessing.get_context("fork").Pool(min(workers, len(items)),
+                                                    initializer=_ignore_sigint)
+    try:
+        out = []
+        for r in pool.imap(_run_task, items, chunksize=1):
+            out.append(r)
+            bar.update(1)
+        pool.close()
+        return out
+    except BaseException:
+        pool.terminate()
+        raise
+    finally:
+        pool.join()
+        _TASK = None
+
+
+class _NoBar:
+    def update(self, n: int = 1) -> None:
+        pass
+
+    def close(self) -> None:
+        pass
+
+    def set_description(self, text: str) -> None:
+        pass
+
+
+def _progress_bar(progress: bool | None, total: int, desc: str) -> Any:
+    if progress is False:
+        return _NoBar()
+    try:
+        from tqdm.auto import tqdm
+    except ImportError:  # pragma: no cover - tqdm is a required dependency
+        return _NoBar()
+    return tqdm(total=total, desc=desc, unit="speed", leave=False,
+                disable=None if progress is None else not progress)
+
+
+# ------------------------------------------------------------------------- attribution
+
+
+def _by_speed(candidates: Candidates, factor: float | None) -> bool:
+    """Compare candidates by speed (``rpm x factor``): needed when they belong to named mesh
+    frequencies (their ``f_mesh_hz`` are then in different units), used whenever possible."""
+    named = candidates.mesh_frequency is not None and any(
+        str(x) for x in candidates.mesh_frequency)
+    usable = bool(factor) and bool(np.all(np.isfinite(candidates.rpm)))
+    if named and not usable:
+        raise ValueError("candidates of named mesh frequencies need factor (reference mesh "
+                         "frequency per speed) and speeds to be compared with the interval")
+    return usable
+
+
+def _mode_shares(result: Any, mass: np.ndarray, shapes: np.ndarray,
+                 freqs_hz: np.ndarray) -> np.ndarray:
+    """Share of each mode in the energy of the growing Floquet solution at ``t = 0``.
+
+    ``x = [q; q']`` is the eigenvector of the largest multiplier; with mass-normalised shapes
+    ``phi_i`` the modal coordinates are ``eta_i = phi_i^T M q`` and the energy of mode ``i`` is
+    ``|eta_i'|^2 + omega_i^2 |eta_i|^2``.
+    """
+    w, v = np.linalg.eig(result.monodromy)
+    x = v[:, int(np.argmax(np.abs(w)))]
+    n = mass.shape[0]
+    eta = shapes.T @ (mass @ x[:n])
+    etad = shapes.T @ (mass @ x[n:])
+    om = 2.0 * np.pi * np.asarray(freqs_hz, dtype=float)
+    e = np.abs(etad) ** 2 + (om * np.abs(eta)) ** 2
+    total = float(e.sum())
+    return e / total if total > 0 else np.zeros_like(e)
+
+
+def attribute_region(lower_hz: float, upper_hz: float, candidates: Candidates, *,
+                     factor: float | None = None, rtol: float = ATTRIBUTION_RTOL,
+                     shares: np.ndarray | None = None, names: Sequence[str] | None = None,
+                     min_share: float = MODE_SHARE_MIN) -> tuple[int | None, str]:
+    """The theory candidate whose frequency relation holds in an unstable interval.
+
+    Parameters
+    ----------
+    lower_hz, upper_hz : float
+        The interval in the grid's (reference) mesh frequency [Hz].
+    candidates : Candidates
+        Allowed rows are considered (suppressed ones never explain a region).
+    factor : float, optional
+        Reference mesh frequency per speed [Hz per min^-1]. Needed when the rows belong to
+        several mesh frequencies (their centres are compared by speed, ``rpm x factor``).
+    rtol : float
+        A candidate holds when its centre lies in ``[lower (1 - rtol), upper (1 + rtol)]``.
+    shares : ndarray, optional
+        Share of every mode (indices of ``candidates.natural_frequencies_hz``) in the growing
+        Floquet solution (see ``mode_shapes`` of :func:`stability_chart`). When given, a
+        candidate must also have its modes carry at least ``min_share`` of it.
+    names : sequence of str, optional
+        Mode names for the evidence text (default ``f1, f2, ...``).
+    min_share : float
+        See ``shares``.
+
+    Returns
+    -------
+    (int or None, str)
+        Row index of the candidate, or None; and the evidence text. With ``shares``, the
+        candidates whose modes carry at least ``min_share`` of the growing solution together
+        (and each of a sum's two modes at least :data:`CLUSTER_SHARE_MIN`) qualify; among those
+        within :data:`SHARE_TIE` of the largest share the lowest order ``n`` wins (a region of
+        order ``n`` is ``O(eps^n)`` wide), then the nearest centre. Without ``shares``: the
+        lowest order, then the nearest centre.
+    """
+    if not len(candidates):
+        return None, "no theory candidates in range"
+    several = _by_speed(candidates, factor)
+    centre = (candidates.rpm * factor if several else candidates.f_mesh_hz).astype(float)
+    lo, hi = float(lower_hz), float(upper_hz)
+    holds = (candidates.allowed.astype(bool) & np.isfinite(centre)
+             & (centre >= lo * (1.0 - rtol)) & (centre <= hi * (1.0 + rtol)))
+    labels = list(names) if names is not None else [
+        f"f{i + 1}" for i in range(candidates.natural_frequencies_hz.size)]
+    dominant = ""
+    if shares is not None and shares.size:
+        order = np.argsort(shares)[::-1]
+        parts = []
+        for i in order[:3]:
+            if shares[i] >= 0.05:
+                parts.append(f"{labels[i]} {100 * shares[i]:.0f} %")
+        dominant = "growing solution: " + ", ".join(parts) if parts else ""
+    freqs = candidates.natural_frequencies_hz
+
+    def cluster(j: int) -> np.ndarray:
+        return np.flatnonzero(np.abs(freqs - freqs[j]) <= 1e-6 * freqs[j])
+
+    scored: list[tuple[float, int]] = []
+    for i in np.flatnonzero(holds):
+        share = 1.0
+        if shares is not None and shares.size:
+            parts = [float(shares[cluster(int(j))].sum())
+                     for j in {int(candidates.mode_i[i]), int(candidates.mode_j[i])}]
+            share = float(sum(parts))
+            if share < min_share or min(parts) < CLUSTER_SHARE_MIN:
+                continue
+        scored.append((share, int(i)))
+    best: tuple[tuple, int] | None = None
+    if scored:
+        top = max(sc for sc, _ in scored)
+        for sc, i in scored:
+            if sc < top - SHARE_TIE:
+                continue
+            key = (int(candidates.n[i]), abs(centre[i] - 0.5 * (lo + hi)))
+            if best is None or key < best[0]:
+                best = (key, i)
+    if best is None:
+        why = (f"no allowed candidate within the interval ± {100 * rtol:g} %"
+               if not holds.any() else
+               f"no allowed candidate within ± {100 * rtol:g} % whose modes carry the growing "
+               "solution")
+        return None, "; ".join(x for x in (why, dominant) if x)
+    i = best[1]
+    where = (f"centre {candidates.rpm[i]:.0f} min-1" if several else
+             f"centre {centre[i]:.1f} Hz")
+    inside = lo <= centre[i] <= hi
+    text = (f"{candidates.full_label(i)}: {where} "
+            + ("inside the interval" if inside else
+               f"{100 * min(abs(centre[i] - lo), abs(centre[i] - hi)) / centre[i]:.2f} % "
+               "outside it"))
+    return i, "; ".join(x for x in (text, dominant) if x)
+
+
+# ------------------------------------------------------------------------- the chart
+
+
 def stability_chart(
     system_at: SystemAt,
     mesh_frequencies_hz: Any,
@@ -205,6 +455,11 @@ def stability_chart(
     mesh_frequency_names: Sequence[str] = (),
     mesh_frequency_ratios: Sequence[float] = (),
     method: str = "",
+    mode_shapes: Any = None,
+    mode_names: Sequence[str] | None = None,
+    attribution_rtol: float = ATTRIBUTION_RTOL,
+    workers: int | None = 1,
+    progress: bool | None = False,
 ) -> StabilityChart:
     """Evaluate Floquet stability over a mesh-frequency grid.
 
@@ -213,7 +468,8 @@ def stability_chart(
     system_at : callable
         ``system_at(f_mesh)`` (or ``system_at(f_mesh, param)`` with ``parameter_values``)
         returning ``(M, C, K, period)`` as accepted by
-        :func:`analysis.instability.floquet.floquet` (``K`` callable or ``PiecewiseConstant``).
+        :func:`analysis.instability.floquet.floquet` (``K`` callable, ``PiecewiseConstant``
+        or ``PiecewiseSmooth``).
     mesh_frequencies_hz : array_like, shape (nf,)
         Strictly increasing mesh-frequency grid [Hz].
     parameter_values : sequence of float, optional
@@ -221,7 +477,8 @@ def stability_chart(
     mesh_frequency_per_rpm : float, optional
         Mesh frequency per input speed [Hz/min-1] (speeds in the region table).
     candidates : Candidates, optional
-        Theory candidates; each region is attributed to the nearest allowed candidate centre.
+        Theory candidates; each region is attributed to the candidate whose relation holds in
+        it (:func:`attribute_region`), else left unattributed.
     refine : bool
         Refine every interior boundary by root finding on ``max|mu| - 1 - tol``.
     tol : float
@@ -231,14 +488,31 @@ def stability_chart(
     parameter_name, parameter_units : str
         Metadata of the second parameter.
     floquet_options : dict, optional
-        Extra keyword arguments for :func:`floquet` (``method``, ``n_steps``, ``rtol``).
+        Extra keyword arguments for :func:`floquet` (``method``, ``n_steps``, ``rtol``,
+        ``multiplier_atol``, ``unity_margin``).
     mesh_frequency_names, mesh_frequency_ratios : sequence
         For a system with several mesh frequencies: their names and their ratios to the grid's
         (reference) mesh frequency, first entry the reference (ratio 1). The region table then
-        gives every region in every mesh frequency, and regions are attributed to candidates
-        by speed (needs ``mesh_frequency_per_rpm``).
+        gives every region in every mesh frequency, and candidates are compared by speed
+        (needs ``mesh_frequency_per_rpm``).
     method : str
         Description of how ``system_at`` makes the system periodic (stored).
+    mode_shapes : array_like, shape (n_dof, n_modes), optional
+        Mass-normalised mode shapes of the mean system, one column per natural frequency of
+        ``candidates`` (same order). The growing Floquet solution at each region's peak is
+        decomposed into them, and a candidate explains the region only if its modes carry at
+        least :data:`MODE_SHARE_MIN` of that solution's energy.
+    mode_names : sequence of str, optional
+        Names of those modes (evidence text).
+    attribution_rtol : float
+        See :func:`attribute_region`.
+    workers : int or None
+        Processes for the grid and the boundary refinements (None: the cores available to
+        this process). A pool is used only when the first evaluation predicts a chart of more
+        than a few seconds, and only where ``fork`` is available; results are identical for
+        any number of workers.
+    progress : bool or None
+        Progress bar (tqdm) over the evaluations; None shows it on a terminal only.
 
     Returns
     -------
@@ -267,6 +541,7 @@ def stability_chart(
     factor = (require_positive(mesh_frequency_per_rpm, "mesh_frequency_per_rpm")
               if mesh_frequency_per_rpm is not None else None)
     require_positive(tol, "tol", allow_zero=True)
+    require_positive(attribution_rtol, "attribution_rtol", allow_zero=True)
     opts = dict(floquet_options or {})
     opts["tol"] = tol
     names = tuple(str(x) for x in mesh_frequency_names)
@@ -276,63 +551,118 @@ def stability_chart(
                          f"mesh_frequency_ratios {len(ratios)}; give one ratio per name")
     if ratios and not (ratios[0] == 1.0 and all(r > 0 for r in ratios)):
         raise ValueError("mesh_frequency_ratios must be > 0 and start with 1 (the reference)")
+    shapes = None
+    if mode_shapes is not None:
+        shapes = require_finite(mode_shapes, "mode_shapes")
+        if candidates is None or shapes.ndim != 2 or \
+                shapes.shape[1] != candidates.natural_frequencies_hz.size:
+            raise ValueError("mode_shapes must be (n_dof, n_modes) with one column per natural "
+                             "frequency of candidates (and candidates given)")
+    n_workers = default_workers() if workers is None else int(workers)
+    if n_workers < 1:
+        raise ValueError(f"workers = {workers!r} is not admissible: an integer >= 1 or None")
 
-    def evaluate(fm: float, p: Any) -> tuple[float, float]:
-        M, C, K, T = _call(system_at, fm, p)
+    def evaluate(item: tuple[float, Any]) -> tuple[float, float, float]:
+        fm, p = item
+        M, C, K, T = _call(system_at, float(fm), p)
         r = floquet(M, C, K, T, **opts)
-        return r.max_modulus, r.growth_rate
+        return r.max_modulus, r.growth_rate, r.error_estimate
 
     rows = [None] if params is None else list(params)
-    mm = np.empty((len(rows), f.size))
-    gr = np.empty_like(mm)
-    for a, p in enumerate(rows):
-        for b, fm in enumerate(f):
-            mm[a, b], gr[a, b] = evaluate(float(fm), p)
+    items = [(float(fm), p) for p in rows for fm in f]
+    bar = _progress_bar(progress, len(items), "Floquet chart")
+    try:
+        # the first evaluation (the lowest mesh frequency: the longest period) tells whether a
+        # process pool pays
+        t0 = time.perf_counter()
+        first = evaluate(items[0])
+        bar.update(1)
+        expected = (time.perf_counter() - t0) * len(items)
+        pool = n_workers if expected > _PARALLEL_MIN_S else 1
+        values = [first, *_map(evaluate, items[1:], workers=pool, bar=bar)]
+        mm = np.array([v[0] for v in values]).reshape(len(rows), f.size)
+        gr = np.array([v[1] for v in values]).reshape(len(rows), f.size)
+        err = np.array([v[2] for v in values]).reshape(len(rows), f.size)
+
+        # intervals and the boundary brackets to refine
+        spans: list[tuple[int, int, int]] = []
+        for a in range(len(rows)):
+            uns = mm[a] > 1.0 + tol
+            edges = np.flatnonzero(np.diff(uns.astype(np.int8)))
+            starts = [0] if uns[0] else []
+            starts += [int(e) + 1 for e in edges if not uns[e]]
+            for s_ in starts:
+                e_ = s_
+                while e_ + 1 < f.size and uns[e_ + 1]:
+                    e_ += 1
+                spans.append((a, s_, e_))
+        brackets: list[tuple[float, float, Any]] = []
+        for a, s_, e_ in spans:
+            if refine and s_ > 0:
+                brackets.append((float(f[s_ - 1]), float(f[s_]), rows[a]))
+            if refine and e_ < f.size - 1:
+                brackets.append((float(f[e_]), float(f[e_ + 1]), rows[a]))
+
+        def root(item: tuple[float, float, Any]) -> float:
+            lo_f, hi_f, p = item
+            return float(scipy.optimize.brentq(
+                lambda x: evaluate((x, p))[0] - 1.0 - tol, lo_f, hi_f,
+                xtol=xtol_rel * hi_f))
+
+        if brackets:
+            bar.total = len(items) + len(brackets)
+            bar.set_description("Floquet boundaries")
+        roots = dict(zip(brackets, _map(root, brackets, workers=pool, bar=bar), strict=True))
+    finally:
+        bar.close()
 
     table: list[dict] = []
-    for a, p in enumerate(rows):
-        uns = mm[a] > 1.0 + tol
-        edges = np.flatnonzero(np.diff(uns.astype(np.int8)))
-        starts = [0] if uns[0] else []
-        starts += [int(e) + 1 for e in edges if not uns[e]]
-        for s in starts:
-            e = s
-            while e + 1 < f.size and uns[e + 1]:
-                e += 1
-
-            def g(x: float, p=p) -> float:
-                return evaluate(x, p)[0] - 1.0 - tol
-
-            lower_open, upper_open = s == 0, e == f.size - 1
-            if lower_open:
-                lower = f[0]
-            elif refine:
-                lower = scipy.optimize.brentq(g, f[s - 1], f[s], xtol=xtol_rel * f[s])
-            else:
-                lower = 0.5 * (f[s - 1] + f[s])
-            if upper_open:
-                upper = f[-1]
-            elif refine:
-                upper = scipy.optimize.brentq(g, f[e], f[e + 1], xtol=xtol_rel * f[e + 1])
-            else:
-                upper = 0.5 * (f[e] + f[e + 1])
-            k = s + int(np.argmax(gr[a, s:e + 1]))
-            centre = 0.5 * (lower + upper)
-            lab, cf = "", np.nan
-            if candidates is not None:
-                by_speed = factor is not None and bool(np.isfinite(candidates.rpm).any())
-                idx = (candidates.nearest_speed(centre / factor) if by_speed
-                       else candidates.nearest(centre))
-                if idx is not None:
-                    lab = candidates.full_label(idx)
-                    cf = (float(candidates.rpm[idx]) * factor if by_speed
-                          else float(candidates.f_mesh_hz[idx]))
-            table.append({
-                "lower": float(lower), "upper": float(upper), "lower_open": lower_open,
-                "upper_open": upper_open, "peak_growth_rate": float(gr[a, k]),
-                "peak_max_modulus": float(mm[a, k]), "candidate": lab, "candidate_f_mesh": cf,
-                "parameter": np.nan if p is None else float(p),
-            })
+    for a, s_, e_ in spans:
+        p = rows[a]
+        lower_open, upper_open = s_ == 0, e_ == f.size - 1
+        if lower_open:
+            lower = f[0]
+        elif refine:
+            lower = roots[(float(f[s_ - 1]), float(f[s_]), p)]
+        else:
+            lower = 0.5 * (f[s_ - 1] + f[s_])
+        if upper_open:
+            upper = f[-1]
+        elif refine:
+            upper = roots[(float(f[e_]), float(f[e_ + 1]), p)]
+        else:
+            upper = 0.5 * (f[e_] + f[e_ + 1])
+        k = s_ + int(np.argmax(gr[a, s_:e_ + 1]))
+        lab, cf, idx, why = "", np.nan, -1, ""
+        if candidates is not None:
+            shares = None
+            if shapes is not None:
+                M, C, K, T = _call(system_at, float(f[k]), p)
+                shares = _mode_shares(floquet(M, C, K, T, **opts), np.asarray(M, float),
+                                      shapes, candidates.natural_frequencies_hz)
+            hit, why = attribute_region(float(lower), float(upper), candidates, factor=factor,
+                                        rtol=attribution_rtol, shares=shares,
+                                        names=mode_names)
+            if hit is None and (lower_open or upper_open):
+                why += ("; the interval reaches the end of the analysed range, so its "
+                        "candidate may lie beyond it")
+            if hit is not None:
+                idx = hit
+                lab = candidates.full_label(hit)
+                cf = (float(candidates.rpm[hit]) * factor if _by_speed(candidates, factor)
+                      else float(candidates.f_mesh_hz[hit]))
+        table.append({
+            "lower": float(lower), "upper": float(upper), "lower_open": lower_open,
+            "upper_open": upper_open, "peak_growth_rate": float(gr[a, k]),
+            "peak_max_modulus": float(mm[a, k]), "candidate": lab, "candidate_f_mesh": cf,
+            "candidate_index": idx, "evidence": why,
+            "parameter": np.nan if p is None else float(p),
+        })
+    notes = []
+    atol = float(opts.get("multiplier_atol", 0.0) or 0.0)
+    if atol and np.isfinite(err).any() and float(np.nanmax(err)) > 10 * atol:
+        notes.append(f"largest estimated error of max|mu| {float(np.nanmax(err)):.2g} "
+                     f"(requested {atol:g}): the sub-step limit was reached")
     squeeze = params is None
     return StabilityChart(
         mesh_frequencies_hz=f, parameter_values=params,
@@ -340,4 +670,5 @@ def stability_chart(
         tol=float(tol), mesh_frequency_per_rpm=factor, region_table=table,
         parameter_name=parameter_name, parameter_units=parameter_units,
         mesh_frequency_names=names, mesh_frequency_ratios=ratios, method=str(method),
+        candidates=candidates, notes=tuple(notes),
     )

@@ -1,8 +1,17 @@
 """Floquet analysis of linear periodic systems ``M q'' + C q' + K(t) q = 0``.
 
-The monodromy matrix is computed either exactly, as an ordered product of matrix exponentials
-for a piecewise-constant stiffness (:class:`PiecewiseConstant`), or by a fourth-order Magnus
-integrator with Richardson extrapolation and step doubling for a smooth stiffness callable.
+The monodromy matrix is computed
+
+* exactly, as an ordered product of matrix exponentials, for a piecewise-constant stiffness
+  (:class:`PiecewiseConstant`, e.g. a rectangular mesh stiffness);
+* as a product of exponentials on sub-steps aligned with the breakpoints of a stiffness that
+  is smooth (typically linear) between them (:class:`PiecewiseSmooth`, e.g. a trapezoidal or
+  tabulated mesh stiffness): the exponential midpoint rule, sub-steps allotted to the pieces by
+  how much ``K`` changes over them and doubled until the largest multiplier converges. Every
+  exponential is exact (scaling and squaring), so the step is sized by the variation of the
+  stiffness, not by the highest natural frequency;
+* by a fourth-order Magnus integrator with Richardson extrapolation and step doubling for a
+  smooth stiffness callable (resolves the fastest mode: the reference for small systems).
 """
 
 from __future__ import annotations
@@ -21,11 +30,14 @@ from analysis.checks import (
     require_square,
 )
 
-__all__ = ["FloquetResult", "PiecewiseConstant", "floquet"]
+__all__ = ["FloquetResult", "PiecewiseConstant", "PiecewiseSmooth", "floquet"]
 
 StiffnessCallable = Callable[[float], Any]
 
 _MAX_STEPS = 2**16
+_MIDPOINT_START = 2  # sub-steps of the piece with the largest stiffness change, first pass
+_MIDPOINT_MAX_SUBSTEPS = 2**17  # sub-steps of one period in the last pass at most (time bound)
+_CHUNK = 2048  # exponentials formed at once (memory bound: CHUNK x (2n)^2 x 8 B per array)
 
 
 @dataclass(frozen=True)
@@ -90,6 +102,62 @@ class PiecewiseConstant:
 
 
 @dataclass(frozen=True)
+class PiecewiseSmooth:
+    """Periodic stiffness matrix that is smooth between breakpoints, evaluated in batches.
+
+    Parameters
+    ----------
+    edges : array_like, shape (m + 1,)
+        Breakpoints [s]: ``edges[0] = 0``, ``edges[-1]`` the period, strictly increasing.
+        Put an edge wherever ``K`` or its derivative jumps (e.g. every kink of a
+        piecewise-linear stiffness table); between edges ``K`` should be smooth.
+    evaluate : callable
+        ``evaluate(times) -> (k, n, n)`` array: ``K`` at an array of ``k`` times [s] in
+        ``[0, period]``.
+
+    Notes
+    -----
+    :func:`floquet` forms the monodromy as the product of ``expm(A(t_j) h_j)`` over sub-steps
+    (exponential midpoint rule, second order). Each piece gets sub-steps in proportion to the
+    change of ``K`` over it (a constant piece one: exact); all sub-steps are halved pass by
+    pass and two passes are combined by Richardson extrapolation until the largest multiplier
+    has converged. With edges at every kink the error expands in even powers of the sub-step,
+    whatever the highest natural frequency (each exponential is exact).
+    """
+
+    edges: np.ndarray
+    evaluate: Callable[[np.ndarray], Any]
+
+    def __post_init__(self) -> None:
+        e = require_finite(self.edges, "edges")
+        if e.ndim != 1 or e.size < 2:
+            raise ValueError(f"edges must be a 1-D array of at least 2 times; got shape {e.shape}")
+        if e[0] != 0.0 or np.any(np.diff(e) <= 0):
+            raise ValueError("edges must start at 0 and increase strictly (the breakpoints of "
+                             "one period)")
+        if not callable(self.evaluate):
+            raise ValueError("evaluate must be a callable times -> (k, n, n) array")
+        object.__setattr__(self, "edges", e)
+
+    @property
+    def period(self) -> float:
+        """The last edge: the period [s]."""
+        return float(self.edges[-1])
+
+    def matrices(self, times: Any) -> np.ndarray:
+        """``K`` at ``times`` [s] as a ``(k, n, n)`` array (checked)."""
+        t = np.atleast_1d(np.asarray(times, dtype=float))
+        k = require_finite(self.evaluate(t), "K(t)")
+        if k.ndim != 3 or k.shape[0] != t.size or k.shape[1] != k.shape[2]:
+            raise ValueError(f"evaluate(times) must return shape ({t.size}, n, n); got {k.shape}")
+        return k
+
+    def __call__(self, t: float) -> np.ndarray:
+        """Stiffness matrix at time ``t`` [s] (periodic continuation)."""
+        return self.matrices([float(t) % self.period])[0]
+
+
+@dataclass(frozen=True)
 class FloquetResult:
     """Floquet multipliers and derived stability measures of one periodic system.
 
@@ -120,11 +188,14 @@ class FloquetResult:
         stays meaningful when a long period (several mesh frequencies) underflows the
         determinant.
     method : str
-        ``"exact"`` (matrix-exponential product) or ``"magnus"``.
+        ``"exact"`` (matrix-exponential product), ``"midpoint"`` (product of exponentials on
+        sub-steps of a :class:`PiecewiseSmooth` stiffness) or ``"magnus"``.
     n_steps : int
-        Number of Magnus steps per period (0 for the exact product).
+        Number of Magnus steps or midpoint sub-steps per period (0 for the exact product).
     error_estimate : float
-        Estimated relative error of the monodromy (0 for the exact product).
+        Estimated error: relative error of the monodromy (``"magnus"``), error of the largest
+        multiplier modulus (``"midpoint"``: a fifteenth of the change between the last two
+        Richardson values), 0 for the exact product.
     """
 
     multipliers: np.ndarray
@@ -283,36 +354,138 @@ def _expm_each(x: np.ndarray) -> np.ndarray:
     return e
 
 
+@dataclass(frozen=True)
+class _Balanced:
+    """Balanced coordinates of ``x' = A(t) x``: mass-normalised ``p = L^T q`` (``M = L L^T``),
+    velocities scaled by ``w = sqrt(max ||L^-1 K L^-T||_F)``.
+
+    ``A~ = [[0, w I], [-L^-1 K L^-T / w, -L^-1 C L^-T]]`` is similar to ``A`` (same
+    multipliers) and has entries of the order of the highest natural frequency in every block
+    (instead of spanning ``1e5`` in mixed units), so scaling and squaring needs few squarings
+    and stays accurate to rounding.
+    """
+
+    li: np.ndarray
+    ct: np.ndarray
+    w: float
+
+    @classmethod
+    def of(cls, m: np.ndarray, c: np.ndarray, k_sample: np.ndarray, period: float) -> _Balanced:
+        li = np.linalg.inv(np.linalg.cholesky(m))
+        kt = li @ k_sample @ li.T
+        norm2 = float(np.max(np.einsum("tij,tij->t", kt, kt))) if m.shape[0] else 0.0
+        w = norm2**0.25 if norm2 > 0 else 1.0 / period
+        return cls(li, li @ c @ li.T, w)
+
+    def states(self, ks: np.ndarray) -> np.ndarray:
+        """Balanced state matrices of a batch ``(k, n, n)`` of stiffness matrices."""
+        n = self.li.shape[0]
+        a = np.zeros((ks.shape[0], 2 * n, 2 * n))
+        a[:, :n, n:] = self.w * np.eye(n)
+        a[:, n:, :n] = -(self.li @ ks @ self.li.T) / self.w
+        a[:, n:, n:] = -self.ct
+        return a
+
+    def unbalance(self, phit: np.ndarray) -> np.ndarray:
+        """The monodromy in ``x = [q; q']`` from the balanced one."""
+        n = self.li.shape[0]
+        t = np.zeros((2 * n, 2 * n))
+        t_inv = np.zeros((2 * n, 2 * n))
+        lt = np.linalg.inv(self.li.T)
+        t[:n, :n] = self.li.T
+        t[n:, n:] = self.w * self.li.T
+        t_inv[:n, :n] = lt
+        t_inv[n:, n:] = lt / self.w
+        return t @ phit @ t_inv
+
+
 def _exact_monodromy(m: np.ndarray, c: np.ndarray, k: PiecewiseConstant) -> np.ndarray:
     """Monodromy ``expm(A_m tau_m) ... expm(A_1 tau_1)`` of a piecewise-constant stiffness.
 
-    The product is formed in balanced coordinates, mass-normalised ``p = L^T q``
-    (``M = L L^T``) and velocities scaled by ``w = sqrt(max ||L^-1 K_k L^-T||_2)``:
-    ``A~ = [[0, w I], [-L^-1 K L^-T / w, -L^-1 C L^-T]]``. This similarity transform leaves the
-    multipliers unchanged and brings ``||A~ tau||`` to the order of ``w tau`` (a few units
-    instead of ``1e5`` in mixed units), so few squarings are needed and the exponentials are
-    accurate to ``1e-14``; the result is transformed back to ``x = [q; q']``. (The Frobenius
-    norm stands in for the 2-norm in ``w``: any value of that order balances.)
+    The product is formed in balanced coordinates (:class:`_Balanced`): the similarity
+    transform leaves the multipliers unchanged and brings ``||A~ tau||`` to the order of
+    ``w tau`` (a few units instead of ``1e5`` in mixed units), so few squarings are needed and
+    the exponentials are accurate to ``1e-14``; the result is transformed back to ``x = [q; q']``.
     """
-    n = m.shape[0]
-    li = np.linalg.inv(np.linalg.cholesky(m))
-    kt = li @ k.matrices @ li.T
-    ct = li @ c @ li.T
-    norm2 = float(np.max(np.einsum("tij,tij->t", kt, kt))) if n else 0.0
-    w = norm2**0.25 if norm2 > 0 else 1.0 / k.period
-    a = np.zeros((kt.shape[0], 2 * n, 2 * n))
-    a[:, :n, n:] = w * np.eye(n)
-    a[:, n:, :n] = -kt / w
-    a[:, n:, n:] = -ct
-    phit = _ordered_product(_expm_each(a * k.durations[:, None, None]))
-    t = np.zeros((2 * n, 2 * n))
-    t_inv = np.zeros((2 * n, 2 * n))
-    t[:n, :n] = li.T
-    t[n:, n:] = w * li.T
-    lt = np.linalg.inv(li.T)
-    t_inv[:n, :n] = lt
-    t_inv[n:, n:] = lt / w
-    return t @ phit @ t_inv
+    bal = _Balanced.of(m, c, k.matrices, k.period)
+    a = bal.states(k.matrices) * k.durations[:, None, None]
+    return bal.unbalance(_ordered_product(_expm_each(a)))
+
+
+def _midpoint_monodromy(m: np.ndarray, c: np.ndarray, k: PiecewiseSmooth, atol: float,
+                        margin: float = 0.0) -> tuple[np.ndarray, int, float]:
+    """Product of ``expm(A(t_j) h_j)`` over sub-steps of a :class:`PiecewiseSmooth` stiffness.
+
+    Piece ``i`` gets ``c_i = max(1, ceil(START v_i / max v))`` equal sub-steps in the first
+    pass, ``v_i`` the change of ``K`` over it (edge to edge, plus four times the deviation of its
+    midpoint from the chord: zero for a linear piece); every further pass halves every
+    sub-step (``c_i 2^k``). The exponential midpoint rule is symmetric, so its error expands in
+    even powers of the sub-step and two passes give the Richardson value
+    ``R_k = Phi_k + (Phi_k - Phi_k-1)/3`` (fourth order). Passes continue until two Richardson
+    values differ in ``max|mu|`` by at most ``15 atol`` (the estimate of the last one's error
+    is that difference / 15) or by at most ``15 margin |max|mu| - 1|`` (the distance from the
+    stability limit then settles the verdict and the growth rate to that relative accuracy),
+    or until :data:`_MIDPOINT_MAX_SUBSTEPS` would be exceeded. The exponentials are formed in
+    chunks of :data:`_CHUNK`, so memory does not grow with the number of sub-steps.
+
+    Returns
+    -------
+    (ndarray, int, float)
+        Monodromy in ``[q; q']``, sub-steps of the last pass, error estimate of ``max|mu|``.
+    """
+    edges = k.edges
+    n_piece = edges.size - 1
+    dur = np.diff(edges)
+    mids = 0.5 * (edges[:-1] + edges[1:])
+    both = k.matrices(np.concatenate([edges, mids]))
+    if both.shape[1] != m.shape[0]:
+        raise ValueError(f"K (PiecewiseSmooth) matrices are {both.shape[1:]} but M is "
+                         f"{m.shape}; all matrices must have the same size")
+    ke, km = both[: n_piece + 1], both[n_piece + 1:]
+    chord = ke[1:] - ke[:-1]
+    bow = km - 0.5 * (ke[1:] + ke[:-1])
+    var = np.sqrt(np.einsum("tij,tij->t", chord, chord)) + 4.0 * np.sqrt(
+        np.einsum("tij,tij->t", bow, bow))
+    scale = float(var.max())
+    bal = _Balanced.of(m, c, ke, k.period)
+    size = 2 * m.shape[0]
+    base = (np.maximum(1, np.ceil(_MIDPOINT_START * var / scale)).astype(np.int64)
+            if scale > 0 else np.ones(n_piece, dtype=np.int64))
+
+    def product(counts: np.ndarray) -> np.ndarray:
+        total = int(counts.sum())
+        piece = np.repeat(np.arange(n_piece), counts)
+        j = np.arange(total) - np.repeat(np.cumsum(counts) - counts, counts)
+        h = dur[piece] / counts[piece]
+        tm = edges[piece] + (j + 0.5) * h
+        p = np.eye(size)
+        for a in range(0, total, _CHUNK):
+            sl = slice(a, a + _CHUNK)
+            x = bal.states(k.matrices(tm[sl])) * h[sl, None, None]
+            p = _ordered_product(_expm_each(x)) @ p
+        return p
+
+    def top(p: np.ndarray) -> float:
+        return float(np.max(np.abs(np.linalg.eigvals(p))))
+
+    counts = base
+    phi = product(counts)
+    if scale == 0.0:  # every piece constant: the product is exact
+        return bal.unbalance(phi), int(counts.sum()), 0.0
+    rich, mu, err = phi, math.nan, math.inf
+    while 2 * int(counts.sum()) <= _MIDPOINT_MAX_SUBSTEPS:
+        counts = 2 * counts
+        finer = product(counts)
+        rich = finer + (finer - phi) / 3.0
+        phi = finer
+        mu_new = top(rich)
+        if math.isfinite(mu):
+            err = abs(mu_new - mu) / 15.0
+            if err <= atol or err <= margin * abs(mu_new - 1.0):
+                mu = mu_new
+                break
+        mu = mu_new
+    return bal.unbalance(rich), int(counts.sum()), err
 
 
 def _frob(a: np.ndarray) -> float:
@@ -322,7 +495,7 @@ def _frob(a: np.ndarray) -> float:
 def floquet(
     M: Any,
     C: Any,
-    K: StiffnessCallable | PiecewiseConstant,
+    K: StiffnessCallable | PiecewiseConstant | PiecewiseSmooth,
     period: float,
     *,
     method: str = "auto",
@@ -330,6 +503,8 @@ def floquet(
     rtol: float = 1e-10,
     tol: float = 1e-7,
     periodicity_rtol: float = 1e-8,
+    multiplier_atol: float = 1e-8,
+    unity_margin: float = 0.0,
 ) -> FloquetResult:
     """Floquet multipliers of ``M q'' + C q' + K(t) q = 0`` with ``K(t + T) = K(t)``.
 
@@ -339,14 +514,16 @@ def floquet(
         Mass matrix [kg], symmetric positive definite.
     C : array_like, shape (n, n)
         Constant damping (and/or gyroscopic) matrix [N s/m].
-    K : callable or PiecewiseConstant
-        Stiffness [N/m]: ``K(t) -> (n, n)`` array for a smooth stiffness, or a
-        :class:`PiecewiseConstant` description (exact monodromy).
+    K : callable, PiecewiseConstant or PiecewiseSmooth
+        Stiffness [N/m]: ``K(t) -> (n, n)`` array for a smooth stiffness, a
+        :class:`PiecewiseConstant` description (exact monodromy) or a :class:`PiecewiseSmooth`
+        description (breakpoints and a batch evaluator; product of exponentials).
     period : float
         Period ``T`` [s] of ``K``; must be > 0.
-    method : {"auto", "exact", "magnus"}
-        ``"auto"`` chooses ``"exact"`` for :class:`PiecewiseConstant` and ``"magnus"`` for
-        callables. ``"magnus"`` may also be used with a :class:`PiecewiseConstant` (as a check).
+    method : {"auto", "exact", "midpoint", "magnus"}
+        ``"auto"`` chooses ``"exact"`` for :class:`PiecewiseConstant`, ``"midpoint"`` for
+        :class:`PiecewiseSmooth` and ``"magnus"`` for callables. ``"magnus"`` may also be used
+        with the two descriptions (as a check).
     n_steps : int, optional
         Fixed number of Magnus steps per period (no error control). By default the number of
         steps is doubled until the Richardson-extrapolated monodromy meets ``rtol``.
@@ -356,6 +533,13 @@ def floquet(
         Stability tolerance: ``stable`` is ``max|mu| <= 1 + tol``.
     periodicity_rtol : float
         Admissible relative difference ``||K(T) - K(0)|| / ||K(0)||`` for a callable ``K``.
+    multiplier_atol : float
+        ``"midpoint"``: target error of ``max|mu|`` (sub-steps are halved until two Richardson
+        values agree to 15 times this; the estimate is reported as ``error_estimate``).
+    unity_margin : float
+        ``"midpoint"``: also stop refining once the error estimate is below
+        ``unity_margin * |max|mu| - 1|`` (e.g. 0.01: far from the stability limit the
+        multiplier is needed to 1 % of its distance from 1 only). 0 (default): off.
 
     Returns
     -------
@@ -378,6 +562,15 @@ def floquet(
     *Exact*: for a piecewise-constant ``K`` with pieces ``(tau_k, K_k)``,
     ``Phi = expm(A_m tau_m) ... expm(A_1 tau_1)``.
 
+    *Midpoint*: for a :class:`PiecewiseSmooth` ``K``, the same product over sub-steps with
+    ``A`` at each sub-step's midpoint (exponential midpoint rule: second order, exact for a
+    constant piece, every exponential exact however many oscillations of the fastest mode a
+    sub-step spans). Sub-steps follow the pieces between the breakpoints, so kinks of ``K``
+    never fall inside one, and their number follows the change of ``K`` (see
+    :class:`PiecewiseSmooth`); they are halved pass by pass, two passes are combined by
+    Richardson extrapolation (fourth order: the rule is symmetric), until ``max|mu|`` has
+    converged to ``multiplier_atol``.
+
     *Magnus*: one step of length ``h`` uses ``A`` at ``t, t + h/2, t + h`` (Simpson nodes),
     ``B0 = (A1 + 4 A2 + A3)/6``, ``B1 = (A3 - A1)/12`` and
     ``Omega = h B0 + h^2 [B1, B0]``, a fourth-order Magnus method (Iserles & Norsett 1999;
@@ -393,12 +586,15 @@ def floquet(
     n = m.shape[0]
     c = require_square(C, "C", n)
     minv = np.linalg.solve(m, np.eye(n))
-    if method not in ("auto", "exact", "magnus"):
-        raise ValueError(f"method = {method!r} is not admissible: use 'auto', 'exact' or 'magnus'")
+    if method not in ("auto", "exact", "midpoint", "magnus"):
+        raise ValueError(f"method = {method!r} is not admissible: use 'auto', 'exact', "
+                         "'midpoint' or 'magnus'")
     if n_steps is not None and (int(n_steps) != n_steps or n_steps < 1):
         raise ValueError(f"n_steps = {n_steps!r} is not admissible: must be a positive integer")
     require_positive(rtol, "rtol")
     require_positive(tol, "tol", allow_zero=True)
+    require_positive(multiplier_atol, "multiplier_atol")
+    require_positive(unity_margin, "unity_margin", allow_zero=True)
 
     if isinstance(K, PiecewiseConstant):
         if K.size != n:
@@ -413,8 +609,26 @@ def floquet(
             )
         kfun: StiffnessCallable = K
         use = "exact" if method == "auto" else method
+        if use == "midpoint":
+            raise ValueError("method = 'midpoint' needs K as a PiecewiseSmooth; a "
+                             "PiecewiseConstant is computed exactly ('exact')")
+    elif isinstance(K, PiecewiseSmooth):
+        if abs(K.period - T) > 1e-9 * T:
+            raise ValueError(
+                f"K is not periodic with period = {T!r} s: its edges end at {K.period!r} s; "
+                "the last edge must be the period"
+            )
+        kfun = K
+        use = "midpoint" if method == "auto" else method
+        if use == "exact":
+            raise ValueError("method = 'exact' needs K as a PiecewiseConstant; a "
+                             "PiecewiseSmooth uses 'midpoint' (or 'magnus')")
+        require_square(K(0.0), "K(0)", n)
     elif callable(K):
         kfun = K
+        if method == "midpoint":
+            raise ValueError("method = 'midpoint' needs K as a PiecewiseSmooth (breakpoints "
+                             "and a batch evaluator); for a callable K use 'magnus'")
         if method == "exact":
             raise ValueError(
                 "method = 'exact' needs K as a PiecewiseConstant; for a callable K use 'magnus'"
@@ -437,6 +651,10 @@ def floquet(
     if use == "exact":
         assert isinstance(K, PiecewiseConstant)
         phi = _exact_monodromy(m, c, K)
+    elif use == "midpoint":
+        assert isinstance(K, PiecewiseSmooth)
+        phi, steps, err = _midpoint_monodromy(m, c, K, float(multiplier_atol),
+                                              float(unity_margin))
     else:
         def sample(times: np.ndarray) -> np.ndarray:
             out = np.empty((times.size, n, n))
@@ -477,19 +695,24 @@ def floquet(
     order = np.argsort(-np.abs(mu), kind="stable")
     mu = mu[order]
     mmax = float(np.abs(mu[0]))
-    expo = np.log(mu.astype(complex)) / T
+    # a long, strongly damped period can underflow every multiplier to 0: growth rate -inf
+    with np.errstate(divide="ignore", invalid="ignore"):
+        expo = np.log(mu.astype(complex)) / T
+        growth = float(np.log(mmax) / T) if mmax > 0 else -math.inf
+        det = float(np.real(np.linalg.det(phi)))
+        logdet = float(np.linalg.slogdet(phi)[1])
     return FloquetResult(
         multipliers=mu,
         exponents=expo,
         max_modulus=mmax,
-        growth_rate=float(np.log(mmax) / T),
+        growth_rate=growth,
         stable=bool(mmax <= 1.0 + tol),
         monodromy=phi,
         period=T,
         tol=float(tol),
-        det_monodromy=float(np.real(np.linalg.det(phi))),
+        det_monodromy=det,
         liouville_expected=float(np.exp(-T * np.trace(minv @ c))),
-        log_det_monodromy=float(np.linalg.slogdet(phi)[1]),
+        log_det_monodromy=logdet,
         log_liouville_expected=float(-T * np.trace(minv @ c)),
         method=use,
         n_steps=steps,

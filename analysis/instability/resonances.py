@@ -52,7 +52,7 @@ from analysis.instability.theory import Candidates, MeshPhasingRule, natural_fre
 from analysis.runup import MapLevels, map_levels
 
 __all__ = ["FORCED", "PARAMETRIC", "UNEXPLAINED", "Crossing", "Resonances",
-           "detect_resonances"]
+           "detect_resonances", "merge_mesh_frequencies"]
 
 FORCED = "forced resonance"
 PARAMETRIC = "parametric instability"
@@ -80,6 +80,9 @@ class Crossing:
         analysed frames).
     strength_db : float
         Rise of the detected resonance [dB] (NaN unless ``status == "rise"``).
+    group : str
+        Mesh frequency the harmonic belongs to ("" for a set with one; see
+        :func:`merge_mesh_frequencies`).
     """
 
     harmonic: int
@@ -88,6 +91,7 @@ class Crossing:
     rpm: float
     status: str
     strength_db: float
+    group: str = ""
 
 
 @dataclass(frozen=True)
@@ -130,7 +134,11 @@ class Resonances:
     notes : tuple of str
         Remarks about the analysis (left-out ranges, resolution).
     mesh_frequency_per_rpm : float
-        Mesh frequency per speed [Hz per min-1].
+        Mesh frequency per speed [Hz per min-1] (the first one after
+        :func:`merge_mesh_frequencies`).
+    group : ndarray of str
+        Mesh frequency whose ray a rise lies on ("" when not on a ray or for a set with one mesh
+        frequency; see :func:`merge_mesh_frequencies`).
     """
 
     time: np.ndarray
@@ -151,20 +159,26 @@ class Resonances:
     growth: GrowthTable | None = None
     settle_time: float = 0.0
     notes: tuple[str, ...] = ()
+    group: np.ndarray | None = None
 
     def __len__(self) -> int:
         return int(self.time.size)
 
+    @property
+    def groups(self) -> np.ndarray:
+        """:attr:`group`, or "" for every row when not set."""
+        if self.group is None:
+            return np.full(len(self), "", dtype=object)
+        return self.group
+
     def select(self, mask: Any) -> Resonances:
         """Rows where ``mask`` is true (crossings, growth and notes kept)."""
         m = np.asarray(mask, dtype=bool)
-        kw = {k: getattr(self, k)[m] for k in ("time", "rpm", "frequency", "f_mesh", "order",
-                                               "mechanism", "mode", "strength_db", "note",
-                                               "feature", "cause", "predicted_rpm",
-                                               "coincidence")}
+        kw = {k: getattr(self, k)[m] for k in _ROW_FIELDS}
         return Resonances(**kw, mesh_frequency_per_rpm=self.mesh_frequency_per_rpm,
                           crossings=self.crossings, growth=self.growth,
-                          settle_time=self.settle_time, notes=self.notes)
+                          settle_time=self.settle_time, notes=self.notes,
+                          group=self.groups[m])
 
     def counts(self) -> dict[str, int]:
         """Number of rises per mechanism."""
@@ -230,6 +244,8 @@ class Resonances:
                 "coincidence": v(self.coincidence, "1",
                                  "chance that a random rise gets this explanation"),
                 "note": v(self.note.astype(str), "1", "evidence"),
+                "group": v(np.asarray(self.groups, dtype=object).astype(str), "1",
+                           "mesh frequency of the ray the rise lies on"),
                 "crossing_harmonic": v(np.asarray([c.harmonic for c in cr], dtype=int), "1",
                                        "mesh harmonic of a predicted crossing", "crossing"),
                 "crossing_mode": v(np.asarray([c.mode for c in cr], dtype=str), "1",
@@ -238,6 +254,8 @@ class Resonances:
                                     "predicted crossing speed", "crossing"),
                 "crossing_status": v(np.asarray([c.status for c in cr], dtype=str), "1",
                                      "what the map shows there", "crossing"),
+                "crossing_group": v(np.asarray([c.group for c in cr], dtype=str), "1",
+                                    "mesh frequency of a predicted crossing", "crossing"),
             },
             coords={"resonance": ("resonance", np.arange(len(self)),
                                   {"units": "1", "long_name": "rise index"}),
@@ -266,6 +284,80 @@ class Resonances:
         from analysis.instability.plots import plot_resonances
 
         return plot_resonances(self, map_ds, ax=ax, **kwargs)
+
+
+_ROW_FIELDS = ("time", "rpm", "frequency", "f_mesh", "order", "mechanism", "mode",
+               "strength_db", "note", "feature", "cause", "predicted_rpm", "coincidence")
+
+
+def merge_mesh_frequencies(parts: Sequence[tuple[str, Resonances]], *,
+                           rpm_tolerance: float, frequency_tolerance: float) -> Resonances:
+    """The rises of one map classified against several mesh frequencies, in one table.
+
+    :func:`detect_resonances` tracks the rays of one mesh frequency per call. For a gear set
+    with several (two stages, the two toothings of a Wolfrom planet) call it once per mesh
+    frequency and merge the results here:
+
+    * rises on the rays of a mesh frequency come from its own call (harmonic ``k`` of that mesh
+      frequency; ``group`` names it, and the cause gets ``" [name]"``);
+    * rises along the natural frequencies and isolated spots are found by every call, each
+      leaving out its own rays: such a rise is kept only when every call found it (within
+      ``rpm_tolerance`` and ``frequency_tolerance``) -- it then lies off every ray -- with the
+      first call's classification;
+    * the predicted crossings of every mesh frequency are listed, each with its ``group``;
+      the growth table is the first call's (the same chart); the notes are merged.
+
+    Parameters
+    ----------
+    parts : sequence of (str, Resonances)
+        Name of each mesh frequency and its :func:`detect_resonances` result, reference first.
+    rpm_tolerance : float
+        Speeds of the same rise in two calls differ by at most this [min-1] (a frame).
+    frequency_tolerance : float
+        Frequencies of the same rise differ by at most this [Hz] (a resolution cell).
+
+    Returns
+    -------
+    Resonances
+        Sorted by speed, then frequency.
+    """
+    if not parts:
+        raise ValueError("parts is empty: give one (name, Resonances) per mesh frequency")
+    if len(parts) == 1:
+        return parts[0][1]
+    rows: list[tuple[str, Resonances, int]] = []
+    first = parts[0][1]
+    for name, res in parts:
+        for i in np.flatnonzero(res.order > 0):
+            rows.append((name, res, int(i)))
+    for i in np.flatnonzero(first.order == 0):
+        ok = all(
+            np.any((other.order == 0)
+                   & (np.abs(other.rpm - first.rpm[i]) <= rpm_tolerance)
+                   & (np.abs(other.frequency - first.frequency[i]) <= frequency_tolerance))
+            for _, other in parts[1:])
+        if ok:
+            rows.append(("", first, int(i)))
+    rows.sort(key=lambda r: (float(r[1].rpm[r[2]]), float(r[1].frequency[r[2]])))
+    kw: dict[str, Any] = {}
+    for f in _ROW_FIELDS:
+        values = [getattr(res, f)[i] for _, res, i in rows]
+        dtype = getattr(first, f).dtype if len(first) else (
+            object if f in ("mechanism", "mode", "note", "feature", "cause") else float)
+        kw[f] = np.asarray(values, dtype=dtype)
+    if rows:
+        kw["cause"] = np.asarray([
+            (f"{res.cause[i]} [{name}]" if name and res.cause[i] else str(res.cause[i]))
+            for name, res, i in rows], dtype=object)
+    crossings = tuple(dataclasses.replace(c, group=name) for name, res in parts
+                      for c in res.crossings)
+    notes = tuple(dict.fromkeys(
+        (f"{name}: {n}" if n.startswith("rays analysed") else n)
+        for name, res in parts for n in res.notes))
+    return Resonances(**kw, mesh_frequency_per_rpm=first.mesh_frequency_per_rpm,
+                      crossings=crossings, growth=first.growth,
+                      settle_time=max(r.settle_time for _, r in parts), notes=notes,
+                      group=np.asarray([name for name, _, _ in rows], dtype=object))
 
 
 # ------------------------------------------------------------------------------ helpers
@@ -340,35 +432,6 @@ def _settle_time(lv: MapLevels, band: np.ndarray, frames: np.ndarray, threshold:
             why = (f"a decaying start transient (broadband level {b[0] - floor:.0f} dB above "
                    "its floor)")
     return t_set, why
-
-
-def _band_label(lo_hz: float, hi_hz: float, fn: np.ndarray, fnames: list[str],
-                clusters: list[list[int]], fam_p: list[int] | None,
-                rule: MeshPhasingRule | None, n_max: int = 12) -> str:
-    """Theory candidate (``2 f_i/n`` or ``(f_i + f_j)/n``, ``n <= n_max``) of an unstable band.
-
-    Among the candidates within one band width of the band centre, the one of lowest order
-    ``n`` (the widest region; higher orders are narrower by powers of the stiffness variation),
-    then the nearest; those the mesh-phasing rule suppresses are skipped.
-    """
-    centre, width = 0.5 * (lo_hz + hi_hz), max(hi_hz - lo_hz, 1e-12)
-    best: tuple[tuple[int, float], str] | None = None
-    for a in range(fn.size):
-        for b in range(a, fn.size):
-            for n in range(1, n_max + 1):
-                if fam_p is not None and rule is not None and not rule.allows(
-                        n, fam_p[clusters[a][0]], fam_p[clusters[b][0]]):
-                    continue
-                value = (fn[a] + fn[b]) / n
-                err = abs(value - centre)
-                if err > width or (best is not None and (n, err) >= best[0]):
-                    continue
-                na = fnames[a] if "=" not in fnames[a] else f"({fnames[a]})"
-                nb = fnames[b] if "=" not in fnames[b] else f"({fnames[b]})"
-                lab = (f"2 {na}/{n}" if n > 1 else f"2 {na}") if a == b else (
-                    f"({na} + {nb})/{n}" if n > 1 else f"{na} + {nb}")
-                best = ((n, err), lab)
-    return best[1] if best else ""
 
 
 # ------------------------------------------------------------------------------ detection
@@ -490,7 +553,6 @@ def detect_resonances(
             raise ValueError("mesh_harmonic_rule needs mode_families, one (kind, p) per natural "
                              "frequency")
         fam_p = [mesh_harmonic_rule.check_family(tuple(x)) for x in mode_families]
-    n_modal = fn.size
     if features is not None:
         # frequency-locked lines the map shows that no natural frequency explains (structural
         # resonances outside the model): they get crossings and tracks of their own
@@ -563,12 +625,8 @@ def detect_resonances(
             tp, rp = speed_profile
         else:
             tp, rp = t, rpm
+        # the bands keep the chart's labels (one attribution, see attribute_region)
         growth = runup_growth(chart, tp, rp, threshold_db=gthr)
-        growth = dataclasses.replace(growth, label=np.asarray(
-            [_band_label(growth.lower_rpm[i] * factor, growth.upper_rpm[i] * factor,
-                         fn[:n_modal], fnames[:n_modal], clusters[:n_modal], fam_p,
-                         mesh_harmonic_rule) or str(growth.label[i])
-             for i in range(len(growth))], dtype=object))
         for i in range(len(growth)):
             state = (f"grows by {growth.growth_db[i]:.0f} dB (time in band "
                      f"{1e3 * growth.time_in_band[i]:.1f} ms x growth rate <= "
@@ -576,7 +634,7 @@ def detect_resonances(
             if not growth.can_grow[i]:
                 state += f": too fast to develop; {growth.advice[i]}"
             notes.append(f"unstable band {growth.lower_rpm[i]:.0f}–{growth.upper_rpm[i]:.0f} "
-                         f"min-1 ({growth.label[i] or 'Floquet'}): {state}")
+                         f"min-1 ({growth.label[i] or 'unattributed'}): {state}")
 
     def developing_band(r: float) -> tuple[int | None, str]:
         """Band containing ``r`` (with a speed tolerance) that grows enough in this run."""

@@ -246,6 +246,14 @@ class Candidates:
                           mesh_frequency=None if self.mesh_frequency is None
                           else self.mesh_frequency[m])
 
+    def modes(self, i: int, rtol: float = 1e-6) -> np.ndarray:
+        """Indices of every mode of row ``i`` (both clusters, each with its repeated modes)."""
+        f = self.natural_frequencies_hz
+        out = []
+        for j in {int(self.mode_i[i]), int(self.mode_j[i])}:
+            out += list(np.flatnonzero(np.abs(f - f[j]) <= rtol * f[j]))
+        return np.unique(np.asarray(out, dtype=int))
+
     def full_label(self, i: int) -> str:
         """Label of row ``i`` with its mesh frequency, e.g. ``"2 f3/4 [stage 2]"``."""
         name = "" if self.mesh_frequency is None else str(self.mesh_frequency[i])

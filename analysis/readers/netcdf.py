@@ -140,13 +140,68 @@ def write_netcdf(ds: xr.Dataset, path: str | os.PathLike[str], *, compress: bool
                 enc.update(zlib=True, complevel=4, shuffle=True)
         encoding[str(v)] = enc
     directory = target.parent if str(target.parent) else Path(".")
-    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=directory)
+    # the temporary file is named like gearvib's (.<name>.gearvib-<host>-<pid>-<8 chars>.tmp),
+    # so that the next gearvib command in the folder removes it after a SIGKILL
+    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.gearvib-{_host()}-{os.getpid()}-",
+                               suffix=".tmp", dir=directory)
     os.close(fd)
     try:
-        out.to_netcdf(tmp, engine="netcdf4", format="NETCDF4", encoding=encoding)
+        _abandonable(out.to_netcdf, tmp, engine="netcdf4", format="NETCDF4", encoding=encoding)
         os.replace(tmp, target)
     except BaseException:
         if os.path.exists(tmp):
             os.remove(tmp)
         raise
     return target
+
+
+def _host() -> str:
+    """This host's name in temporary file names (as ``gearvib.tempfiles.host_tag``)."""
+    import re
+    import socket
+
+    return re.sub(r"[^A-Za-z0-9_]", "_", socket.gethostname().split(".")[0] or "host")[:32]
+
+
+def _abandonable(fn, *args, **kwargs) -> None:
+    """Call ``fn`` in a worker thread that a ``KeyboardInterrupt`` abandons at once.
+
+    Same mechanism as ``gearvib.interrupts.run_abandonable`` (which explains it): a signal
+    handler's exception raised inside xarray's backend lock leaves the lock held and the
+    clean-up of ``to_netcdf`` waiting for it forever. The main thread only waits here, so the
+    interrupt reaches it outside any library lock; the caller then removes the temporary file.
+    """
+    import _thread
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        fn(*args, **kwargs)
+        return
+    done = _thread.allocate_lock()
+    box: list[BaseException] = []
+
+    def work() -> None:
+        try:
+            fn(*args, **kwargs)
+        except BaseException as exc:
+            box.append(exc)
+        finally:
+            done.release()
+
+    done.acquire()
+    _thread.start_new_thread(work, ())
+    try:
+        while not done.acquire(timeout=0.05):
+            pass
+    except BaseException:
+        if not _ABANDONED:  # at exit, wait for abandoned writes (HDF5 must not end under them)
+            import atexit
+
+            atexit.register(lambda: [lock.acquire() for lock in _ABANDONED])
+        _ABANDONED.append(done)
+        raise
+    if box:
+        raise box[0]
+
+
+_ABANDONED: list = []

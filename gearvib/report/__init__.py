@@ -9,14 +9,17 @@ Typical use::
     build_report(["out/case1.nc", "out/case2.nc"], "again")   # from the runs alone
 
 Modules: :mod:`~gearvib.report.study` (recipes), :mod:`~gearvib.report.runner` (run and build),
-:mod:`~gearvib.report.figures` (content and figures), :mod:`~gearvib.report.compare` (case
-comparison), :mod:`~gearvib.report.document` (what both writers share: figure images,
-placeholders), :mod:`~gearvib.report.html`, :mod:`~gearvib.report.pdf` (writers; the PDF is
-typeset with ReportLab), :mod:`~gearvib.report.wording` (counts with their nouns).
+:mod:`~gearvib.report.case` (the content of one run, computed once),
+:mod:`~gearvib.report.figures` (figures), :mod:`~gearvib.report.sections` (the document: sections
+of headings, paragraphs, tables and figures), :mod:`~gearvib.report.compare` (case comparison),
+:mod:`~gearvib.report.crosscheck` (checks that the tables of a rendered report agree),
+:mod:`~gearvib.report.document` (what both writers share: figure images, placeholders),
+:mod:`~gearvib.report.html`, :mod:`~gearvib.report.pdf` (writers; the PDF is typeset with
+ReportLab), :mod:`~gearvib.report.wording` (counts with their nouns).
 """
 
+from gearvib.report.case import CaseAnalysis, analyse_case
 from gearvib.report.compare import Comparison, compare_cases
-from gearvib.report.figures import SECTION_IDS, CaseAnalysis, analyse_case
 from gearvib.report.runner import (
     ReportPaths,
     StudyResult,
@@ -24,6 +27,7 @@ from gearvib.report.runner import (
     check_output_dir,
     run_study,
 )
+from gearvib.report.sections import SECTION_IDS
 from gearvib.report.study import AnalysisSettings, Case, RunSettings, Study, load_study
 
 __all__ = [

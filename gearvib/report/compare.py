@@ -8,23 +8,25 @@ The comparison of a case against a reference (e.g. the paper's case 2 against ca
 * the unstable intervals of the Floquet stability charts: by overlap in speed; the change of
   width is relative;
 * the natural frequencies, mode by mode;
-* the peak-to-peak fluctuation of the summed sun-mesh stiffness.
+* the peak-to-peak fluctuation of the summed stiffness of the first central gear (the sun).
 
-It then checks the paper's statements that apply: when the summed sun-mesh stiffness
-fluctuation differs (planet phasing), the paper found *fewer resonance regions with less
-intensity*; when the natural frequencies differ (e.g. elastic bearings), it found *lower natural
-frequencies, wider instability regions and new ones*. The verdict says whether this run
-reproduces that, and if not, which regions got stronger or appeared.
+It then checks the paper's statements that apply, decided by what differs between the two
+gear-set descriptions: when only the planet angles differ (planet phasing, the paper's cases 1
+and 2), the paper found *fewer resonance regions with less intensity*; when only the bearing
+supports differ, it found *lower natural frequencies, wider instability regions and new ones*.
+The verdict says whether this run reproduces that, and if not, which regions got stronger or
+appeared. Any other pair of gear sets is compared without the paper's statements.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
-from gearvib.report.figures import CaseAnalysis, ResonanceRegion
+from gearvib.report.case import CaseAnalysis, ResonanceRegion
 from gearvib.report.wording import count
 
 __all__ = ["Comparison", "FloquetChange", "RegionChange", "compare_cases"]
@@ -72,8 +74,11 @@ class RegionChange:
         def strength(r: ResonanceRegion | None) -> str:
             return "–" if r is None else f"{r.strength_db:.1f} ({r.n_spots})"
 
-        mech = (self.reference or self.other).mechanisms[0] if (self.reference or self.other) \
-            else ""
+        texts = [r.summary for r in (self.reference, self.other) if r is not None]
+        mech = texts[0] if len(set(texts)) == 1 else " | ".join(
+            f"{name}: {t}" for name, t in zip(("reference", "other"), texts, strict=False))
+        if self.reference is None or self.other is None:
+            mech = texts[0]
         d = "–" if math.isnan(self.delta_db) else f"{self.delta_db:+.1f}"
         return (self.status, span(self.reference), strength(self.reference), span(self.other),
                 strength(self.other), d, mech)
@@ -90,20 +95,29 @@ class FloquetChange:
     reference, other : (float, float) or None
         Speed interval [min^-1].
     candidate : str
-        Theory candidate of the interval.
+        Theory candidate of the interval (the other case's if it has the interval).
+    reference_candidate, other_candidate : str
+        The candidate each case's Floquet table gives it ("" if unattributed or absent).
     """
 
     status: str
     reference: tuple[float, float] | None
     other: tuple[float, float] | None
     candidate: str
+    reference_candidate: str = ""
+    other_candidate: str = ""
 
     def row(self) -> tuple[str, ...]:
-        """Formatted table row."""
+        """Formatted table row (each case's candidate as in its own Floquet table)."""
         def span(r: tuple[float, float] | None) -> str:
             return "–" if r is None else f"{r[0]:.0f}–{r[1]:.0f} ({r[1] - r[0]:.0f})"
 
-        return self.status, span(self.reference), span(self.other), self.candidate or "–"
+        def lab(r: tuple[float, float] | None, text: str) -> str:
+            return "–" if r is None else (text or "unattributed")
+
+        return (self.status, span(self.reference), span(self.other),
+                lab(self.reference, self.reference_candidate),
+                lab(self.other, self.other_candidate))
 
 
 @dataclass(frozen=True)
@@ -121,9 +135,14 @@ class Comparison:
     natural_frequencies : list of (str, float, float)
         ``(name, f_reference, f_other)`` [Hz], mode by mode.
     stiffness_p2p : (float or None, float or None)
-        Peak-to-peak fluctuation of the summed sun-mesh stiffness [N/m].
+        Peak-to-peak fluctuation of the summed stiffness of the first central gear (the sun
+        of a simple set) [N/m].
     n_regions : (int, int)
         Resonance regions in each case.
+    signal : str
+        The signal whose regions are compared (e.g. the sonogram of a tooth force).
+    differences : tuple of str
+        Paths of the gear-set description that differ (``"geometry.planet_angles_deg"``).
     total_strength_db : (float, float)
         Energetic sum ``10 log10 sum 10^(s/10)`` of the region strengths (-inf if none).
     fewer_or_weaker : bool
@@ -150,6 +169,8 @@ class Comparison:
     claims: list[tuple[str, bool | None, str]] = field(default_factory=list)
     verdict: str = ""
     explanation: list[str] = field(default_factory=list)
+    signal: str = "sonogram of the tooth force"
+    differences: tuple[str, ...] = ()
 
 
 def _energy_db(values: list[float]) -> float:
@@ -186,10 +207,7 @@ def _match_regions(ref: list[ResonanceRegion], oth: list[ResonanceRegion], tol_r
 
 
 def _floquet_intervals(ca: CaseAnalysis) -> list[tuple[float, float, str]]:
-    if ca.chart is None:
-        return []
-    f = ca.mesh_frequency_per_rpm
-    return [(r["lower"] / f, r["upper"] / f, str(r["candidate"])) for r in ca.chart.region_table]
+    return [(r["lower_rpm"], r["upper_rpm"], r["label"]) for r in ca.floquet_regions()]
 
 
 def _match_floquet(ref: list[tuple[float, float, str]], oth: list[tuple[float, float, str]],
@@ -203,23 +221,59 @@ def _match_floquet(ref: list[tuple[float, float, str]], oth: list[tuple[float, f
             if j not in used and ov > best_ov:
                 best, best_ov = j, ov
         if best is None:
-            out.append(FloquetChange("vanished", (a[0], a[1]), None, a[2]))
+            out.append(FloquetChange("vanished", (a[0], a[1]), None, a[2], a[2], ""))
             continue
         used.add(best)
         b = oth[best]
         wa, wb = a[1] - a[0], b[1] - b[0]
         rel = (wb - wa) / wa if wa > 0 else math.inf
         status = "unchanged" if abs(rel) <= rel_tol else ("wider" if rel > 0 else "narrower")
-        out.append(FloquetChange(status, (a[0], a[1]), (b[0], b[1]), b[2] or a[2]))
-    out += [FloquetChange("appeared", None, (b[0], b[1]), b[2]) for j, b in enumerate(oth)
-            if j not in used]
+        out.append(FloquetChange(status, (a[0], a[1]), (b[0], b[1]), b[2] or a[2], a[2], b[2]))
+    out += [FloquetChange("appeared", None, (b[0], b[1]), b[2], "", b[2])
+            for j, b in enumerate(oth) if j not in used]
     out.sort(key=lambda c: (c.reference or c.other)[0])  # type: ignore[index]
     return out
 
 
 def _fmt_region(r: ResonanceRegion) -> str:
     return (f"{r.rpm_low:.0f}–{r.rpm_high:.0f} min⁻¹ (strongest {r.strength_db:.1f} dB at "
-            f"{r.frequency_hz:.0f} Hz, {r.mechanisms[0]})")
+            f"{r.frequency_hz:.0f} Hz; {r.summary})")
+
+
+_IGNORED = {"name", "title", "simulation", "description"}
+
+
+def differences(a: Any, b: Any, path: str = "") -> set[str]:
+    """Paths where two gear-set descriptions differ (names, titles and run settings ignored)."""
+    if isinstance(a, dict) and isinstance(b, dict):
+        out: set[str] = set()
+        for k in set(a) | set(b):
+            if not path and k in _IGNORED:
+                continue
+            if k not in a or k not in b:
+                out.add(f"{path}{k}")
+            else:
+                out |= differences(a[k], b[k], f"{path}{k}.")
+        return out
+    return set() if a == b else {path.rstrip(".")}
+
+
+def _gearset(ca: CaseAnalysis) -> dict | None:
+    inner = ca.config.get("model", {}) if isinstance(ca.config, dict) else {}
+    gs = inner.get("gearset") if isinstance(inner, dict) else None
+    return gs if isinstance(gs, dict) else None
+
+
+def _kind_of_change(diff: set[str]) -> str:
+    """``"phasing"`` (only the planet angles differ), ``"bearings"`` (only supports), else
+    ``""``."""
+    if not diff:
+        return ""
+    if all(d.startswith(("geometry.planet_angles_deg", "geometry.n_planets")) for d in diff):
+        return "phasing"
+    if all(d.startswith("bodies.") and ".support" in d for d in diff):
+        return "bearings"
+    return ""
 
 
 def compare_cases(reference: CaseAnalysis, other: CaseAnalysis, *, rpm_tol: float | None = None,
@@ -249,8 +303,12 @@ def compare_cases(reference: CaseAnalysis, other: CaseAnalysis, *, rpm_tol: floa
     nat = [(n, float(a), float(b)) for n, a, b in zip(
         reference.mode_names, reference.natural_frequencies_hz, other.natural_frequencies_hz,
         strict=False)]
-    p2p = (reference.stiffness.peak_to_peak if reference.stiffness else None,
-           other.stiffness.peak_to_peak if other.stiffness else None)
+    st_a, st_b = reference.main_stiffness, other.main_stiffness
+    p2p = (st_a.peak_to_peak if st_a else None, st_b.peak_to_peak if st_b else None)
+    gear = st_a.central if st_a else "sun"
+    gs_a, gs_b = _gearset(reference), _gearset(other)
+    diff = differences(gs_a, gs_b) if gs_a is not None and gs_b is not None else {"?"}
+    kind = _kind_of_change(diff)
     n_ref, n_oth = len(reference.regions), len(other.regions)
     e_ref = _energy_db([r.strength_db for r in reference.regions])
     e_oth = _energy_db([r.strength_db for r in other.regions])
@@ -260,22 +318,18 @@ def compare_cases(reference: CaseAnalysis, other: CaseAnalysis, *, rpm_tol: floa
 
     claims: list[tuple[str, bool | None, str]] = []
     explanation: list[str] = []
-    region_text = (f"{b}: {count(n_oth, 'sun-mesh resonance region')} (total {e_oth:.1f} dB) "
+    region_text = (f"{b}: {count(n_oth, 'resonance region')} (total {e_oth:.1f} dB) "
                    f"against {n_ref} in {a} (total {e_ref:.1f} dB)")
     worse = [c for c in changes if c.status in ("stronger", "appeared")]
     better = [c for c in changes if c.status in ("weaker", "vanished")]
-    phasing = (p2p[0] is not None and p2p[1] is not None and
-               abs(p2p[1] - p2p[0]) > 0.05 * max(p2p[0], p2p[1], 1.0))
+    phasing = (kind == "phasing" and p2p[0] is not None and p2p[1] is not None)
     if phasing:
-        stiff_text = (f"summed sun-mesh stiffness fluctuation {p2p[1] / 1e8:.3f}e8 N/m "
+        stiff_text = (f"summed {gear}-mesh stiffness fluctuation {p2p[1] / 1e8:.3f}e8 N/m "
                       f"peak-to-peak in {b} against {p2p[0] / 1e8:.3f}e8 N/m in {a}")
-        claims.append(("the summed sun-mesh stiffness oscillates less", p2p[1] < p2p[0],
+        claims.append((f"the summed {gear}-mesh stiffness oscillates less", p2p[1] < p2p[0],
                        stiff_text))
-        claims.append(("fewer or weaker sun-mesh resonance regions", fewer_or_weaker,
-                       region_text))
-    freq_change = [(n, fa, fb) for n, fa, fb in nat if abs(fb - fa) > 0.01 * fa]
-    n_modes_differ = reference.natural_frequencies_hz.size != other.natural_frequencies_hz.size
-    bearings = bool(freq_change) or n_modes_differ
+        claims.append(("fewer or weaker resonance regions", fewer_or_weaker, region_text))
+    bearings = kind == "bearings"
     if bearings:
         lowered = (other.natural_frequencies_hz.min() < reference.natural_frequencies_hz.min()
                    if other.natural_frequencies_hz.size and
@@ -309,7 +363,7 @@ def compare_cases(reference: CaseAnalysis, other: CaseAnalysis, *, rpm_tol: floa
         else:
             partly = (" (fewer regions, but stronger in total)" if n_oth < n_ref else "")
             verdict = (f"This run does not reproduce the paper's finding of fewer and weaker "
-                       f"sun-mesh resonance regions{partly}: {region_text}, although the "
+                       f"resonance regions{partly}: {region_text}, although the "
                        f"{claims[0][2]}.")
             if worse:
                 explanation.append(
@@ -325,8 +379,8 @@ def compare_cases(reference: CaseAnalysis, other: CaseAnalysis, *, rpm_tol: floa
             explanation.append(
                 "Why: shifting the planets cancels the tangential (rotational) part of the "
                 "stiffness variation, but the broken symmetry leaves the radial part "
-                "un-equalised, so the planet modes (f3 = f4) are excited as strongly or more "
-                "(the paper notes the same for the 3rd and 4th natural frequencies); and "
+                "un-equalised, so the planet modes are excited as strongly or more (the paper "
+                "notes the same for its 3rd and 4th natural frequencies); and "
                 "modifications usually improve one speed range only and can cause new "
                 "resonance regions.")
         explanation.append(PAPER_PHASING)
@@ -338,14 +392,22 @@ def compare_cases(reference: CaseAnalysis, other: CaseAnalysis, *, rpm_tol: floa
                        for c in claims) + f"). {region_text}.")
         explanation.append(PAPER_BEARINGS)
     else:
-        verdict = (f"{b} against {a}: same natural frequencies and sun-mesh stiffness "
-                   f"fluctuation; {region_text}.")
+        what = ("the gear-set descriptions differ in " + ", ".join(sorted(diff)[:6])
+                + (" ..." if len(diff) > 6 else "")) if diff and diff != {"?"} else (
+            "the runs carry no gear-set descriptions to compare" if diff == {"?"} else
+            "same gear set")
+        verdict = (f"{b} against {a} ({what}; the paper's statements on planet phasing and "
+                   f"bearing stiffness do not apply): {region_text}.")
     if floq:
         counts = {s: sum(c.status == s for c in floq) for s in
                   ("wider", "narrower", "unchanged", "vanished", "appeared")}
         explanation.append("Floquet intervals: " + ", ".join(
             f"{v} {k}" for k, v in counts.items() if v) + ".")
+    signal = (f"sonogram of the tooth force {reference.force_mesh}"
+              if reference.force_mesh == other.force_mesh else
+              f"sonograms of the tooth forces {reference.force_mesh} and {other.force_mesh}")
     return Comparison(reference=a, other=b, regions=changes, floquet=floq,
                       natural_frequencies=nat, stiffness_p2p=p2p, n_regions=(n_ref, n_oth),
                       total_strength_db=(e_ref, e_oth), fewer_or_weaker=fewer_or_weaker,
-                      claims=claims, verdict=verdict, explanation=explanation)
+                      claims=claims, verdict=verdict, explanation=explanation, signal=signal,
+                      differences=tuple(sorted(diff - {"?"})))

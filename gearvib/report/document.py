@@ -22,7 +22,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 from gearvib import __version__
-from gearvib.report.figures import Block
+from gearvib.report.sections import Block
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure

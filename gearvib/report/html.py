@@ -26,7 +26,7 @@ from gearvib.report.document import (
     is_emphasised,
     missing_figure_text,
 )
-from gearvib.report.figures import Block, Section
+from gearvib.report.sections import Block, Section
 
 __all__ = ["render_html"]
 

@@ -67,7 +67,7 @@ from gearvib.report.document import (
     is_emphasised,
     missing_figure_text,
 )
-from gearvib.report.figures import Block, Section
+from gearvib.report.sections import Block, Section
 
 __all__ = ["PAGE", "PageLayout", "column_widths", "write_pdf"]
 

@@ -6,14 +6,18 @@ set, assemble, modal analysis, run-up), writes ``<out_dir>/<case>.nc`` and then 
 the run files: the gear set is rebuilt from the ``config_json`` attribute every run carries.
 
 Every output is written atomically (a temporary file in the output folder, renamed when
-complete), so an error or Ctrl-C never leaves a half-written file; the output folder is checked
-for writability before any work is done.
+complete), so an error or Ctrl-C never leaves a half-written file. The output folder is checked
+for writability before any work is done, but created only when the first file is written into
+it; a folder this call created and left empty (an error or Ctrl-C before the first file) is
+removed again. Run files of the cases that finished stay: they are complete, and
+``gearvib report out/*.nc -o out`` builds the report from them without simulating again.
 """
 
 from __future__ import annotations
 
 import contextlib
 import logging
+import math
 import os
 import sys
 import tempfile
@@ -21,20 +25,24 @@ import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import xarray as xr
 
+from gearvib import tempfiles
 from gearvib.assembly import assemble
 from gearvib.config import gearset_from_dict
 from gearvib.io import GearvibFileError, atomic_write, read_run, write_netcdf
 from gearvib.modal import modal_analysis
+from gearvib.report.case import CaseAnalysis, analyse_case, run_description
 from gearvib.report.compare import Comparison, compare_cases
 from gearvib.report.document import FigureImages
-from gearvib.report.figures import CaseAnalysis, analyse_case, report_sections
 from gearvib.report.html import render_html
 from gearvib.report.pdf import write_pdf
-from gearvib.report.study import AnalysisSettings, Study, resolve_run
-from gearvib.simulate import SimulationError, SpeedRamp, simulate
+from gearvib.report.sections import report_sections
+from gearvib.report.study import AnalysisSettings, Study, check_report_size, resolve_run
+from gearvib.simulate import SimulationError, simulate
+from gearvib.simulation.settings import conditions_from_settings
 
 __all__ = ["ReportPaths", "StudyResult", "build_report", "check_output_dir", "run_study"]
 
@@ -100,37 +108,67 @@ class StudyResult:
 
 
 def check_output_dir(out_dir: str | os.PathLike) -> Path:
-    """Create the output folder if needed and check that files can be written into it.
+    """Check that the output folder can be used, without creating it.
+
+    An existing folder gets a write test (a temporary file, removed at once); a missing one
+    needs its nearest existing parent to be a writable folder (same test there). The folder
+    itself is created by :func:`_output_folder` when the first file is written.
 
     Raises
     ------
     ValueError
-        ``out_dir`` exists and is not a directory.
+        ``out_dir`` exists and is not a directory, or a parent is a file.
     PermissionError
-        The folder cannot be created or is not writable (nothing is left behind).
+        The folder (or the parent it would be created in) is not writable; nothing is created.
     """
     p = Path(out_dir)
     if p.exists() and not p.is_dir():
         raise ValueError(f"output folder {str(p)!r} exists and is not a directory")
-    created: list[Path] = []
     q = p
     while not q.exists() and q != q.parent:
-        created.append(q)
         q = q.parent
     if q.exists() and not q.is_dir():
         raise ValueError(f"cannot create output folder {str(p)!r}: {str(q)!r} is a file")
     try:
-        p.mkdir(parents=True, exist_ok=True)
-        fd, probe = tempfile.mkstemp(dir=p, prefix=".gearvib-write-test-")
+        fd, probe = tempfile.mkstemp(dir=q, prefix=tempfiles.prefix("write-test"),
+                                     suffix=".tmp")
         os.close(fd)
         os.unlink(probe)
     except OSError as exc:
-        for d in created:  # remove what this call created, deepest first
-            with contextlib.suppress(OSError):
-                d.rmdir()
         raise PermissionError(f"output folder {str(p)!r} is not writable "
                               f"({exc.strerror or exc})") from None
     return p
+
+
+class _OutputFolder:
+    """Creates the output folder when the first file is written; removes what it created if it
+    is still empty when the work ends with an error or Ctrl-C."""
+
+    def __init__(self, path: Path) -> None:
+        self.path = path
+        self.created: list[Path] = []
+
+    def ensure(self) -> Path:
+        """Create the folder (and missing parents) now; returns it."""
+        if not self.path.exists():
+            q = self.path
+            missing = []
+            while not q.exists() and q != q.parent:
+                missing.append(q)
+                q = q.parent
+            self.path.mkdir(parents=True, exist_ok=True)
+            self.created += missing  # deepest first
+        return self.path
+
+    def __enter__(self) -> _OutputFolder:
+        return self
+
+    def __exit__(self, exc_type: Any, exc: Any, tb: Any) -> None:
+        if exc_type is None:
+            return
+        for d in self.created:
+            with contextlib.suppress(OSError):
+                d.rmdir()  # only if empty
 
 
 def _caller(ds: xr.Dataset) -> dict:
@@ -193,21 +231,20 @@ def _default_title(runs: Sequence[tuple[str, xr.Dataset]]) -> str:
 
 
 def _subtitle(cases: Sequence[CaseAnalysis]) -> str:
-    """The line under the title: the cases (with their labels) and their run-ups."""
+    """The line under the title: the cases (with their labels) and their runs."""
     named = [c.name if c.label in ("", c.name) else f"{c.name} ({c.label})" for c in cases]
-    runs = [f"{c.run['speed_start_rpm']:g} → {c.run['speed_end_rpm']:g} min⁻¹ in "
-            f"{c.run['duration']:g} s" for c in cases]
+    runs = [c.run_text() for c in cases]
     if len(cases) == 1:
-        return f"Case {named[0]}. Run-up {runs[0]}."
+        return f"Case {named[0]}. Run: {runs[0]}."
     if len(set(runs)) == 1:
-        return f"Cases: {'; '.join(named)}. Run-up of each case {runs[0]}."
-    return (f"Cases: {'; '.join(named)}. Run-up "
-            + ", ".join(f"{c.name}: {r}" for c, r in zip(cases, runs, strict=True)) + ".")
+        return f"Cases: {'; '.join(named)}. Run of each case: {runs[0]}."
+    return (f"Cases: {'; '.join(named)}. Runs: "
+            + "; ".join(f"{c.name}: {r}" for c, r in zip(cases, runs, strict=True)) + ".")
 
 
 def build_report(paths_or_datasets: Sequence[RunInput] | RunInput, out_dir: str | os.PathLike,
                  *, title: str | None = None, analysis: AnalysisSettings | None = None,
-                 reference: str | None = None) -> ReportPaths:
+                 reference: str | None = None, progress: bool | None = False) -> ReportPaths:
     """Build ``report.html`` and ``report.pdf`` from run-up files or Datasets.
 
     Parameters
@@ -223,6 +260,8 @@ def build_report(paths_or_datasets: Sequence[RunInput] | RunInput, out_dir: str 
     reference : str, optional
         Case the others are compared with (default: the stored study reference, else the
         first case).
+    progress : bool or None
+        Progress bar of the Floquet charts (None: on a terminal only).
 
     Returns
     -------
@@ -236,7 +275,21 @@ def build_report(paths_or_datasets: Sequence[RunInput] | RunInput, out_dir: str 
         The output folder is not usable (before any computation).
     """
     runs = _load_inputs(paths_or_datasets)  # type: ignore[arg-type]
-    out = check_output_dir(out_dir)
+    for name, ds in runs:  # before any analysis: the maps must fit into memory
+        t = ds["time"].values
+        fs = float(1.0 / (t[1] - t[0])) if t.size > 1 and t[1] > t[0] else 1.0
+        stored = _caller(ds).get("analysis")
+        settings = analysis or (AnalysisSettings.from_dict(stored) if isinstance(stored, dict)
+                                else AnalysisSettings())
+        check_report_size(t.size, fs, settings, f"run {name!r}")
+    with _OutputFolder(check_output_dir(out_dir)) as folder:
+        return _build(runs, folder, title=title, analysis=analysis, reference=reference,
+                      progress=progress)
+
+
+def _build(runs: list[tuple[str, xr.Dataset]], folder: _OutputFolder, *, title: str | None,
+           analysis: AnalysisSettings | None, reference: str | None,
+           progress: bool | None) -> ReportPaths:
     first = _caller(runs[0][1])
     study = first.get("study", {}) if isinstance(first.get("study"), dict) else {}
     names = [n for n, _ in runs]
@@ -244,14 +297,20 @@ def build_report(paths_or_datasets: Sequence[RunInput] | RunInput, out_dir: str 
     if ref not in names:
         ref = names[0]
     title = title or str(study.get("title", "")) or _default_title(runs)
-    cases: list[CaseAnalysis] = [analyse_case(ds, name=n, settings=analysis) for n, ds in runs]
+    cases: list[CaseAnalysis] = []
+    for n, ds in runs:
+        t0 = time.perf_counter()
+        cases.append(analyse_case(ds, name=n, settings=analysis, progress=progress))
+        log.info("analysed %s in %.1f s (Floquet chart %.1f s)", n, time.perf_counter() - t0,
+                 cases[-1].stability_time_s)
     ref_case = next(c for c in cases if c.name == ref)
     comparisons = tuple(compare_cases(ref_case, c) for c in cases if c is not ref_case)
     sections = report_sections(cases, comparisons)
     subtitle = _subtitle(cases)
-    html_path, pdf_path = out / "report.html", out / "report.pdf"
     images = FigureImages()  # every figure is drawn once, for both documents
     text = render_html(sections, title=title, subtitle=subtitle, images=images)
+    out = folder.ensure()  # created only now, when there is something to write
+    html_path, pdf_path = out / "report.html", out / "report.pdf"
     pages = atomic_write(pdf_path, lambda tmp: write_pdf(sections, tmp, title=title,
                                                     subtitle=subtitle, images=images))
     atomic_write(html_path, lambda tmp: tmp.write_text(text, encoding="utf-8"))
@@ -298,7 +357,13 @@ def run_study(study: Study, out_dir: str | os.PathLike, *, progress: bool = True
     for case in study.cases:  # check every description before the first (long) simulation
         cfg, base = case.load()
         gs = gearset_from_dict(cfg, base=base)
-        prepared.append((case, cfg, base, gs, resolve_run(study.run, cfg)))
+        try:
+            run = resolve_run(study.run, cfg)
+        except ValueError as exc:
+            raise type(exc)(f"case {case.name!r}: {exc}") from None
+        check_report_size(math.floor(run["duration"] * run["fs_out"]) + 1, run["fs_out"],
+                          study.analysis, f"case {case.name!r}")
+        prepared.append((case, cfg, base, gs, run))
     runs: dict[str, Path] = {}
     sim_time: dict[str, float] = {}
     n_steps = len(prepared) + 1
@@ -307,28 +372,30 @@ def run_study(study: Study, out_dir: str | os.PathLike, *, progress: bool = True
         if progress:
             print(f"  [{i}/{n_steps}] {text}", file=sys.stderr, flush=True)
 
-    for i, (case, cfg, base, gs, run) in enumerate(prepared, start=1):
-        step(i, f"simulating {case.name}: {run['speed_start_rpm']:g} -> "
-             f"{run['speed_end_rpm']:g} min-1 in {run['duration']:g} s")
-        model = assemble(gs)
-        modal = modal_analysis(model)
-        config = {"gearset": cfg, "gearset_dir": str(base) if base is not None else None,
-                  "run": run, "case": case.name, "label": case.label,
-                  "analysis": study.analysis.to_dict(),
-                  "study": {"title": study.title, "reference": study.reference_case}}
-        ramp = SpeedRamp(run["speed_start_rpm"], run["speed_end_rpm"], run["duration"],
-                         input_torque=run["input_torque"])
-        log.info("simulating %s: %g -> %g min-1 in %g s", case.name, run["speed_start_rpm"],
-                 run["speed_end_rpm"], run["duration"])
-        try:
-            res = simulate(model, ramp, fs_out=run["fs_out"], progress=progress, config=config,
-                           natural_frequencies=modal.elastic())
-        except SimulationError as exc:
-            raise SimulationError(f"case {case.name!r}: {exc}") from exc
-        sim_time[case.name] = res.wall_time
-        runs[case.name] = write_netcdf(res.to_dataset(), out / f"{case.name}.nc")
-    step(n_steps, "analysing the runs and writing the report (maps, spectra, Floquet charts)")
-    report = build_report(list(runs.values()), out, title=study.title,
-                          analysis=study.analysis, reference=study.reference_case)
+    with _OutputFolder(out) as folder:
+        for i, (case, cfg, base, gs, run) in enumerate(prepared, start=1):
+            what = run_description(run)
+            step(i, f"simulating {case.name}: {what}")
+            model = assemble(gs)
+            modal = modal_analysis(model)
+            config = {"gearset": cfg, "gearset_dir": str(base) if base is not None else None,
+                      "run": run, "case": case.name, "label": case.label,
+                      "analysis": study.analysis.to_dict(),
+                      "study": {"title": study.title, "reference": study.reference_case}}
+            log.info("simulating %s: %s", case.name, what)
+            try:
+                res = simulate(model, conditions_from_settings(run), dt=run.get("dt"),
+                               fs_out=run["fs_out"], gyroscopic=bool(run.get("gyroscopic")),
+                               progress=progress, config=config,
+                               natural_frequencies=modal.elastic())
+            except SimulationError as exc:
+                raise SimulationError(f"case {case.name!r}: {exc}") from exc
+            sim_time[case.name] = res.wall_time
+            runs[case.name] = write_netcdf(res.to_dataset(), folder.ensure() / f"{case.name}.nc")
+        step(n_steps, "analysing the runs and writing the report (maps, spectra, Floquet "
+                      f"charts: stability = {study.analysis.stability!r})")
+        report = _build([(n, read_run(p)) for n, p in runs.items()], folder,
+                        title=study.title, analysis=study.analysis,
+                        reference=study.reference_case, progress=None if progress else False)
     return StudyResult(study=study, out_dir=out, runs=runs, report=report,
                        simulation_time_s=sim_time, wall_time_s=time.perf_counter() - t0)

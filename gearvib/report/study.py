@@ -21,7 +21,9 @@ the recipe), optional run settings shared by all cases and optional analysis set
     stability_points = 300
 
 Every table is checked like :mod:`gearvib.config`: an unknown key is an error naming the key and
-the admissible ones.
+the admissible ones, and every value is type- and range-checked (:data:`ANALYSIS_LIMITS`).
+:func:`check_report_size` refuses maps whose frames would not fit into memory before a run is
+simulated or analysed.
 """
 
 from __future__ import annotations
@@ -34,13 +36,17 @@ from pathlib import Path
 from typing import Any
 
 from gearvib.config import ConfigError, check_keys, list_presets, load_config
+from gearvib.memory import require_memory
+from gearvib.simulation.settings import MAX_DURATION, MAX_SPEED_RPM, MAX_TORQUE, MIN_DURATION
 
 __all__ = [
+    "ANALYSIS_LIMITS",
     "DEFAULT_RUN",
     "AnalysisSettings",
     "Case",
     "RunSettings",
     "Study",
+    "check_report_size",
     "load_study",
     "resolve_run",
 ]
@@ -54,27 +60,63 @@ _STUDY = {"title", "cases", "reference", "description"}
 _CASE = {"name", "config", "label"}
 _RUN = set(DEFAULT_RUN)
 _ANALYSIS = {"n_max", "stability_points", "map_resolution_hz", "map_overlap", "orders",
-             "threshold_db", "tolerance", "frequency_max_hz", "force_mesh", "spectrum_peaks"}
-_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]*$")
+             "threshold_db", "tolerance", "frequency_max_hz", "force_mesh", "spectrum_peaks",
+             "stability"}
+_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,99}$")
+ANALYSIS_LIMITS: dict[str, tuple[float, float]] = {
+    "n_max": (1, 20),
+    "stability_points": (2, 20_000),
+    "orders": (0, 100),
+    "spectrum_peaks": (1, 200),
+    "map_resolution_hz": (1e-3, 1e6),
+    "tolerance": (0.0, 0.5),
+    "threshold_db": (0.0, 200.0),
+    "frequency_max_hz": (0.0, 1e9),
+}
+"""Admissible ranges of the ``[analysis]`` keys (integers: inclusive; ``stability_points``
+bounds the Floquet chart's computing time, about 1-5 ms per point)."""
+_RUN_LIMITS = {"speed_start_rpm": (0.0, MAX_SPEED_RPM), "speed_end_rpm": (0.0, MAX_SPEED_RPM),
+               "duration": (MIN_DURATION, MAX_DURATION), "input_torque": (-MAX_TORQUE, MAX_TORQUE),
+               "fs_out": (0.0, 1e12)}
+"""Ranges of the run settings (as ``[simulation]``, :mod:`gearvib.simulation.settings`)."""
+MAX_CASES = 100
+"""Most cases of one study."""
+MAP_COPIES = 4
+"""Peak memory of a map as multiples of its frames x bins (map, dB, Dataset, image)."""
+STABILITY = ("full", "coarse", "off")
+"""Values of ``[analysis] stability``: the Floquet chart at ``stability_points`` speeds,
+at most 80 speeds with looser accuracy, or none."""
 
 
-def _number(value: Any, where: str, *, positive: bool = False, minimum: float | None = None
-            ) -> float:
+def _short(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
+def _number(value: Any, where: str, *, positive: bool = False, minimum: float | None = None,
+            maximum: float | None = None) -> float:
     if isinstance(value, bool) or not isinstance(value, int | float):
-        raise ConfigError(f"{where} must be a number, got {value!r}")
-    v = float(value)
+        raise ConfigError(f"{where} must be a number, got {_short(value)}")
+    try:
+        v = float(value)
+    except OverflowError:
+        v = math.inf
     if not math.isfinite(v):
-        raise ConfigError(f"{where} = {value!r}; admissible: a finite number")
+        raise ConfigError(f"{where} = {_short(value)}; admissible: a finite number")
     if positive and not v > 0:
         raise ConfigError(f"{where} = {value!r}; admissible: a number > 0")
     if minimum is not None and v < minimum:
         raise ConfigError(f"{where} = {value!r}; admissible: a number >= {minimum:g}")
+    if maximum is not None and v > maximum:
+        raise ConfigError(f"{where} = {value!r}; admissible: a number <= {maximum:g}")
     return v
 
 
-def _integer(value: Any, where: str, minimum: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, int) or value < minimum:
-        raise ConfigError(f"{where} = {value!r}; admissible: an integer >= {minimum}")
+def _integer(value: Any, where: str, minimum: int, maximum: int | None = None) -> int:
+    if isinstance(value, bool) or not isinstance(value, int) or value < minimum or (
+            maximum is not None and value > maximum):
+        top = f" and <= {maximum}" if maximum is not None else ""
+        raise ConfigError(f"{where} = {_short(value)}; admissible: an integer >= {minimum}{top}")
     return int(value)
 
 
@@ -140,12 +182,20 @@ class AnalysisSettings:
         Highest order ``n`` of the theory candidates ``2 f_i/n``, ``(f_i + f_j)/n``.
     stability_points : int
         Speeds of the Floquet stability chart over the run-up range (boundaries refined).
+    stability : str
+        ``"full"`` (default): the Floquet chart at ``stability_points`` speeds, ``max|mu|``
+        to 1e-7 near the stability limit; ``"coarse"``: at most 80 speeds, ``max|mu|`` to
+        1e-6, boundaries to 1e-6; ``"off"``: no chart (parametric rises are then judged by
+        the theory candidates alone).
     map_resolution_hz : float
         Resolution bandwidth of the rpm-frequency map [Hz].
     map_overlap : float
         Frame overlap of the maps, in ``[0, 1)``.
     orders : int
-        Mesh orders ``1..orders`` drawn in the sonogram and used for resonance detection.
+        Mesh orders ``1..orders`` of every mesh frequency, drawn in the sonogram and used for
+        resonance detection; 0 (default): per mesh frequency enough orders to reach the
+        highest natural frequency in the map at the top speed, 7 to 20 (7 for the paper's
+        set).
     threshold_db : float
         Minimum rise above the background of a detected resonance [dB].
     tolerance : float
@@ -164,12 +214,18 @@ class AnalysisSettings:
     stability_points: int = 300
     map_resolution_hz: float = 20.0
     map_overlap: float = 0.9
-    orders: int = 7
+    orders: int = 0
     threshold_db: float = 6.0
     tolerance: float = 0.03
     frequency_max_hz: float = 0.0
     force_mesh: str = ""
     spectrum_peaks: int = 10
+    stability: str = "full"
+
+    def __post_init__(self) -> None:
+        if self.stability not in STABILITY:
+            raise ConfigError(f"[analysis].stability = {self.stability!r}; admissible: "
+                              + ", ".join(repr(x) for x in STABILITY))
 
     def to_dict(self) -> dict[str, Any]:
         """All settings as a plain dict."""
@@ -182,13 +238,23 @@ class AnalysisSettings:
         kw: dict[str, Any] = {}
         for k in ("n_max", "stability_points", "orders", "spectrum_peaks"):
             if k in table:
-                kw[k] = _integer(table[k], f"{where}.{k}", 2 if k == "stability_points" else 1)
+                lo, hi = ANALYSIS_LIMITS[k]
+                kw[k] = _integer(table[k], f"{where}.{k}", int(lo), int(hi))
+        if "stability" in table:
+            if table["stability"] not in STABILITY:
+                raise ConfigError(f"{where}.stability = {_short(table['stability'])}; "
+                                  "admissible: " + ", ".join(repr(x) for x in STABILITY))
+            kw["stability"] = table["stability"]
         for k in ("map_resolution_hz", "tolerance"):
             if k in table:
-                kw[k] = _number(table[k], f"{where}.{k}", positive=True)
+                lo, hi = ANALYSIS_LIMITS[k]
+                kw[k] = _number(table[k], f"{where}.{k}", positive=True,
+                                minimum=lo if k != "tolerance" else None,
+                                maximum=hi if k != "tolerance" else None)
         for k in ("threshold_db", "frequency_max_hz"):
             if k in table:
-                kw[k] = _number(table[k], f"{where}.{k}", minimum=0.0)
+                kw[k] = _number(table[k], f"{where}.{k}", minimum=0.0,
+                                maximum=ANALYSIS_LIMITS[k][1])
         if "map_overlap" in table:
             v = _number(table["map_overlap"], f"{where}.map_overlap", minimum=0.0)
             if v >= 1.0:
@@ -197,7 +263,7 @@ class AnalysisSettings:
         if "tolerance" in kw and kw["tolerance"] >= 0.5:
             raise ConfigError(f"{where}.tolerance = {kw['tolerance']!r}; admissible: < 0.5")
         if "force_mesh" in table:
-            if not isinstance(table["force_mesh"], str):
+            if not isinstance(table["force_mesh"], str) or len(table["force_mesh"]) > 200:
                 raise ConfigError(f"{where}.force_mesh must be a mesh name (string)")
             kw["force_mesh"] = table["force_mesh"]
         return cls(**kw)
@@ -274,6 +340,8 @@ class Study:
         """
         check_keys(run, _RUN, "the run settings")
         settings = RunSettings(**{k: _number(v, k) for k, v in run.items()})
+        if isinstance(names, str) or not isinstance(names, list | tuple):
+            raise ConfigError("names must be a list of preset names or TOML paths")
         cases = tuple(Case(name=Path(n).stem if n.endswith(".toml") else n, config=str(n))
                       for n in names)
         return cls(title=title or "",
@@ -281,34 +349,62 @@ class Study:
 
     def with_duration(self, duration: float) -> Study:
         """A copy whose run-up lasts ``duration`` seconds (same speed range)."""
-        return replace(self, run=replace(self.run, duration=_number(duration, "duration",
-                                                                     positive=True)))
+        return replace(self, run=replace(self.run, duration=_number(
+            duration, "duration", minimum=MIN_DURATION, maximum=MAX_DURATION)))
 
 
-def resolve_run(run: RunSettings, gearset_cfg: dict) -> dict[str, float]:
-    """Complete run settings for one gear set.
+def resolve_run(run: RunSettings, gearset_cfg: dict) -> dict[str, Any]:
+    """Complete, checked run settings for one gear set.
 
-    Order of precedence: the study's ``[run]`` value, the gear set's ``[simulation]`` value,
-    :data:`DEFAULT_RUN`. Only the keys of :data:`DEFAULT_RUN` are used from ``[simulation]``.
+    The gear set's ``[simulation]`` table decides the drive (``"speed"``, ``"torque"`` or
+    ``"motor"``, see :mod:`gearvib.simulation.settings`); the study's ``[run]`` values replace
+    its values; :data:`DEFAULT_RUN` fills what neither gives (a speed drive without
+    ``input_torque`` or ``load_torque`` gets the default input torque).
 
     Returns
     -------
     dict
-        ``speed_start_rpm``, ``speed_end_rpm``, ``duration``, ``input_torque``, ``fs_out``.
+        :func:`gearvib.simulation.settings.read_run_settings` of the merged table (``drive``,
+        ``speed_start_rpm``, ``speed_end_rpm``, ``duration``, ``input_torque`` where the drive
+        has one, ``load_torque``, ``motor``, ...) with ``fs_out`` always set.
+
+    Raises
+    ------
+    ConfigError
+        A value is not admissible, or a ``[run]`` value does not apply to the drive (the
+        message names the key, the drive and the admissible range).
     """
+    from gearvib.simulation.settings import read_run_settings
+
     sim = gearset_cfg.get("simulation", {}) if isinstance(gearset_cfg, dict) else {}
+    if not isinstance(sim, dict):
+        raise ConfigError(f"[simulation] must be a table, got {type(sim).__name__}")
+    sim = dict(sim)
     given = run.to_dict()
-    out = {}
-    for k, default in DEFAULT_RUN.items():
-        v = given.get(k, sim.get(k, default))
-        out[k] = _number(v, f"run setting {k}")
-    if not out["duration"] > 0:
-        raise ConfigError(f"duration = {out['duration']!r}; admissible: > 0 s")
-    if out["speed_end_rpm"] <= out["speed_start_rpm"] or out["speed_start_rpm"] < 0:
+    fs_out = given.pop("fs_out", None)
+    drive = sim.get("drive", "speed")
+    if "input_torque" in given and drive == "motor":
+        raise ConfigError("[run].input_torque does not apply to this gear set: its "
+                          "[simulation] drive is 'motor' (the torque follows the motor "
+                          "characteristic); remove it from [run] or use a speed or torque drive")
+    if drive == "speed" and "input_torque" in given:
+        sim.pop("load_torque", None)  # the study's input torque replaces the set's load
+    if drive == "speed" and not ({"input_torque", "load_torque"} & (set(sim) | set(given))):
+        given["input_torque"] = DEFAULT_RUN["input_torque"]
+    for k in ("speed_start_rpm", "speed_end_rpm", "duration"):
+        if k not in sim and k not in given and (drive == "speed" or k == "duration"):
+            given[k] = DEFAULT_RUN[k]
+    try:
+        out = read_run_settings(sim, given)
+    except ValueError as exc:
+        raise ConfigError(str(exc)) from None
+    out["fs_out"] = _number(fs_out if fs_out is not None else (
+        out.get("fs_out") or DEFAULT_RUN["fs_out"]), "run setting fs_out", positive=True,
+        maximum=_RUN_LIMITS["fs_out"][1])
+    if drive == "speed" and (out["speed_end_rpm"] <= out["speed_start_rpm"]
+                             or out["speed_start_rpm"] < 0):
         raise ConfigError(f"speed range {out['speed_start_rpm']:g} -> {out['speed_end_rpm']:g} "
                           "min-1 is not admissible: need 0 <= start < end (a run-up)")
-    if not out["fs_out"] > 0:
-        raise ConfigError(f"fs_out = {out['fs_out']!r}; admissible: > 0 Hz")
     return out
 
 
@@ -370,13 +466,16 @@ def load_study(path: str | Path) -> Study:
     if st is None:
         raise ConfigError(f"{p.name}: missing table [study]")
     cases_t = st.get("cases")
-    if not isinstance(cases_t, list) or not cases_t:
-        raise ConfigError("[study].cases must be a non-empty list of {name = ..., config = ...}")
+    if not isinstance(cases_t, list) or not 1 <= len(cases_t) <= MAX_CASES:
+        raise ConfigError(f"[study].cases must be a list of 1..{MAX_CASES} tables "
+                          "{name = ..., config = ...}")
     base = p.resolve().parent
     cases = tuple(_case(t, i, base) for i, t in enumerate(cases_t))
     title = st.get("title", "")
     if not isinstance(title, str):
         raise ConfigError("[study].title must be a string")
+    if not isinstance(st.get("description", ""), str):
+        raise ConfigError("[study].description must be a string")
     run_t = check_keys(doc.get("run", {}), _RUN, "[run]")
     run = RunSettings(**{k: _number(v, f"[run].{k}") for k, v in run_t.items()})
     analysis = AnalysisSettings.from_dict(doc.get("analysis", {}))
@@ -385,3 +484,32 @@ def load_study(path: str | Path) -> Study:
         raise ConfigError("[study].reference must be a case name (string)")
     return Study(title=title, cases=cases, run=run, analysis=analysis, reference=reference,
                  source=p)
+
+
+def check_report_size(n_samples: int, fs: float, settings: AnalysisSettings,
+                      where: str = "the run") -> None:
+    """Refuse maps whose frames would not fit into memory (before simulating or analysing).
+
+    The rpm-frequency map of a run of ``n_samples`` at ``fs`` has ``(n - seg) // hop + 1``
+    frames of ``seg // 2 + 1`` bins, with the Hann window ``seg = 1.5 fs / map_resolution_hz``
+    and ``hop = seg (1 - map_overlap)`` (as :func:`analysis.frames.frame_layout`); the
+    rpm-order map has about as many. An overlap near 1 or a fine resolution of a long run
+    multiplies the frames.
+
+    Raises
+    ------
+    gearvib.memory.RunSizeError
+        Naming ``map_overlap`` and ``map_resolution_hz``, the frames and the memory needed.
+    """
+    n = max(int(n_samples), 1)
+    seg_f = 1.5 * fs / settings.map_resolution_hz
+    seg = max(4, min(n, round(seg_f) if math.isfinite(seg_f) else n))
+    hop = max(1, round(seg * (1.0 - settings.map_overlap)))
+    frames = (n - seg) // hop + 1
+    bins = seg // 2 + 1
+    need = 2 * MAP_COPIES * 8 * frames * bins  # rpm-frequency and rpm-order map
+    require_memory(need, f"the maps of {where} ({frames} frames of {bins} bins: "
+                   f"map_overlap = {settings.map_overlap:g}, map_resolution_hz = "
+                   f"{settings.map_resolution_hz:g} over {n} samples at {fs:g} Hz)",
+                   "lower [analysis].map_overlap (0.9 gives a smooth map) or coarsen "
+                   "map_resolution_hz")

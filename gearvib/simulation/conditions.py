@@ -77,8 +77,9 @@ class SpeedRamp:
     coupling: DriveCoupling | None = None
 
     def __post_init__(self) -> None:
-        if not self.duration > 0:
-            raise ValueError("SpeedRamp.duration must be > 0")
+        if not (math.isfinite(self.duration) and self.duration >= 1e-9):
+            raise ValueError(f"SpeedRamp.duration = {self.duration!r} s is not admissible "
+                             "(admissible: finite, >= 1e-9 s)")
 
     def table(self) -> tuple[np.ndarray, np.ndarray]:
         """Nodes ``(time [s], speed [min^-1])`` of the piecewise-linear profile."""

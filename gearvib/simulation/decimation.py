@@ -5,7 +5,22 @@ from __future__ import annotations
 import numpy as np
 import scipy.signal
 
-__all__ = ["decimation_filter"]
+__all__ = ["decimation_filter", "filter_length"]
+
+
+def filter_length(decimation: int, attenuation_db: float = 85.0) -> int:
+    """Number of taps of :func:`decimation_filter` (odd), computed without designing it.
+
+    For astronomically large decimations (only ever computed to refuse them) an integer
+    estimate of the Kaiser formula is returned instead of overflowing.
+    """
+    if decimation == 1:
+        return 1
+    if decimation > 10**12:
+        # Kaiser: (A - 7.95) / (2.285 * pi * 0.4 / D) + 1 = 26.8 D for A = 85 dB
+        return int(decimation) * 27 | 1
+    numtaps, _ = scipy.signal.kaiserord(attenuation_db, 0.4 / decimation)
+    return int(numtaps) | 1
 
 
 def decimation_filter(decimation: int, attenuation_db: float = 85.0) -> np.ndarray:

@@ -9,7 +9,7 @@ existed (``v^T (F_L + F_R)``), so such runs start from the same state bit for bi
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 import numpy as np
 
@@ -23,12 +23,14 @@ MAX_NEWTON = 200
 """Iterations of the damped Newton method on the potential energy (fallback solver)."""
 
 
-def _contact_state(dl: np.ndarray, dr: np.ndarray, j: np.ndarray) -> np.ndarray:
+def _contact_state(dl: np.ndarray, dr: np.ndarray, gl: np.ndarray, gr: np.ndarray
+                   ) -> np.ndarray:
     """Flank-contact state per mesh: bit 0 left flank, bit 1 right flank (0: in the backlash).
 
-    ``dl``, ``dr``: deflections along the left and the right flank's line of action.
+    ``dl``, ``dr``: deflections along the left and the right flank's line of action; ``gl``,
+    ``gr``: the half gaps of each flank (``j/2`` for a healthy mesh).
     """
-    return (dl > j / 2).astype(np.int64) + 2 * (dr < -j / 2).astype(np.int64)
+    return (dl > gl).astype(np.int64) + 2 * (dr < -gr).astype(np.int64)
 
 
 def _force_sum(vl, vr, fl, fr):
@@ -38,7 +40,7 @@ def _force_sum(vl, vr, fl, fr):
     return vl.T @ fl + vr.T @ fr
 
 
-def _state_solve(a0, f, mr, vl, vr, j, kl, kr, k_in, free_rigid, state):
+def _state_solve(a0, f, mr, vl, vr, gl, gr, kl, kr, k_in, free_rigid, state):
     """Linear solution with the flanks of ``state`` in contact (one active-set step).
 
     Returns ``q, acc, a, b, resid, new_state`` with ``a q + m_r acc = b`` the linear system of
@@ -51,7 +53,7 @@ def _state_solve(a0, f, mr, vl, vr, j, kl, kr, k_in, free_rigid, state):
     left = (state & 1).astype(bool)
     right = (state & 2).astype(bool)
     a += (vl[left].T * kl[left]) @ vl[left] + (vr[right].T * kr[right]) @ vr[right]
-    b += vl[left].T @ (kl[left] * j[left] / 2) - vr[right].T @ (kr[right] * j[right] / 2)
+    b += vl[left].T @ (kl[left] * gl[left]) - vr[right].T @ (kr[right] * gr[right])
     if free_rigid:
         # equilibrated: acceleration column and pin row scaled to the stiffness
         big = np.abs(a).max() + 1e-300
@@ -67,15 +69,15 @@ def _state_solve(a0, f, mr, vl, vr, j, kl, kr, k_in, free_rigid, state):
     else:
         q = np.linalg.lstsq(a, b, rcond=None)[0]
         resid = a @ q - b
-    return q, acc, a, b, resid, _contact_state(vl @ q, vr @ q, j)
+    return q, acc, a, b, resid, _contact_state(vl @ q, vr @ q, gl, gr)
 
 
-def _flank_forces(dl, dr, j, kl, kr):
+def _flank_forces(dl, dr, gl, gr, kl, kr):
     """Left (>= 0) and right (<= 0) flank forces of the static contact law."""
-    return kl * np.maximum(dl - j / 2, 0.0), -kr * np.maximum(-dr - j / 2, 0.0)
+    return kl * np.maximum(dl - gl, 0.0), -kr * np.maximum(-dr - gr, 0.0)
 
 
-def _line_minimum(a0p, g0p, dl, dr, cl, cr, j, kl, kr, same: bool) -> float:
+def _line_minimum(a0p, g0p, dl, dr, cl, cr, gl, gr, kl, kr, same: bool) -> float:
     """Exact minimiser ``t > 0`` of the energy along a descent direction ``p``.
 
     ``phi'(t) = t p.A.p + g0.p + sum_m [cl_m F_L,m(dl_m + t cl_m) + cr_m F_R,m(dr_m + t cr_m)]``
@@ -85,23 +87,23 @@ def _line_minimum(a0p, g0p, dl, dr, cl, cr, j, kl, kr, same: bool) -> float:
     ``p``).
     """
     mask = (cl != 0.0) if same else (cl != 0.0) | (cr != 0.0)
-    cm, dm, jm, klm, krm = cl[mask], dl[mask], j[mask], kl[mask], kr[mask]
+    cm, dm, glm, grm, klm, krm = cl[mask], dl[mask], gl[mask], gr[mask], kl[mask], kr[mask]
     cmr, dmr = cr[mask], dr[mask]
     with np.errstate(divide="ignore", invalid="ignore"):
-        brk = np.concatenate([(jm / 2 - dm) / cm, (-jm / 2 - dmr) / cmr])
+        brk = np.concatenate([(glm - dm) / cm, (-grm - dmr) / cmr])
     brk = np.unique(brk[np.isfinite(brk) & (brk > 0.0)])
 
     def slope_and_value(t: float) -> tuple[float, float]:
         dd = dm + t * cm
         ddr = dmr + t * cmr
-        fl, fr = _flank_forces(dd, ddr, jm, klm, krm)
+        fl, fr = _flank_forces(dd, ddr, glm, grm, klm, krm)
         if same:
             val = t * a0p + g0p + float(cm @ (fl + fr))
-            stiff = a0p + float(np.sum(cm * cm * (klm * (dd > jm / 2) + krm * (dd < -jm / 2))))
+            stiff = a0p + float(np.sum(cm * cm * (klm * (dd > glm) + krm * (dd < -grm))))
         else:
             val = t * a0p + g0p + float(cm @ fl + cmr @ fr)
-            stiff = a0p + float(np.sum(cm * cm * klm * (dd > jm / 2)
-                                       + cmr * cmr * krm * (ddr < -jm / 2)))
+            stiff = a0p + float(np.sum(cm * cm * klm * (dd > glm)
+                                       + cmr * cmr * krm * (ddr < -grm)))
         return val, stiff
 
     t0 = 0.0
@@ -116,7 +118,7 @@ def _line_minimum(a0p, g0p, dl, dr, cl, cr, j, kl, kr, same: bool) -> float:
     return np.inf
 
 
-def _energy_solve(a0, f, mr, rigid, vl, vr, j, kl, kr, k_in, free_rigid, max_iter):
+def _energy_solve(a0, f, mr, rigid, vl, vr, gl, gr, kl, kr, k_in, free_rigid, max_iter):
     """Damped Newton method on the potential energy (symmetric ``a0``).
 
     The static problem is the minimum of the convex, piecewise-quadratic energy
@@ -163,12 +165,12 @@ def _energy_solve(a0, f, mr, rigid, vl, vr, j, kl, kr, k_in, free_rigid, max_ite
     history = []
     for _ in range(max_iter):
         dl, dr = vl @ q, vr @ q
-        fl, fr = _flank_forces(dl, dr, j, kl, kr)
+        fl, fr = _flank_forces(dl, dr, gl, gr, kl, kr)
         g = a0 @ q - f_eff + _force_sum(vl, vr, fl, fr)
         if np.abs(g[free]).max() <= 1e-12 * (scale + np.abs(_force_sum(vl, vr, fl, -fr)).max()):
             return q, acc, None
-        history.append(_contact_state(dl, dr, j))
-        on_l, on_r = dl > j / 2, dr < -j / 2
+        history.append(_contact_state(dl, dr, gl, gr))
+        on_l, on_r = dl > gl, dr < -gr
         off = ~(on_l | on_r)
         h = (a0 + (vl[on_l].T * kl[on_l]) @ vl[on_l] + (vr[on_r].T * kr[on_r]) @ vr[on_r]
              + (vl[off].T * reg[off]) @ vl[off])
@@ -176,8 +178,8 @@ def _energy_solve(a0, f, mr, rigid, vl, vr, j, kl, kr, k_in, free_rigid, max_ite
         p[free] = np.linalg.lstsq(h[np.ix_(free, free)], -g[free], rcond=None)[0]
         cl = vl @ p
         cr = cl if same else vr @ p
-        t = _line_minimum(float(p @ a0 @ p), float(p @ (a0 @ q - f_eff)), dl, dr, cl, cr, j,
-                          kl, kr, same)
+        t = _line_minimum(float(p @ a0 @ p), float(p @ (a0 @ q - f_eff)), dl, dr, cl, cr, gl,
+                          gr, kl, kr, same)
         if not np.isfinite(t):
             raise SimulationError(
                 "no static equilibrium at t = 0: the initial load is not balanced (a member is "
@@ -197,7 +199,7 @@ class _NoConvergence(Exception):
     """The contact sets cycle; ``args[0]`` lists the indices of the meshes that switch."""
 
 
-def _active_set(a0, f, mr, vl, vr, j, kl, kr, k_in, free_rigid, state, max_iter):
+def _active_set(a0, f, mr, vl, vr, gl, gr, kl, kr, k_in, free_rigid, state, max_iter):
     """Active-set iterations (Newton's method on the piecewise-linear equations) from ``state``.
 
     Returns the solution ``(q, acc, a, b, resid)`` or None (a contact state repeats, or a
@@ -206,8 +208,8 @@ def _active_set(a0, f, mr, vl, vr, j, kl, kr, k_in, free_rigid, state, max_iter)
     seen = set()
     history = []
     for _ in range(max_iter):
-        q, acc, a, b, resid, new = _state_solve(a0, f, mr, vl, vr, j, kl, kr, k_in, free_rigid,
-                                                state)
+        q, acc, a, b, resid, new = _state_solve(a0, f, mr, vl, vr, gl, gr, kl, kr, k_in,
+                                                free_rigid, state)
         history.append(state)
         if np.array_equal(new, state):
             return ((q, acc, a, b, resid) if _balanced(a, b, q, resid) else None), history
@@ -218,7 +220,7 @@ def _active_set(a0, f, mr, vl, vr, j, kl, kr, k_in, free_rigid, state, max_iter)
     return None, [*history, new]
 
 
-def _contact_solve(a0, f, mr, rigid, vl, vr, j, kl, kr, k_in, free_rigid, max_iter):
+def _contact_solve(a0, f, mr, rigid, vl, vr, gl, gr, kl, kr, k_in, free_rigid, max_iter):
     """Solution of the piecewise-linear static problem at fixed flank stiffness.
 
     First the plain active-set iteration from every left flank in contact: exact and fast when
@@ -232,16 +234,17 @@ def _contact_solve(a0, f, mr, rigid, vl, vr, j, kl, kr, k_in, free_rigid, max_it
     that floats in its backlash (no exact linear solution) keeps the energy minimum.
     """
     n_mesh = vl.shape[0]
-    sol, hist1 = _active_set(a0, f, mr, vl, vr, j, kl, kr, k_in, free_rigid,
+    sol, hist1 = _active_set(a0, f, mr, vl, vr, gl, gr, kl, kr, k_in, free_rigid,
                              np.ones(n_mesh, dtype=np.int64), max_iter)
     if sol is not None:
         return sol
     a_sym = 0.5 * (a0 + a0.T)
     symmetric = np.allclose(a0, a_sym, rtol=0.0, atol=1e-12 * (np.abs(a0).max() + 1e-300))
-    q_e, acc_e, hist_e = _energy_solve(a_sym, f, mr, rigid, vl, vr, j, kl, kr, k_in,
+    q_e, acc_e, hist_e = _energy_solve(a_sym, f, mr, rigid, vl, vr, gl, gr, kl, kr, k_in,
                                        free_rigid, MAX_NEWTON)
-    state = _contact_state(vl @ q_e, vr @ q_e, j)
-    sol, hist2 = _active_set(a0, f, mr, vl, vr, j, kl, kr, k_in, free_rigid, state, max_iter)
+    state = _contact_state(vl @ q_e, vr @ q_e, gl, gr)
+    sol, hist2 = _active_set(a0, f, mr, vl, vr, gl, gr, kl, kr, k_in, free_rigid, state,
+                             max_iter)
     if sol is not None:
         return sol
     if symmetric and hist_e is None:
@@ -249,7 +252,7 @@ def _contact_solve(a0, f, mr, rigid, vl, vr, j, kl, kr, k_in, free_rigid, max_it
         b = f.copy()
         left, right = (state & 1).astype(bool), (state & 2).astype(bool)
         a += (vl[left].T * kl[left]) @ vl[left] + (vr[right].T * kr[right]) @ vr[right]
-        b += vl[left].T @ (kl[left] * j[left] / 2) - vr[right].T @ (kr[right] * j[right] / 2)
+        b += vl[left].T @ (kl[left] * gl[left]) - vr[right].T @ (kr[right] * gr[right])
         resid = a @ q_e + mr * acc_e - b
         if free_rigid:
             resid = np.append(resid, 0.0)
@@ -269,6 +272,7 @@ def static_equilibrium(
     free_rigid: bool = False,
     max_iter: int = 100,
     mesh_names: Sequence[str] | None = None,
+    flank_law: Callable | None = None,
 ) -> tuple[np.ndarray, float]:
     """Static (quasi-static) equilibrium at ``t = 0`` with the piecewise-linear contact law.
 
@@ -297,6 +301,11 @@ def static_equilibrium(
         Maximum number of contact-set updates.
     mesh_names : sequence of str, optional
         Mesh names for the error messages.
+    flank_law : callable, optional
+        ``flank_law(q, first) -> {mesh: (k_left, k_right, gap_left, gap_right)}``: the
+        effective stiffness and half gaps of meshes with faults at ``q`` (``first``: the first
+        iteration, every tooth pair counted in contact), which replace the table values and
+        ``j/2`` of those meshes (:meth:`gearvib.faults.law.FaultLaw.flank_law`).
 
     Returns
     -------
@@ -354,14 +363,21 @@ def static_equilibrium(
         pos = system.mesh_position_offsets + system.mesh_position_vectors @ q
         kl = np.array([kn.periodic_interp(system.left_tables, m, s) for m, s in enumerate(pos)])
         kr = np.array([kn.periodic_interp(system.right_tables, m, s) for m, s in enumerate(pos)])
+        gl = j / 2
+        gr = gl
         k_now = np.concatenate([kl, kr])
+        if flank_law is not None:  # faulty meshes: the tooth pairs in contact at q
+            gr = gl.copy()
+            for m, (klm, krm, glm, grm) in flank_law(q, _outer == 0).items():
+                kl[m], kr[m], gl[m], gr[m] = klm, krm, glm, grm
+            k_now = np.concatenate([kl, kr, gl, gr])
         # converged, or the solution sits on a jump of a stiffness table (k alternates between
         # both sides of it): either solution is the equilibrium to the table's resolution
         if any(np.allclose(k_now, k, rtol=1e-12, atol=0.0) for k in k_seen):
             break
         k_seen.append(k_now)
         try:
-            q, acc, a, b, resid = _contact_solve(a0, f, mr, rigid, vl, vr, j, kl, kr, k_in,
+            q, acc, a, b, resid = _contact_solve(a0, f, mr, rigid, vl, vr, gl, gr, kl, kr, k_in,
                                                  free_rigid, max_iter)
         except _NoConvergence as exc:
             names = list(mesh_names) if mesh_names is not None else None

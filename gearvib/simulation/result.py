@@ -53,6 +53,9 @@ def model_sha256(model: AssembledModel) -> str:
         h.update(b"mesh_back_vectors")
         h.update(str(a.shape).encode())
         h.update(a.tobytes())
+    if model.faults:  # local tooth faults and manufacturing errors (healthy: as before)
+        h.update(b"faults")
+        h.update(json.dumps([f.to_dict() for f in model.faults], sort_keys=True).encode())
     names = [
         model.dof_names,
         model.mesh_names,
@@ -129,6 +132,16 @@ class RunUpResult:
         Dataset title.
     wall_time : float
         Wall time of the call [s] (not stored in the dataset, which is deterministic).
+    sensor_names : tuple of str
+        Virtual housing sensors (:mod:`gearvib.sensors`), labels of the ``sensor`` dimension.
+    sensor_acceleration : ndarray, shape (n_sensor, n_time), optional
+        Their accelerations [m s-2].
+    sensor_info : tuple of dict
+        Their descriptions (angle, window, housing response).
+    tacho : ndarray, shape (n_time,), optional
+        Tacho pulse train of a shaft [V].
+    tacho_info : dict, optional
+        The tacho's description (member, pulses per revolution, level).
     """
 
     time: np.ndarray
@@ -157,6 +170,11 @@ class RunUpResult:
     coupling: DriveCoupling | None = None
     title: str = "gearvib run-up simulation"
     wall_time: float = field(default=0.0, compare=False)
+    sensor_names: tuple[str, ...] = ()
+    sensor_acceleration: np.ndarray | None = None
+    sensor_info: tuple[dict, ...] = ()
+    tacho: np.ndarray | None = None
+    tacho_info: dict | None = None
 
     @property
     def config_sha256(self) -> str:
@@ -293,6 +311,25 @@ class RunUpResult:
                 "flank_contact_changes",
             ),
         }
+        if self.sensor_acceleration is not None:
+            coords["sensor"] = xr.Variable(("sensor",), np.array(self.sensor_names, dtype=str),
+                                           {"long_name": "virtual sensor on the housing"})
+            coords["sensor_angle"] = var(
+                ("sensor",), np.array([i["angle_deg"] for i in self.sensor_info], dtype=float),
+                "degree", "sensor position on the housing (counter-clockwise from x)",
+                "sensor_angle")
+            acc = var(("sensor", "time"), self.sensor_acceleration, "m s-2",
+                      "housing acceleration at the virtual sensor", "virtual_sensor")
+            acc.attrs["transmission_path"] = json.dumps(list(self.sensor_info), sort_keys=True)
+            data["sensor_acceleration"] = acc
+        if self.tacho is not None:
+            info = dict(self.tacho_info or {})
+            tacho = var(t, self.tacho, "V", f"tacho pulse train of the {info.get('member')} "
+                        f"shaft, {info.get('pulses_per_rev')} pulses per revolution", "tacho")
+            tacho.attrs.update({"pulses_per_rev": int(info.get("pulses_per_rev", 1)),
+                                "member": str(info.get("member")),
+                                "duty": float(info.get("duty", 0.5))})
+            data["tacho"] = tacho
         attrs = {
             "Conventions": "CF-1.11",
             "title": self.title,
@@ -353,6 +390,8 @@ def build_result(
     bearing = np.asarray(model.bearing_stiffness)[:, None] * (bv @ q.T) + np.asarray(
         model.bearing_damping
     )[:, None] * (bv @ qd.T)
+    if setup.faults is not None and np.any(setup.faults.bearing_offsets):
+        bearing -= setup.faults.bearing_offsets[:, None]  # displaced planet pins
     trans = [i for i, u in enumerate(model.dof_units) if u == "m"]
     rot = sorted((d, name) for name, d in model.rotation_dofs.items() if d >= 0)
     members = tuple(name for _, name in rot)
@@ -398,6 +437,10 @@ def build_result(
             "load_torque": list(setup.load),
         },
     }
+    if model.faults:  # only then: healthy runs keep their configuration text bit for bit
+        cfg["faults"] = [f.to_dict() for f in model.faults]
+    if model.sensors:
+        cfg["sensors"] = [sn.to_dict() for sn in model.sensors]
     config_json = json.dumps(_jsonable(cfg), sort_keys=True)
     name = model.meta.get("name") if isinstance(model.meta, Mapping) else None
     return RunUpResult(

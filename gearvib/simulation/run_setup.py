@@ -8,6 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from gearvib import kernels as kn
+from gearvib.faults.law import FaultLaw, build_fault_law
 from gearvib.model import AssembledModel
 from gearvib.simulation.conditions import (
     RAD_S_PER_RPM,
@@ -98,6 +99,9 @@ class RunSetup:
         Sense of the mean load at ``t = 0`` (+1: the input drives forward; -1: the load torque
         reversed): selects the loaded flanks of the mean system
         (:meth:`AssembledModel.mesh_contacts`).
+    faults : FaultLaw or None
+        The model's local tooth faults and manufacturing errors as kernel data (None: a
+        healthy set, whose run is that of the model's tables alone).
     """
 
     system: kn.KernelSystem
@@ -112,6 +116,7 @@ class RunSetup:
     load: tuple[float, float, float]
     drive: str
     torque_sign: float = 1.0
+    faults: FaultLaw | None = None
 
 
 def default_coupling(model: AssembledModel, torque_sign: float = 1.0) -> DriveCoupling:
@@ -238,6 +243,16 @@ def prepare_run(
     fpar[kn.FP_T0], fpar[kn.FP_C1], fpar[kn.FP_C2] = load
     fpar[kn.FP_SPEED_LIMIT] = 3.0 * speed_max + 100.0
     gyro, centri = model.carrier_frame_operators()
+    law = build_fault_law(model) if model.faults else None
+    fault_arrays: dict = {}
+    f_const = np.zeros(n)
+    if law:
+        rec, fints, fvals = law.pack()
+        fault_arrays = {"fault_records": rec, "fault_ints": fints, "fault_vals": fvals,
+                        "fault_jumps": law.cycle_jumps()}
+        f_const = law.f_const.copy()
+    else:
+        law = None
     system = kn.KernelSystem(
         minv=np.linalg.inv(mass),
         stiffness=model.stiffness,
@@ -253,13 +268,14 @@ def prepare_run(
         right_tables=model.mesh_back_tables,
         backlash=model.mesh_backlash,
         mesh_damping=model.mesh_damping,
-        f_const=np.zeros(n),
+        f_const=f_const,
         ipar=ipar,
         fpar=fpar,
         speed_table=speed_tab,
         torque_table=torque_tab,
         deflection_limit=np.full(model.n_mesh, np.inf),
         mesh_back_vectors=model.mesh_back_vectors,
+        **fault_arrays,
     )
     return RunSetup(
         system,
@@ -274,4 +290,5 @@ def prepare_run(
         tuple(float(x) for x in load),
         drive,
         torque_sign,
+        law,
     )

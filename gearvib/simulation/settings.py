@@ -23,7 +23,8 @@ Keys (all optional; SI units, speeds in min^-1):
 ``gyroscopic``     true: gyroscopic and centripetal terms of the rotating carrier
 ================== ===================================================================
 
-Every value is checked here, and an error names the key and the admissible range.
+Every value is checked here, and an error (:class:`gearvib.config.ConfigError`) names the key
+and the admissible range; command-line options override the keys of the same name.
 """
 
 from __future__ import annotations
@@ -32,6 +33,7 @@ import math
 from collections.abc import Mapping
 from typing import Any
 
+from gearvib.config import ConfigError
 from gearvib.simulation.conditions import (
     Conditions,
     DriveCoupling,
@@ -58,40 +60,80 @@ _ONLY = {
 }
 
 
-def _num(value: Any, key: str, *, low: float | None = None, strict: bool = False) -> float:
+MAX_TABLE = 100_000
+"""Longest motor characteristic table accepted."""
+MAX_SPEED_RPM = 1e9
+"""Largest speed magnitude accepted [min^-1] (a run that fast is then refused for its size)."""
+MAX_TORQUE = 1e12
+"""Largest torque magnitude accepted [N m] (also the coefficients of ``load_torque``)."""
+MIN_DURATION = 1e-6
+"""Shortest simulated time accepted [s]."""
+MAX_DURATION = 1e7
+"""Longest simulated time accepted [s] (a long run is then refused for its steps or memory)."""
+
+
+def _num(value: Any, key: str, *, low: float | None = None, strict: bool = False,
+         high: float | None = None) -> float:
     if isinstance(value, bool) or not isinstance(value, int | float):
-        raise ValueError(f"[simulation].{key} must be a number, got {value!r}")
-    v = float(value)
+        raise ConfigError(f"[simulation].{key} must be a number, got {_short(value)}")
+    try:
+        v = float(value)
+    except OverflowError:
+        raise ConfigError(f"[simulation].{key} = {_short(value)} is not admissible "
+                          "(admissible: a finite number)") from None
     if not math.isfinite(v):
-        raise ValueError(f"[simulation].{key} = {v!r} is not admissible (admissible: finite)")
+        raise ConfigError(f"[simulation].{key} = {v!r} is not admissible (admissible: finite)")
     if low is not None and (v < low or (strict and v == low)):
         bound = f"> {low:g}" if strict else f">= {low:g}"
-        raise ValueError(f"[simulation].{key} = {v!r} is not admissible (admissible: {bound})")
+        raise ConfigError(f"[simulation].{key} = {v!r} is not admissible (admissible: {bound})")
+    if high is not None and abs(v) > high:
+        raise ConfigError(f"[simulation].{key} = {v!r} is not admissible (admissible: "
+                          f"|{key.split('.')[-1]}| <= {high:g})")
+    return v
+
+
+def _short(value: Any) -> str:
+    """``repr`` of a value, shortened for a one-line message."""
+    text = repr(value)
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
+def _slip(value: Any) -> float:
+    v = _num(value, "motor.breakdown_slip", low=0.0, strict=True)
+    if v >= 1.0:
+        raise ConfigError(f"[simulation].motor.breakdown_slip = {v!r} is not admissible "
+                          "(admissible: 0 < s_k < 1)")
     return v
 
 
 def _motor(value: Any) -> dict:
     if not isinstance(value, Mapping):
-        raise ValueError("[simulation].motor must be a table: {synchronous_rpm, "
+        raise ConfigError("[simulation].motor must be a table: {synchronous_rpm, "
                          "breakdown_torque, breakdown_slip} or {speed_rpm, torque}")
     keys = set(value)
     if keys == _MOTOR_KLOSS:
         return {"synchronous_rpm": _num(value["synchronous_rpm"], "motor.synchronous_rpm",
-                                        low=0.0, strict=True),
+                                        low=0.0, strict=True, high=MAX_SPEED_RPM),
                 "breakdown_torque": _num(value["breakdown_torque"], "motor.breakdown_torque",
-                                         low=0.0, strict=True),
-                "breakdown_slip": _num(value["breakdown_slip"], "motor.breakdown_slip",
-                                       low=0.0, strict=True)}
+                                         low=0.0, strict=True, high=MAX_TORQUE),
+                "breakdown_slip": _slip(value["breakdown_slip"])}
     if keys == _MOTOR_TABLE:
         out = {}
         for k in ("speed_rpm", "torque"):
-            if not isinstance(value[k], list) or len(value[k]) < 2:
-                raise ValueError(f"[simulation].motor.{k} must be a list of >= 2 numbers")
-            out[k] = [_num(v, f"motor.{k}") for v in value[k]]
+            if not isinstance(value[k], list) or not 2 <= len(value[k]) <= MAX_TABLE:
+                raise ConfigError(f"[simulation].motor.{k} must be a list of 2..{MAX_TABLE} "
+                                  "numbers")
+            out[k] = [_num(v, f"motor.{k}", high=MAX_SPEED_RPM if k == "speed_rpm"
+                           else MAX_TORQUE) for v in value[k]]
+        if len(out["speed_rpm"]) != len(out["torque"]):
+            raise ConfigError(f"[simulation].motor: speed_rpm ({len(out['speed_rpm'])} values) "
+                              f"and torque ({len(out['torque'])}) must be as long")
+        if any(b <= a for a, b in zip(out["speed_rpm"], out["speed_rpm"][1:], strict=False)):
+            raise ConfigError("[simulation].motor.speed_rpm must be strictly increasing")
         return out
-    unknown = sorted(keys - _MOTOR_KLOSS - _MOTOR_TABLE)
+    unknown = sorted(str(k) for k in keys - _MOTOR_KLOSS - _MOTOR_TABLE)
     what = f"unknown key {unknown[0]!r} in" if unknown else "incomplete"
-    raise ValueError(f"{what} [simulation].motor (admissible: synchronous_rpm, "
+    raise ConfigError(f"{what} [simulation].motor (admissible: synchronous_rpm, "
                      "breakdown_torque, breakdown_slip for the Kloss curve, or speed_rpm and "
                      "torque for a table)")
 
@@ -117,60 +159,66 @@ def read_run_settings(sim: Mapping[str, Any] | None,
 
     Raises
     ------
-    ValueError
-        Naming the key and the admissible values.
+    ConfigError
+        (a ``ValueError``) Naming the key and the admissible values.
     """
+    if sim is not None and not isinstance(sim, Mapping):
+        raise ConfigError(f"[simulation] must be a table, got {type(sim).__name__}")
     table = dict(sim or {})
-    unknown = sorted(set(table) - SIMULATION_KEYS)
+    unknown = sorted(str(k) for k in set(table) - SIMULATION_KEYS)
     if unknown:
-        raise ValueError(f"unknown key {unknown[0]!r} in [simulation] (admissible: "
+        raise ConfigError(f"unknown key {unknown[0]!r} in [simulation] (admissible: "
                          f"{', '.join(sorted(SIMULATION_KEYS))})")
     for key, value in (overrides or {}).items():
         if value is not None:
             table[key] = value
     drive = table.get("drive", "speed")
-    if drive not in DRIVES:
-        raise ValueError(f"[simulation].drive = {drive!r} is not admissible (admissible: "
+    if not isinstance(drive, str) or drive not in DRIVES:
+        raise ConfigError(f"[simulation].drive = {_short(drive)} is not admissible (admissible: "
                          f"{', '.join(DRIVES)})")
     for key, drives in _ONLY.items():
         if key in table and drive not in drives:
-            raise ValueError(f"[simulation].{key} applies to drive = "
+            raise ConfigError(f"[simulation].{key} applies to drive = "
                              f"{' or '.join(repr(d) for d in drives)}, not {drive!r}")
     run: dict[str, Any] = {"drive": drive}
-    run["speed_start_rpm"] = _num(table.get("speed_start_rpm", 0.0), "speed_start_rpm")
-    run["speed_end_rpm"] = (_num(table["speed_end_rpm"], "speed_end_rpm")
+    run["speed_start_rpm"] = _num(table.get("speed_start_rpm", 0.0), "speed_start_rpm",
+                                  high=MAX_SPEED_RPM)
+    run["speed_end_rpm"] = (_num(table["speed_end_rpm"], "speed_end_rpm", high=MAX_SPEED_RPM)
                             if "speed_end_rpm" in table else
                             (None if drive == "motor" else 4000.0))
-    run["duration"] = _num(table.get("duration", 1.0), "duration", low=0.0, strict=True)
-    run["input_torque"] = (_num(table["input_torque"], "input_torque")
+    run["duration"] = _num(table.get("duration", 1.0), "duration", low=MIN_DURATION,
+                           high=MAX_DURATION)
+    run["input_torque"] = (_num(table["input_torque"], "input_torque", high=MAX_TORQUE)
                            if "input_torque" in table else None)
     load = table.get("load_torque")
-    if isinstance(load, list):
+    if isinstance(load, list | tuple):
         if drive == "speed" or len(load) != 3:
-            raise ValueError("[simulation].load_torque must be a number (speed drive) or "
+            raise ConfigError("[simulation].load_torque must be a number (speed drive) or "
                              "[T0, c1, c2] (torque and motor drive)")
-        load = [_num(v, "load_torque") for v in load]
+        load = [_num(v, "load_torque", high=MAX_TORQUE) for v in load]
     elif load is not None:
-        load = _num(load, "load_torque")
+        load = _num(load, "load_torque", high=MAX_TORQUE)
     run["load_torque"] = load
     if drive == "speed":
         if run["input_torque"] is not None and load is not None:
-            raise ValueError("[simulation]: give input_torque or load_torque, not both "
+            raise ConfigError("[simulation]: give input_torque or load_torque, not both "
                              "(speed drive)")
         if run["input_torque"] is None and load is None:
             run["input_torque"] = 0.0
     if drive == "torque" and run["input_torque"] is None:
-        raise ValueError("[simulation].input_torque is required for drive = 'torque' [N m]")
-    run["load_inertia"] = _num(table.get("load_inertia", 0.0), "load_inertia", low=0.0)
+        raise ConfigError("[simulation].input_torque is required for drive = 'torque' [N m]")
+    run["load_inertia"] = _num(table.get("load_inertia", 0.0), "load_inertia", low=0.0,
+                               high=1e9)
     if "drive_damping" in table and "drive_stiffness" not in table:
-        raise ValueError("[simulation].drive_damping needs drive_stiffness")
-    run["drive_stiffness"] = (_num(table["drive_stiffness"], "drive_stiffness", low=0.0,
+        raise ConfigError("[simulation].drive_damping needs drive_stiffness")
+    run["drive_stiffness"] = (_num(table["drive_stiffness"], "drive_stiffness", low=0.0, high=1e40,
                                    strict=True) if "drive_stiffness" in table else None)
-    run["drive_damping"] = (_num(table.get("drive_damping", 0.0), "drive_damping", low=0.0)
+    run["drive_damping"] = (_num(table.get("drive_damping", 0.0), "drive_damping", low=0.0,
+                                 high=1e12)
                             if "drive_stiffness" in table else None)
     if drive == "motor":
         if "motor" not in table:
-            raise ValueError("[simulation].motor is required for drive = 'motor'")
+            raise ConfigError("[simulation].motor is required for drive = 'motor'")
         run["motor"] = _motor(table["motor"])
         if run["speed_end_rpm"] is None:  # the expected highest speed
             motor = run["motor"]
@@ -180,13 +228,13 @@ def read_run_settings(sim: Mapping[str, Any] | None,
         run["motor"] = None
     if run["input_torque"] is None:  # no single input torque (load_torque given, or a motor)
         del run["input_torque"]
-    run["fs_out"] = (_num(table["fs_out"], "fs_out", low=0.0, strict=True)
+    run["fs_out"] = (_num(table["fs_out"], "fs_out", low=0.0, strict=True, high=1e12)
                      if table.get("fs_out") is not None else None)
     run["dt"] = (_num(table["dt"], "dt", low=0.0, strict=True)
                  if table.get("dt") is not None else None)
     gyro = table.get("gyroscopic", False)
     if not isinstance(gyro, bool):
-        raise ValueError(f"[simulation].gyroscopic must be true or false, got {gyro!r}")
+        raise ConfigError(f"[simulation].gyroscopic must be true or false, got {_short(gyro)}")
     run["gyroscopic"] = gyro
     return run
 
@@ -198,7 +246,21 @@ def conditions_from_settings(run: Mapping[str, Any]) -> Conditions:
     ``duration``; torque drive: :class:`TorqueDriven` with the constant ``input_torque``,
     starting at ``speed_start_rpm``, ``speed_end_rpm`` the expected highest speed; motor
     drive: :class:`MotorDriven` (Kloss curve or table).
+
+    Raises
+    ------
+    ConfigError
+        Settings the conditions refuse (named).
     """
+    try:
+        return _conditions(run)
+    except ConfigError:
+        raise
+    except (ValueError, TypeError) as exc:
+        raise ConfigError(f"[simulation]: {exc}") from None
+
+
+def _conditions(run: Mapping[str, Any]) -> Conditions:
     drive = run["drive"]
     load = run["load_torque"]
     if drive == "speed":

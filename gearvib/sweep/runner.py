@@ -145,7 +145,7 @@ def run_sweep(sweep: Sweep, out_dir: str | os.PathLike, *, workers: int | None =
     cases = sweep.cases()
     out = check_output_dir(out_dir)
     runs = out / "runs"
-    runs.mkdir(exist_ok=True)
+    runs.mkdir(parents=True, exist_ok=True)  # the folder is checked, not created
     _remove_stale_temporaries(runs)
     run_files = [run_file_name(c.sha256) for c in cases]
     tasks = [CaseTask(c, str((out / f).resolve()), sweep.summary)

@@ -34,7 +34,7 @@ RPM0, RPM1 = 300.0, 3300.0
 NAMES = ["fa", "fb"]
 FAMILIES = [("rotational", 0), ("planet", 1)]
 RULE = MeshPhasingRule(3, 33, 114)  # in-phase planets: mesh harmonics force rotational modes only
-BAND_GROWS = UnstableBand("", 1180.0, 1220.0, np.zeros(0), np.array([60.0]))
+BAND_GROWS = UnstableBand("2 fb/3", 1180.0, 1220.0, np.zeros(0), np.array([60.0]))
 BAND_FAST = UnstableBand("", 2495.0, 2505.0, np.zeros(0), np.array([60.0]))
 
 

@@ -17,13 +17,10 @@ import pytest
 from gearvib.assembly import assemble
 from gearvib.config import gearset_from_dict
 from gearvib.report import AnalysisSettings
-from gearvib.report.figures import (
-    analyse_case,
-    order_map_figure,
-    report_sections,
-    sonogram_figure,
-)
+from gearvib.report.case import analyse_case
+from gearvib.report.figures import order_map_figure, sonogram_figure
 from gearvib.report.html import render_html
+from gearvib.report.sections import report_sections
 from gearvib.simulate import SpeedRamp, simulate
 from gearvib.structure import Body, MeshSpec, wolfrom
 from tests.gearvib.two_stage_sets import other_stage, paper_stage, two_stage_config
@@ -160,7 +157,7 @@ def test_report_states_and_draws_the_stage2_mesh_frequency(run):
         np.testing.assert_allclose(np.asarray(freq) / np.asarray(rpm), f, rtol=1e-12)
     omap = order_map_figure(ca)
     assert omap is not None
-    labels = [t.get_text() for t in omap.axes[0].get_legend().get_texts()]
+    labels = [t.get_text() for t in omap.legends[0].get_texts()]
     assert labels == [f"stage 1: k × {60 * f1:.4g}", f"stage 2: k × {60 * f2:.4g}"]
     # the Floquet chart and the candidates name the mesh frequency they belong to
     assert ca.chart is not None and ca.chart.mesh_frequency_names == ("stage 1", "stage 2")
@@ -171,10 +168,14 @@ def test_report_states_and_draws_the_stage2_mesh_frequency(run):
     html = render_html(report_sections([ca]), title="two-stage")  # what build_report writes
     m = re.search(r"mesh frequency per input speed, stage 2</td><td>([0-9.]+) Hz", html)
     assert m and float(m.group(1)) == pytest.approx(f2, rel=1e-5)
-    m = re.search(r"at 1500 min⁻¹ f_mesh = (\d+) Hz \(stage 2\)", html)
-    assert m and int(m.group(1)) == round(1500 * f2) == 93
-    m = re.search(r"at 1500 min⁻¹ f_mesh = (\d+) Hz \(stage 1\)", html)
-    assert m and int(m.group(1)) == round(1500 * f1) == 640
+    # every mesh frequency at the top speed (6000 min^-1); the paper's speeds (1500 min^-1 ...)
+    # are not given for a set that is not the paper's
+    m = re.search(r"f_mesh,stage 2 = [0-9.]+ Hz per min⁻¹ × n_in \([0-9.]+ mesh cycles per "
+                  r"input revolution; (\d+) Hz at 6000 min⁻¹", html)
+    assert m and int(m.group(1)) == round(6000 * f2) == 371
+    m = re.search(r"f_mesh,stage 1 = [^;]+; (\d+) Hz at 6000 min⁻¹", html)
+    assert m and int(m.group(1)) == round(6000 * f1) == 2559
+    assert "at 1500 min⁻¹" not in html and not ca.paper_set
     assert "[stage 2]" in html  # candidate rows per mesh frequency
 
 

@@ -27,7 +27,7 @@ from gearvib.report import (
     load_study,
     run_study,
 )
-from gearvib.report.figures import analyse_case, summed_sun_stiffness
+from gearvib.report.case import analyse_case, summed_sun_stiffness
 from gearvib.report.wording import count
 
 REPO = Path(__file__).resolve().parents[2]
@@ -156,8 +156,8 @@ def test_report_states_mesh_frequency_at_1500_rpm(html_text):
 
 def test_report_lists_identified_regions(study_run, html_text):
     res = _section(html_text, "resonances")
-    assert "Identified resonance regions of paper-case1" in res
-    table = res.split("Identified resonance regions of paper-case1")[1].split("</table>")[0]
+    assert "Resonance regions of paper-case1" in res
+    table = res.split("Resonance regions of paper-case1")[1].split("</table>")[0]
     rows = re.findall(r"<tr><td>(\d+)–(\d+)</td>", table)
     assert rows, "no resonance region listed for paper-case1"
     for lo, hi in rows:
@@ -184,7 +184,7 @@ def test_comparison_reports_fewer_weaker_or_explains(study_run, html_text):
         assert "does not reproduce" in text
         assert "Regions that got stronger or appeared" in text
         assert "one speed range only" in text
-    assert count(cmp.n_regions[1], "sun-mesh resonance region") in text
+    assert count(cmp.n_regions[1], "resonance region") in text
 
 
 def test_rebuild_from_netcdf_is_byte_identical(study_run, tmp_path):
@@ -200,7 +200,8 @@ def test_report_without_stored_gearset_falls_back_to_dataset(study_run, tmp_path
     ca = analyse_case(ds, name="bare", settings=QUICK)
     assert ca.model is None and ca.chart is None
     assert ca.mesh_frequency_per_rpm == pytest.approx(0.4265306, rel=1e-4)
-    assert ca.stiffness is not None and ca.stiffness.source == "simulation"
+    assert ca.stiffness and {st.source for st in ca.stiffness} == {"simulation"}
+    assert [st.central for st in ca.stiffness] == ["sun", "ring"]
     assert any("gear-set description" in n for n in ca.notes)
     paths = build_report([ds], tmp_path / "bare")
     assert "comparison" not in paths.sections

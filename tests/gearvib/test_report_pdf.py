@@ -28,10 +28,11 @@ from pdfminer.pdfparser import PDFParser
 
 from gearvib.io import read_run, write_netcdf
 from gearvib.report import SECTION_IDS, AnalysisSettings, build_report
+from gearvib.report.case import analyse_case
 from gearvib.report.document import FigureImages
-from gearvib.report.figures import Block, Section, analyse_case, report_sections
 from gearvib.report.html import render_html
 from gearvib.report.pdf import PAGE, column_widths, write_pdf
+from gearvib.report.sections import Block, Section, report_sections
 from gearvib.report.wording import count
 
 DEMO_MAX_PAGES = 15  # README: the demo report has 13 pages (matplotlib pages before: 50)

@@ -294,3 +294,100 @@ def test_first_order_regions_per_mesh_frequency(two_paper_stages):
     assert ok.any()
     # speeds of stage-2 rows come from the stage-2 mesh frequency
     np.testing.assert_allclose(speed[ok], centre[ok] / F2_PER_RPM, rtol=1e-9)
+
+
+def _with(preset: str, edit) -> object:
+    import copy
+
+    from gearvib.config import gearset_from_dict, load_config
+
+    cfg, base = load_config(preset)
+    cfg = copy.deepcopy(cfg)
+    edit(cfg)
+    return assemble(gearset_from_dict(cfg, base=base))
+
+
+def _trapezoidal(cfg: dict) -> None:
+    for k in ("sun", "ring"):
+        cfg["meshes"][k]["stiffness"].update(model="trapezoidal", ramp=0.05)
+
+
+def test_trapezoidal_floquet_equals_the_adaptive_magnus_of_before():
+    """Issue #15: the trapezoidal stiffness (piecewise linear) goes through the midpoint
+    product with breakpoints at the kinks of every contact's table; its max|mu| equals the
+    adaptive Magnus integrator used before (K as a callable) to 1e-7 -- measured 1.4e-9 and
+    4.3e-9 -- at 1500 min^-1 (stable) and 2800 min^-1 (inside 2 (f3=f4)/3), with 160 instead of
+    8192 exponentials per period."""
+    from analysis.instability import PiecewiseSmooth
+
+    model = _with("paper-case1", _trapezoidal)
+    system = periodic_system(model)
+    f = system.reference_frequency_per_rpm
+    verdicts = set()
+    for rpm in (1500.0, 2800.0):
+        M, C, K, T = system.at(rpm * f)
+        assert isinstance(K, PiecewiseSmooth)
+        new = floquet(M, C, K, T)
+        old = floquet(M, C, lambda t, fm=rpm * f: system.stiffness_at(t, fm), T)
+        assert new.method == "midpoint" and old.method == "magnus"
+        assert new.max_modulus == pytest.approx(old.max_modulus, abs=1e-7)
+        assert new.growth_rate == pytest.approx(old.growth_rate, abs=1e-3)
+        assert new.n_steps < old.n_steps / 10
+        verdicts.add(new.stable)
+    assert verdicts == {True, False}
+
+
+def test_region_label_is_the_candidate_whose_modes_grow():
+    """The 839-844 min^-1 region of paper-case1 was labelled "2 f2/4" (nearest candidate by
+    centre, 1478 min^-1 away) and, with more orders, "2 f2/7" (844.8 min^-1). The growing Floquet
+    solution there is the planet pair f3 = f4 (100 %), and the region is 2 (f3=f4)/10: with the
+    planet inertia 4 % larger f3 drops 35 Hz and the region moves by -7 Hz of mesh frequency,
+    as 2 f3/10 does (2 f2/7 would move by -2.2 Hz)."""
+    speeds = np.linspace(800.0, 880.0, 81)
+    charts = {}
+    for scale in (1.0, 1.04):
+        def heavier(cfg, scale=scale):
+            cfg["bodies"]["planet"]["inertia"] *= scale
+
+        model = _with("paper-case1", heavier)
+        charts[scale] = (model, stability_over_speed(model, speeds))
+    (m0, c0), (m1, c1) = charts[1.0], charts[1.04]
+    (r0,), (r1,) = c0.region_table, c1.region_table
+    assert r0["candidate"] == r1["candidate"] == "2 (f3=f4)/10"
+    assert "f3" in r0["evidence"] and "f2" not in r0["evidence"].split("growing solution")[1]
+    from gearvib.modal import modal_analysis
+
+    f0, f1 = modal_analysis(m0).frequencies_hz, modal_analysis(m1).frequencies_hz
+    shift = 0.5 * (r1["lower"] + r1["upper"]) - 0.5 * (r0["lower"] + r0["upper"])
+    assert shift == pytest.approx(2 * (f1[2] - f0[2]) / 10, rel=0.05)
+    assert abs(shift - 2 * (f1[1] - f0[1]) / 7) > 3.0
+    # the label is a row of the chart's candidate table, at the stated centre
+    i = r0["candidate_index"]
+    assert c0.candidates.full_label(i) == r0["candidate"]
+    assert r0["lower"] * 0.99 <= c0.candidates.f_mesh_hz[i] <= r0["upper"] * 1.01
+
+
+def test_unattributed_when_no_candidate_holds(case1):
+    """Without the candidate that holds, a region is not given the nearest one."""
+    speeds = np.linspace(2700.0, 2900.0, 41)
+    full = gear_set_candidates(case1, n_max=4, speed_range=(2000.0, 4000.0))
+    keep = np.array([lab != "2 (f3=f4)/3" for lab in full.label])
+    chart = stability_over_speed(case1, speeds, candidates=full.select(keep))
+    (reg,) = chart.region_table
+    assert reg["candidate"] == "" and reg["candidate_index"] == -1
+    assert "no allowed candidate" in reg["evidence"]
+
+
+def test_chart_in_a_process_pool_is_identical(monkeypatch):
+    """Grid points and boundary refinements in two worker processes give the same chart."""
+    import sys
+
+    chart_module = sys.modules["analysis.instability.chart"]
+    monkeypatch.setattr(chart_module, "_PARALLEL_MIN_S", 0.0)  # use the pool even if fast
+    model = _with("paper-case1", _trapezoidal)
+    speeds = np.linspace(2000.0, 2900.0, 24)
+    one = stability_over_speed(model, speeds, workers=1)
+    two = stability_over_speed(model, speeds, workers=2)
+    np.testing.assert_array_equal(one.max_modulus, two.max_modulus)
+    assert one.region_table == two.region_table
+    assert len(one.region_table) == 2

@@ -120,7 +120,7 @@ def test_zip_random_and_list_index_paths():
     ({"parameter": [{"path": "geometry.planet_angles_deg.3", "values": [1.0]}]},
      "index 3 out of range"),
     ({"parameter": [{"path": "simulation.duration", "values": [-1.0]}]},
-     "[simulation].duration = -1.0 is not admissible (admissible: > 0)"),
+     "[simulation].duration = -1.0 is not admissible (admissible: >= 1e-06)"),
     ({"simulation": {"speed": 3}}, "unknown key 'speed' in [simulation]"),
     ({"parameter": [{"path": "meshes.sun.damping_ratio", "values": list(range(1, 200))},
                     {"path": "meshes.ring.damping_ratio", "values": list(range(1, 200))}]},

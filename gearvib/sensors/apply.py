@@ -1,0 +1,72 @@
+"""Sensors against an assembled model: defaults filled in and every name checked.
+
+:func:`add_sensors` is :meth:`gearvib.model.AssembledModel.with_sensors`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import replace
+
+from gearvib.model import AssembledModel
+from gearvib.sensors.description import (
+    HousingSensor,
+    SensorError,
+    Tacho,
+    check_unique,
+    sensors_from_list,
+)
+
+__all__ = ["add_sensors", "housing_meshes"]
+
+
+def housing_meshes(model: AssembledModel, member: str) -> list[int]:
+    """Meshes of the housing member with planets (the forces a housing sensor sees)."""
+    planets = {p["name"] for p in model.meta.get("planets", [])}
+    return [k for k, m in enumerate(model.meta.get("meshes", []))
+            if m["gear1"] == member and m["gear2"] in planets]
+
+
+def _default_housing(model: AssembledModel, name: str) -> str:
+    fixed = [f for f in model.fixed_members if housing_meshes(model, f)]
+    if len(fixed) != 1:
+        central = sorted({m["gear1"] for m in model.meta.get("meshes", [])})
+        raise SensorError(f"sensor {name!r}: the gear set has {len(fixed)} fixed central gears "
+                          f"with meshes ({', '.join(fixed) or 'none'}); give the housing "
+                          f"member (one of {', '.join(central)})")
+    return fixed[0]
+
+
+def add_sensors(model: AssembledModel, sensors: Sequence) -> AssembledModel:
+    """:meth:`AssembledModel.with_sensors` (see there)."""
+    new = sensors_from_list(list(sensors))
+    checked = []
+    bodies = {b["name"]: b["role"] for b in model.meta.get("bodies", [])}
+    for s in new:
+        if isinstance(s, Tacho):
+            member = s.member or model.input_member
+            if model.rotation_dofs.get(member, -1) < 0:
+                raise SensorError(f"tacho {s.name!r}: member {member!r} has no rotation (it is "
+                                  "not a body of the set, or it is held at rest)")
+            checked.append(replace(s, member=member))
+            continue
+        assert isinstance(s, HousingSensor)
+        member = s.member or _default_housing(model, s.name)
+        if member not in bodies:
+            raise SensorError(f"sensor {s.name!r}: member {member!r} is not a body of the set")
+        if not housing_meshes(model, member):
+            raise SensorError(f"sensor {s.name!r}: {member!r} meshes with no planet (a housing "
+                              "sensor sees the mesh forces of a central gear)")
+        for b, _ in s.bearings:
+            names = (f"{b}.x", f"{b}.y")
+            if bodies.get(b) not in ("central", "carrier") or any(
+                    n not in model.bearing_names for n in names):
+                elastic = sorted({n.rsplit(".", 1)[0] for n in model.bearing_names
+                                  if n.endswith((".x", ".y"))})
+                raise SensorError(f"sensor {s.name!r}: bearings: {b!r} has no elastic radial "
+                                  "bearing (members with one: "
+                                  f"{', '.join(elastic) or 'none'})")
+        checked.append(replace(s, member=member))
+    every = (*model.sensors, *checked)
+    check_unique(every)
+    return replace(model, sensors=every)

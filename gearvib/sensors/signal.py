@@ -1,0 +1,162 @@
+"""Virtual sensor signals of a run: the housing accelerometers and the tacho.
+
+Transmission path (McFadden & Smith 1985; Inalpolat & Kahraman 2009). A sensor at angle
+``theta_s`` on the housing member sees every planet's mesh force with that member weighted by
+the angle between the planet and the sensor::
+
+    p(t) = sum_n w(wrap(theta_c + psi_n - theta_h - theta_s)) (F_left,n + F_right,n)(t)
+           + sum_b g_b (F_x,b cos(theta_s - theta_c) + F_y,b sin(theta_s - theta_c))
+
+(``theta_c`` the carrier angle, ``psi_n`` the planet's angle on the carrier, ``theta_h`` the
+housing member's own rotation, ``wrap`` to (-pi, pi]; the bearing terms project the radial
+bearing force of central member ``b``, whose components are in the carrier frame, on the
+sensor's radial direction). Windows, with ``W`` = ``width_deg``:
+
+* ``hann``: ``w = (1 + cos(pi d / W)) / 2`` for ``|d| <= W``, else 0;
+* ``rectangular``: ``w = 1`` for ``|d| <= W``, else 0;
+* ``exponential``: ``w = exp(-|d| / W)``.
+
+The acceleration is ``a = h * p`` with the housing accelerance ``H(f)`` (modes or measured),
+applied by FFT on the output grid to the record zero-padded to twice its length (a linear
+convolution; the part of ``p`` that is constant from the start, ``p(0)``, is taken as applied
+for ever: ``a = H(0) p(0) + IFFT(H FFT(p - p(0)))``).
+
+Computed after the integration from the stored forces at the output rate: they are low-pass
+filtered (flat to 0.3 ``fs_out``, >= 80 dB from 0.5 ``fs_out``) and the window moves them by
+carrier orders only, whose weights fall fast (Hann: as ``q^-3``), so the product aliases
+nothing into the analysed band; the FFT applies the FRF exactly at every output frequency. In
+the kernel it would cost work at every internal step and could not use a measured FRF.
+
+Tacho: the pulse train of the simulated shaft angle ``theta`` (the member's actual rotation)
+with ``P`` pulses per revolution: high (``level_v``) while ``frac(P theta / 2 pi) < duty``;
+every edge is a linear ramp over two samples centred on its exact time, so a trigger that
+interpolates the level crossing (``analysis.speed.from_tacho``) recovers it to rounding.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import numpy as np
+import scipy.fft
+
+from gearvib.model import AssembledModel
+from gearvib.sensors.apply import housing_meshes
+from gearvib.sensors.description import HousingSensor, Tacho
+
+__all__ = ["add_sensor_signals", "housing_response", "path_force", "tacho_signal",
+           "window_weight"]
+
+
+def window_weight(window: str, width_deg: float, delta: np.ndarray) -> np.ndarray:
+    """Transmission-path weight at angles ``delta`` [rad] between planet and sensor."""
+    d = np.abs(np.mod(np.asarray(delta, dtype=float) + np.pi, 2.0 * np.pi) - np.pi)  # 0..pi
+    width = math.radians(width_deg)
+    if window == "hann":
+        return np.where(d <= width, 0.5 * (1.0 + np.cos(np.pi * np.minimum(d / width, 1.0))),
+                        0.0)
+    if window == "rectangular":
+        return (d <= width).astype(float)
+    if window == "exponential":
+        return np.exp(-d / width)
+    raise ValueError(f"window = {window!r} is not admissible (admissible: hann, exponential, "
+                     "rectangular)")
+
+
+def _rotation(result, member: str) -> np.ndarray:
+    if member in result.members:
+        return result.rotation[result.members.index(member)]
+    return np.zeros(result.time.size)  # held at rest
+
+
+def path_force(result, model: AssembledModel, sensor: HousingSensor) -> np.ndarray:
+    """The windowed force sum ``p(t)`` a sensor sees [N] (module docstring)."""
+    planets = {p["name"]: p for p in model.meta.get("planets", [])}
+    meshes = model.meta["meshes"]
+    theta_s = math.radians(sensor.angle_deg)
+    theta_h = _rotation(result, sensor.member)
+    p = np.zeros(result.time.size)
+    for k in housing_meshes(model, sensor.member):
+        planet = planets[meshes[k]["gear2"]]
+        theta_c = _rotation(result, planet["carrier"])
+        delta = theta_c + math.radians(planet["angle_deg"]) - theta_h - theta_s
+        force = result.normal_force[k, 0] + result.normal_force[k, 1]
+        p += window_weight(sensor.window, sensor.width_deg, delta) * force
+    for b, gain in sensor.bearings:
+        fx = result.bearing_force[result.bearing_names.index(f"{b}.x")]
+        fy = result.bearing_force[result.bearing_names.index(f"{b}.y")]
+        carriers = {pl["carrier"] for pl in planets.values()}
+        theta_c = _rotation(result, sorted(carriers)[0]) if carriers else 0.0
+        rel = theta_s - theta_c
+        p += gain * (fx * np.cos(rel) + fy * np.sin(rel))
+    return p
+
+
+def housing_response(p: np.ndarray, fs: float, sensor: HousingSensor) -> np.ndarray:
+    """Acceleration [m s-2] of the housing response to the path force ``p`` [N] sampled at
+    ``fs`` (module docstring)."""
+    n = p.size
+    if n == 0:
+        return p.copy()
+    p0 = float(p[0])
+    nfft = scipy.fft.next_fast_len(2 * n, real=True)
+    spec = scipy.fft.rfft(p - p0, nfft)
+    f = scipy.fft.rfftfreq(nfft, 1.0 / fs)
+    h = sensor.accelerance(f)
+    a = scipy.fft.irfft(h * spec, nfft)[:n]
+    return a + float(np.real(h[0])) * p0
+
+
+def tacho_signal(angle: np.ndarray, tacho: Tacho) -> np.ndarray:
+    """Pulse train [V] of a shaft angle [rad] sampled on a uniform grid (module docstring).
+
+    The state is high while ``frac(P theta / 2 pi) < duty``. Each edge is placed at its exact
+    time (the angle interpolated linearly between the samples) and drawn as a linear ramp of
+    two samples centred there, so a trigger that interpolates its level crossing between two
+    samples finds the edge exactly (as a measured, anti-alias filtered edge).
+    """
+    x = np.asarray(angle, dtype=float) * tacho.pulses_per_rev / (2.0 * math.pi)
+    duty = tacho.duty
+    state = ((x - np.floor(x)) < duty).astype(float)
+    out = state.copy()
+    if x.size >= 2:
+        k = np.flatnonzero(state[1:] != state[:-1])
+        a, b = x[k], x[k + 1]
+        lo, hi = np.minimum(a, b), np.maximum(a, b)
+        rising = np.floor(hi) - np.floor(lo)  # integers in (lo, hi]
+        falling = np.floor(hi - duty) - np.floor(lo - duty)
+        single = (rising + falling) == 1  # one edge in the interval: place it exactly
+        level = np.where(rising == 1, np.floor(hi), np.floor(hi - duty) + duty)
+        tau = (level - a) / np.where(b != a, b - a, 1.0)  # edge time, fraction of a sample
+        step = state[k + 1] - state[k]
+        k, tau, step = k[single], tau[single], step[single]
+        out[k] += step * (0.5 - 0.5 * tau)
+        out[k + 1] += step * (-0.5 * tau)
+    return tacho.level_v * np.clip(out, 0.0, 1.0)
+
+
+def add_sensor_signals(result, model: AssembledModel):
+    """The run result with its sensors' signals (``model.sensors``) added.
+
+    Every housing sensor gives a row of ``sensor_acceleration``; a tacho (or, when the model
+    has housing sensors but no tacho, a default tacho with one pulse per revolution of the
+    input member) gives ``tacho``.
+    """
+    fs = float(result.step.fs_out)
+    acc = [s for s in model.sensors if isinstance(s, HousingSensor)]
+    tachos = [s for s in model.sensors if isinstance(s, Tacho)]
+    if acc and not tachos:
+        tachos = [Tacho(member=model.input_member)]
+    kw: dict = {}
+    if acc:
+        rows = [housing_response(path_force(result, model, s), fs, s) for s in acc]
+        kw["sensor_names"] = tuple(s.name for s in acc)
+        kw["sensor_acceleration"] = np.ascontiguousarray(np.array(rows))
+        kw["sensor_info"] = tuple(s.to_dict() for s in acc)
+    if tachos:
+        t = tachos[0]
+        member = t.member or model.input_member
+        kw["tacho"] = tacho_signal(_rotation(result, member), t)
+        kw["tacho_info"] = {**t.to_dict(), "member": member}
+    return replace(result, **kw)

@@ -1,0 +1,200 @@
+"""Property-based fuzz suite over command-line arguments (hypothesis).
+
+Each example builds an argument list for ``gearvib`` -- a subcommand (or a wrong one), its
+positional arguments (presets, missing or broken files, a study recipe, run files) and a
+random subset of its options with random values (``inf``, ``nan``, ``1e400``, ``-1``, ``""``,
+``0x10``, ``4000:0``, text, floats) and outputs (an existing directory, ``/proc/x.nc``, a
+missing folder, an existing file with and without ``--overwrite``) -- and runs
+:func:`gearvib.cli.main` in a fresh folder. Properties:
+
+* the exit code is 0, 1 (a failed computation) or 2 (bad input), and ``main`` raises nothing
+  else;
+* an error is one line on stderr starting with ``gearvib: error:`` (exit 2) or
+  ``gearvib: failed:`` (exit 1); no traceback is ever printed;
+* no temporary file is left in the folder.
+
+``simulate`` runs for real, with ``--max-steps 20000`` appended so that accepted runs stay
+short (longer ones are refused by the run-size check). ``report`` and ``demo`` run their real
+argument and output checks, and a stand-in for the simulations and the rendering (the checks a
+study makes before its first simulation: every case's description, run settings and map size;
+for run files: reading them) -- the full commands are tested in ``test_cli.py``.
+
+``GEARVIB_FUZZ_EXAMPLES`` sets the number of examples (default 500 here, fixed seed).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import os
+import shutil
+import tempfile
+from pathlib import Path
+from types import SimpleNamespace
+
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+import gearvib.report as report_pkg
+from gearvib.cli import main
+from gearvib.config import gearset_from_dict
+from gearvib.io import read_run
+from gearvib.report.runner import check_output_dir
+from gearvib.report.study import check_report_size, resolve_run
+from tests.gearvib import fuzz_support as fz
+
+REPO = Path(__file__).resolve().parents[2]
+VALUES = ["0", "-1", "1", "0.003", "0.001", "1e-3", "inf", "nan", "-inf", "1e400", "1e308",
+          "", "abc", "0x10", "1_000", " 5", "0:4000", "4000:0", "0:1e9", "1:2:3", "1400:1600",
+          "25000", "1000", "1e-12", "-0", "20000:0", "1e9"]
+value = st.one_of(st.sampled_from(VALUES), st.floats(allow_nan=True).map(repr),
+                  st.text(max_size=5))
+config = st.sampled_from(["paper-case1", "paper-case2", "wolfrom-example", "two-stage-example",
+                          "paper-case9", "missing.toml", "broken.toml", "mine.toml", "adir",
+                          ""])
+output_file = st.sampled_from(["x.nc", "adir", "/proc/x.nc", "no/such/x.nc", "", "existing.nc",
+                               "adir/y.nc", "broken.toml"])
+output_dir = st.sampled_from(["out", "adir", "existing.nc", "/proc/out", "no/such/out", "filled"])
+
+
+def options(names: list[str]) -> st.SearchStrategy[list[str]]:
+    flags = {"-q", "--quiet", "--json", "--overwrite", "-f", "--help"}
+
+    def one(name: str) -> st.SearchStrategy[list[str]]:
+        return st.just([name]) if name in flags else value.map(lambda v: [name, v])
+
+    return st.lists(st.sampled_from(names).flatmap(one), max_size=4).map(
+        lambda parts: [x for p in parts for x in p])
+
+
+simulate_args = st.tuples(config, output_file, options(
+    ["--speed", "--duration", "--fs", "--dt", "--torque", "-q", "--overwrite", "--colour",
+     "--max-steps"])).map(lambda t: ["simulate", t[0], "-o", t[1], *t[2], "--max-steps",
+                                     "20000"])
+modes_args = st.tuples(config, options(["--json", "--carrier-speed", "--colour"])).map(
+    lambda t: ["modes", t[0], *t[1]])
+catalogue_args = st.tuples(config, options(["--speed", "--reference", "--mesh-harmonics",
+                                            "--harmonics", "--sidebands", "--json"]),
+                           st.sampled_from([[], ["--speed", "1500"]])).map(
+    lambda t: ["catalogue", t[0], *t[2], *t[1]])
+preset_args = st.one_of(st.sampled_from([[], ["paper-case1"], ["nope"], ["a", "b"]]),
+                        st.lists(st.text(max_size=6), max_size=2)).map(
+    lambda t: ["preset", *t])
+report_inputs = st.sampled_from([["study.toml"], ["bad-study.toml"], ["existing.nc"],
+                                 ["existing.nc", "existing.nc"], ["broken.nc"], ["missing.nc"],
+                                 ["study.toml", "existing.nc"], ["mine.toml"], ["adir"]])
+report_args = st.tuples(report_inputs, output_dir, options(
+    ["--duration", "-q", "--overwrite", "--colour"])).map(
+    lambda t: ["report", *t[0], "-o", t[1], *t[2]])
+demo_args = st.tuples(output_dir, options(["--duration", "-q", "--overwrite", "--colour"])).map(
+    lambda t: ["demo", "-o", t[0], *t[1]])
+other_args = st.one_of(st.just([]), st.lists(st.sampled_from(
+    ["bogus", "--version", "--help", "-x", "simulate", "modes", "catalogue"]), max_size=2))
+argv = st.one_of(simulate_args, simulate_args, modes_args, catalogue_args, preset_args,
+                 report_args, demo_args, other_args)
+
+
+def _fake_run_study(study, out_dir, *, progress=True, duration=None):
+    """The checks of :func:`run_study` before its first simulation; no simulation."""
+    if duration is not None:
+        study = study.with_duration(duration)
+    out = check_output_dir(out_dir)
+    for case in study.cases:
+        cfg, base = case.load()
+        gearset_from_dict(cfg, base=base)
+        run = resolve_run(study.run, cfg)
+        check_report_size(int(run["duration"] * run["fs_out"]) + 1, run["fs_out"],
+                          study.analysis, case.name)
+    paths = SimpleNamespace(html=out / "report.html", pdf=out / "report.pdf")
+    return SimpleNamespace(report=paths, runs={})
+
+
+def _fake_build_report(inputs, out_dir, **kwargs):
+    """Reading the runs and checking the folder, as :func:`build_report` does first."""
+    for p in inputs:
+        read_run(p)
+    out = check_output_dir(out_dir)
+    return SimpleNamespace(html=out / "report.html", pdf=out / "report.pdf")
+
+
+@pytest.fixture(scope="module")
+def template(tmp_path_factory) -> Path:
+    """Files every example finds in its folder."""
+    d = tmp_path_factory.mktemp("cli-fuzz-template")
+    assert main(["simulate", "paper-case1", "-o", str(d / "existing.nc"), "--speed",
+                 "1400:1600", "--duration", "0.01", "-q"]) == 0
+    (d / "adir").mkdir()
+    (d / "filled").mkdir()
+    (d / "filled" / "report.html").write_text("an earlier report")
+    (d / "broken.nc").write_bytes(b"CDF\x01 truncated")
+    (d / "broken.toml").write_text("this is [not toml")
+    text = (REPO / "gearvib" / "presets" / "paper-case1.toml").read_text()
+    (d / "mine.toml").write_text(text.replace("duration = 1.0", "duration = 0.002"))
+    (d / "study.toml").write_text('[study]\ntitle = "t"\ncases = [{name = "a", config = '
+                                  '"paper-case1"}]\n[run]\nduration = 0.05\n')
+    (d / "bad-study.toml").write_text('[study]\ncases = [{name = "a/b", config = 3}]\n')
+    return d
+
+
+@pytest.fixture(scope="module", autouse=True)
+def _stand_ins():
+    old = report_pkg.run_study, report_pkg.build_report
+    report_pkg.run_study, report_pkg.build_report = _fake_run_study, _fake_build_report
+    yield
+    report_pkg.run_study, report_pkg.build_report = old
+    fz.write_report()
+
+
+def run_cli(args: list[str], folder: Path) -> tuple[int, str, str]:
+    out, err = io.StringIO(), io.StringIO()
+    cwd = os.getcwd()
+    os.chdir(folder)
+    try:
+        with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err), \
+                fz.time_limit(60.0):
+            try:
+                code = main(args)
+            except SystemExit as exc:  # argparse: --help, --version, one-line usage errors
+                code = exc.code if isinstance(exc.code, int) else 2
+    finally:
+        os.chdir(cwd)
+    return code, out.getvalue(), err.getvalue()
+
+
+class CliOutcome(Exception):
+    """An outcome that breaks the command line's promises."""
+
+
+@settings(max_examples=fz.examples(500), deadline=None, database=None,
+          derandomize=fz.derandomize(),
+          suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
+@given(args=argv)
+def test_command_line_gives_one_line_errors_and_clean_folders(template, args):
+    folder = Path(tempfile.mkdtemp(prefix="gearvib-cli-fuzz-"))
+    try:
+        shutil.copytree(template, folder, dirs_exist_ok=True)
+        err: BaseException | None = None
+        try:
+            code, _out, stderr = run_cli(args, folder)
+        except Exception as exc:  # anything main lets escape breaks the promise
+            err = exc
+        else:
+            lines = stderr.strip().splitlines()
+            temps = [str(p) for p in folder.rglob("*.tmp")]
+            if "Traceback" in stderr or code not in (0, 1, 2) or temps:
+                err = CliOutcome(f"exit {code}, stderr {stderr!r}, temporary files {temps}")
+            elif code in (1, 2):
+                head = "gearvib: failed:" if code == 1 else "gearvib: error:"
+                if not lines or not lines[-1].startswith(head) or not all(
+                        ln.startswith("gearvib: ") for ln in lines) or sum(
+                        ln.startswith(("gearvib: error:", "gearvib: failed:"))
+                        for ln in lines) != 1:
+                    err = CliOutcome(f"exit {code}: stderr is not one error line: {stderr!r}")
+                elif code == 1:
+                    err = fz.SimulationError(lines[-1])
+                else:
+                    err = fz.ConfigError(lines[-1])
+        fz.check("command line", err, args)
+    finally:
+        shutil.rmtree(folder, ignore_errors=True)

@@ -1,0 +1,118 @@
+"""Shared machinery of the fuzz suites over descriptions, run settings and the command line.
+
+* ``GEARVIB_FUZZ_EXAMPLES`` (the switch the reader fuzz suite uses too): examples per test.
+  Unset, each test runs its small default with a fixed seed (CI); set, e.g. to 10000, every
+  test runs that many fresh random examples (the long campaign).
+* ``GEARVIB_FUZZ_REPORT=<file.json>``: the counts per test (tries, accepted, clear errors,
+  failed computations, other) are merged into that file; they are also printed.
+* :func:`classify` sorts an outcome: ``accepted``; ``clear`` -- a documented input error
+  (:class:`~gearvib.config.ConfigError`, including :class:`~gearvib.memory.RunSizeError`, or a
+  ``ValueError`` raised by gearvib's own checks, i.e. in a gearvib source file, with a
+  one-line message); ``failed`` -- :class:`~gearvib.simulate.SimulationError` (a real
+  numerical blow-up or no static equilibrium, exit code 1); ``other`` -- anything else, which
+  fails the test.
+* :func:`time_limit` turns a hang into an error (SIGALRM): a hang is "other" too.
+"""
+
+from __future__ import annotations
+
+import collections
+import contextlib
+import json
+import os
+import signal
+import sys
+import traceback
+from collections.abc import Iterator
+from pathlib import Path
+
+import gearvib
+from gearvib.config import ConfigError
+from gearvib.simulation.errors import SimulationError
+
+ENV = os.environ.get("GEARVIB_FUZZ_EXAMPLES")
+REPORT = os.environ.get("GEARVIB_FUZZ_REPORT")
+COUNTS: dict[str, collections.Counter[str]] = collections.defaultdict(collections.Counter)
+GEARVIB_DIR = str(Path(gearvib.__file__).resolve().parent)
+
+
+def examples(default: int) -> int:
+    """Examples of one test: ``GEARVIB_FUZZ_EXAMPLES`` if set, else ``default``."""
+    return int(ENV) if ENV else default
+
+
+def derandomize() -> bool:
+    """Fixed examples in CI (reproducible), fresh random ones in a campaign."""
+    return not ENV
+
+
+class Hang(Exception):
+    """An example ran longer than its time limit."""
+
+
+@contextlib.contextmanager
+def time_limit(seconds: float) -> Iterator[None]:
+    """Raise :class:`Hang` in the main thread after ``seconds`` (POSIX; no-op elsewhere)."""
+    if not hasattr(signal, "setitimer"):
+        yield
+        return
+
+    def on_alarm(signum: int, frame: object) -> None:
+        raise Hang(f"no answer within {seconds} s")
+
+    old = signal.signal(signal.SIGALRM, on_alarm)
+    signal.setitimer(signal.ITIMER_REAL, seconds)
+    try:
+        yield
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, old)
+
+
+def _raised_by_gearvib(exc: BaseException) -> bool:
+    tb = traceback.extract_tb(exc.__traceback__)
+    return bool(tb) and str(Path(tb[-1].filename).resolve()).startswith(GEARVIB_DIR)
+
+
+def classify(exc: BaseException | None) -> str:
+    """``accepted``, ``clear``, ``failed`` or ``other`` (see the module docstring)."""
+    if exc is None:
+        return "accepted"
+    text = str(exc).strip()
+    one_line = bool(text) and "\n" not in text and "Traceback" not in text
+    if isinstance(exc, SimulationError) and one_line:
+        return "failed"
+    if isinstance(exc, ConfigError) and one_line:
+        return "clear"
+    if type(exc) is ValueError and one_line and _raised_by_gearvib(exc):
+        return "clear"
+    return "other"
+
+
+def record(test: str, exc: BaseException | None) -> str:
+    """Count an outcome of ``test``; returns its class."""
+    kind = classify(exc)
+    COUNTS[test]["tries"] += 1
+    COUNTS[test][kind] += 1
+    return kind
+
+
+def write_report() -> None:
+    """Print the counts and merge them into ``GEARVIB_FUZZ_REPORT``."""
+    if not COUNTS:
+        return
+    summary = {k: dict(v) for k, v in COUNTS.items()}
+    print(f"\ngearvib fuzz counts: {summary}", file=sys.stderr)
+    if REPORT:
+        p = Path(REPORT)
+        old = json.loads(p.read_text()) if p.exists() else {}
+        old.update(summary)
+        p.write_text(json.dumps(old, indent=2, sort_keys=True))
+
+
+def check(test: str, exc: BaseException | None, context: object) -> None:
+    """Record an outcome; an ``other`` outcome fails with the context and the traceback."""
+    if record(test, exc) == "other":
+        assert exc is not None
+        detail = "".join(traceback.format_exception(exc))
+        raise AssertionError(f"undocumented error for {context!r}:\n{detail}")
