@@ -55,6 +55,7 @@ import csv
 import json
 import math
 import sys
+import time
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -193,7 +194,8 @@ def _analysis(ds: xr.Dataset):
 def planet_spots(ca) -> tuple[int, float]:
     """Detected rises within 3 % of the planet-mode frequency: count and strongest [dB]."""
     kinds = list(ca.modal.kinds) if ca.modal is not None else []
-    fp = [f for f, k in zip(ca.modal.frequencies_hz, kinds) if k == "planet"] if kinds else []
+    fp = [f for f, k in zip(ca.modal.frequencies_hz, kinds, strict=True)
+          if k == "planet"] if kinds else []
     if not fp:
         return 0, math.nan
     f0 = float(fp[0])
@@ -241,6 +243,95 @@ def plausible(row: dict) -> bool:
 def reproduces_case_finding(pair: dict) -> bool:
     """Case 2 quieter (dL < 0), fewer or weaker regions, planet modes still excited."""
     return bool(pair["dL_db"] < 0 and pair["fewer_or_weaker"] and pair["planet_spots_2"] > 0)
+
+
+# -------------------------------------------------------------------------------- theory
+
+def _trapezoid(ramp_sun: float, ramp_ring: float) -> dict:
+    return {"sun": {"model": "trapezoidal", "k_min": 2.6667e7, "k_max": 4.3333e7, "ramp": ramp_sun},
+            "ring": {"model": "trapezoidal", "k_min": 3.0e7, "k_max": 5.0e7, "ramp": ramp_ring}}
+
+
+THEORY_SETS = (  # (label, preset, changes of the description as {key path: value})
+    ("paper-case1 (preset)", "paper-case1", {}),
+    ("rectangular x_s = +0.3", "paper-case1", {"geometry.profile_shift_sun": 0.3}),
+    ("ramps 0.2/0.1 x_s = 0", "paper-case1",
+     {"meshes.sun.stiffness": _trapezoid(0.2, 0.1)["sun"],
+      "meshes.ring.stiffness": _trapezoid(0.2, 0.1)["ring"]}),
+    ("z_p = 41", "paper-case1", {"geometry.z_planet": 41, "bodies.planet.inertia": 1.61e-3}),
+    ("paper-case1-study", "paper-case1-study", {}),
+    ("paper-case2 (preset)", "paper-case2", {}),
+    ("paper-case2-study", "paper-case2-study", {}),
+)
+
+
+def _set_path(cfg: dict, path: str, value) -> None:
+    keys = path.split(".")
+    node = cfg
+    for k in keys[:-1]:
+        node = node[k]
+    node[keys[-1]] = value
+
+
+def mesh_forcing(preset: str, changes: dict | None = None, torque: float = 60.0,
+                 mesh: int = 0, harmonics: int = 4, low_hz: float = 500.0) -> list[dict]:
+    """Quasi-static forcing of every gear mode by every harmonic of the mesh stiffness.
+
+    The static deflection ``x0`` under the input torque (mean stiffness ``K``, the model's
+    balanced nominal load) meets the stiffness variation ``K(t) = K + sum_l (K_l e^{i l W t} +
+    c.c.)`` (:meth:`gearvib.stability.PeriodicGearSystem.harmonics`): the force ``-K(t) x0``
+    drives mode ``i`` (mass-normalised ``phi_i``, ``w_i``) at ``l`` times the mesh frequency,
+    i.e. at the input speed where ``l f_mesh = f_i``. Returned per mode and harmonic: the
+    quasi-static amplitude of that modal response in the force of mesh ``mesh`` (sun-planet1),
+    ``F = 2 k_mesh |sum_i (v . phi_i) (phi_i^T K_l x0) / w_i^2|`` [N] (``v`` the mesh's line of
+    action, the sum over a degenerate pair so that the result does not depend on its basis);
+    at resonance it is amplified by about ``1 / (2 zeta)`` (less in a fast run-up).
+    """
+    import copy
+
+    import scipy.linalg
+
+    from gearvib.assembly import assemble
+    from gearvib.config import gearset_from_dict, load_config
+    from gearvib.stability import periodic_system
+
+    cfg = copy.deepcopy(load_config(preset)[0])
+    cfg.pop("simulation", None)
+    for k, v in (changes or {}).items():
+        _set_path(cfg, k, v)
+    model = assemble(gearset_from_dict(cfg))
+    k_bar = model.mean_stiffness_matrix()
+    _, k_hat = periodic_system(model).harmonics(harmonics)
+    x0 = np.linalg.lstsq(k_bar, torque * model.nominal_load(), rcond=None)[0]
+    w2, phi = scipy.linalg.eigh(k_bar, model.mass)
+    f = np.sqrt(np.abs(w2)) / (2.0 * math.pi)
+    v = model.mesh_vectors[mesh]
+    k_mesh = float(model.mean_mesh_stiffness()[mesh])
+    rows = []
+    elastic = np.flatnonzero(f > low_hz)
+    for name, f0 in paper_mode_names(f[elastic], low_hz):
+        group = [i for i in elastic if abs(f[i] - f0) <= 0.005 * f0]  # a degenerate pair: both
+        for ell in range(1, harmonics + 1):
+            resp = sum((v @ phi[:, i]) * (phi[:, i] @ k_hat[ell - 1] @ x0) / w2[i] for i in group)
+            rows.append({"mode": name, "f_hz": round(float(f0), 1), "harmonic": ell,
+                         "rpm": round(float(f0 / (ell * model.mesh_frequency_per_rpm)), 0),
+                         "force_n": round(float(2.0 * k_mesh * abs(resp)), 3)})
+    return rows
+
+
+def write_forcing() -> Path:
+    """:func:`mesh_forcing` of the :data:`THEORY_SETS` -> ``reports/paper-study/forcing.csv``."""
+    rows = []
+    for label, preset, changes in THEORY_SETS:
+        rows += [{"set": label, **r} for r in mesh_forcing(preset, changes)]
+    target = HERE / "forcing.csv"
+    tmp = target.with_suffix(".tmp")
+    with tmp.open("w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=list(rows[0]))
+        w.writeheader()
+        w.writerows(rows)
+    tmp.replace(target)
+    return target
 
 
 # ------------------------------------------------------------------------------ the sweeps
@@ -357,8 +448,282 @@ def write_metrics(out: Path, names: Sequence[str] = ()) -> Path:
     return target
 
 
-def make_figures(out: Path) -> None:  # filled in below
-    raise NotImplementedError
+# ------------------------------------------------------------------------------- figures
+
+SWEEP_COLOURS = {"damping-speed": "tab:blue", "drive": "tab:cyan", "damping-torque": "tab:orange",
+                 "planet": "tab:green", "geometry": "tab:olive", "shape": "tab:purple",
+                 "load": "tab:brown", "refine": "tab:red", "key": "k", "key-preset": "0.5"}
+
+
+def _key_runs(out: Path, name: str) -> tuple:
+    """The case-1 and case-2 run of a key sweep (``sweep-key*.toml``)."""
+    from gearvib.io import read_run
+
+    sw = xr.open_dataset(out / name / "sweep.nc")
+    col = _parameter_columns(sw)[0]
+    runs = {_case_label(sw, col, i): read_run(out / name / str(sw["run_file"].values[i]))
+            for i in range(sw.sizes["case"])}
+    return runs[CASE_LABELS[0]], runs[CASE_LABELS[1]]
+
+
+def _shade_paper_speeds(ax, vertical: bool = True) -> None:
+    for s in PAPER_SPEEDS:
+        lo, hi = s * (1 - WINDOW), s * (1 + WINDOW)
+        (ax.axvspan if vertical else ax.axhspan)(lo, hi, color="0.85", zorder=0)
+
+
+def figure_tracks(out: Path, target: Path) -> Path:
+    """Order tracks L_k(n) of the preset paper-case1/2 and of the study presets (2 x 2)."""
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(2, 2, figsize=(11.0, 7.0), sharex=True, sharey=True,
+                             layout="constrained")
+    titles = {"key-preset": "presets paper-case1/2 (speed drive, 0.5 %)",
+              "key": "study presets paper-case1/2-study"}
+    colours = plt.get_cmap("viridis")(np.linspace(0.0, 0.9, ORDERS.size))
+    for r, name in enumerate(("key-preset", "key")):
+        for c, ds in enumerate(_key_runs(out, name)):
+            ax = axes[r, c]
+            rpm, levels = order_tracks(ds)
+            _shade_paper_speeds(ax)
+            for k in range(ORDERS.size):
+                ax.plot(rpm, levels[k], color=colours[k], lw=0.9, label=f"order {k + 1}")
+            ax.set_title(f"{titles[name]}: {CASE_LABELS[c]}", fontsize=10)
+            ax.set_xlim(LOW_RPM, 4000.0)
+            ax.grid(alpha=0.3)
+            if r == 1:
+                ax.set_xlabel("sun speed [min⁻¹]")
+            if c == 0:
+                ax.set_ylabel("tooth force sun-planet1, rms [dB re 1 N]")
+    axes[0, 1].legend(loc="lower right", fontsize=8, ncols=2)
+    fig.suptitle("Mesh-order levels in the run-up (grey: ±5 % around the paper's 1500, 2600, "
+                 "3100 min⁻¹)", fontsize=11)
+    fig.savefig(target, dpi=90)
+    plt.close(fig)
+    return target
+
+
+def paper_mode_names(freqs_hz, low_hz: float = 200.0) -> list[tuple[str, float]]:
+    """The gear modes above ``low_hz`` named as in the paper (f2, f3=f4, f5, ...): mode 1 is
+    the rigid-body rotation; a load shaft's mode far below the gear modes is not counted;
+    equal frequencies (within 0.5 %) are one label."""
+    out: list[tuple[str, float]] = []
+    i = 2
+    for f in sorted(float(x) for x in freqs_hz if x > low_hz):
+        if out and abs(f - out[-1][1]) <= 0.005 * f:
+            out[-1] = (f"{out[-1][0]}=f{i}", out[-1][1])
+        else:
+            out.append((f"f{i}", f))
+        i += 1
+    return out
+
+
+def figure_sonograms(out: Path, target: Path, range_db: float = 50.0) -> Path:
+    """Rpm-frequency maps (the paper's Figure 11 view) of the study presets, case 1 and 2, on
+    one colour scale (top: the larger maximum of the two)."""
+    import matplotlib.pyplot as plt
+
+    cas = [_analysis(ds) for ds in _key_runs(out, "key")]
+    fmax = PASSBAND * float(cas[0].dataset.attrs["fs_out"])
+    maps = []
+    for ca in cas:
+        m = ca.fmap
+        keep = m.frequency <= fmax
+        with np.errstate(divide="ignore"):
+            db = 20.0 * np.log10(np.asarray(m.values, dtype=float)[:, keep])
+        o = np.argsort(m.rpm, kind="stable")
+        maps.append((m.frequency[keep], m.rpm[o], db[o]))
+    top = max(float(np.nanmax(d)) for _, _, d in maps)
+    fig, axes = plt.subplots(1, 2, figsize=(12.0, 5.6), sharey=True, layout="constrained")
+    for c, (ca, (f, rpm, db)) in enumerate(zip(cas, maps, strict=True)):
+        ax = axes[c]
+        im = ax.pcolormesh(f, rpm, db, shading="nearest", cmap="viridis",
+                           vmin=top - range_db, vmax=top, rasterized=True)
+        line = np.array([rpm.min(), rpm.max()])
+        for k in range(1, 8):
+            fk = k * ca.mesh_frequency_per_rpm * line
+            ax.plot(fk, line, color="w", lw=0.7, ls="--")
+            x_at = min(fk[1], 0.97 * fmax)
+            ax.text(x_at, min(line[1], x_at / (k * ca.mesh_frequency_per_rpm)) - 40, f"{k}",
+                    color="w", fontsize=8, ha="right", va="top")
+        for name, fn in paper_mode_names(ca.natural_frequencies_hz):
+            ax.axvline(fn, color="tab:orange", lw=0.9, ls=":")
+            ax.text(fn, 0.02, f" {name}", color="w", fontsize=8, rotation=90, va="bottom",
+                    ha="right", transform=ax.get_xaxis_transform())
+        for sp in PAPER_SPEEDS:
+            ax.axhline(sp, color="w", lw=0.6, ls=":")
+        ax.set_xlim(0.0, fmax)
+        ax.set_ylim(rpm.min(), rpm.max())
+        ax.set_xlabel("frequency [Hz]")
+        ax.set_title(f"paper-case{c + 1}-study: tooth force sun-planet1", fontsize=10)
+    axes[0].set_ylabel("sun speed [min⁻¹]")
+    fig.colorbar(im, ax=axes, label="rms level [dB re 1 N]")
+    fig.suptitle("Sonograms, one colour scale (dashed: mesh orders 1-7; dotted orange: natural "
+                 "frequencies; dotted white: 1500, 2600, 3100 min⁻¹)", fontsize=10)
+    fig.savefig(target, dpi=80)
+    plt.close(fig)
+    return target
+
+
+def _load_metrics() -> list[dict]:
+    with (HERE / "metrics.csv").open() as fh:
+        return list(csv.DictReader(fh))
+
+
+def _f(row: dict, key: str) -> float:
+    try:
+        return float(row[key])
+    except (KeyError, TypeError, ValueError):
+        return math.nan
+
+
+def figure_overview(target: Path) -> Path:
+    """Every parameter set: paper speeds and orders at 1500 min^-1 (left), case 2 vs 1 (right)."""
+    import matplotlib.pyplot as plt
+    from matplotlib.lines import Line2D
+
+    rows = [r for r in _load_metrics() if r.get("status_1") == "ok" and r.get("status_2") == "ok"]
+    rng = np.random.default_rng(0)  # jitter only (fixed seed: same figure every time)
+    fig, (a, b) = plt.subplots(1, 2, figsize=(12.0, 5.0), layout="constrained")
+    for r in rows:
+        col = SWEEP_COLOURS.get(r["sweep"], "k")
+        ok = r.get("plausible") == "True"
+        face = col if ok else "none"
+        mk = "*" if r.get("match") == "True" else "o"
+        size = 130 if mk == "*" else 30
+        a.scatter(_f(r, "N_1500_1") + rng.uniform(-0.25, 0.25),
+                  _f(r, "paper_score_1") + rng.uniform(-0.2, 0.2),
+                  s=size, marker=mk, facecolors=face, edgecolors=col, lw=1.0)
+        b.scatter(_f(r, "dL_db"), _f(r, "strength_2_db") - _f(r, "strength_1_db"),
+                  s=size, marker=mk, facecolors=face, edgecolors=col, lw=1.0)
+    a.set_xlabel("case 1: orders resonant at 1500 min⁻¹, N(1500) (paper: 7)")
+    a.set_ylabel("case 1: paper speeds reproduced (paper: 3)")
+    a.set_xticks(range(8))
+    a.set_yticks(range(4))
+    a.grid(alpha=0.3)
+    b.axhline(0.0, color="0.4", lw=0.8)
+    b.axvline(0.0, color="0.4", lw=0.8)
+    b.set_xlabel("case 2 − case 1: mean order level dL [dB]")
+    b.set_ylabel("case 2 − case 1: total region strength [dB]")
+    x0, x1 = b.get_xlim()
+    y0, y1 = b.get_ylim()
+    b.fill_between([x0, 0.0], y0, 0.0, color="tab:green", alpha=0.12, lw=0)
+    b.set_xlim(x0, x1)
+    b.set_ylim(y0, y1)
+    b.grid(alpha=0.3)
+    handles = [Line2D([], [], ls="", marker="o", color=c, label=n)
+               for n, c in SWEEP_COLOURS.items() if any(r["sweep"] == n for r in rows)]
+    handles += [Line2D([], [], ls="", marker="o", mfc="none", color="k",
+                       label=f"implausible (K_v > {KV_MAX:g} or contact loss > "
+                             f"{CONTACT_LOSS_MAX:.0%})"),
+                Line2D([], [], ls="", marker="*", ms=12, color="k", label="match"),
+                Line2D([], [], ls="", marker="s", ms=10, color="tab:green", alpha=0.3,
+                       label="paper's case finding:\ncase 2 quieter, regions weaker")]
+    b.legend(handles=handles, fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    fig.suptitle(f"{len(rows)} parameter sets, each run as case 1 and case 2 (left: jittered; "
+                 "the two key presets repeat sweep rows)",
+                 fontsize=11)
+    fig.savefig(target, dpi=90)
+    plt.close(fig)
+    return target
+
+
+def figure_damping(target: Path) -> Path:
+    """N(1500) and the region strength of case 2 against case 1 over mesh damping."""
+    import matplotlib.pyplot as plt
+
+    rows = _load_metrics()
+    series = {
+        "speed drive (preset), z_p = 40": [r for r in rows if r["sweep"] == "damping-speed"],
+        "torque drive, z_p = 40": [r for r in rows if r["sweep"] == "damping-torque"],
+        "torque drive, z_p = 41": [r for r in rows if r["sweep"] == "planet"
+                                   and r.get("geometry.z_planet") in ("41", "41.0")],
+        "torque, x_s = 0.3, ramps 0.2/0.1": [r for r in rows if r["sweep"] == "refine"
+                                              and r.get("geometry.profile_shift_sun") == "0.3"
+                                              and "0.2/0.1" in r.get("meshes", "")],
+    }
+
+    def zeta(r: dict) -> float:
+        if r.get("meshes.sun.damping_ratio"):
+            return 100.0 * _f(r, "meshes.sun.damping_ratio")
+        return float(r["meshes"].split(",")[-1].strip().rstrip(" %").split()[-1])
+
+    fig, (a, b) = plt.subplots(1, 2, figsize=(11.0, 4.2), layout="constrained")
+    for (name, rs), mk in zip(series.items(), "osD^", strict=True):
+        rs = [r for r in rs if r.get("status_1") == "ok" and r.get("status_2") == "ok"]
+        z = np.array([zeta(r) for r in rs])
+        o = np.argsort(z)
+        a.plot(z[o], np.array([_f(r, "N_1500_1") for r in rs])[o], marker=mk, label=name)
+        b.plot(z[o], np.array([_f(r, "strength_2_db") - _f(r, "strength_1_db")
+                               for r in rs])[o], marker=mk, label=name)
+    a.set_xlabel("mesh damping ratio [%]")
+    a.set_ylabel("case 1: orders resonant at 1500 min⁻¹")
+    b.set_xlabel("mesh damping ratio [%]")
+    b.set_ylabel("case 2 − case 1: total region strength [dB]")
+    b.axhline(0.0, color="0.4", lw=0.8)
+    b.text(0.98, 0.02, "below 0: case 2 weaker (paper)", transform=b.transAxes, ha="right",
+           fontsize=8)
+    for ax in (a, b):
+        ax.grid(alpha=0.3)
+    a.legend(fontsize=8)
+    fig.savefig(target, dpi=90)
+    plt.close(fig)
+    return target
+
+
+def figure_forcing(target: Path) -> Path:
+    """The quasi-static mesh forcing (forcing.csv) at the crossings the paper names."""
+    import matplotlib.pyplot as plt
+
+    with (HERE / "forcing.csv").open() as fh:
+        rows = list(csv.DictReader(fh))
+    crossings = [("f2", 2, "f2 by 2nd harmonic\n(paper: 1500)"),
+                 ("f5", 2, "f5 by 2nd harmonic\n(paper: 2600)"),
+                 ("f2", 1, "f2 by 1st harmonic\n(paper window 3100)"),
+                 ("f3=f4", 3, "f3=f4 by 3rd harm."),
+                 ("f3=f4", 1, "f3=f4 by 1st harm.")]
+    sets = [label for label, _, _ in THEORY_SETS]
+    fig, ax = plt.subplots(figsize=(11.0, 4.6), layout="constrained")
+    width = 0.8 / len(sets)
+    colours = plt.get_cmap("tab10")
+    for j, name in enumerate(sets):
+        vals, rpms = [], []
+        for mode, ell, _ in crossings:
+            r = next(r for r in rows if r["set"] == name and r["mode"] == mode
+                     and int(r["harmonic"]) == ell)
+            vals.append(max(float(r["force_n"]), 0.1))
+            rpms.append(float(r["rpm"]))
+        x = np.arange(len(crossings)) + (j - (len(sets) - 1) / 2) * width
+        ax.bar(x, vals, width, color=colours(j), label=name,
+               hatch="//" if "case2" in name else None, edgecolor="w", lw=0.5)
+    rpm_of = {(r["mode"], int(r["harmonic"])): float(r["rpm"]) for r in rows
+              if r["set"] == sets[0]}
+    ax.set_xticks(np.arange(len(crossings)),
+                  [f"{t}\n{rpm_of[(m, ell)]:.0f} min⁻¹" for m, ell, t in crossings], fontsize=8)
+    ax.set_yscale("log")
+    ax.set_ylim(0.1, 5000.0)
+    ax.set_ylabel("quasi-static force sun-planet1 [N]")
+    ax.set_title("Forcing of each mode by a mesh harmonic: static deflection x stiffness "
+                 "variation, 60 N m (static tooth force 516 N)", fontsize=10)
+    ax.legend(fontsize=8, ncols=4, loc="upper center")
+    ax.text(3.0, 0.15, "case 1: planet modes not forced (0)", ha="center", fontsize=8)
+    ax.grid(axis="y", alpha=0.3)
+    fig.savefig(target, dpi=90)
+    plt.close(fig)
+    return target
+
+
+def make_figures(out: Path, quick: bool = False) -> list[Path]:
+    """The write-up's figures (PNG, next to metrics.csv)."""
+    made = [figure_tracks(out, HERE / "fig-tracks.png"),
+            figure_sonograms(out, HERE / "fig-sonograms.png")]
+    if not quick:
+        made += [figure_overview(HERE / "fig-overview.png"),
+                 figure_damping(HERE / "fig-damping.png"),
+                 figure_forcing(HERE / "fig-forcing.png")]
+    for m in made:
+        print(m, flush=True)
+    return made
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -369,13 +734,21 @@ def main(argv: Sequence[str] | None = None) -> int:
     ap.add_argument("--out", type=Path, default=Path("paper-study-out"),
                     help="folder of the run files (default: paper-study-out)")
     ap.add_argument("--workers", type=int, default=1, help="local worker processes (default 1)")
+    ap.add_argument("--quick", action="store_true",
+                    help="only the key sweeps (presets paper-case1/2 and paper-case1/2-study: "
+                         "4 runs); the overview figures keep the committed metrics")
     a = ap.parse_args(argv)
+    names = list(QUICK) if a.quick and not a.sweeps else a.sweeps
+    t0 = time.perf_counter()
     if a.step in ("run", "all"):
-        run_sweeps(a.out, a.workers, a.sweeps)
+        run_sweeps(a.out, a.workers, names)
     if a.step in ("metrics", "all"):
-        print(write_metrics(a.out, a.sweeps))
+        print(write_metrics(a.out, names))
+        print(write_forcing())
     if a.step in ("figures", "all"):
-        make_figures(a.out)
+        make_figures(a.out, quick=a.quick)
+    print(f"paper study ({a.step}{', quick' if a.quick else ''}): "
+          f"{time.perf_counter() - t0:.0f} s", flush=True)
     return 0
 
 
