@@ -435,7 +435,8 @@ def write_metrics(out: Path, names: Sequence[str] = ()) -> Path:
         with target.open() as fh:
             done = {sweep_name(p) for p in sweep_files(names)}
             old = [r for r in csv.DictReader(fh) if r["sweep"] not in done]
-    rows = old + rows
+    rank = {sweep_name(p): i for i, p in enumerate(sweep_files())}
+    rows = sorted(old + rows, key=lambda r: rank.get(r["sweep"], len(rank)))  # file order
     fields: list[str] = []
     for r in rows:
         fields += [k for k in r if k not in fields]
