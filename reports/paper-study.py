@@ -423,6 +423,11 @@ def sweep_rows(out: Path, name: str) -> list[dict]:
             row[f"Kv_{tag}"] = round(float(np.nanmax(sw["dynamic_factor"].values[k])), 3)
             row[f"contact_loss_{tag}"] = round(
                 float(np.nanmax(sw["contact_loss_fraction"].values[k])), 4)
+            if "floquet_growth_rate" in sw:  # sweeps that ask for it ([summary] floquet_*)
+                g = np.asarray(sw["floquet_growth_rate"].values[k], dtype=float)
+                speeds = np.asarray(sw["floquet_speed"].values, dtype=float)
+                row[f"floquet_max_{tag}"] = round(float(np.nanmax(g)), 2)
+                row[f"floquet_unstable_rpm_{tag}"] = " ".join(f"{v:.0f}" for v in speeds[g > 0])
             row[f"run_{tag}"] = str(sw["run_file"].values[k])
         if runs[0] is not None and runs[1] is not None:
             pair = pair_metrics(runs[0], runs[1])
