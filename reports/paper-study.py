@@ -17,7 +17,8 @@ figures of the write-up::
     python reports/paper-study.py all      [--out DIR] [--workers N]
     python reports/paper-study.py all --quick    # only the key sweeps (4 runs, about 20 s)
 
-The whole study (10 sweeps, 170 runs of 1 s) took 343 s on 2 shared cores (147 CPU-seconds).
+The whole study (10 sweeps, 170 runs of 1 s) took 343-489 s on 2 busy shared cores (about
+150 CPU-seconds).
 ``DIR`` (default ``paper-study-out``) holds the run files (about 5 MB each); the metrics table,
 the forcing table and the figures are small, committed, and the same byte for byte on every
 run. A sweep resumes: finished runs are read, not simulated again.
@@ -454,9 +455,11 @@ def write_metrics(out: Path, names: Sequence[str] = ()) -> Path:
             old = [r for r in csv.DictReader(fh) if r["sweep"] not in done]
     rank = {sweep_name(p): i for i, p in enumerate(sweep_files())}
     rows = sorted(old + rows, key=lambda r: rank.get(r["sweep"], len(rank)))  # file order
-    fields: list[str] = []
-    for r in rows:
-        fields += [k for k in r if k not in fields]
+    # columns in a canonical order (the same whichever sweeps were recomputed): the sweep, its
+    # parameters (key paths), then the metrics, each group sorted by name
+    names = {k for r in rows for k in r} - {"sweep"}
+    params = sorted(k for k in names if "." in k or k == "meshes")
+    fields = ["sweep", *params, *sorted(names - set(params))]
     tmp = target.with_suffix(".tmp")
     with tmp.open("w", newline="") as fh:
         w = csv.DictWriter(fh, fieldnames=fields)
