@@ -93,6 +93,7 @@ __all__ = [
     "n_signals",
     "pack",
     "periodic_interp",
+    "rhs_loop",
     "speed_profile",
     "work_shape",
 ]
@@ -268,6 +269,11 @@ N_HEADER = H_FVAL + 3
 JUMP_FRACTION = 0.05
 #: At most this many jump segments per mesh are located; tables with more are smooth enough.
 MAX_JUMPS_PER_MESH = 32
+#: Index type of the hot loops: numba computes no negative-index wraparound for unsigned indices
+#: (``_U(i)`` is a free cast; mixing it with signed integers would give float64, which numba
+#: refuses as an index, so a slip cannot go unnoticed).
+_U = np.uint64
+_U1 = np.uint64(1)
 #: Margin [mesh cycles] around a step's extrapolated mesh positions within which a faulty
 #: pair in contact switches a faulty mesh to its pair law.
 NEED_MARGIN = 0.1
@@ -625,7 +631,7 @@ def _presence(i, i0, w, nper, ce):
     return 0.0
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _faulty_flanks(ints, vals, tables, m, rec, y, s, d, dd, dr, ddr, half, damping,
                    mesh_out):
     """Contact law of a faulty mesh, tooth pair by tooth pair (:mod:`gearvib.faults.law`).
@@ -806,97 +812,101 @@ def _faulty_flanks(ints, vals, tables, m, rec, y, s, d, dd, dr, ddr, half, dampi
     return fl, fr, ke, st
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _rhs(t, y, dy, mesh_out, ints, vals, tables, speed_tab, torque_tab):
     """Right-hand side ``dy = f(t, y)``; ``mesh_out[m] = (F_L, -F_R, k_eff, state, delta, s,
     delta_R)``.
 
     ``ints, vals, tables, speed_tab, torque_tab`` is the packed system of :func:`pack`; every
-    product runs over the stored non-zeros only.
+    product runs over the stored non-zeros only. Indices are unsigned (:data:`_U`), so no
+    negative-index wraparound is computed on the hot path; negative sentinels (``-1``: none)
+    are read signed.
     """
-    n = ints[H_N]
-    n_mesh = ints[H_NMESH]
+    n = _U(ints[H_N])
+    n_mesh = _U(ints[H_NMESH])
     n_table = tables.shape[2]
-    lp = ints[H_LP]
-    li = ints[H_LI]
-    lv = ints[H_LV]
-    a0 = ints[H_ACC0]
+    lp = _U(ints[H_LP])
+    li = _U(ints[H_LI])
+    lv = _U(ints[H_LV])
+    a0 = _U(ints[H_ACC0])
     for i in range(n):
         dy[i] = y[n + i]
         acc = vals[a0 + i]
-        for p in range(ints[lp + i], ints[lp + i + 1]):
-            acc += vals[lv + p] * y[ints[li + p]]
+        for p in range(_U(ints[lp + i]), _U(ints[lp + i + _U1])):
+            acc += vals[lv + p] * y[_U(ints[li + p])]
         dy[n + i] = acc
-    fpar = ints[H_FPAR]
+    fpar = _U(ints[H_FPAR])
     carrier = ints[H_IPAR + IP_CARRIER]
     if ints[H_IPAR + IP_GYRO] != 0 and carrier >= 0:
-        om = y[n + carrier]
+        om = y[n + _U(carrier)]
         om2 = om * om
-        cp = ints[H_CP]
-        ci = ints[H_CI]
-        cv = ints[H_CV]
-        gp = ints[H_GP]
-        gi = ints[H_GI]
-        gv = ints[H_GV]
+        cp = _U(ints[H_CP])
+        ci = _U(ints[H_CI])
+        cv = _U(ints[H_CV])
+        gp = _U(ints[H_GP])
+        gi = _U(ints[H_GI])
+        gv = _U(ints[H_GV])
         for i in range(n):
             acc = 0.0
-            for p in range(ints[cp + i], ints[cp + i + 1]):
-                acc += vals[cv + p] * y[ints[ci + p]]
+            for p in range(_U(ints[cp + i]), _U(ints[cp + i + _U1])):
+                acc += vals[cv + p] * y[_U(ints[ci + p])]
             acc2 = 0.0
-            for p in range(ints[gp + i], ints[gp + i + 1]):
-                acc2 += vals[gv + p] * y[n + ints[gi + p]]
+            for p in range(_U(ints[gp + i]), _U(ints[gp + i + _U1])):
+                acc2 += vals[gv + p] * y[n + _U(ints[gi + p])]
             dy[n + i] += om2 * acc + om * acc2
     mode = ints[H_IPAR + IP_MODE]
-    k_in = ints[H_IPAR + IP_INPUT]
+    k_in = _U(ints[H_IPAR + IP_INPUT])  # >= 0: every model has an input rotation
     torque = 0.0
     if mode == DRIVE_SPEED:
         phi, w = _speed_at(speed_tab, t)
-        torque = vals[fpar + FP_KC] * (phi - y[k_in]) + vals[fpar + FP_CC] * (w - y[n + k_in])
+        torque = vals[fpar + _U(FP_KC)] * (phi - y[k_in]) + vals[fpar + _U(FP_CC)] * (
+            w - y[n + k_in])
     elif mode == DRIVE_TORQUE:
         torque = _table_at(torque_tab, t)
     elif mode == DRIVE_MOTOR:
         torque = _table_at(torque_tab, y[n + k_in])
     if torque != 0.0:
-        ii = ints[H_II]
-        iv = ints[H_IV]
-        for p in range(ints[H_NI]):
-            dy[n + ints[ii + p]] += vals[iv + p] * torque
+        ii = _U(ints[H_II])
+        iv = _U(ints[H_IV])
+        for p in range(_U(ints[H_NI])):
+            dy[n + _U(ints[ii + p])] += vals[iv + p] * torque
     k_out = ints[H_IPAR + IP_OUTPUT]
     if k_out >= 0:
-        e = vals[fpar + FP_OUTDIR]
-        wo = e * y[n + k_out]
+        e = vals[fpar + _U(FP_OUTDIR)]
+        wo = e * y[n + _U(k_out)]
         load = -e * (
-            vals[fpar + FP_T0] + vals[fpar + FP_C1] * wo + vals[fpar + FP_C2] * wo * abs(wo)
+            vals[fpar + _U(FP_T0)] + vals[fpar + _U(FP_C1)] * wo
+            + vals[fpar + _U(FP_C2)] * wo * abs(wo)
         )
-        oi = ints[H_OI]
-        ov = ints[H_OV]
-        for p in range(ints[H_NO]):
-            dy[n + ints[oi + p]] += vals[ov + p] * load
-    vp = ints[H_VP]
-    vi = ints[H_VI]
-    vv = ints[H_VV]
-    fp = ints[H_FP]
-    fi = ints[H_FI]
-    fv = ints[H_FV]
-    pp = ints[H_PP]
-    pi = ints[H_PI]
-    pv = ints[H_PV]
-    s0 = ints[H_S0]
-    bl = ints[H_BL]
-    mc = ints[H_MC]
-    rflag = ints[H_RFLAG]
-    rvp = ints[H_RVP]
-    rvi = ints[H_RVI]
-    rvv = ints[H_RVV]
-    rfp = ints[H_RFP]
-    rfi = ints[H_RFI]
-    rfv = ints[H_RFV]
-    frec = ints[H_FREC]
+        oi = _U(ints[H_OI])
+        ov = _U(ints[H_OV])
+        for p in range(_U(ints[H_NO])):
+            dy[n + _U(ints[oi + p])] += vals[ov + p] * load
+    vp = _U(ints[H_VP])
+    vi = _U(ints[H_VI])
+    vv = _U(ints[H_VV])
+    fp = _U(ints[H_FP])
+    fi = _U(ints[H_FI])
+    fv = _U(ints[H_FV])
+    pp = _U(ints[H_PP])
+    pi = _U(ints[H_PI])
+    pv = _U(ints[H_PV])
+    s0 = _U(ints[H_S0])
+    bl = _U(ints[H_BL])
+    mc = _U(ints[H_MC])
+    rflag = _U(ints[H_RFLAG])
+    rvp = _U(ints[H_RVP])
+    rvi = _U(ints[H_RVI])
+    rvv = _U(ints[H_RVV])
+    rfp = _U(ints[H_RFP])
+    rfi = _U(ints[H_RFI])
+    rfv = _U(ints[H_RFV])
+    frec = _U(ints[H_FREC])
     for m in range(n_mesh):
         d = 0.0
         dd = 0.0
-        for p in range(ints[vp + m], ints[vp + m + 1]):
-            j = ints[vi + p]
+        for p in range(_U(ints[vp + m]), _U(ints[vp + m + _U1])):
+            j = _U(ints[vi + p])
             d += vals[vv + p] * y[j]
             dd += vals[vv + p] * y[n + j]
         two_lines = ints[rflag + m] != 0
@@ -905,13 +915,13 @@ def _rhs(t, y, dy, mesh_out, ints, vals, tables, speed_tab, torque_tab):
         if two_lines:  # the back flank's own line of action
             dr = 0.0
             ddr = 0.0
-            for p in range(ints[rvp + m], ints[rvp + m + 1]):
-                j = ints[rvi + p]
+            for p in range(_U(ints[rvp + m]), _U(ints[rvp + m + _U1])):
+                j = _U(ints[rvi + p])
                 dr += vals[rvv + p] * y[j]
                 ddr += vals[rvv + p] * y[n + j]
         s = vals[s0 + m]
-        for p in range(ints[pp + m], ints[pp + m + 1]):
-            s += vals[pv + p] * y[ints[pi + p]]
+        for p in range(_U(ints[pp + m]), _U(ints[pp + m + _U1])):
+            s += vals[pv + p] * y[_U(ints[pi + p])]
         rec = ints[frec + m]
         if rec >= 0 and mesh_out[m, 7] != 0.0:
             # a mesh with faults, a faulty pair in contact (or deviations): pair by pair
@@ -919,22 +929,22 @@ def _rhs(t, y, dy, mesh_out, ints, vals, tables, speed_tab, torque_tab):
                                             0.5 * vals[bl + m], vals[mc + m], mesh_out)
         else:
             i0, i1, w = _interp_cell(n_table, s)
-            kl = (1.0 - w) * tables[0, m, i0] + w * tables[0, m, i1]
-            kr = (1.0 - w) * tables[1, m, i0] + w * tables[1, m, i1]
+            kl = (1.0 - w) * tables[0, m, _U(i0)] + w * tables[0, m, _U(i1)]
+            kr = (1.0 - w) * tables[1, m, _U(i0)] + w * tables[1, m, _U(i1)]
             fl, fr, ke, st = flank_forces_two_lines(d, dd, dr, ddr, kl, kr, vals[bl + m],
                                                     vals[mc + m])
         if two_lines:
             if fl != 0.0:
-                for p in range(ints[fp + m], ints[fp + m + 1]):
-                    dy[n + ints[fi + p]] -= fl * vals[fv + p]
+                for p in range(_U(ints[fp + m]), _U(ints[fp + m + _U1])):
+                    dy[n + _U(ints[fi + p])] -= fl * vals[fv + p]
             if fr != 0.0:
-                for p in range(ints[rfp + m], ints[rfp + m + 1]):
-                    dy[n + ints[rfi + p]] -= fr * vals[rfv + p]
+                for p in range(_U(ints[rfp + m]), _U(ints[rfp + m + _U1])):
+                    dy[n + _U(ints[rfi + p])] -= fr * vals[rfv + p]
         else:  # one line of action: the summed force (bit for bit as a one-line model)
             f = fl + fr
             if f != 0.0:
-                for p in range(ints[fp + m], ints[fp + m + 1]):
-                    dy[n + ints[fi + p]] -= f * vals[fv + p]
+                for p in range(_U(ints[fp + m]), _U(ints[fp + m + _U1])):
+                    dy[n + _U(ints[fi + p])] -= f * vals[fv + p]
         mesh_out[m, 0] = fl
         mesh_out[m, 1] = -fr
         mesh_out[m, 2] = ke
@@ -966,6 +976,27 @@ def evaluate_rhs(t: float, y: np.ndarray, system: tuple) -> tuple[np.ndarray, np
     return dy, mesh_out[:, :7].copy()
 
 
+@njit(cache=True)
+def rhs_loop(states: np.ndarray, t0: float, dt: float, n_eval: int, system: tuple,
+             dy: np.ndarray, mesh_out: np.ndarray) -> float:
+    """``n_eval`` right-hand sides at the rows of ``states`` (cycled), times ``t0 + r dt``.
+
+    For benchmarks (``benchmarks/bench_kernel.py``): the right-hand side of the kernels alone,
+    without allocation; returns the sum of the last entries of ``dy`` (a check value).
+    """
+    ints, vals, tables, speed_tab, torque_tab = system
+    check = 0.0
+    r = 0
+    n2 = states.shape[1]
+    for _ in range(n_eval):
+        _rhs(t0 + r * dt, states[r], dy, mesh_out, ints, vals, tables, speed_tab, torque_tab)
+        check += dy[n2 - 1]
+        r += 1
+        if r == states.shape[0]:
+            r = 0
+    return check
+
+
 def work_shape(n_dof: int, n_mesh: int) -> tuple[int, int]:
     """Shape of the ``work`` buffer of :func:`integrate_chunk`."""
     return 6, max(2 * n_dof, 4 * n_mesh + 4)
@@ -990,7 +1021,7 @@ def _insert_split(splits, count, tau, dt, tol):
     return count + 1
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _split_times(y, dt, ints, vals, mesh_out, splits):
     """Times in ``(0, dt)`` at which a mesh position reaches a stiffness jump during the step.
 
@@ -1076,7 +1107,7 @@ def _first_beyond(vals, start, count, x):
     return a
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _rk4_step(t, h, y, k1, k2, k3, k4, tmp, mesh_out, ints, vals, tables, speed_tab, torque_tab):
     """One classical RK4 step of size ``h`` from ``(t, y)`` (in place); ``k1 = f(t, y)`` given."""
     n2 = 2 * ints[H_N]
