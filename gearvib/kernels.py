@@ -594,7 +594,7 @@ def _table_at(tab: np.ndarray, t: float) -> float:
     return v[i] + (v[i + 1] - v[i]) * (t - tt[i]) / (tt[i + 1] - tt[i])
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _pairs_needed(ints, vals, rec, lo, hi):
     """A faulty mesh needs its pair law somewhere in ``lo <= s <= hi``: it has deviations, or a
     pair with a faulty tooth is in contact there, within :data:`NEED_MARGIN` (its table over
@@ -1137,7 +1137,7 @@ def _first_beyond(vals, start, count, x):
 @njit(cache=True, _nrt=False)
 def _rk4_step(t, h, y, k1, k2, k3, k4, tmp, mesh_out, ints, vals, tables, speed_tab, torque_tab):
     """One classical RK4 step of size ``h`` from ``(t, y)`` (in place); ``k1 = f(t, y)`` given."""
-    n2 = 2 * ints[H_N]
+    n2 = _U(2 * ints[H_N])
     h2 = 0.5 * h
     h6 = h / 6.0
     for i in range(n2):
