@@ -33,9 +33,10 @@ import numpy as np
 
 from gearvib import kernels as kn
 from gearvib.assembly import assemble
-from gearvib.config import load_gearset
+from gearvib.config import gearset_from_dict, load_config, load_gearset
 from gearvib.simulate import SpeedRamp, choose_step, prepare_run, static_equilibrium
 from gearvib.simulation.frequencies import stiffest_matrix, undamped_frequencies
+from gearvib.sweep.keys import set_path
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 C_SOURCE = os.path.join(HERE, "c", "rk4_kernel.c")
@@ -173,6 +174,41 @@ def rhs_per_eval(case: Case, c, n_steps: int, repeat: int) -> dict:
             "rhs_c": r_c / n_eval * 1e9}
 
 
+N_BATCH = 8
+
+
+def batch_variants(preset: str) -> list:
+    """8 variants: sun-mesh damping ratio x1 ... x2.75, elastic: planet bearing stiffness."""
+    cfg, base = load_config(preset)
+    out = []
+    for k in range(N_BATCH):
+        d = set_path(cfg, "meshes.sun.damping_ratio", 0.005 * (1 + 0.25 * k))
+        if "elastic" in preset:
+            d = set_path(d, "bodies.planet.support.radial", 1.5e8 * (1 + 0.05 * k))
+        out.append(assemble(gearset_from_dict(d, base=base)))
+    return out
+
+
+def batched_vs_single(preset: str, cond, window: float, repeat: int) -> tuple[float, float]:
+    """CPU time of 8 single runs and of one batched call over the same window."""
+    cases = [Case(m, cond, 0.0) for m in batch_variants(preset)]
+    dt = cases[0].dt
+    if any(c.dt != dt for c in cases):
+        raise SystemExit("the variants' automatic steps differ")
+    n_steps = round(window / dt)
+    systems = [c.system for c in cases]
+    y0 = np.array([c.y0 for c in cases])
+    rec, _, status, _ = kn.integrate_batch(systems, y0, dt, n_steps)
+    if status[0] != kn.STATUS_OK:
+        raise SystemExit(f"batched run failed: status {status.tolist()}")
+    for b, c in enumerate(cases):
+        if rec[b].tobytes() != kn.integrate(c.system, c.y0, dt, n_steps)[0].tobytes():
+            raise SystemExit(f"batched variant {b} differs from its single run")
+    t_single = best(lambda: [kn.integrate(c.system, c.y0, dt, n_steps) for c in cases], repeat)
+    t_batch = best(lambda: kn.integrate_batch(systems, y0, dt, n_steps), repeat)
+    return t_single, t_batch
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="shorter windows, 3 repetitions")
@@ -195,6 +231,13 @@ def main() -> None:
                   f"{r['loop_numba'] / r['loop_c']:6.2f} {r['rhs_numba']:16.1f} "
                   f"{r['rhs_c']:8.1f} {r['rhs_numba'] / r['rhs_c']:6.2f}")
         print("(records of the C loop and of the numba kernel bit-identical)")
+    print(f"\nbatched ({N_BATCH} variants: sun-mesh damping, planet bearing stiffness) against "
+          f"{N_BATCH} single runs, {window} s from t = 0 (CPU time, best of {repeat})")
+    print(f"{'model':22s} {'8 single [s]':>13s} {'batched [s]':>12s} {'throughput ratio':>17s}")
+    for preset in ("paper-case1", "paper-case1-elastic"):
+        t_s, t_b = batched_vs_single(preset, cond, window, repeat)
+        print(f"{preset:22s} {t_s:13.4f} {t_b:12.4f} {t_s / t_b:17.2f}")
+    print("(every batched variant bit-identical to its single run)")
 
 
 if __name__ == "__main__":

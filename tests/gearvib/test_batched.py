@@ -88,12 +88,12 @@ def test_batch_of_one_and_of_the_rigid_model():
 def test_topology_differences_are_named(elastic_variants):
     elastic = elastic_variants[0][0]
     rigid, _ = _start(_variant("paper-case1", 0.005))
-    with pytest.raises(ValueError, match="variant 1 .*number of coordinates"):
+    with pytest.raises(ValueError, match=r"variant 1 .*number of coordinates"):
         kn.pack_batch([elastic, rigid])
     torque = prepare_run(_variant("paper-case1-elastic", 0.005),
                          TorqueDriven(60.0, load_inertia=0.1, duration=0.1, max_rpm=4000),
                          False).system
-    with pytest.raises(ValueError, match="variant 1 .*drive mode"):
+    with pytest.raises(ValueError, match=r"variant 1 .*drive mode"):
         kn.pack_batch([elastic, torque])
     other_ramp = prepare_run(_variant("paper-case1-elastic", 0.005),
                              SpeedRamp(0.0, 1000.0, 1.0, input_torque=60.0), False).system
