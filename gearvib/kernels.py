@@ -781,29 +781,34 @@ def _faulty_flanks(ints, vals, tables, m, rec, y, s, d, dd, dr, ddr, half, dampi
                 kl = share_l * pres
                 kr = share_r * pres
             else:
-                kl = ((1.0 - wi) * vals[pv + idx] + wi * vals[pv + idx + 1]) * pres
-                kr = ((1.0 - wi) * vals[pv + nu + idx] + wi * vals[pv + nu + idx + 1]) * pres
+                a = _U(pv + idx)  # offsets and counters >= 0: unsigned, no wraparound
+                c = _U(pv + nu + idx)
+                kl = ((1.0 - wi) * vals[a] + wi * vals[a + _U1]) * pres
+                kr = ((1.0 - wi) * vals[c] + wi * vals[c + _U1]) * pres
             ol = el
             orr = er
             for g in range(2):
                 if g == 0:
                     if z1 <= 0:
                         continue
-                    sh = vals[h1 + k1]
-                    prof = ints[p1 + k1]
+                    sh = vals[_U(h1 + k1)]
+                    prof = ints[_U(p1 + k1)]
                 else:
                     if z2 <= 0:
                         continue
-                    sh = vals[h2 + k2]
-                    prof = ints[p2 + k2]
+                    sh = vals[_U(h2 + k2)]
+                    prof = ints[_U(p2 + k2)]
                 ol += sh
                 orr += sh
                 if prof >= 0:
-                    b = prv + prof * 4 * nu + idx
-                    kl *= (1.0 - wi) * vals[b] + wi * vals[b + 1]
-                    kr *= (1.0 - wi) * vals[b + nu] + wi * vals[b + nu + 1]
-                    ol -= (1.0 - wi) * vals[b + 2 * nu] + wi * vals[b + 2 * nu + 1]
-                    orr += (1.0 - wi) * vals[b + 3 * nu] + wi * vals[b + 3 * nu + 1]
+                    b0 = _U(prv + prof * 4 * nu + idx)
+                    b1 = _U(prv + prof * 4 * nu + nu + idx)
+                    b2 = _U(prv + prof * 4 * nu + 2 * nu + idx)
+                    b3 = _U(prv + prof * 4 * nu + 3 * nu + idx)
+                    kl *= (1.0 - wi) * vals[b0] + wi * vals[b0 + _U1]
+                    kr *= (1.0 - wi) * vals[b1] + wi * vals[b1 + _U1]
+                    ol -= (1.0 - wi) * vals[b2] + wi * vals[b2 + _U1]
+                    orr += (1.0 - wi) * vals[b3] + wi * vals[b3 + _U1]
             if kl > 0.0 and d + ol > half:
                 f_el += kl * (d + ol - half)
                 ke += kl
