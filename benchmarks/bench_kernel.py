@@ -5,11 +5,13 @@ Run ``python3 benchmarks/bench_kernel.py [--quick]``. For ``paper-case1`` and
 step), it prints side by side:
 
 * **ns per right-hand-side evaluation**, numba kernel against a plain C loop of the same
-  algorithm (``benchmarks/c/rk4_kernel.c``, compiled here with ``gcc -O2`` and called through
-  ctypes on the same packed arrays): the whole RK4 loop of :func:`gearvib.kernels.integrate_chunk`
-  (sub-steps at the stiffness jumps, recorded rows) divided by its number of right-hand-side
-  evaluations, and a loop of right-hand sides alone over recorded states. The C output is
-  checked to be bit-identical to the numba kernel's before any time is reported.
+  algorithm (``benchmarks/c/rk4_kernel.c``, compiled here with ``gcc -O2`` and, second, with
+  ``-march=native -ffp-contract=off`` (the host's instruction set, as numba uses it), and
+  called through ctypes on the same packed arrays): the whole RK4 loop of
+  :func:`gearvib.kernels.integrate_chunk` (sub-steps at the stiffness jumps, recorded rows)
+  divided by its number of right-hand-side evaluations, and a loop of right-hand sides alone
+  over recorded states. The C output is checked to be bit-identical to the numba kernel's
+  before any time is reported.
 * **batched against single throughput per core**: 8 variants of the gear set (mesh damping and
   bearing stiffness varied) advanced by one call of
   :func:`gearvib.kernels.integrate_chunk_batch`, against the 8 runs one after another; the
@@ -41,17 +43,20 @@ from gearvib.sweep.keys import set_path
 HERE = os.path.dirname(os.path.abspath(__file__))
 C_SOURCE = os.path.join(HERE, "c", "rk4_kernel.c")
 CFLAGS = ["-O2", "-shared", "-fPIC"]
+#: A second build with the host's instruction set, as numba's LLVM uses it (SSE4.1 rounding,
+#: AVX); no contraction into fused multiply-adds, so it stays bit-identical.
+CFLAGS_NATIVE = ["-O2", "-march=native", "-ffp-contract=off", "-shared", "-fPIC"]
 I64 = ctypes.POINTER(ctypes.c_int64)
 F64 = ctypes.POINTER(ctypes.c_double)
 
 
-def build_c(tmp: str) -> ctypes.CDLL:
-    """Compile the C baseline with ``gcc -O2`` (no fast-math) and load it."""
+def build_c(tmp: str, flags: list[str], name: str) -> ctypes.CDLL:
+    """Compile the C baseline with ``flags`` (never fast-math) and load it."""
     gcc = shutil.which("gcc")
     if gcc is None:
         raise SystemExit("bench_kernel needs gcc for the C baseline")
-    lib = os.path.join(tmp, "rk4_kernel.so")
-    subprocess.run([gcc, *CFLAGS, "-o", lib, C_SOURCE, "-lm"], check=True)
+    lib = os.path.join(tmp, f"rk4_kernel_{name}.so")
+    subprocess.run([gcc, *flags, "-o", lib, C_SOURCE, "-lm"], check=True)
     c = ctypes.CDLL(lib)
     c.gv_header_size.restype = ctypes.c_int64
     if c.gv_header_size() != kn.N_HEADER:
@@ -141,7 +146,7 @@ def rhs_per_eval(case: Case, c, n_steps: int, repeat: int) -> dict:
     y_n = case.y0.copy()
     rec_n = case.run_numba(y_n, case.first, n_steps)
     y_c = case.y0.copy()
-    rec_c, n_rhs = c and case.run_c(c, y_c, case.first, n_steps)
+    rec_c, n_rhs = case.run_c(c, y_c, case.first, n_steps)
     identical = np.array_equal(rec_n, rec_c) and np.array_equal(y_n, y_c)
     if not identical:
         raise SystemExit(f"C and numba records differ (max |diff| "
@@ -217,20 +222,27 @@ def main() -> None:
     window = 0.02 if args.quick else 0.1
     cond = SpeedRamp(0.0, 4000.0, 1.0, input_torque=60.0)
     with tempfile.TemporaryDirectory() as tmp:
-        c = build_c(tmp)
-        print(f"C baseline: gcc {' '.join(CFLAGS)} {os.path.relpath(C_SOURCE)}")
-        print("ns per right-hand-side evaluation (CPU time, best of "
-              f"{repeat}; window {window} s of the run-up from t = 0.4 s, ~1600 min^-1)")
-        print(f"{'model':22s} {'RHS evals':>10s} {'RK4 loop numba':>15s} {'C':>8s} {'ratio':>6s}"
-              f" {'RHS alone numba':>16s} {'C':>8s} {'ratio':>6s}")
-        for preset in ("paper-case1", "paper-case1-elastic"):
-            case = Case(assemble(load_gearset(preset)), cond, 0.4)
-            n_steps = round(window / case.dt)
-            r = rhs_per_eval(case, c, n_steps, repeat)
-            print(f"{preset:22s} {r['n_rhs']:10d} {r['loop_numba']:15.1f} {r['loop_c']:8.1f} "
-                  f"{r['loop_numba'] / r['loop_c']:6.2f} {r['rhs_numba']:16.1f} "
-                  f"{r['rhs_c']:8.1f} {r['rhs_numba'] / r['rhs_c']:6.2f}")
-        print("(records of the C loop and of the numba kernel bit-identical)")
+        builds = [("O2", CFLAGS), ("native", CFLAGS_NATIVE)]
+        libs = {name: build_c(tmp, flags, name) for name, flags in builds}
+        cases = {}
+        for name, flags in builds:
+            c = libs[name]
+            print(f"\nC baseline: gcc {' '.join(flags)} {os.path.relpath(C_SOURCE)}")
+            print("ns per right-hand-side evaluation (CPU time, best of "
+                  f"{repeat}; window {window} s of the run-up from t = 0.4 s, ~1600 min^-1)")
+            print(f"{'model':22s} {'RHS evals':>10s} {'RK4 loop numba':>15s} {'C':>8s} "
+                  f"{'ratio':>6s} {'RHS alone numba':>16s} {'C':>8s} {'ratio':>6s}")
+            for preset in ("paper-case1", "paper-case1-elastic"):
+                if preset not in cases:
+                    cases[preset] = Case(assemble(load_gearset(preset)), cond, 0.4)
+                case = cases[preset]
+                n_steps = round(window / case.dt)
+                r = rhs_per_eval(case, c, n_steps, repeat)
+                print(f"{preset:22s} {r['n_rhs']:10d} {r['loop_numba']:15.1f} "
+                      f"{r['loop_c']:8.1f} {r['loop_numba'] / r['loop_c']:6.2f} "
+                      f"{r['rhs_numba']:16.1f} {r['rhs_c']:8.1f} "
+                      f"{r['rhs_numba'] / r['rhs_c']:6.2f}")
+            print("(records of the C loop and of the numba kernel bit-identical)")
     print(f"\nbatched ({N_BATCH} variants: sun-mesh damping, planet bearing stiffness) against "
           f"{N_BATCH} single runs, {window} s from t = 0 (CPU time, best of {repeat})")
     print(f"{'model':22s} {'8 single [s]':>13s} {'batched [s]':>12s} {'throughput ratio':>17s}")
