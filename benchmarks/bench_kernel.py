@@ -1,0 +1,256 @@
+"""Benchmark of the run-up kernel per core (not a timed test).
+
+Run ``python3 benchmarks/bench_kernel.py [--quick]``. For ``paper-case1`` and
+``paper-case1-elastic`` (1 s run-up 0 -> 4000 min^-1 at 60 N m input torque, the automatic
+step), it prints side by side:
+
+* **ns per right-hand-side evaluation**, numba kernel against a plain C loop of the same
+  algorithm (``benchmarks/c/rk4_kernel.c``, compiled here with ``gcc -O2`` and, second, with
+  ``-march=native -ffp-contract=off`` (the host's instruction set, as numba uses it), and
+  called through ctypes on the same packed arrays): the whole RK4 loop of
+  :func:`gearvib.kernels.integrate_chunk` (sub-steps at the stiffness jumps, recorded rows)
+  divided by its number of right-hand-side evaluations, and a loop of right-hand sides alone
+  over recorded states. The C output is checked to be bit-identical to the numba kernel's
+  before any time is reported.
+* **batched against single throughput per core**: 8 variants of the gear set (mesh damping and
+  bearing stiffness varied) advanced by one call of
+  :func:`gearvib.kernels.integrate_chunk_batch`, against the 8 runs one after another; the
+  batch's rows are checked bit-identical to the single runs'.
+
+Every time is the best of several repetitions of a fixed window (process CPU time; the machine
+is shared), numba compilation excluded.
+"""
+
+from __future__ import annotations
+
+import argparse
+import ctypes
+import os
+import shutil
+import subprocess
+import tempfile
+import time
+
+import numpy as np
+
+from gearvib import kernels as kn
+from gearvib.assembly import assemble
+from gearvib.config import gearset_from_dict, load_config, load_gearset
+from gearvib.simulate import SpeedRamp, choose_step, prepare_run, static_equilibrium
+from gearvib.simulation.frequencies import stiffest_matrix, undamped_frequencies
+from gearvib.sweep.keys import set_path
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+C_SOURCE = os.path.join(HERE, "c", "rk4_kernel.c")
+CFLAGS = ["-O2", "-shared", "-fPIC"]
+#: A second build with the host's instruction set, as numba's LLVM uses it (SSE4.1 rounding,
+#: AVX); no contraction into fused multiply-adds, so it stays bit-identical.
+CFLAGS_NATIVE = ["-O2", "-march=native", "-ffp-contract=off", "-shared", "-fPIC"]
+I64 = ctypes.POINTER(ctypes.c_int64)
+F64 = ctypes.POINTER(ctypes.c_double)
+
+
+def build_c(tmp: str, flags: list[str], name: str) -> ctypes.CDLL:
+    """Compile the C baseline with ``flags`` (never fast-math) and load it."""
+    gcc = shutil.which("gcc")
+    if gcc is None:
+        raise SystemExit("bench_kernel needs gcc for the C baseline")
+    lib = os.path.join(tmp, f"rk4_kernel_{name}.so")
+    subprocess.run([gcc, *flags, "-o", lib, C_SOURCE, "-lm"], check=True)
+    c = ctypes.CDLL(lib)
+    c.gv_header_size.restype = ctypes.c_int64
+    if c.gv_header_size() != kn.N_HEADER:
+        raise SystemExit("benchmarks/c/rk4_kernel.c is out of date with gearvib.kernels' header")
+    c.gv_integrate_chunk.restype = ctypes.c_int64
+    c.gv_integrate_chunk.argtypes = [
+        I64, F64, F64, ctypes.c_int64, F64, ctypes.c_int64, F64, ctypes.c_int64, F64,
+        ctypes.c_int64, ctypes.c_int64, ctypes.c_double, F64, ctypes.c_int64, ctypes.c_int64,
+        I64, I64, ctypes.c_int64, F64, ctypes.c_int64, F64, I64,
+    ]
+    c.gv_rhs_loop.restype = ctypes.c_double
+    c.gv_rhs_loop.argtypes = [
+        I64, F64, F64, ctypes.c_int64, F64, ctypes.c_int64, F64, ctypes.c_int64, F64,
+        ctypes.c_int64, ctypes.c_double, ctypes.c_double, ctypes.c_int64, F64, F64,
+    ]
+    return c
+
+
+def ptr(a: np.ndarray, kind=F64):
+    return a.ctypes.data_as(kind)
+
+
+class Case:
+    """A packed run of a model: system, initial state at ``t_start``, step."""
+
+    def __init__(self, model, cond, t_start: float):
+        setup = prepare_run(model, cond, False)
+        system = setup.system
+        k_max = stiffest_matrix(model, setup.torque_sign).copy()
+        k_in = system.ipar[kn.IP_INPUT]
+        k_max[k_in, k_in] += setup.coupling.stiffness
+        f_nat = float(undamped_frequencies(setup.mass, k_max).max())
+        f_mesh = float(np.nanmax(model.mesh_frequencies_per_rpm)) * setup.speed_max * 30 / np.pi
+        self.step = choose_step(f_nat, f_mesh, speed_max_rpm=setup.speed_max * 30 / np.pi)
+        qd0 = setup.rigid * setup.omega0
+        q0, _ = static_equilibrium(system, setup.mass, setup.rigid, qd0)
+        delta0 = np.abs(system.mesh_vectors @ q0)
+        system.deflection_limit[:] = np.maximum(1e3 * (delta0 + np.abs(system.backlash) / 2),
+                                                1e-3)
+        self.system = system
+        self.packed = system.astuple()
+        self.n, self.nm = system.n_dof, system.n_mesh
+        self.dt = self.step.dt
+        # advance to t_start (the state of the run there is the benchmark's start)
+        y = np.concatenate([q0, qd0])
+        self.first = round(t_start / self.dt)
+        if self.first:
+            self.run_numba(y, 0, self.first)
+        self.y0 = y
+
+    def buffers(self, n_steps: int):
+        return (np.empty((n_steps, kn.n_signals(self.n, self.nm))),
+                np.full(self.nm, -1, dtype=np.int64), np.zeros(self.nm, dtype=np.int64),
+                np.empty(kn.work_shape(self.n, self.nm)),
+                np.empty((self.nm, kn.MESH_OUT_COLUMNS)), np.zeros(2, dtype=np.int64))
+
+    def run_numba(self, y: np.ndarray, first: int, n_steps: int) -> np.ndarray:
+        record, fs, ch, work, mo, status = self.buffers(n_steps)
+        kn.integrate_chunk(y, first, n_steps, self.dt, self.packed, record, 0, fs, ch,
+                           first + n_steps, work, mo, status)
+        assert status[0] == kn.STATUS_OK
+        return record
+
+    def run_c(self, c, y: np.ndarray, first: int, n_steps: int) -> tuple[np.ndarray, int]:
+        ints, vals, tables, sp, tq = self.packed
+        record, fs, ch, work, mo, status = self.buffers(n_steps)
+        n_rhs = c.gv_integrate_chunk(
+            ptr(ints, I64), ptr(vals), ptr(tables), tables.shape[2], ptr(sp), sp.shape[1],
+            ptr(tq), tq.shape[1], ptr(y), first, n_steps, self.dt, ptr(record), record.shape[1],
+            0, ptr(fs, I64), ptr(ch, I64), first + n_steps, ptr(work), work.shape[1], ptr(mo),
+            ptr(status, I64))
+        assert status[0] == kn.STATUS_OK
+        return record, n_rhs
+
+
+def best(fn, repeat: int) -> float:
+    times = []
+    for _ in range(repeat):
+        t0 = time.process_time()
+        fn()
+        times.append(time.process_time() - t0)
+    return min(times)
+
+
+def rhs_per_eval(case: Case, c, n_steps: int, repeat: int) -> dict:
+    """ns per right-hand side: whole RK4 loop, numba vs C, after a bit-identity check."""
+    y_n = case.y0.copy()
+    rec_n = case.run_numba(y_n, case.first, n_steps)
+    y_c = case.y0.copy()
+    rec_c, n_rhs = case.run_c(c, y_c, case.first, n_steps)
+    identical = np.array_equal(rec_n, rec_c) and np.array_equal(y_n, y_c)
+    if not identical:
+        raise SystemExit(f"C and numba records differ (max |diff| "
+                         f"{np.nanmax(np.abs(rec_n - rec_c)):.3g}): the baseline is not the "
+                         "same algorithm")
+    t_n = best(lambda: case.run_numba(case.y0.copy(), case.first, n_steps), repeat)
+    t_c = best(lambda: case.run_c(c, case.y0.copy(), case.first, n_steps), repeat)
+    # right-hand sides alone, at the recorded states
+    states = np.ascontiguousarray(rec_n[:, : 2 * case.n])
+    ints, vals, tables, sp, tq = case.packed
+    dy = np.empty(2 * case.n)
+    mo = np.empty((case.nm, kn.MESH_OUT_COLUMNS))
+    t0 = case.first * case.dt
+    n_eval = n_rhs
+
+    def loop_c():
+        return c.gv_rhs_loop(ptr(ints, I64), ptr(vals), ptr(tables), tables.shape[2], ptr(sp),
+                             sp.shape[1], ptr(tq), tq.shape[1], ptr(states), states.shape[0],
+                             t0, case.dt, n_eval, ptr(dy), ptr(mo))
+
+    def loop_n():
+        return kn.rhs_loop(states, t0, case.dt, n_eval, case.packed, dy, mo)
+
+    if loop_c() != loop_n():
+        raise SystemExit("C and numba right-hand sides differ")
+    r_n = best(loop_n, repeat)
+    r_c = best(loop_c, repeat)
+    return {"n_rhs": n_rhs, "steps": n_steps, "loop_numba": t_n / n_rhs * 1e9,
+            "loop_c": t_c / n_rhs * 1e9, "rhs_numba": r_n / n_eval * 1e9,
+            "rhs_c": r_c / n_eval * 1e9}
+
+
+N_BATCH = 8
+
+
+def batch_variants(preset: str) -> list:
+    """8 variants: sun-mesh damping ratio x1 ... x2.75, elastic: planet bearing stiffness."""
+    cfg, base = load_config(preset)
+    out = []
+    for k in range(N_BATCH):
+        d = set_path(cfg, "meshes.sun.damping_ratio", 0.005 * (1 + 0.25 * k))
+        if "elastic" in preset:
+            d = set_path(d, "bodies.planet.support.radial", 1.5e8 * (1 + 0.05 * k))
+        out.append(assemble(gearset_from_dict(d, base=base)))
+    return out
+
+
+def batched_vs_single(preset: str, cond, window: float, repeat: int) -> tuple[float, float]:
+    """CPU time of 8 single runs and of one batched call over the same window."""
+    cases = [Case(m, cond, 0.0) for m in batch_variants(preset)]
+    dt = cases[0].dt
+    if any(c.dt != dt for c in cases):
+        raise SystemExit("the variants' automatic steps differ")
+    n_steps = round(window / dt)
+    systems = [c.system for c in cases]
+    y0 = np.array([c.y0 for c in cases])
+    rec, _, status, _ = kn.integrate_batch(systems, y0, dt, n_steps)
+    if status[0] != kn.STATUS_OK:
+        raise SystemExit(f"batched run failed: status {status.tolist()}")
+    for b, c in enumerate(cases):
+        if rec[b].tobytes() != kn.integrate(c.system, c.y0, dt, n_steps)[0].tobytes():
+            raise SystemExit(f"batched variant {b} differs from its single run")
+    t_single = best(lambda: [kn.integrate(c.system, c.y0, dt, n_steps) for c in cases], repeat)
+    t_batch = best(lambda: kn.integrate_batch(systems, y0, dt, n_steps), repeat)
+    return t_single, t_batch
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="shorter windows, 3 repetitions")
+    args = parser.parse_args()
+    repeat = 3 if args.quick else 7
+    window = 0.02 if args.quick else 0.1
+    cond = SpeedRamp(0.0, 4000.0, 1.0, input_torque=60.0)
+    with tempfile.TemporaryDirectory() as tmp:
+        builds = [("O2", CFLAGS), ("native", CFLAGS_NATIVE)]
+        libs = {name: build_c(tmp, flags, name) for name, flags in builds}
+        cases = {}
+        for name, flags in builds:
+            c = libs[name]
+            print(f"\nC baseline: gcc {' '.join(flags)} {os.path.relpath(C_SOURCE)}")
+            print("ns per right-hand-side evaluation (CPU time, best of "
+                  f"{repeat}; window {window} s of the run-up from t = 0.4 s, ~1600 min^-1)")
+            print(f"{'model':22s} {'RHS evals':>10s} {'RK4 loop numba':>15s} {'C':>8s} "
+                  f"{'ratio':>6s} {'RHS alone numba':>16s} {'C':>8s} {'ratio':>6s}")
+            for preset in ("paper-case1", "paper-case1-elastic"):
+                if preset not in cases:
+                    cases[preset] = Case(assemble(load_gearset(preset)), cond, 0.4)
+                case = cases[preset]
+                n_steps = round(window / case.dt)
+                r = rhs_per_eval(case, c, n_steps, repeat)
+                print(f"{preset:22s} {r['n_rhs']:10d} {r['loop_numba']:15.1f} "
+                      f"{r['loop_c']:8.1f} {r['loop_numba'] / r['loop_c']:6.2f} "
+                      f"{r['rhs_numba']:16.1f} {r['rhs_c']:8.1f} "
+                      f"{r['rhs_numba'] / r['rhs_c']:6.2f}")
+            print("(records of the C loop and of the numba kernel bit-identical)")
+    print(f"\nbatched ({N_BATCH} variants: sun-mesh damping, planet bearing stiffness) against "
+          f"{N_BATCH} single runs, {window} s from t = 0 (CPU time, best of {repeat})")
+    print(f"{'model':22s} {'8 single [s]':>13s} {'batched [s]':>12s} {'throughput ratio':>17s}")
+    for preset in ("paper-case1", "paper-case1-elastic"):
+        t_s, t_b = batched_vs_single(preset, cond, window, repeat)
+        print(f"{preset:22s} {t_s:13.4f} {t_b:12.4f} {t_s / t_b:17.2f}")
+    print("(every batched variant bit-identical to its single run)")
+
+
+if __name__ == "__main__":
+    main()
