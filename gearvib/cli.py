@@ -25,7 +25,7 @@ from typing import NoReturn
 from gearvib import __version__
 from gearvib.interrupts import Interrupted, exit_now, pending_signal, signals_as_exceptions
 
-__all__ = ["main", "run"]
+__all__ = ["hide_unused_modules", "main", "run"]
 
 
 class CliError(Exception):
@@ -458,7 +458,7 @@ def run() -> None:
     """
     import logging
 
-    _hide_dask(sys.argv[1:])
+    hide_unused_modules(sys.argv[1:])
     with signals_as_exceptions():
         try:
             code = _run_command(None)
@@ -474,19 +474,24 @@ def run() -> None:
         exit_now(code)
 
 
-def _hide_dask(argv: Sequence[str]) -> None:
-    """Make dask unimportable in this process unless the command is ``sweep``.
+def hide_unused_modules(argv: Sequence[str]) -> None:
+    """Make optional modules that libraries probe for, and gearvib never uses, unimportable.
 
-    With dask installed, xarray imports it (and dask.distributed) to check every new variable
-    and every netCDF write for dask arrays: 0.3-0.7 s of imports in a command that never holds
-    one (half the whole time of a 1 s ``simulate``). An entry of ``None`` in ``sys.modules``
-    makes ``importlib.util.find_spec`` report the module as missing, so xarray takes its
-    no-dask path; the files written are the same. Only the console script does this (its
-    process ends with the command), never :func:`main`, which may run inside a user's program.
+    * ``dask`` and ``distributed``: with dask installed, xarray imports them to check every
+      new variable and every netCDF write for dask arrays, 0.3-0.7 s of imports in a command
+      that never holds one (half the whole time of a 1 s ``simulate``). Kept for ``sweep``,
+      the one command that may use a Dask cluster.
+    * ``cffi``: numba's typing registry imports it (and its C parser, 0.1 s) at the first
+      compilation or cache load, for calling cffi functions, which gearvib does not do.
+
+    An entry of ``None`` in ``sys.modules`` makes ``importlib.util.find_spec`` report the module
+    as missing and ``import`` raise ImportError, so the libraries take their documented
+    no-dask / no-cffi paths; the files written are the same. Only the console script does this
+    (its process ends with the command), never :func:`main`, which may run inside a user's
+    program.
     """
-    if "sweep" in argv:  # the one command that may use a Dask cluster
-        return
-    for name in ("dask", "distributed"):
+    hidden = ["cffi"] if "sweep" in argv else ["cffi", "dask", "distributed"]
+    for name in hidden:
         sys.modules.setdefault(name, None)  # type: ignore[arg-type]
 
 
