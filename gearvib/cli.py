@@ -262,8 +262,8 @@ def _cmd_demo(args: argparse.Namespace) -> int:
 
 
 def _cmd_sweep(args: argparse.Namespace) -> int:
+    from gearvib.execution import dask_executor
     from gearvib.sweep import load_sweep, run_sweep
-    from gearvib.sweep.execution import dask_executor
 
     sweep = load_sweep(args.sweep)
     if args.list:

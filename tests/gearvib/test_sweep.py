@@ -375,7 +375,7 @@ def test_local_workers_get_one_thread_each_and_the_numba_cache(method, monkeypat
 
     import numba
 
-    from gearvib.sweep.execution import THREAD_VARIABLES, local_executor, worker_environment
+    from gearvib.execution import THREAD_VARIABLES, local_executor, worker_environment
 
     if method not in multiprocessing.get_all_start_methods():
         pytest.skip(f"no {method} start method here")
