@@ -296,10 +296,16 @@ def chart_chunk(system_at: SystemAt | None, kind: str, items: Sequence[tuple], o
     sa = _INSTALLED if system_at is None else system_at
     if sa is None:
         raise RuntimeError("chart_chunk: no system given and none installed in this process")
-    with _one_thread():
-        if kind == "grid":
-            return [_evaluate_point(sa, float(f), p, opts) for f, p in items]
-        return [_boundary(sa, float(lo), float(hi), p, opts, xtol_rel) for lo, hi, p in items]
+    with _one_thread():  # entering the limit costs ~10 ms: once per chunk
+        return _evaluate_items(sa, kind, items, opts, xtol_rel)
+
+
+def _evaluate_items(system_at: SystemAt, kind: str, items: Sequence[tuple], opts: dict,
+                    xtol_rel: float) -> list:
+    if kind == "grid":
+        return [_evaluate_point(system_at, float(f), p, opts) for f, p in items]
+    return [_boundary(system_at, float(lo), float(hi), p, opts, xtol_rel)
+            for lo, hi, p in items]
 
 
 def _chunks(n: int, parts: int) -> list[range]:
@@ -324,7 +330,7 @@ def _map_chart(kind: str, items: Sequence[tuple], *, system_at: SystemAt, opts: 
         out = []
         with _one_thread():
             for it in items:
-                out.extend(chart_chunk(system_at, kind, [it], opts, xtol_rel))
+                out.extend(_evaluate_items(system_at, kind, [it], opts, xtol_rel))
                 bar.update(1)
         return out
     sent = None if own_pool else system_at
