@@ -83,6 +83,13 @@ def test_simulate_command_imports_nothing_it_does_not_need(tmp_path):
         assert name in state["hidden"] and name not in top
 
 
+def test_modes_command_imports_neither_xarray_nor_numba():
+    mods = _top(_modules_after("from gearvib.cli import main\n"
+                               "assert main(['modes', 'paper-case1']) == 0"))
+    for name in (*HEAVY, "xarray", "pandas", "numba", "netCDF4"):
+        assert name not in mods, f"`gearvib modes` imports {name}"
+
+
 @pytest.mark.parametrize(("argv", "hidden"), [
     (["simulate", "paper-case1"], {"cffi", "dask", "distributed"}),
     (["sweep", "s.toml", "-o", "out"], {"cffi"}),
