@@ -697,8 +697,10 @@ def stability_chart(
             bar.set_description("Floquet boundaries")
         roots = dict(zip(brackets, _map_chart("boundary", brackets, **run), strict=True))
     except BaseException:
-        if own_pool and pool is not None:
-            pool.shutdown(wait=True, cancel_futures=True)
+        if own_pool and pool is not None:  # return at once: queued chunks are cancelled, the
+            # running ones end in the background (the workers ignore Ctrl-C) and their
+            # processes exit then
+            pool.shutdown(wait=False, cancel_futures=True)
             own_pool = False
         raise
     finally:
