@@ -215,8 +215,10 @@ def executor_for(workers: int | None = 1, scheduler: str | None = None,
         pool = local_executor(n)
         try:
             yield pool, n
-        except BaseException:
-            pool.shutdown(wait=True, cancel_futures=True)
+        except BaseException:  # an error or an interrupt: stop the workers now
+            from analysis.instability.chart import terminate_pool
+
+            terminate_pool(pool)
             raise
         else:
             pool.shutdown(wait=True)

@@ -37,7 +37,7 @@ from analysis.instability.floquet import floquet
 from analysis.instability.theory import Candidates
 
 __all__ = ["ATTRIBUTION_RTOL", "StabilityChart", "attribute_region", "chart_chunk",
-           "stability_chart"]
+           "stability_chart", "terminate_pool"]
 
 SystemAt = Callable[..., tuple[Any, Any, Any, float]]
 
@@ -256,6 +256,27 @@ def default_workers() -> int:
         return max(1, len(os.sched_getaffinity(0)))
     except AttributeError:  # not on Linux
         return max(1, os.cpu_count() or 1)
+
+
+def terminate_pool(pool: Executor) -> None:
+    """Cancel the queued work of a process pool and end its worker processes now.
+
+    ``ProcessPoolExecutor.shutdown`` waits for the calls that are running (a chunk of a chart
+    may take seconds), and a parent that exits meanwhile leaves its workers blocked for ever.
+    Python 3.14's ``terminate_workers`` is used where it exists; before, the pool's worker
+    processes (its ``_processes`` table, stable since Python 3.3) are terminated.
+    """
+    stop = getattr(pool, "terminate_workers", None)
+    if callable(stop):
+        stop()
+        return
+    procs = list((getattr(pool, "_processes", None) or {}).values())  # shutdown clears it
+    pool.shutdown(wait=False, cancel_futures=True)
+    for proc in procs:
+        if proc.is_alive():
+            proc.terminate()
+    for proc in procs:
+        proc.join(timeout=1.0)
 
 
 def _one_thread() -> Any:
@@ -697,10 +718,8 @@ def stability_chart(
             bar.set_description("Floquet boundaries")
         roots = dict(zip(brackets, _map_chart("boundary", brackets, **run), strict=True))
     except BaseException:
-        if own_pool and pool is not None:  # return at once: queued chunks are cancelled, the
-            # running ones end in the background (the workers ignore Ctrl-C) and their
-            # processes exit then
-            pool.shutdown(wait=False, cancel_futures=True)
+        if own_pool and pool is not None:  # return at once, nothing left running
+            terminate_pool(pool)
             own_pool = False
         raise
     finally:
