@@ -19,21 +19,15 @@ speed in ``min-1``). For a DataArray the reference must be one of its coordinate
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import xarray as xr
 
-from analysis.inputs import Reference, dataset_variable, find_reference
-from analysis.maps import (
-    OverallLevel,
-    RpmFrequencyMap,
-    RpmOrderMap,
-    overall_level,
-    rpm_frequency_map,
-    rpm_order_map,
-)
-from analysis.orders import OrderCut, OrderSpectrum, order_cuts, order_spectrum
-from analysis.spectrum import Spectrum, spectrum
+if TYPE_CHECKING:  # the methods import their modules when called: `import analysis` stays light
+    from analysis.inputs import Reference
+    from analysis.maps import OverallLevel, RpmFrequencyMap, RpmOrderMap
+    from analysis.orders import OrderCut, OrderSpectrum
+    from analysis.spectrum import Spectrum
 
 __all__ = ["ACCESSOR", "DataArrayAccessor", "DatasetAccessor"]
 
@@ -42,6 +36,8 @@ ACCESSOR = "gearvib"
 
 
 def _ref_kwargs(obj: Any, speed: str | None, angle: str | None) -> dict[str, Any]:
+    from analysis.inputs import find_reference
+
     ref = find_reference(obj, speed=speed, angle=angle)
     return {ref.kind: obj[ref.variable]}
 
@@ -61,28 +57,38 @@ class DataArrayAccessor:
 
     def reference(self, speed: str | None = None, angle: str | None = None) -> Reference:
         """The speed reference that order analysis would use (named or found)."""
+        from analysis.inputs import find_reference
+
         return find_reference(self._obj, speed=speed, angle=angle)
 
     def spectrum(self, **kwargs: Any) -> Spectrum:
         """:func:`analysis.spectrum.spectrum` of the array."""
+        from analysis.spectrum import spectrum
+
         return spectrum(self._obj, **kwargs)
 
     def frequency_map(
         self, speed: str | None = None, *, angle: str | None = None, **kwargs: Any
     ) -> RpmFrequencyMap:
         """:func:`analysis.maps.rpm_frequency_map` against a speed or angle coordinate."""
+        from analysis.maps import rpm_frequency_map
+
         return rpm_frequency_map(self._obj, **_ref_kwargs(self._obj, speed, angle), **kwargs)
 
     def order_map(
         self, speed: str | None = None, *, angle: str | None = None, **kwargs: Any
     ) -> RpmOrderMap:
         """:func:`analysis.maps.rpm_order_map` against a speed or angle coordinate."""
+        from analysis.maps import rpm_order_map
+
         return rpm_order_map(self._obj, **_ref_kwargs(self._obj, speed, angle), **kwargs)
 
     def order_cuts(
         self, orders: Any, speed: str | None = None, *, angle: str | None = None, **kwargs: Any
     ) -> OrderCut:
         """:func:`analysis.orders.order_cuts` of ``orders``."""
+        from analysis.orders import order_cuts
+
         ref = _ref_kwargs(self._obj, speed, angle)
         return order_cuts(self._obj, orders=orders, **ref, **kwargs)
 
@@ -90,12 +96,16 @@ class DataArrayAccessor:
         self, speed: str | None = None, *, angle: str | None = None, **kwargs: Any
     ) -> OrderSpectrum:
         """:func:`analysis.orders.order_spectrum` against a speed or angle coordinate."""
+        from analysis.orders import order_spectrum
+
         return order_spectrum(self._obj, **_ref_kwargs(self._obj, speed, angle), **kwargs)
 
     def overall_level(
         self, speed: str | None = None, *, angle: str | None = None, **kwargs: Any
     ) -> OverallLevel:
         """:func:`analysis.maps.overall_level` against a speed or angle coordinate."""
+        from analysis.maps import overall_level
+
         return overall_level(self._obj, **_ref_kwargs(self._obj, speed, angle), **kwargs)
 
 
@@ -116,19 +126,27 @@ class DatasetAccessor:
 
     def reference(self, speed: str | None = None, angle: str | None = None) -> Reference:
         """The speed reference that order analysis would use (named or found)."""
+        from analysis.inputs import find_reference
+
         return find_reference(self._obj, speed=speed, angle=angle)
 
     def _var(self, variable: str) -> xr.DataArray:
+        from analysis.inputs import dataset_variable
+
         return dataset_variable(self._obj, variable)
 
     def spectrum(self, variable: str, **kwargs: Any) -> Spectrum:
         """:func:`analysis.spectrum.spectrum` of ``ds[variable]``."""
+        from analysis.spectrum import spectrum
+
         return spectrum(self._var(variable), **kwargs)
 
     def frequency_map(
         self, variable: str, speed: str | None = None, *, angle: str | None = None, **kwargs: Any
     ) -> RpmFrequencyMap:
         """:func:`analysis.maps.rpm_frequency_map` of ``ds[variable]``."""
+        from analysis.maps import rpm_frequency_map
+
         return rpm_frequency_map(
             self._var(variable), **_ref_kwargs(self._obj, speed, angle), **kwargs
         )
@@ -137,6 +155,8 @@ class DatasetAccessor:
         self, variable: str, speed: str | None = None, *, angle: str | None = None, **kwargs: Any
     ) -> RpmOrderMap:
         """:func:`analysis.maps.rpm_order_map` of ``ds[variable]``."""
+        from analysis.maps import rpm_order_map
+
         return rpm_order_map(self._var(variable), **_ref_kwargs(self._obj, speed, angle), **kwargs)
 
     def order_cuts(
@@ -149,6 +169,8 @@ class DatasetAccessor:
         **kwargs: Any,
     ) -> OrderCut:
         """:func:`analysis.orders.order_cuts` of ``ds[variable]``."""
+        from analysis.orders import order_cuts
+
         ref = _ref_kwargs(self._obj, speed, angle)
         return order_cuts(self._var(variable), orders=orders, **ref, **kwargs)
 
@@ -156,6 +178,8 @@ class DatasetAccessor:
         self, variable: str, speed: str | None = None, *, angle: str | None = None, **kwargs: Any
     ) -> OrderSpectrum:
         """:func:`analysis.orders.order_spectrum` of ``ds[variable]``."""
+        from analysis.orders import order_spectrum
+
         return order_spectrum(
             self._var(variable), **_ref_kwargs(self._obj, speed, angle), **kwargs
         )
@@ -164,6 +188,8 @@ class DatasetAccessor:
         self, variable: str, speed: str | None = None, *, angle: str | None = None, **kwargs: Any
     ) -> OverallLevel:
         """:func:`analysis.maps.overall_level` of ``ds[variable]``."""
+        from analysis.maps import overall_level
+
         return overall_level(self._var(variable), **_ref_kwargs(self._obj, speed, angle), **kwargs)
 
 

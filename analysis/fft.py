@@ -5,7 +5,7 @@ backend, the thread count and the plan cache are controlled in one place.
 
 * **Backend.** pyFFTW (FFTW 3) when it can be imported, otherwise :mod:`scipy.fft`
   (:func:`backend` tells which one is active). Setting the environment variable
-  ``GEARVIB_FFT=scipy`` before the first import forces :mod:`scipy.fft` (BSD-licensed
+  ``GEARVIB_FFT=scipy`` before the first transform forces :mod:`scipy.fft` (BSD-licensed
   pocketfft) even when pyFFTW is installed: pyFFTW's wheels bundle FFTW, which is GPL.
   Both give the unnormalised forward transform and the ``1/n``-normalised inverse, like
   :mod:`numpy.fft`.
@@ -48,7 +48,6 @@ from types import ModuleType
 from typing import Any
 
 import numpy as np
-import scipy.fft
 
 __all__ = [
     "RfftPlan",
@@ -82,11 +81,24 @@ def _load_pyfftw() -> ModuleType | None:
     return pyfftw
 
 
-_pyfftw: ModuleType | None = _load_pyfftw()
+_UNLOADED: Any = object()
+_pyfftw: Any = _UNLOADED  # the pyfftw module, None (scipy.fft backend), or not chosen yet
 _workers: int = 1
 _planner_effort: str = "FFTW_ESTIMATE"
 _cache: OrderedDict[tuple[Any, ...], tuple[Any, int]] = OrderedDict()  # key -> (plan, bytes)
 _cache_lock = threading.Lock()
+_load_lock = threading.Lock()
+
+
+def _fftw() -> ModuleType | None:
+    """The pyfftw module, or ``None`` for the scipy.fft backend; chosen on first use (importing
+    pyFFTW takes 0.1-0.3 s, which a process that never transforms should not pay)."""
+    global _pyfftw
+    if _pyfftw is _UNLOADED:
+        with _load_lock:
+            if _pyfftw is _UNLOADED:
+                _pyfftw = _load_pyfftw()
+    return _pyfftw
 
 
 def backend() -> str:
@@ -97,7 +109,7 @@ def backend() -> str:
     str
         ``"pyfftw"`` when pyFFTW is importable, ``"scipy"`` otherwise.
     """
-    return "pyfftw" if _pyfftw is not None else "scipy"
+    return "pyfftw" if _fftw() is not None else "scipy"
 
 
 def _check_workers(workers: int, name: str = "workers") -> int:
@@ -178,6 +190,8 @@ def next_fast_len(n: int) -> int:
     """
     if isinstance(n, bool) or not isinstance(n, int | np.integer) or n < 1:
         raise ValueError(f"n = {n!r} is not admissible: must be an integer >= 1")
+    import scipy.fft
+
     return int(scipy.fft.next_fast_len(int(n), real=True))
 
 
@@ -226,9 +240,9 @@ def empty_aligned(shape: int | tuple[int, ...], dtype: Any = np.float64) -> np.n
         C-contiguous array; pass it as ``out=`` to :func:`rfft` / :func:`irfft` so that FFTW
         writes into it directly.
     """
-    if _pyfftw is None:
+    if _fftw() is None:
         return np.empty(shape, dtype)
-    return _pyfftw.empty_aligned(shape, dtype)
+    return _fftw().empty_aligned(shape, dtype)
 
 
 def _cached(key: tuple[Any, ...], size: int, make: Any) -> Any:
@@ -238,7 +252,7 @@ def _cached(key: tuple[Any, ...], size: int, make: Any) -> Any:
     and returned without being cached. The cache holds at most ``_CACHE_SIZE`` plans and
     ``_CACHE_MAX_BYTES`` of their buffers (the newest plan is always kept).
     """
-    key = (*key, threading.get_ident(), _planner_effort, _pyfftw is not None)
+    key = (*key, threading.get_ident(), _planner_effort, _fftw() is not None)
     if size > _CACHE_MAX_ELEMENTS:
         return make()
     with _cache_lock:
@@ -265,8 +279,9 @@ def _nbytes(obj: Any) -> int:
 
 def _builder(kind: str, a: np.ndarray, n: int | None, axis: int, threads: int) -> Any:
     """Cached pyFFTW builder for this transform (new, uncached one for huge inputs)."""
-    assert _pyfftw is not None
-    make = _pyfftw.builders.rfft if kind == "rfft" else _pyfftw.builders.irfft
+    fftw = _fftw()
+    assert fftw is not None
+    make = fftw.builders.rfft if kind == "rfft" else fftw.builders.irfft
 
     def build() -> Any:
         return make(
@@ -364,9 +379,9 @@ class RfftPlan:
         self.input = empty_aligned((rows, n), np.float64)
         self._output: np.ndarray | None = None
         self._fftw: Any = None
-        if _pyfftw is not None:
+        if _fftw() is not None:
             self._output = empty_aligned((rows, n // 2 + 1), np.complex128)
-            self._fftw = _pyfftw.FFTW(
+            self._fftw = _fftw().FFTW(
                 self.input,
                 self._output,
                 axes=(-1,),
@@ -392,6 +407,8 @@ class RfftPlan:
             caller may modify it in place meanwhile.
         """
         if self._fftw is None or self._output is None:
+            import scipy.fft
+
             return scipy.fft.rfft(self.input, axis=-1, workers=self.workers)
         self._fftw.execute()
         return self._output
@@ -479,7 +496,9 @@ def rfft(
     shape = (*a.shape[:axis], m // 2 + 1, *a.shape[axis + 1 :])
     dtype = np.dtype(np.complex64 if a.dtype == np.float32 else np.complex128)
     out = _check_out(out, shape, dtype)
-    if _pyfftw is None:
+    if _fftw() is None:
+        import scipy.fft
+
         return _fallback(scipy.fft.rfft, a, n, axis, threads, out)
     return _execute(_builder("rfft", a, n, axis, threads), a, out)
 
@@ -519,6 +538,8 @@ def irfft(
     shape = (*a.shape[:axis], m, *a.shape[axis + 1 :])
     dtype = np.dtype(np.float32 if a.dtype == np.complex64 else np.float64)
     out = _check_out(out, shape, dtype)
-    if _pyfftw is None:
+    if _fftw() is None:
+        import scipy.fft
+
         return _fallback(scipy.fft.irfft, a, n, axis, threads, out)
     return _execute(_builder("irfft", a, n, axis, threads), a, out)

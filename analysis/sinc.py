@@ -19,6 +19,8 @@ alone or with others, bit for bit.
 
 from __future__ import annotations
 
+import functools
+
 import numba
 import numpy as np
 
@@ -61,7 +63,11 @@ def kernel_table(pieces: int = _PIECES, degree: int = _DEGREE) -> np.ndarray:
     return table
 
 
-_TABLE = kernel_table()
+@functools.cache
+def _default_table() -> np.ndarray:
+    # computed on first use, not on import (0.6 s of numpy polynomial fits); kept writeable:
+    # a read-only array would be another numba signature (a second compilation)
+    return kernel_table()
 
 
 @numba.njit(cache=True, error_model="numpy")  # no zero-division checks (none can occur)
@@ -169,7 +175,7 @@ def interpolate(
     n = start + x2.shape[1] if n_total is None else int(n_total)
     p = np.ascontiguousarray(pos, dtype=np.float64)
     out = np.empty((x2.shape[0], p.size))
-    _interpolate(x2, int(start), n, p, _TABLE, out)
+    _interpolate(x2, int(start), n, p, _default_table(), out)
     return out
 
 

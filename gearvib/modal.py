@@ -25,12 +25,15 @@ from __future__ import annotations
 import json
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 import scipy.linalg
-import xarray as xr
 
 from gearvib.model import FLANK_NAMES, AssembledModel
+
+if TYPE_CHECKING:
+    import xarray as xr
 
 __all__ = ["RIGID_BODY_RTOL", "ModalResult", "modal_analysis", "rigid_body_mask"]
 
@@ -149,6 +152,8 @@ class ModalResult:
 
     def to_dataset(self) -> xr.Dataset:
         """The modes as a CF-annotated Dataset."""
+        import xarray as xr  # on use: `gearvib modes` does not need it
+
         mode = np.arange(1, self.n_modes + 1)
         ds = xr.Dataset(
             {

@@ -65,6 +65,7 @@ from gearvib.simulation.step import (
     StepChoice,
     choose_step,
 )
+from gearvib.simulation.tooth_forces import StaticToothForces, static_tooth_forces
 
 __all__ = [
     "CHUNK_DURATION",
@@ -84,6 +85,7 @@ __all__ = [
     "SimulationError",
     "SpeedRamp",
     "SpeedTable",
+    "StaticToothForces",
     "StepChoice",
     "TorqueDriven",
     "check_run_size",
@@ -93,6 +95,7 @@ __all__ = [
     "prepare_run",
     "simulate",
     "static_equilibrium",
+    "static_tooth_forces",
 ]
 
 CHUNK_DURATION = 0.05

@@ -36,9 +36,11 @@ exponentials.
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import math
 from collections.abc import Callable, Sequence
+from concurrent.futures import Executor
 from dataclasses import dataclass
 from functools import cached_property
 
@@ -55,6 +57,7 @@ from analysis.instability import (
     instability_candidates,
     stability_chart,
 )
+from gearvib.execution import default_workers, executor_for
 from gearvib.modal import ModalResult, modal_analysis
 from gearvib.model import AssembledModel, MeshContacts, MeshFrequencyGroup
 from gearvib.simulate import DriveCoupling, default_coupling
@@ -680,6 +683,7 @@ def stability_over_speed(model: AssembledModel, speeds_rpm: np.ndarray, *,
                          torque_sign: float = 1.0, candidates: Candidates | None = None,
                          modal: ModalResult | None = None,
                          floquet_options: dict | None = None, workers: int | None = 1,
+                         scheduler: str | None = None, executor: Executor | None = None,
                          progress: bool | None = False, xtol_rel: float = 1e-8
                          ) -> StabilityChart:
     """Floquet stability chart over input speed, with regions attributed to theory candidates.
@@ -710,8 +714,15 @@ def stability_over_speed(model: AssembledModel, speeds_rpm: np.ndarray, *,
     floquet_options : dict, optional
         Options of :func:`analysis.instability.floquet` (default :data:`CHART_ACCURACY`).
     workers : int or None
-        Processes for the evaluations (None: every core available); see
-        :func:`analysis.instability.stability_chart`. Results do not depend on it.
+        Local worker processes for the evaluations (None: every core available; 1: this
+        process), the pool of the sweeps (:func:`gearvib.execution.executor_for`), used only
+        when the chart is expected to take more than a few seconds. Results do not depend on
+        it.
+    scheduler : str, optional
+        Address of a Dask scheduler whose workers evaluate the chart instead (``[dask]``
+        extra).
+    executor : concurrent.futures.Executor, optional
+        An executor of the caller's (not shut down); ``workers`` then only sizes the chunks.
     progress : bool or None
         Progress bar (None: on a terminal only).
     xtol_rel : float
@@ -742,22 +753,53 @@ def stability_over_speed(model: AssembledModel, speeds_rpm: np.ndarray, *,
     if shapes.shape[1] != candidates.natural_frequencies_hz.size:
         shapes, names = None, None  # candidates of other modes: frequency relation only
     opts = dict(CHART_ACCURACY if floquet_options is None else floquet_options)
-    return stability_chart(system.at, speeds * f_per_rpm, mesh_frequency_per_rpm=f_per_rpm,
-                           candidates=candidates, refine=refine, mode_shapes=shapes,
-                           mode_names=names, floquet_options=opts, workers=workers,
-                           progress=progress, xtol_rel=xtol_rel, **_chart_metadata(system))
+    with _chart_executor(workers, scheduler, executor) as (pool, n):
+        return stability_chart(system.at, speeds * f_per_rpm, mesh_frequency_per_rpm=f_per_rpm,
+                               candidates=candidates, refine=refine, mode_shapes=shapes,
+                               mode_names=names, floquet_options=opts, workers=n,
+                               executor=pool, progress=progress, xtol_rel=xtol_rel,
+                               **_chart_metadata(system))
+
+
+@dataclass(frozen=True)
+class _SystemsByParameter:
+    """``system_at(f_mesh, value)`` of :func:`stability_map`: picklable (the systems of every
+    value, built in the caller), so that any executor can evaluate the chart."""
+
+    systems: dict[float, PeriodicGearSystem]
+
+    def __call__(self, f: float, value: float):
+        return self.systems[float(value)].at(f)
+
+
+@contextlib.contextmanager
+def _chart_executor(workers: int | None, scheduler: str | None, executor: Executor | None):
+    """``(executor or None, worker count)`` for :func:`stability_chart`: None runs in this
+    process; otherwise the sweeps' executors (:func:`gearvib.execution.executor_for`)."""
+    n = default_workers() if workers is None else workers
+    if isinstance(n, bool) or not isinstance(n, int) or n < 1:
+        raise ValueError(f"workers = {workers!r} is not admissible: an integer >= 1 or None")
+    if executor is None and scheduler is None and n == 1:
+        yield None, 1
+        return
+    with executor_for(n, scheduler, executor) as (pool, count):
+        yield pool, count
 
 
 def stability_map(model_for: Callable[[float], AssembledModel], speeds_rpm: np.ndarray,
                   values: np.ndarray, *, parameter_name: str = "parameter",
-                  parameter_units: str = "1", refine: bool = False) -> StabilityChart:
+                  parameter_units: str = "1", refine: bool = False,
+                  floquet_options: dict | None = None, workers: int | None = None,
+                  scheduler: str | None = None, executor: Executor | None = None,
+                  progress: bool | None = False) -> StabilityChart:
     """Ince-Strutt style chart of a gear set over input speed x one design parameter.
 
     Parameters
     ----------
     model_for : callable
         ``model_for(value) -> AssembledModel``, e.g. the gear set rebuilt with another mesh
-        damping ratio, stiffness variation or contact ratio.
+        damping ratio, stiffness variation or contact ratio. Called once per value, in this
+        process (it need not be picklable).
     speeds_rpm : array_like
         Increasing input speeds [min^-1].
     values : array_like
@@ -766,33 +808,41 @@ def stability_map(model_for: Callable[[float], AssembledModel], speeds_rpm: np.n
         Metadata of the parameter axis.
     refine : bool
         Refine region boundaries (slower).
+    floquet_options : dict, optional
+        Options of :func:`analysis.instability.floquet` (default: its own).
+    workers : int or None
+        Local worker processes (None: every core available; 1: this process), the pool of
+        the sweeps (:func:`gearvib.execution.executor_for`), started only when the chart is
+        expected to take more than a few seconds. The chart is the same for any number.
+    scheduler : str, optional
+        Address of a Dask scheduler whose workers evaluate the chart (``[dask]`` extra).
+    executor : concurrent.futures.Executor, optional
+        An executor of the caller's (not shut down); ``workers`` then only sizes the chunks.
+    progress : bool or None
+        Progress bar over the evaluations (None: on a terminal only).
     """
     speeds = np.asarray(speeds_rpm, dtype=float)
     vals = [float(v) for v in np.asarray(values, dtype=float).ravel()]
     if speeds.ndim != 1 or speeds.size < 2 or not (speeds > 0).all() or not vals:
         raise ValueError("speeds_rpm must be increasing positive speeds and values non-empty")
     systems: dict[float, PeriodicGearSystem] = {}
-
-    def system(value: float) -> PeriodicGearSystem:
+    for value in vals:
         if value not in systems:
             systems[value] = periodic_system(model_for(value))
-        return systems[value]
-
-    first = system(vals[0])
+    first = systems[vals[0]]
     f_per_rpm = _reference_factor(first.model, first)
-
-    def at(f: float, p: float):
-        s = system(float(p))
+    for value, s in systems.items():
         if not math.isclose(s.reference_frequency_per_rpm, f_per_rpm, rel_tol=1e-9):
-            raise ValueError(f"model_for({p}) changes the mesh frequency per speed "
+            raise ValueError(f"model_for({value}) changes the mesh frequency per speed "
                              f"({s.reference_frequency_per_rpm:.6g} against {f_per_rpm:.6g} "
                              "Hz per min^-1); the chart needs one speed axis")
-        return s.at(f)
-
-    return stability_chart(at, speeds * f_per_rpm, parameter_values=vals,
-                           mesh_frequency_per_rpm=f_per_rpm, refine=refine,
-                           parameter_name=parameter_name, parameter_units=parameter_units,
-                           **_chart_metadata(first))
+    with _chart_executor(workers, scheduler, executor) as (pool, n):
+        return stability_chart(_SystemsByParameter(systems), speeds * f_per_rpm,
+                               parameter_values=vals, mesh_frequency_per_rpm=f_per_rpm,
+                               refine=refine, parameter_name=parameter_name,
+                               parameter_units=parameter_units,
+                               floquet_options=floquet_options, workers=n, executor=pool,
+                               progress=progress, **_chart_metadata(first))
 
 
 def first_order_regions(model: AssembledModel, *, coupling: DriveCoupling | None = None,

@@ -25,7 +25,6 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from scipy.integrate import quad
 
 from gearvib.geometry import MeshGeometry
 
@@ -478,11 +477,15 @@ class PairSuperposition(MeshStiffness):
 
     @property
     def mean(self) -> float:
+        from scipy.integrate import quad  # on use, not on import
+
         return float(
             sum(quad(self._f_scalar, a, b, limit=200, epsabs=0.0)[0] for a, b in self._segments())
         )
 
     def harmonics(self, l_max: int) -> np.ndarray:
+        from scipy.integrate import quad
+
         n = _lmax(l_max)
         out = np.zeros(n, dtype=complex)
         for i in range(n):

@@ -10,10 +10,12 @@ the interval widened by a small relative tolerance, and -- when the mode shapes 
 its modes must carry the growing Floquet solution. An interval no candidate explains stays
 *unattributed* (label ``""``); the nearest candidate is never taken as such.
 
-Grid points and boundary refinements are independent Floquet evaluations; with
-``workers > 1`` they run in a process pool (forked, so the system callable is not pickled)
-when the first evaluation shows that the chart takes long enough to pay for it. The results
-do not depend on the number of workers.
+Grid points and boundary refinements are independent Floquet evaluations. They run on any
+:class:`concurrent.futures.Executor` (``executor=``: a process pool, a Dask cluster; gearvib
+passes the executors its sweeps use) or, with ``workers > 1`` and no executor, on a forked
+process pool of the call (the system callable is then not pickled), in chunks of
+:func:`chart_chunk`, when the first evaluation shows that the chart takes long enough to pay
+for it. The results do not depend on the executor or the number of workers.
 """
 
 from __future__ import annotations
@@ -23,6 +25,7 @@ import os
 import signal
 import time
 from collections.abc import Callable, Sequence
+from concurrent.futures import Executor, Future, ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -33,7 +36,8 @@ from analysis.checks import require_finite, require_monotonic, require_positive
 from analysis.instability.floquet import floquet
 from analysis.instability.theory import Candidates
 
-__all__ = ["ATTRIBUTION_RTOL", "StabilityChart", "attribute_region", "stability_chart"]
+__all__ = ["ATTRIBUTION_RTOL", "StabilityChart", "attribute_region", "chart_chunk",
+           "stability_chart", "terminate_pool"]
 
 SystemAt = Callable[..., tuple[Any, Any, Any, float]]
 
@@ -235,15 +239,14 @@ def _call(system_at: SystemAt, f: float, p: Any) -> tuple:
 
 # ------------------------------------------------------------------------- parallel map
 
-_TASK: Callable[[Any], Any] | None = None  # set in the parent just before the pool forks
+_INSTALLED: SystemAt | None = None  # the system of this chart's own forked pool (initializer)
 
 
-def _run_task(item: Any) -> Any:
-    assert _TASK is not None
-    return _TASK(item)
-
-
-def _ignore_sigint() -> None:  # workers: Ctrl-C is the parent's to handle (it terminates them)
+def _install(system_at: SystemAt) -> None:
+    """Initializer of the chart's own pool: the system arrives by fork (never pickled), and
+    Ctrl-C is the parent's to handle (it cancels the pool)."""
+    global _INSTALLED
+    _INSTALLED = system_at
     signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
@@ -255,35 +258,120 @@ def default_workers() -> int:
         return max(1, os.cpu_count() or 1)
 
 
-def _map(func: Callable[[Any], Any], items: Sequence[Any], *, workers: int, bar: Any) -> list:
-    """``[func(x) for x in items]``, in a forked process pool when ``workers > 1``.
+def terminate_pool(pool: Executor) -> None:
+    """Cancel the queued work of a process pool and end its worker processes now.
 
-    The pool is terminated on any error or Ctrl-C (nothing keeps running); the order of the
-    results is that of ``items``.
+    ``ProcessPoolExecutor.shutdown`` waits for the calls that are running (a chunk of a chart
+    may take seconds), and a parent that exits meanwhile leaves its workers blocked for ever.
+    Python 3.14's ``terminate_workers`` is used where it exists; before, the pool's worker
+    processes (its ``_processes`` table, stable since Python 3.3) are terminated.
     """
-    global _TASK
-    if workers <= 1 or len(items) < 2 or "fork" not in multiprocessing.get_all_start_methods():
-        out = []
-        for x in items:
-            out.append(func(x))
-            bar.update(1)
-        return out
-    _TASK = func
-    pool = multiprocessing.get_context("fork").Pool(min(workers, len(items)),
-                                                    initializer=_ignore_sigint)
+    stop = getattr(pool, "terminate_workers", None)
+    if callable(stop):
+        stop()
+        return
+    procs = list((getattr(pool, "_processes", None) or {}).values())  # shutdown clears it
+    pool.shutdown(wait=False, cancel_futures=True)
+    for proc in procs:
+        if proc.is_alive():
+            proc.terminate()
+    for proc in procs:
+        proc.join(timeout=1.0)
+
+
+def _one_thread() -> Any:
+    """One BLAS/OpenMP thread (threadpoolctl) while a chunk is evaluated, wherever it runs: no
+    oversubscription by workers, and the same arithmetic in this process and in any worker."""
     try:
+        from threadpoolctl import threadpool_limits
+    except ImportError:  # pragma: no cover - a required dependency of gearvib
+        import contextlib
+
+        return contextlib.nullcontext()
+    return threadpool_limits(limits=1)
+
+
+def _evaluate_point(system_at: SystemAt, f: float, p: Any, opts: dict) -> tuple:
+    M, C, K, T = _call(system_at, f, p)
+    r = floquet(M, C, K, T, **opts)
+    return r.max_modulus, r.growth_rate, r.error_estimate
+
+
+def _boundary(system_at: SystemAt, lo_f: float, hi_f: float, p: Any, opts: dict,
+              xtol_rel: float) -> float:
+    tol = float(opts["tol"])
+    return float(scipy.optimize.brentq(
+        lambda x: _evaluate_point(system_at, x, p, opts)[0] - 1.0 - tol, lo_f, hi_f,
+        xtol=xtol_rel * hi_f))
+
+
+def chart_chunk(system_at: SystemAt | None, kind: str, items: Sequence[tuple], opts: dict,
+                xtol_rel: float) -> list:
+    """Evaluate a chunk of a chart (the task every executor runs; importable by workers).
+
+    ``kind = "grid"``: ``items`` are ``(f_mesh, parameter)``, the result per item is
+    ``(max|mu|, growth rate, error estimate)``; ``kind = "boundary"``: ``items`` are
+    ``(f_low, f_high, parameter)`` brackets, the result the refined boundary [Hz].
+    ``system_at = None`` takes the system the chart's own pool installed in this worker.
+    """
+    sa = _INSTALLED if system_at is None else system_at
+    if sa is None:
+        raise RuntimeError("chart_chunk: no system given and none installed in this process")
+    with _one_thread():  # entering the limit costs ~10 ms: once per chunk
+        return _evaluate_items(sa, kind, items, opts, xtol_rel)
+
+
+def _evaluate_items(system_at: SystemAt, kind: str, items: Sequence[tuple], opts: dict,
+                    xtol_rel: float) -> list:
+    if kind == "grid":
+        return [_evaluate_point(system_at, float(f), p, opts) for f, p in items]
+    return [_boundary(system_at, float(lo), float(hi), p, opts, xtol_rel)
+            for lo, hi, p in items]
+
+
+def _chunks(n: int, parts: int) -> list[range]:
+    size = max(1, -(-n // max(1, parts)))
+    return [range(i, min(n, i + size)) for i in range(0, n, size)]
+
+
+def _map_chart(kind: str, items: Sequence[tuple], *, system_at: SystemAt, opts: dict,
+               xtol_rel: float, executor: Executor | None, own_pool: bool, workers: int,
+               bar: Any) -> list:
+    """Results of :func:`chart_chunk` over ``items`` in their order.
+
+    ``executor`` None: in this process, one item per chunk (the progress bar moves with each).
+    Otherwise the items are cut into about four chunks per worker and submitted; the system
+    travels with each chunk (pickled), except to the chart's own forked pool
+    (``own_pool``), whose workers hold it already. The result of an item does not depend on
+    the chunk it is in, so the chart is the same for any executor and worker count.
+    """
+    if not items:
+        return []
+    if executor is None:
         out = []
-        for r in pool.imap(_run_task, items, chunksize=1):
-            out.append(r)
-            bar.update(1)
-        pool.close()
+        with _one_thread():
+            for it in items:
+                out.extend(_evaluate_items(system_at, kind, [it], opts, xtol_rel))
+                bar.update(1)
         return out
+    sent = None if own_pool else system_at
+    futures: dict[Future, range] = {}
+    try:
+        for r in _chunks(len(items), 4 * workers):
+            fut = executor.submit(chart_chunk, sent, kind, [items[i] for i in r], opts,
+                                  xtol_rel)
+            futures[fut] = r
+        results: list[Any] = [None] * len(items)
+        for fut in as_completed(futures):
+            r = futures[fut]
+            for i, v in zip(r, fut.result(), strict=True):
+                results[i] = v
+            bar.update(len(r))
+        return results
     except BaseException:
-        pool.terminate()
+        for fut in futures:
+            fut.cancel()
         raise
-    finally:
-        pool.join()
-        _TASK = None
 
 
 class _NoBar:
@@ -459,6 +547,7 @@ def stability_chart(
     mode_names: Sequence[str] | None = None,
     attribution_rtol: float = ATTRIBUTION_RTOL,
     workers: int | None = 1,
+    executor: Executor | None = None,
     progress: bool | None = False,
 ) -> StabilityChart:
     """Evaluate Floquet stability over a mesh-frequency grid.
@@ -508,9 +597,20 @@ def stability_chart(
         See :func:`attribute_region`.
     workers : int or None
         Processes for the grid and the boundary refinements (None: the cores available to
-        this process). A pool is used only when the first evaluation predicts a chart of more
-        than a few seconds, and only where ``fork`` is available; results are identical for
-        any number of workers.
+        this process): a forked process pool of this call (where ``fork`` is available) when
+        no ``executor`` is given, else the number of workers of ``executor`` (sizes the
+        chunks: about four per worker).
+    executor : concurrent.futures.Executor, optional
+        Where the evaluations run when the chart is worth it: e.g. the local pool or Dask
+        cluster of :func:`gearvib.execution.executor_for`, or
+        ``dask.distributed.Client(address).get_executor()``. ``system_at`` is then pickled
+        with every chunk (cloudpickle on Dask), so it must be picklable for a process pool.
+        Not shut down here.
+
+        Parallel work (own pool or ``executor``) starts only when the first evaluation
+        predicts a chart of more than a few seconds. Every evaluation runs with one
+        BLAS/OpenMP thread (threadpoolctl), here and in the workers, so the results are
+        identical for any executor and number of workers.
     progress : bool or None
         Progress bar (tqdm) over the evaluations; None shows it on a terminal only.
 
@@ -558,28 +658,38 @@ def stability_chart(
                 shapes.shape[1] != candidates.natural_frequencies_hz.size:
             raise ValueError("mode_shapes must be (n_dof, n_modes) with one column per natural "
                              "frequency of candidates (and candidates given)")
-    n_workers = default_workers() if workers is None else int(workers)
-    if n_workers < 1:
+    n_workers = default_workers() if workers is None else workers
+    if isinstance(n_workers, bool) or not isinstance(n_workers, int | np.integer) \
+            or n_workers < 1:
         raise ValueError(f"workers = {workers!r} is not admissible: an integer >= 1 or None")
-
-    def evaluate(item: tuple[float, Any]) -> tuple[float, float, float]:
-        fm, p = item
-        M, C, K, T = _call(system_at, float(fm), p)
-        r = floquet(M, C, K, T, **opts)
-        return r.max_modulus, r.growth_rate, r.error_estimate
+    n_workers = int(n_workers)
+    if executor is not None and not isinstance(executor, Executor):
+        raise ValueError(f"executor = {executor!r} is not admissible: a "
+                         "concurrent.futures.Executor or None")
 
     rows = [None] if params is None else list(params)
     items = [(float(fm), p) for p in rows for fm in f]
     bar = _progress_bar(progress, len(items), "Floquet chart")
+    pool: Executor | None = None
+    own_pool = False
+    run = {"system_at": system_at, "opts": opts, "xtol_rel": xtol_rel, "bar": bar,
+           "workers": n_workers, "own_pool": False, "executor": None}
     try:
-        # the first evaluation (the lowest mesh frequency: the longest period) tells whether a
-        # process pool pays
+        # the first evaluation (the lowest mesh frequency: the longest period) tells whether
+        # parallel work pays
         t0 = time.perf_counter()
-        first = evaluate(items[0])
-        bar.update(1)
+        first = _map_chart("grid", items[:1], **run)
         expected = (time.perf_counter() - t0) * len(items)
-        pool = n_workers if expected > _PARALLEL_MIN_S else 1
-        values = [first, *_map(evaluate, items[1:], workers=pool, bar=bar)]
+        if len(items) > 1 and expected > _PARALLEL_MIN_S:
+            if executor is not None:
+                pool = executor
+            elif n_workers > 1 and "fork" in multiprocessing.get_all_start_methods():
+                pool = ProcessPoolExecutor(min(n_workers, len(items) - 1),
+                                           mp_context=multiprocessing.get_context("fork"),
+                                           initializer=_install, initargs=(system_at,))
+                own_pool = True
+        run.update(executor=pool, own_pool=own_pool)
+        values = [*first, *_map_chart("grid", items[1:], **run)]
         mm = np.array([v[0] for v in values]).reshape(len(rows), f.size)
         gr = np.array([v[1] for v in values]).reshape(len(rows), f.size)
         err = np.array([v[2] for v in values]).reshape(len(rows), f.size)
@@ -603,17 +713,18 @@ def stability_chart(
             if refine and e_ < f.size - 1:
                 brackets.append((float(f[e_]), float(f[e_ + 1]), rows[a]))
 
-        def root(item: tuple[float, float, Any]) -> float:
-            lo_f, hi_f, p = item
-            return float(scipy.optimize.brentq(
-                lambda x: evaluate((x, p))[0] - 1.0 - tol, lo_f, hi_f,
-                xtol=xtol_rel * hi_f))
-
         if brackets:
             bar.total = len(items) + len(brackets)
             bar.set_description("Floquet boundaries")
-        roots = dict(zip(brackets, _map(root, brackets, workers=pool, bar=bar), strict=True))
+        roots = dict(zip(brackets, _map_chart("boundary", brackets, **run), strict=True))
+    except BaseException:
+        if own_pool and pool is not None:  # return at once, nothing left running
+            terminate_pool(pool)
+            own_pool = False
+        raise
     finally:
+        if own_pool and pool is not None:
+            pool.shutdown(wait=True)
         bar.close()
 
     table: list[dict] = []

@@ -39,7 +39,6 @@ import math
 from dataclasses import replace
 
 import numpy as np
-import scipy.fft
 
 from gearvib.model import AssembledModel
 from gearvib.sensors.apply import housing_meshes
@@ -100,6 +99,8 @@ def housing_response(p: np.ndarray, fs: float, sensor: HousingSensor) -> np.ndar
     if n == 0:
         return p.copy()
     p0 = float(p[0])
+    import scipy.fft  # on use: a run without housing sensors does not need it
+
     nfft = scipy.fft.next_fast_len(2 * n, real=True)
     spec = scipy.fft.rfft(p - p0, nfft)
     f = scipy.fft.rfftfreq(nfft, 1.0 / fs)

@@ -8,6 +8,7 @@
 ``decimation``      the anti-alias FIR of the output decimation
 ``run_setup``       model + conditions -> the kernel arrays of one run (:func:`prepare_run`)
 ``equilibrium``     static equilibrium at the start of a run (:func:`static_equilibrium`)
+``tooth_forces``    static tooth force per mesh under a run's load (:func:`static_tooth_forces`)
 ``result``          :class:`RunUpResult` and its CF-annotated Dataset
 ``settings``        the ``[simulation]`` table -> checked run settings -> conditions
 ==================  =========================================================================

@@ -6,18 +6,19 @@
 ``summary``         :func:`summarise_run`: the small Dataset kept per case
 ``description``     :class:`Sweep` (TOML or API), its :class:`Parameter` s and cases
 ``case``            :func:`run_case`: one case, the function every worker executes
-``execution``       executors: in-process, a local process pool, a Dask cluster
 ``combine``         the combined Dataset ``sweep.nc``
 ``runner``          :func:`run_sweep`: resumable fan-out, run files, ``sweep.nc``
 ``report``          figures against the parameters and ``sweep.html``
 ==================  =========================================================================
 
-Imports inside this package run down the table. The user page is ``docs/sweeps.md``.
+Imports inside this package run down the table. The executors (in-process, a local process
+pool, a Dask cluster) live in :mod:`gearvib.execution`, shared with the stability charts of
+:mod:`gearvib.stability`. The user page is ``docs/sweeps.md``.
 """
 
+from gearvib.execution import SerialExecutor, dask_executor, local_executor
 from gearvib.sweep.case import CaseOutcome, CaseTask, run_case
 from gearvib.sweep.description import Parameter, Sweep, SweepCase, load_sweep, sweep_from_dict
-from gearvib.sweep.execution import SerialExecutor, dask_executor, local_executor
 from gearvib.sweep.runner import SweepResult, run_sweep
 from gearvib.sweep.summary import SummarySettings, summarise_run
 

@@ -3,7 +3,7 @@
 :func:`run_case` maps a :class:`CaseTask` (one case description, where its run file goes and
 what to summarise) to a :class:`CaseOutcome` (the case's summary Dataset). It is a plain,
 picklable top-level function, so any :class:`concurrent.futures.Executor` can run it: the
-in-process :class:`~gearvib.sweep.execution.SerialExecutor`, a local process pool or a Dask
+in-process :class:`~gearvib.execution.SerialExecutor`, a local process pool or a Dask
 cluster. A different runner with the same signature (e.g. a batched kernel that advances several
 cases at once) can be handed to :func:`gearvib.sweep.run_sweep` instead.
 

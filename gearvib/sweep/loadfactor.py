@@ -3,8 +3,9 @@
 Definitions (the user page is ``docs/sweeps.md``)
 --------------------------------------------------
 
-*Static tooth force* ``F_stat,m`` of mesh ``m``: the normal force of the mesh's loaded flank in
-the static equilibrium of the same gear set under the same transmitted torque, with every flank
+*Static tooth force* ``F_stat,m`` of mesh ``m`` (:func:`gearvib.simulate.static_tooth_forces`,
+defined in :mod:`gearvib.simulation.tooth_forces`): the normal force of the mesh's loaded flank
+in the static equilibrium of the same gear set under the same transmitted torque, with every flank
 stiffness at its mean over the mesh cycle. "Same torque" means the run's load torque and, for a
 speed ramp, the d'Alembert torque of its (constant) acceleration: the equilibrium is exactly
 the one :func:`gearvib.simulate.static_equilibrium` computes for the start of the run, with the
@@ -35,72 +36,13 @@ contact.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 
-from gearvib.model import AssembledModel
-from gearvib.simulate import Conditions, prepare_run, static_equilibrium
+from gearvib.simulate import StaticToothForces
 
-__all__ = ["MeshLoads", "StaticLoad", "mesh_loads", "static_tooth_force"]
-
-
-@dataclass(frozen=True)
-class StaticLoad:
-    """Static tooth forces of a gear set under a run's load (see the module docstring).
-
-    Attributes
-    ----------
-    force : ndarray, shape (n_mesh,)
-        Static normal force of the loaded flank [N] (0 for an unloaded mesh).
-    flank : ndarray of int, shape (n_mesh,)
-        Loaded flank: 0 left, 1 right.
-    deflection : ndarray, shape (n_mesh,)
-        Static mesh deflection [m].
-    """
-
-    force: np.ndarray
-    flank: np.ndarray
-    deflection: np.ndarray
-
-
-def static_tooth_force(model: AssembledModel, conditions: Conditions, *,
-                       gyroscopic: bool = False) -> StaticLoad:
-    """Static tooth force of every mesh at mean stiffness under the run's torque.
-
-    Parameters
-    ----------
-    model : AssembledModel
-        The gear set.
-    conditions : Conditions
-        The run's operating conditions (load torque, drive, initial acceleration).
-    gyroscopic : bool
-        As in :func:`gearvib.simulate.simulate` (centripetal stiffness at the initial speed).
-
-    Returns
-    -------
-    StaticLoad
-    """
-    setup = prepare_run(model, conditions, gyroscopic)
-    system = setup.system
-    n_table = system.left_tables.shape[1]
-    left_mean = system.left_tables.mean(axis=1)
-    right_mean = system.right_tables.mean(axis=1)
-    mean_system = replace(
-        system,
-        left_tables=np.repeat(left_mean[:, None], n_table, axis=1),
-        right_tables=np.repeat(right_mean[:, None], system.right_tables.shape[1], axis=1),
-    )
-    q, _ = static_equilibrium(mean_system, setup.mass, setup.rigid, setup.rigid * setup.omega0,
-                              rigid_acceleration=setup.alpha0, free_rigid=setup.free_rigid)
-    delta = system.mesh_vectors @ q
-    delta_back = system.back_vectors @ q  # the back flank's own line of action
-    half = 0.5 * system.backlash
-    f_left = np.where(delta > half, left_mean * (delta - half), 0.0)
-    f_right = np.where(delta_back < -half, -right_mean * (delta_back + half), 0.0)
-    flank = (f_right > f_left).astype(np.int64)
-    force = np.where(flank == 0, f_left, f_right)
-    return StaticLoad(force=force, flank=flank, deflection=delta)
+__all__ = ["MeshLoads", "mesh_loads"]
 
 
 @dataclass(frozen=True)
@@ -133,7 +75,7 @@ class MeshLoads:
 
 
 def mesh_loads(normal_force: np.ndarray, deflection: np.ndarray, backlash: np.ndarray,
-               static: StaticLoad) -> MeshLoads:
+               static: StaticToothForces) -> MeshLoads:
     """Load summaries of one run over the samples given.
 
     Parameters
@@ -144,8 +86,9 @@ def mesh_loads(normal_force: np.ndarray, deflection: np.ndarray, backlash: np.nd
         Mesh deflection [m] in the window.
     backlash : ndarray, shape (n_mesh,)
         Total normal backlash ``j`` [m].
-    static : StaticLoad
-        From :func:`static_tooth_force`.
+    static : StaticToothForces
+        From :func:`gearvib.simulate.static_tooth_forces` (the same run's model and
+        conditions).
 
     Returns
     -------

@@ -26,18 +26,18 @@ from pathlib import Path
 import xarray as xr
 
 from gearvib.config import ConfigError
+from gearvib.execution import (
+    SerialExecutor,
+    default_workers,
+    local_executor,
+    worker_environment,
+)
 from gearvib.io import write_netcdf
 from gearvib.report.runner import check_output_dir
 from gearvib.simulate import SimulationError, simulate
 from gearvib.sweep.case import CaseOutcome, CaseTask, build_case, conditions_for, run_case
 from gearvib.sweep.combine import combine_summaries
 from gearvib.sweep.description import Sweep
-from gearvib.sweep.execution import (
-    SerialExecutor,
-    default_workers,
-    local_executor,
-    worker_environment,
-)
 
 __all__ = ["SweepResult", "run_file_name", "run_sweep"]
 
@@ -115,7 +115,7 @@ def run_sweep(sweep: Sweep, out_dir: str | os.PathLike, *, workers: int | None =
         Local worker processes (default: the CPUs available); 1 runs in this process. Ignored
         when ``executor`` is given.
     start_method : str, optional
-        Start method of the local workers (see :func:`gearvib.sweep.execution.local_executor`).
+        Start method of the local workers (see :func:`gearvib.execution.local_executor`).
     executor : concurrent.futures.Executor, optional
         Where the cases run, e.g. ``dask.distributed.Client(address).get_executor()``. Its
         workers must reach ``out_dir`` under the same path. Not shut down here.

@@ -29,9 +29,9 @@ import xarray as xr
 from analysis.orders import order_cuts
 from gearvib.config import ConfigError, check_keys
 from gearvib.model import AssembledModel
-from gearvib.simulate import Conditions
+from gearvib.simulate import Conditions, static_tooth_forces
 from gearvib.stability import stability_over_speed
-from gearvib.sweep.loadfactor import mesh_loads, static_tooth_force
+from gearvib.sweep.loadfactor import mesh_loads
 
 __all__ = [
     "ORDER_SIGNAL_VARIABLES",
@@ -361,7 +361,7 @@ def summarise_run(ds: xr.Dataset, model: AssembledModel, conditions: Conditions,
     keep = _window_mask(ds, s)
     idx = np.flatnonzero(keep)
     span = slice(int(idx[0]), int(idx[-1]) + 1)
-    static = static_tooth_force(model, conditions, gyroscopic=gyroscopic)
+    static = static_tooth_forces(model, conditions, gyroscopic=gyroscopic)
     loads = mesh_loads(ds["normal_force"].transpose("mesh", "flank", "time").values[..., keep],
                        ds["mesh_deflection"].transpose("mesh", "time").values[..., keep],
                        np.asarray(model.mesh_backlash, dtype=float), static)

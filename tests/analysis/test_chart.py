@@ -138,3 +138,36 @@ def test_piecewise_system_and_errors():
         stability_chart(rect, [0.3, 0.2, 0.4])
     with pytest.raises(ValueError, match="system_at must return"):
         stability_chart(lambda f: (1.0, 2.0), [0.3, 0.4])
+
+
+def _sleep_long(x: int) -> int:
+    import time
+
+    time.sleep(60)
+    return x
+
+
+def test_terminate_pool_ends_running_workers_at_once():
+    """An error or Ctrl-C during a chart must not wait for the running chunks (seconds each)
+    nor leave worker processes behind."""
+    import multiprocessing
+    import time
+    from concurrent.futures import ProcessPoolExecutor
+
+    from analysis.instability.chart import terminate_pool
+
+    if "fork" not in multiprocessing.get_all_start_methods():
+        pytest.skip("needs fork")
+    before = set(multiprocessing.active_children())
+    pool = ProcessPoolExecutor(2, mp_context=multiprocessing.get_context("fork"))
+    futures = [pool.submit(_sleep_long, i) for i in range(4)]
+    deadline = time.monotonic() + 30
+    while not any(f.running() for f in futures) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    children = set(multiprocessing.active_children()) - before
+    assert children
+    t0 = time.perf_counter()
+    terminate_pool(pool)
+    assert time.perf_counter() - t0 < 5.0
+    assert not any(p.is_alive() for p in children)
+    assert all(f.cancelled() or f.done() for f in futures[2:])

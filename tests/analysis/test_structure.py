@@ -2,7 +2,8 @@
 
 Imports run one way (no cycle, not even through function-level imports), no module imports
 another module's private (``_name``) names, and analysis modules are imported at module level
-only (imports under ``if TYPE_CHECKING:`` are for annotations and do not count).
+only (imports under ``if TYPE_CHECKING:`` are for annotations and do not count), except in the
+accessor, which imports on use (issue 16).
 """
 
 from __future__ import annotations
@@ -69,10 +70,17 @@ def test_no_private_names_imported_across_modules():
     assert not bad, bad
 
 
+# The accessor is registered by `import analysis`; it imports the modules it forwards to when
+# a method is called, so that importing the package costs xarray only (issue 16: 0.3 s instead
+# of 1.8 s). Its imports still count for the one-way layering below.
+LAZY = {"accessor"}
+
+
 def test_analysis_modules_are_imported_at_module_level_only():
     bad = [
         f"{m}: {module}"
         for m in MODULES
+        if m not in LAZY
         for module, _names, top in _imports(PACKAGE / f"{m}.py")
         if not top
     ]

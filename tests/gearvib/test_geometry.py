@@ -12,6 +12,7 @@ from gearvib.geometry import (
     Toothing,
     admissible_planet_angles,
     check_planet_angles,
+    inverse_involute,
     mesh_geometry,
     mesh_phases,
     minimum_offset_angle,
@@ -208,6 +209,31 @@ def test_planet_tooth_number_and_profile_shift():
     assert mesh_geometry(sun2, p).centre_distance == pytest.approx(
         mesh_geometry(ring2, p).centre_distance, rel=1e-12
     )
+
+
+def test_inverse_involute_and_profile_shift_match_scipy_brentq():
+    # the root finders are written out (no scipy.optimize import in a simulation); the
+    # independent reference is Brent's method
+    from scipy.optimize import brentq
+
+    for v in np.logspace(-4, 4, 60):
+        v = float(v)
+        ref = brentq(lambda a, v=v: math.tan(a) - a - v, 0.0, 1.5707963, xtol=1e-15,
+                     rtol=1e-15)
+        assert inverse_involute(v) == pytest.approx(ref, rel=1e-13, abs=0.0)
+    assert inverse_involute(0.0) == 0.0
+    assert inverse_involute(math.tan(0.35) - 0.35) == pytest.approx(0.35, rel=1e-15)
+    with pytest.raises(ValueError, match="not admissible"):
+        inverse_involute(-1e-3)
+    for sun, ring, zp in ((tooth(33), tooth(-114), 40), (tooth(33), tooth(-114), 41),
+                          (tooth(33, profile_shift=0.3), tooth(-114, profile_shift=0.1), 40)):
+        def gap(x, sun=sun, ring=ring, zp=zp):
+            p = tooth(zp, profile_shift=x)
+            return (mesh_geometry(sun, p).centre_distance
+                    - mesh_geometry(ring, p).centre_distance)
+
+        ref = brentq(gap, -0.5, 0.5, xtol=1e-15)
+        assert planet_profile_shift(sun, ring, zp) == pytest.approx(ref, abs=1e-12)
 
 
 # --- phases ----------------------------------------------------------------------------------

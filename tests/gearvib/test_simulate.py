@@ -24,6 +24,7 @@ from gearvib.simulate import (
     simulate,
     static_equilibrium,
 )
+from gearvib.simulation.decimation import kaiser_design
 
 MODULE = 2e-3
 ALPHA = np.deg2rad(20.0)
@@ -415,3 +416,18 @@ def test_decimation_filter_is_alias_free() -> None:
         mag = np.abs(resp)
         assert np.all(np.abs(mag[w <= 0.3] - 1) < 1e-3)
         assert np.all(mag[w >= 0.5] < 10 ** (-80 / 20))
+
+
+def test_decimation_filter_equals_scipy_firwin_bit_for_bit() -> None:
+    # written out to spare the CLI the import of scipy.signal; must stay scipy's design
+    for dec in (*range(2, 41), 64, 97, 128, 250, 1000):
+        numtaps, beta = scipy.signal.kaiserord(85.0, 0.4 / dec)
+        numtaps |= 1
+        ref = scipy.signal.firwin(numtaps, 0.4 / dec, window=("kaiser", beta), fs=1.0)
+        ref = ref / ref.sum()
+        h = decimation_filter(dec)
+        assert h.shape == ref.shape and np.array_equal(h, ref), dec
+    for att, width in ((85.0, 0.013), (60.0, 0.2), (30.0, 0.05), (15.0, 0.5)):
+        assert kaiser_design(att, width) == scipy.signal.kaiserord(att, width)
+    with pytest.raises(ValueError, match="width"):
+        kaiser_design(85.0, 0.0)

@@ -391,3 +391,67 @@ def test_chart_in_a_process_pool_is_identical(monkeypatch):
     np.testing.assert_array_equal(one.max_modulus, two.max_modulus)
     assert one.region_table == two.region_table
     assert len(one.region_table) == 2
+
+
+def _damping_map_inputs():
+    import copy
+
+    from gearvib.config import gearset_from_dict, load_config
+
+    cfg, base = load_config("paper-case1")
+
+    def model_for(zeta):
+        c = copy.deepcopy(cfg)
+        for mesh in c["meshes"].values():
+            mesh["damping_ratio"] = zeta
+        return assemble(gearset_from_dict(c, base=base))
+
+    return model_for, np.linspace(2700.0, 2900.0, 9), [0.0, 0.004, 0.02]
+
+
+def _same_chart(a, b) -> None:
+    np.testing.assert_array_equal(a.max_modulus, b.max_modulus)
+    np.testing.assert_array_equal(a.growth_rate, b.growth_rate)
+    assert a.region_table == b.region_table
+
+
+def test_stability_map_on_the_sweep_executors_is_identical(monkeypatch):
+    """Issue 16: stability_map runs on the sweeps' executors (serial, a local pool of 2, an
+    executor passed in) and gives the same chart, bit for bit, boundaries refined too."""
+    import sys
+    from concurrent.futures import ProcessPoolExecutor
+
+    from gearvib.execution import SerialExecutor
+    from gearvib.stability import stability_map
+
+    monkeypatch.setattr(sys.modules["analysis.instability.chart"], "_PARALLEL_MIN_S", 0.0)
+    model_for, speeds, zetas = _damping_map_inputs()
+    one = stability_map(model_for, speeds, zetas, refine=True, workers=1)
+    assert len(one.region_table) >= 1 and np.isfinite(one.region_table[0]["lower"])
+    _same_chart(one, stability_map(model_for, speeds, zetas, refine=True, workers=2))
+    _same_chart(one, stability_map(model_for, speeds, zetas, refine=True,
+                                   executor=SerialExecutor()))
+    with ProcessPoolExecutor(2) as pool:  # a caller's executor: the system is pickled
+        _same_chart(one, stability_map(model_for, speeds, zetas, refine=True, executor=pool,
+                                       workers=2))
+    with pytest.raises(ValueError, match="workers"):
+        stability_map(model_for, speeds, zetas, workers=0)
+
+
+@pytest.mark.slow
+def test_stability_charts_on_a_dask_local_cluster_are_identical(monkeypatch):
+    import sys
+
+    distributed = pytest.importorskip("distributed")
+    from gearvib.stability import stability_map
+
+    monkeypatch.setattr(sys.modules["analysis.instability.chart"], "_PARALLEL_MIN_S", 0.0)
+    model_for, speeds, zetas = _damping_map_inputs()
+    one = stability_map(model_for, speeds, zetas, workers=1)
+    over = stability_over_speed(model_for(0.0), speeds, refine=True, workers=1)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as cluster:
+        address = cluster.scheduler_address
+        _same_chart(one, stability_map(model_for, speeds, zetas, scheduler=address))
+        _same_chart(over, stability_over_speed(model_for(0.0), speeds, refine=True,
+                                               scheduler=address))

@@ -360,8 +360,10 @@ def test_summary_window_and_reference(tiny_run):
     by_member = summarise_run(ds, model, cond, SummarySettings(
         orders=(per_rev,), order_reference="sun", order_resolution=0.1 * per_rev))
     by_mesh = summarise_run(ds, model, cond, SummarySettings(orders=(1.0,)))
-    np.testing.assert_array_equal(one.normal_force_order_level.values,
-                                  by_mesh.normal_force_order_level.values)
+    # the same order of the same frames: equal up to rounding (the ring and sun mesh
+    # frequencies of the run agree to the last bits only)
+    np.testing.assert_allclose(one.normal_force_order_level.values,
+                               by_mesh.normal_force_order_level.values, rtol=1e-12)
     # (measured 1.2-1.6 %: the angular sampling of the two differs)
     np.testing.assert_allclose(by_member.normal_force_order_level.values,
                                by_mesh.normal_force_order_level.values, rtol=0.03)
@@ -375,7 +377,7 @@ def test_local_workers_get_one_thread_each_and_the_numba_cache(method, monkeypat
 
     import numba
 
-    from gearvib.sweep.execution import THREAD_VARIABLES, local_executor, worker_environment
+    from gearvib.execution import THREAD_VARIABLES, local_executor, worker_environment
 
     if method not in multiprocessing.get_all_start_methods():
         pytest.skip(f"no {method} start method here")

@@ -69,7 +69,7 @@ def test_cli_sweep_errors_exit_2(argv_tail, message, tmp_path, monkeypatch, caps
     if "--scheduler" in argv_tail:
         pytest.importorskip("distributed")
         # nothing listens on port 9: fail fast instead of waiting for the default timeout
-        monkeypatch.setattr("gearvib.sweep.execution.CONNECT_TIMEOUT_S", 1.0)
+        monkeypatch.setattr("gearvib.execution.CONNECT_TIMEOUT_S", 1.0)
     assert main(["sweep", *argv_tail]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and message in err[0]

@@ -258,11 +258,10 @@ def test_static_tooth_force_of_the_back_flank_mirrors_the_front_on_elastic_beari
     """
     from gearvib.assembly import assemble
     from gearvib.config import load_gearset
-    from gearvib.simulate import SpeedRamp
-    from gearvib.sweep.loadfactor import static_tooth_force
+    from gearvib.simulate import SpeedRamp, static_tooth_forces
 
     model = assemble(load_gearset("paper-case1-elastic"))
-    fwd = static_tooth_force(model, SpeedRamp(500.0, 500.0, 0.1, input_torque=60.0))
-    rev = static_tooth_force(model, SpeedRamp(500.0, 500.0, 0.1, input_torque=-60.0))
+    fwd = static_tooth_forces(model, SpeedRamp(500.0, 500.0, 0.1, input_torque=60.0))
+    rev = static_tooth_forces(model, SpeedRamp(500.0, 500.0, 0.1, input_torque=-60.0))
     assert (fwd.flank == 0).all() and (rev.flank == 1).all()
     np.testing.assert_allclose(rev.force, fwd.force, rtol=1e-9)

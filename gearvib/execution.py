@@ -1,4 +1,9 @@
-"""Where the cases of a sweep run: any :class:`concurrent.futures.Executor`.
+"""Where independent computations run: any :class:`concurrent.futures.Executor`.
+
+Used by the sweeps (:func:`gearvib.sweep.run_sweep`, one task per case) and the stability
+charts (:func:`gearvib.stability.stability_over_speed` and :func:`~gearvib.stability.stability_map`,
+one task per chunk of Floquet evaluations; :func:`executor_for` opens the executor of a
+``workers`` / ``scheduler`` / ``executor`` choice).
 
 * :class:`SerialExecutor`: in this process, one case after the other (``workers = 1``).
 * :func:`local_executor`: a :class:`~concurrent.futures.ProcessPoolExecutor` of worker
@@ -6,7 +11,8 @@
 * :func:`dask_executor`: ``dask.distributed.Client(address).get_executor()``, the
   ``concurrent.futures`` face of a Dask cluster (``pip install "gearvib[dask]"``).
 
-One code path (:func:`gearvib.sweep.run_sweep`) serves all of them.
+One code path (:func:`gearvib.sweep.run_sweep`, :func:`analysis.instability.stability_chart`)
+serves all of them.
 
 Threads and the numba cache
 ---------------------------
@@ -43,6 +49,7 @@ __all__ = [
     "dask_executor",
     "default_start_method",
     "default_workers",
+    "executor_for",
     "local_executor",
     "worker_environment",
 ]
@@ -169,3 +176,49 @@ def dask_executor(address: str) -> tuple[Executor, Any]:
     except (OSError, TimeoutError) as exc:
         raise OSError(f"cannot connect to the Dask scheduler at {address!r}: {exc}") from None
     return client.get_executor(), client
+
+
+@contextlib.contextmanager
+def executor_for(workers: int | None = 1, scheduler: str | None = None,
+                 executor: Executor | None = None) -> Iterator[tuple[Executor, int]]:
+    """The executor of a ``workers`` / ``scheduler`` / ``executor`` choice, closed afterwards.
+
+    Parameters
+    ----------
+    workers : int or None
+        Local worker processes (None: :func:`default_workers`; 1: this process). Their
+        environment is :func:`worker_environment`.
+    scheduler : str, optional
+        Address of a Dask scheduler (``tcp://host:8786``): its workers run the tasks; the
+        client is closed on exit.
+    executor : concurrent.futures.Executor, optional
+        Use this one as it is (not shut down here); ``workers`` and ``scheduler`` are ignored.
+
+    Yields
+    ------
+    (concurrent.futures.Executor, int)
+        The executor and its number of workers (for a given ``executor``: ``workers``, or
+        :func:`default_workers`; for a Dask cluster: its worker threads when it was opened).
+    """
+    n = default_workers() if workers is None else _check_workers(workers)
+    if executor is not None:
+        yield executor, n
+        return
+    if scheduler is not None:
+        dask_exec, client = dask_executor(scheduler)
+        try:
+            yield dask_exec, max(1, sum(client.nthreads().values()))
+        finally:
+            client.close()
+        return
+    with worker_environment():
+        pool = local_executor(n)
+        try:
+            yield pool, n
+        except BaseException:  # an error or an interrupt: stop the workers now
+            from analysis.instability.chart import terminate_pool
+
+            terminate_pool(pool)
+            raise
+        else:
+            pool.shutdown(wait=True)

@@ -1,0 +1,115 @@
+"""Import laziness of the command line and of ``analysis`` (issue 16: whole-process time).
+
+Not timed (times belong in ``benchmarks/bench_cli.py``): these tests check *which* modules a
+fresh interpreter holds after an import or a command, so that a heavy import cannot come back
+unnoticed.
+"""
+
+from __future__ import annotations
+
+import ast
+import json
+import os
+import subprocess
+import sys
+
+import pytest
+
+HEAVY = ("matplotlib", "reportlab", "dask", "distributed")
+
+
+def _modules_after(code: str) -> set[str]:
+    script = code + "\nimport json, sys\nprint(json.dumps(sorted(sys.modules)))\n"
+    env = {**os.environ, "MPLBACKEND": "Agg"}
+    out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                         env=env, check=True, timeout=120).stdout
+    return set(json.loads(out.strip().splitlines()[-1]))
+
+
+def _top(mods: set[str]) -> set[str]:
+    return {m.split(".")[0] for m in mods}
+
+
+def test_import_gearvib_cli_is_light():
+    mods = _top(_modules_after("import gearvib.cli"))
+    for name in (*HEAVY, "numpy", "scipy", "xarray", "numba", "pandas", "netCDF4"):
+        assert name not in mods, f"`import gearvib.cli` imports {name}"
+
+
+def test_import_analysis_is_light():
+    mods = _modules_after("import analysis")
+    for name in (*HEAVY, "numba", "pyfftw", "scipy"):
+        assert name not in _top(mods), f"`import analysis` imports {name}"
+    assert "xarray" in _top(mods)  # the accessor is registered on xarray's classes
+    # the accessor still works: its methods import their modules when called
+    mods = _modules_after(
+        "import numpy as np, xarray as xr, analysis\n"
+        "t = np.arange(2048) / 1024.0\n"
+        "s = xr.DataArray(np.sin(2 * np.pi * 100 * t), dims='time', coords={'time': t})\n"
+        "assert s.gearvib.spectrum().to_dataset().sizes\n"
+    )
+    assert "analysis.spectrum" in mods
+
+
+def test_simulate_command_imports_nothing_it_does_not_need(tmp_path):
+    # the console script's process: run() hides dask/cffi; the command never draws
+    code = (
+        "import sys\n"
+        f"sys.argv = ['gearvib', 'simulate', 'paper-case1', '-o', {str(tmp_path / 'r.nc')!r},"
+        " '--duration', '0.02', '-q']\n"
+        "import gearvib.cli, gearvib.interrupts\n"
+        "import json\n"
+        "def report(code):\n"
+        "    print(json.dumps({'loaded': sorted(n for n, m in sys.modules.items() if m),\n"
+        "                      'hidden': sorted(n for n, m in sys.modules.items() if m is None)"
+        "}), flush=True)\n"
+        "    import os; os._exit(code)\n"
+        "gearvib.cli.exit_now = report\n"
+        "gearvib.cli.run()\n"
+    )
+    env = {**os.environ, "MPLBACKEND": "Agg"}
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          env=env, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    state = json.loads(proc.stdout.strip().splitlines()[-1])
+    mods = set(state["loaded"])
+    assert (tmp_path / "r.nc").is_file()
+    top = _top(mods)
+    for name in ("matplotlib", "reportlab", "pyfftw", "cffi"):
+        assert name not in top, f"`gearvib simulate` imports {name}"
+    for name in ("scipy.signal", "scipy.optimize", "scipy.fft", "analysis.maps"):
+        assert name not in mods, f"`gearvib simulate` imports {name}"
+    for name in ("dask", "distributed", "cffi"):  # hidden: sys.modules holds None for them
+        assert name in state["hidden"] and name not in top
+
+
+def test_modes_command_imports_neither_xarray_nor_numba():
+    mods = _top(_modules_after("from gearvib.cli import main\n"
+                               "assert main(['modes', 'paper-case1']) == 0"))
+    for name in (*HEAVY, "xarray", "pandas", "numba", "netCDF4"):
+        assert name not in mods, f"`gearvib modes` imports {name}"
+
+
+@pytest.mark.parametrize(("argv", "hidden"), [
+    (["simulate", "paper-case1"], {"cffi", "dask", "distributed"}),
+    (["sweep", "s.toml", "-o", "out"], {"cffi"}),
+])
+def test_hide_unused_modules(argv, hidden):
+    code = (
+        "import sys\n"
+        "from gearvib.cli import hide_unused_modules\n"
+        f"hide_unused_modules({argv!r})\n"
+        "print(sorted(n for n in ('cffi', 'dask', 'distributed') "
+        "if n in sys.modules and sys.modules[n] is None))\n"
+        "for n in ('dask', 'distributed'):\n"
+        "    if sys.modules.get(n, 0) is None:\n"
+        "        try:\n"
+        "            __import__(n)\n"
+        "        except ImportError:\n"
+        "            pass\n"
+        "        else:\n"
+        "            raise SystemExit(n + ' importable')\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True, timeout=60).stdout
+    assert set(ast.literal_eval(out)) == hidden
