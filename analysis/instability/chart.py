@@ -277,6 +277,10 @@ def terminate_pool(pool: Executor) -> None:
             proc.terminate()
     for proc in procs:
         proc.join(timeout=1.0)
+    for proc in procs:  # a worker that did not end on SIGTERM within a second (a loaded host)
+        if proc.is_alive():
+            proc.kill()
+            proc.join(timeout=2.0)
 
 
 def _one_thread() -> Any:
