@@ -60,7 +60,7 @@ def test_measured_report_with_gearset_passes_the_cross_check(with_gearset):
     assert p.sections == MEASURED_SECTION_IDS
     html = p.html.read_text()
     assert cross_check(html) == []
-    tables, paragraphs = parse_report(html)
+    tables, _ = parse_report(html)
     caps = [t.caption for t in tables]
     for prefix in ("Record of runup", "Channels of runup", "Gear set of runup",
                    "Natural frequencies of the model of runup", "Spectrum peaks of runup",
