@@ -511,6 +511,10 @@ def compare_measurements(
                          "min-1; simulate the measured speed range")
     if hi < lo:  # within 2 %: constant speeds that agree
         lo, hi = hi, lo
+    if hi < 1.03 * lo:  # a constant speed: the frames within +-3 % of it
+        notes.append(f"the common speed range is {lo:.0f}–{hi:.0f} min-1: frames within ± 3 % "
+                     "of it are compared")
+        lo, hi = lo / 1.03, hi * 1.03
     top = {"measured": float(rm.max()), "simulated": float(rs.max())}
     nyq = min(0.95 * 0.5 * measured.fs * 60.0 / top["measured"],
               0.95 * 0.5 * simulated.fs * 60.0 / top["simulated"])
@@ -553,22 +557,24 @@ def compare_measurements(
     # the common range of the frames (a frame's speed is its mean over several revolutions)
     f_lo = max(lo, *(float(f.min()) for f in frames))
     f_hi = min(hi, *(float(f.max()) for f in frames))
-    if f_hi > f_lo:
+    if f_hi > 1.03 * f_lo:
         lo, hi = f_lo, f_hi
     varying = hi >= _MIN_SPEED_RATIO * max(lo, 1e-300)
-    n_common = min(int(((f >= lo) & (f <= hi)).sum()) for f in frames)
-    if n_common == 0:
-        # constant speeds within 2 %: every frame counts
-        edges = np.array([min(f.min() for f in frames), max(f.max() for f in frames)])
-        notes.append("no frame of both records inside one common speed: all frames are used")
+    inside = [(f >= lo) & (f <= hi) for f in frames]
+    for k, (f, what) in enumerate(zip(frames, ("measured", "simulated"), strict=True)):
+        if not inside[k].any():  # e.g. a run-up passing quickly through a constant speed
+            near = int(np.argmin(np.abs(f - 0.5 * (lo + hi))))
+            inside[k] = np.arange(f.size) == near
+            notes.append(f"no {what} frame lies in {lo:.0f}–{hi:.0f} min-1: its frame "
+                         f"nearest to the middle ({f[near]:.0f} min-1) is used")
+    n_common = min(int(x.sum()) for x in inside)
+    nb = int(max(1, min(rpm_bins, n_common // 2))) if varying else 1
+    edges = np.linspace(lo, hi, nb + 1)
+    if nb == 1:
+        binned = [p[x].mean(axis=0)[None, :] for p, x in zip(powers, inside, strict=True)]
     else:
-        nb = int(max(1, min(rpm_bins, n_common // 2))) if varying else 1
-        edges = np.linspace(lo, hi, nb + 1)
-    binned = [_binned(p, f, edges) for p, f in zip(powers, frames, strict=True)]
-    spectra = []
-    for p, f in zip(powers, frames, strict=True):
-        sel = (f >= edges[0]) & (f <= edges[-1])
-        spectra.append(p[sel].mean(axis=0) if sel.any() else p.mean(axis=0))
+        binned = [_binned(p, f, edges) for p, f in zip(powers, frames, strict=True)]
+    spectra = [p[x].mean(axis=0) for p, x in zip(powers, inside, strict=True)]
     if calibrated:
         offsets = (0.0, 0.0)
         basis = f"calibrated: dB re 1 {um}"
