@@ -445,7 +445,8 @@ def compare_measurements(
         Channels compared (default: the measured one's first vibration channel; for the
         simulation the channel of the same name, else its first).
     natural_frequencies_hz : array_like, optional
-        The model's natural frequencies [Hz] (> 0) for the line comparison.
+        The model's natural frequencies [Hz] (> 0) for the line comparison (measured lines
+        below 0.15 x the lowest of them, near-DC content, are left out).
     mode_names : sequence of str, optional
         Their names (default ``f1, f2, ...``).
     max_order : float, optional
@@ -614,6 +615,8 @@ def compare_measurements(
         if len(names) != fn.size:
             raise ValueError(f"mode_names has {len(names)} entries; natural_frequencies_hz "
                              f"has {fn.size}")
+        if fn.size:  # near-DC content (drive, rigid-body motion) is no structural line
+            fm = fm[fm >= 0.15 * float(fn.min())]
         for f in fm:
             sim = bool(fs_lines is not None and fs_lines.size
                        and np.min(np.abs(fs_lines - f)) <= 0.03 * f)
