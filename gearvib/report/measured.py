@@ -470,7 +470,8 @@ def analyse_measurement(measurement: Measurement, *, gearset: Any = None,
 
     # spectrum over the record, peaks identified against frequency-locked lines (natural
     # frequencies) and, at constant speed, the catalogue at the mean speed
-    seg = _segment(t.size, fs, max(st.map_resolution_hz / 4.0, 1.5 * fs / t.size))
+    # about 4096 lines, at least four segments to average
+    seg = _segment(t.size, fs, max(1.5 * fs / 4096, 1.5 * fs / max(t.size // 4, 16)))
     sp = spectrum(x, window="hann", amplitude="rms", segment_length=seg, name=ch)
     band = sp.frequency <= fmax
     pk = find_peaks(sp, prominence_db=6.0, max_peaks=_PEAKS,
