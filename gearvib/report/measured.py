@@ -867,13 +867,15 @@ def sonogram_figure(mc: MeasuredCase, figsize: tuple[float, float] = (7.5, 6.2)
                                      "va": "bottom", "rotation": 90}))
     r = mc.resonances
     if r is not None and len(r):
-        forced = np.asarray([str(x) == "forced resonance" for x in r.mechanism])
-        if forced.any():
-            ax.plot(r.frequency[forced], r.rpm[forced], "o", mfc="none", mec="r", ms=7,
-                    label="forced resonance")
-        if (~forced).any():
-            ax.plot(r.frequency[~forced], r.rpm[~forced], "x", color="0.8", ms=4,
-                    label="other rise")
+        mech = np.asarray([str(x) for x in r.mechanism])
+        for which, mk, col, lab in (("forced resonance", "o", "r", "forced resonance"),
+                                    ("parametric instability", "s", "#ff66ff",
+                                     "parametric (theory candidate)"),
+                                    ("unexplained", "x", "0.8", "unexplained rise")):
+            sel = mech == which
+            if sel.any():
+                ax.plot(r.frequency[sel], r.rpm[sel], mk, mfc="none", mec=col, color=col,
+                        ms=7 if mk != "x" else 4, label=lab)
     ax.legend(loc="lower right", fontsize=7)
     fig.suptitle(f"{mc.name}: rpm-frequency map of {mc.channel}", fontsize=10)
     place_labels(fig, ax, labels)
@@ -960,8 +962,8 @@ def measured_sections(mc: MeasuredCase) -> list[Section]:
                   + (", dotted vertical lines = natural frequencies of the model"
                      if mc.natural_frequencies_hz.size else "")
                   + ", dash-dotted grey lines = frequency-locked lines of the map that no "
-                  "natural frequency explains, circles = forced resonances, crosses = other "
-                  "rises.",
+                  "natural frequency explains, circles = forced resonances, squares = "
+                  "parametric rises (theory candidates), crosses = unexplained rises.",
                   figure=lambda: sonogram_figure(mc))]
         if mc.omap is not None:
             s["sonograms"] += [Block("figure", f"{n}: rpm-order map of {mc.channel} (order "
