@@ -444,6 +444,10 @@ def load_measurement(
     else:
         raise TypeError(f"source must be a path or an xarray.Dataset, not {type(source).__name__}")
     t = _time_seconds(ds, where)
+    if not _is_run(ds) and "normal_force" in ds.variables:
+        raise ValueError(f"{where} is a simulated run without a virtual sensor: add a "
+                         "[[sensor]] table to the gear set (docs/faults-sensors.md) and "
+                         "simulate again")
     if _is_run(ds):
         signals, extra = _channels_of_run(ds, t)
     else:

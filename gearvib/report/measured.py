@@ -51,7 +51,7 @@ from gearvib.report.document import FigureImages
 from gearvib.report.html import render_html
 from gearvib.report.pdf import write_pdf
 from gearvib.report.sections import Block, Section
-from gearvib.report.study import AnalysisSettings
+from gearvib.report.study import AnalysisSettings, check_report_size
 from gearvib.report.wording import count
 
 if TYPE_CHECKING:
@@ -421,6 +421,7 @@ def analyse_measurement(measurement: Measurement, *, gearset: Any = None,
     st = settings or AnalysisSettings()
     m = measurement
     x = m.channel(channel)
+    check_report_size(m.time.size, m.fs, st, f"the measurement {name or m.name!r}")
     ch = str(x.name)
     units = str(x.attrs.get("units", "1"))
     t = m.time

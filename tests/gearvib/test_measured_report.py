@@ -275,3 +275,29 @@ def test_real_uff_files_compare_or_a_clear_error(path, simulated_file, tmp_path,
     assert code == 0, captured.err
     assert "compare:" in captured.out and "matched" in captured.out
     assert (tmp_path / "c" / "comparison.nc").is_file()
+
+
+def test_measured_pdf_text_stays_inside_the_margins(with_gearset):
+    from pdfminer.high_level import extract_pages
+    from pdfminer.layout import LAParams, LTChar
+
+    from gearvib.report.pdf import PAGE
+
+    def chars(obj):
+        if isinstance(obj, LTChar):
+            yield obj
+        elif hasattr(obj, "__iter__"):
+            for child in obj:
+                yield from chars(child)
+
+    bad = []
+    pages = list(extract_pages(with_gearset.pdf, laparams=LAParams()))
+    assert len(pages) == with_gearset.pdf_pages
+    for page in pages:
+        for c in chars(page):
+            inside_x = PAGE.left - 0.5 <= c.x0 and c.x1 <= PAGE.width - PAGE.right + 0.5
+            in_frame = PAGE.bottom - 0.5 <= c.y0 and c.y1 <= PAGE.height - PAGE.top + 0.5
+            in_footer = PAGE.footer - 3 <= c.y0 and c.y1 <= PAGE.bottom
+            if not (inside_x and (in_frame or in_footer)):
+                bad.append((page.pageid, c.get_text(), round(c.x0), round(c.y0)))
+    assert not bad, bad[:20]
