@@ -172,17 +172,14 @@ def _read_file(path: Path, options: dict | None) -> tuple[xr.Dataset, dict]:
     if path.is_dir():
         raise ValueError(f"measurement {str(path)!r} is a directory; give a file")
     ext = path.suffix.lower()
-    if ext in FORMATS["netcdf"][1]:
+    if ext in FORMATS["netcdf"][1] and _netcdf_run_bytes(path) is not None:
         try:
             with xr.open_dataset(path, decode_times=False, decode_timedelta=False) as probe:
-                run = _is_run(probe)
-                if run:
-                    ds = labels_from_cf(probe.load())
+                ds = labels_from_cf(probe.load())
         except (OSError, ValueError, RuntimeError) as exc:
             raise ReaderError(f"{path}: not a readable netCDF file ({exc})") from None
-        if run:
-            return ds, {"file": str(path), "format": "netcdf (gearvib run)",
-                        "reader": "xarray.open_dataset"}
+        return ds, {"file": str(path), "format": "netcdf (gearvib run)",
+                    "reader": "xarray.open_dataset"}
     opts = dict(options or {})
     if ext in FORMATS["csv"][1] and not opts:
         opts = {"time_column": "time"}  # the layout write_csv writes: "time [s]" first
@@ -197,6 +194,35 @@ def _read_file(path: Path, options: dict | None) -> tuple[xr.Dataset, dict]:
     reader = next((f"analysis.readers.{fn.__name__}" for name, (fn, exts) in FORMATS.items()
                    if ext in exts), "analysis.readers.read")
     return ds, {"file": str(path), "format": fmt, "reader": reader}
+
+
+def _netcdf_run_bytes(path: Path) -> int | None:
+    """Declared bytes of a simulated run's netCDF file (``None``: not a run with sensors).
+
+    Only the header is read (netCDF4, after the netCDF-3 header walk): xarray would load the
+    index coordinates while opening, whatever size a corrupt header claims. A run's declared
+    data must fit into memory (twice: the load and its copy).
+    """
+    import math
+
+    import netCDF4
+
+    from analysis.readers.cdf3 import check_cdf3, is_cdf3
+    from analysis.readers.integrity import require_memory
+
+    if is_cdf3(path):
+        check_cdf3(path)
+    try:
+        with netCDF4.Dataset(path, "r") as nc:
+            if _RUN_MARKER not in nc.variables:
+                return None
+            declared = sum(math.prod(int(n) for n in v.shape)
+                           * max(getattr(v.dtype, "itemsize", 8), 1)
+                           for v in nc.variables.values())
+    except OSError as exc:
+        raise ReaderError(f"{path}: not a readable netCDF file ({exc})") from None
+    require_memory(2 * declared, path, f"the run's variables ({declared} bytes declared)")
+    return declared
 
 
 def _time_seconds(ds: xr.Dataset, where: str) -> np.ndarray:
