@@ -348,7 +348,8 @@ def _cmd_compare(args: argparse.Namespace) -> int:
                                       simulated_channel=args.simulated_channel,
                                       max_order=args.max_order,
                                       order_resolution=args.order_resolution,
-                                      calibrated=False if args.normalise else None)
+                                      calibrated=False if args.normalise else None,
+                                      reference=args.reference)
         paths = build_comparison_report(cmp, out)
     print(f"compare: {cmp.result.summary()}")
     print(f"         {paths.html}")

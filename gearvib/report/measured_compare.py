@@ -242,8 +242,8 @@ def compare_with_simulation(measured: Measurement | str | os.PathLike | xr.Datas
                             gearset: Any = None, channel: str | None = None,
                             simulated_channel: str | None = None,
                             max_order: float | None = None, order_resolution: float = 0.25,
-                            calibrated: bool | None = None, **speed: Any
-                            ) -> SimulationComparison:
+                            calibrated: bool | None = None, reference: str | None = None,
+                            **speed: Any) -> SimulationComparison:
     """Compare a measurement with a simulated run, with the model's interpretation.
 
     Parameters
@@ -260,6 +260,9 @@ def compare_with_simulation(measured: Measurement | str | os.PathLike | xr.Datas
         Channels compared.
     max_order, order_resolution, calibrated
         See :func:`analysis.comparison.compare_measurements`.
+    reference : str, optional
+        Member whose speed both references measure: the shaft of the catalogue's orders
+        (default: the input member).
 
     Returns
     -------
@@ -281,6 +284,9 @@ def compare_with_simulation(measured: Measurement | str | os.PathLike | xr.Datas
     else:
         gs = gearset if isinstance(gearset, GearSet) else load_gearset(str(gearset))
     model: AssembledModel | None = assemble(gs) if gs is not None else None
+    if model is None and reference is not None:
+        raise ValueError("reference applies with a gear set (--gearset CONFIG, or a run that "
+                         "carries its description)")
     fn = names = None
     modal = None
     elastic: list[int] = []
@@ -296,7 +302,12 @@ def compare_with_simulation(measured: Measurement | str | os.PathLike | xr.Datas
     labels: list[str] = []
     params: list[list[ParameterShare]] = []
     if model is not None and modal is not None:
-        cat = gear_set_catalogue(model, mesh_harmonics=8, harmonics=3, sidebands=2)
+        ratios = dict(model.kinematic_ratios)
+        if reference is not None and not ratios.get(reference):
+            raise ValueError(f"reference = {reference!r} is not a rotating member of the gear "
+                             f"set; admissible: {sorted(k for k, v in ratios.items() if v)}")
+        cat = gear_set_catalogue(model, reference=reference, mesh_harmonics=8, harmonics=3,
+                                 sidebands=2)
         orders = np.asarray([p.order for p in res.peaks])
         if orders.size:
             ident = identify_peaks(orders, catalogue_lines(cat, axis="order",
