@@ -25,11 +25,13 @@ When none is found a :class:`ValueError` names the options and lists the channel
 from __future__ import annotations
 
 import json
+import math
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import netCDF4
 import numpy as np
 import xarray as xr
 
@@ -37,6 +39,8 @@ from analysis.cf import elapsed_seconds, labels_from_cf
 from analysis.checks import uniform_rate
 from analysis.inputs import ANGLE_UNITS, find_reference
 from analysis.readers import FORMATS, ReaderError, read
+from analysis.readers.cdf3 import check_cdf3, is_cdf3
+from analysis.readers.integrity import require_memory
 from analysis.speed import SpeedReference, from_angle, from_rpm, from_tacho
 
 __all__ = ["MIN_SAMPLES", "Measurement", "load_measurement"]
@@ -203,13 +207,6 @@ def _netcdf_run_bytes(path: Path) -> int | None:
     index coordinates while opening, whatever size a corrupt header claims. A run's declared
     data must fit into memory (twice: the load and its copy).
     """
-    import math
-
-    import netCDF4
-
-    from analysis.readers.cdf3 import check_cdf3, is_cdf3
-    from analysis.readers.integrity import require_memory
-
     if is_cdf3(path):
         check_cdf3(path)
     try:

@@ -35,10 +35,15 @@ import xarray as xr
 from analysis.comparison import MeasuredSimulatedComparison, compare_measurements
 from analysis.identification import catalogue_lines, identify_peaks
 from analysis.measurement import Measurement, load_measurement
+from gearvib.assembly import assemble
+from gearvib.catalogue import gear_set_catalogue
+from gearvib.config import GearSet, gearset_from_dict, load_gearset
 from gearvib.io import atomic_write
+from gearvib.modal import modal_analysis
 from gearvib.report.document import FigureImages
 from gearvib.report.html import render_html
 from gearvib.report.pdf import write_pdf
+from gearvib.report.runner import check_output_dir
 from gearvib.report.sections import Block, Section
 
 if TYPE_CHECKING:
@@ -219,8 +224,6 @@ class SimulationComparison:
 
 def _model_from_run(simulated: Measurement) -> tuple[Any, str]:
     """The gear set stored in a simulated run's ``config_json`` (None when absent)."""
-    from gearvib.config import gearset_from_dict
-
     try:
         cfg = json.loads(simulated.source.get("config_json") or "{}")
     except ValueError:
@@ -268,11 +271,6 @@ def compare_with_simulation(measured: Measurement | str | os.PathLike | xr.Datas
     -------
     SimulationComparison
     """
-    from gearvib.assembly import assemble
-    from gearvib.catalogue import gear_set_catalogue
-    from gearvib.config import GearSet, load_gearset
-    from gearvib.modal import modal_analysis
-
     m = measured if isinstance(measured, Measurement) else load_measurement(
         measured, channel=channel, **speed)
     s = simulated if isinstance(simulated, Measurement) else load_measurement(simulated)
@@ -398,8 +396,6 @@ class ComparisonPaths:
 def build_comparison_report(comparison: SimulationComparison, out_dir: str | os.PathLike, *,
                             title: str | None = None) -> ComparisonPaths:
     """Write ``comparison.html``, ``comparison.pdf`` and ``comparison.nc`` into ``out_dir``."""
-    from gearvib.report.runner import check_output_dir
-
     out = check_output_dir(out_dir)
     r = comparison.result
     sections = comparison_sections(comparison)
