@@ -215,6 +215,8 @@ def _cmd_report(args: argparse.Namespace) -> int:
     inputs = [Path(i) for i in args.inputs]
     out = Path(args.output)
     report_files = ["report.html", "report.pdf"]
+    if _is_measured_report(args, inputs):
+        return _measured_report(args, inputs, out, report_files)
     if len(inputs) == 1 and inputs[0].suffix == ".toml":
         study = load_study(inputs[0])
         if args.duration is not None:
@@ -236,6 +238,88 @@ def _cmd_report(args: argparse.Namespace) -> int:
     print(f"report: {paths.html}")
     print(f"        {paths.pdf}")
     return 0
+
+
+_MEASURED_OPTIONS = ("gearset", "channel", "tacho", "pulses_per_rev", "speed", "angle", "rpm",
+                     "reference")
+
+
+def _is_measured_report(args: argparse.Namespace, inputs: Sequence) -> bool:
+    """A measured report: measurement options given, or one input that is no study or run."""
+    from gearvib.report.measured import is_simulated_run
+
+    if any(getattr(args, k, None) is not None for k in _MEASURED_OPTIONS):
+        return True
+    if len(inputs) != 1 or inputs[0].suffix == ".toml":
+        return False
+    return not (inputs[0].suffix in (".nc", ".nc4") and is_simulated_run(inputs[0]))
+
+
+def _speed_options(args: argparse.Namespace) -> dict:
+    """The speed-reference options of a measurement, as load_measurement keywords."""
+    return {k: getattr(args, k) for k in ("tacho", "pulses_per_rev", "speed", "angle", "rpm")
+            if getattr(args, k, None) is not None}
+
+
+def _measured_report(args: argparse.Namespace, inputs: Sequence, out, files: list[str]) -> int:
+    from analysis.measurement import load_measurement
+    from gearvib.outputs import check_output_folder, removed_if_left_empty
+    from gearvib.report.measured import build_measured_report
+
+    if len(inputs) != 1:
+        raise CliError(f"a measured report takes one measurement file, got {len(inputs)} "
+                       "inputs")
+    if args.duration is not None:
+        raise CliError("--duration applies to a study .toml, not to a measurement")
+    if args.gearset is not None:  # inputs first: the description, then the file
+        from gearvib.config import load_gearset
+
+        gearset = load_gearset(args.gearset)
+    else:
+        gearset = None
+    m = load_measurement(inputs[0], channel=args.channel, **_speed_options(args))
+    _report_removed(check_output_folder(out, files, overwrite=args.overwrite)[1])
+    with removed_if_left_empty(out):
+        paths = build_measured_report(m, out, gearset=gearset, channel=args.channel,
+                                      reference=args.reference)
+    if paths.case.model is None:
+        print("gearvib: no --gearset: the report shows the maps, spectra and orders of the "
+              "reference shaft only", file=sys.stderr)
+    print(f"report: {paths.html}")
+    print(f"        {paths.pdf}")
+    return 0
+
+
+def _add_speed_options(p: argparse.ArgumentParser) -> None:
+    """--channel, --tacho, --pulses-per-rev, --speed, --angle, --rpm (a measurement's)."""
+    p.add_argument("--channel", metavar="CH", help="vibration channel of the measurement "
+                   "(default: the first that is not the speed reference)")
+    g = p.add_mutually_exclusive_group()
+    g.add_argument("--tacho", metavar="CH", help="tacho (pulse) channel of the reference "
+                   "shaft (default: a channel named 'tacho', else 'speed')")
+    g.add_argument("--speed", metavar="CH", help="speed channel of the reference shaft "
+                   "[min-1, rpm, rad/s]")
+    g.add_argument("--angle", metavar="CH", help="angle channel of the reference shaft "
+                   "[rad, degree]")
+    g.add_argument("--rpm", type=_limits(0.0, 1e7, strict=True), metavar="N",
+                   help="constant reference speed [min-1] for a record without a speed "
+                   "channel")
+    p.add_argument("--pulses-per-rev", type=_pulses, metavar="N",
+                   help="tacho pulses per revolution, 1..10000 (default: the channel's "
+                   "attribute, else 1)")
+    p.add_argument("--reference", metavar="MEMBER", help="gear-set member whose speed the "
+                   "reference measures (default: the tacho's member, else the input)")
+
+
+def _pulses(text: str) -> int:
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text[:40]!r} is not an integer") from None
+    if not 1 <= v <= 10_000:
+        raise argparse.ArgumentTypeError(f"{text[:40]!r} is not admissible (admissible: "
+                                         "1..10000)")
+    return v
 
 
 def _cmd_demo(args: argparse.Namespace) -> int:
@@ -389,9 +473,16 @@ def _parser() -> argparse.ArgumentParser:
     pr.set_defaults(func=_cmd_preset)
 
     r = sub.add_parser("report", help="order-analysis report (HTML + PDF)",
-                       description="Render a study recipe (TOML: simulates its cases) or "
-                       "existing run files (.nc) into report.html and report.pdf.")
-    r.add_argument("inputs", nargs="+", help="a study .toml, or one or more run .nc files")
+                       description="Render a study recipe (TOML: simulates its cases), "
+                       "existing run files (.nc) or one measurement (any readable format: "
+                       "UFF, TDMS, MAT, WAV, CSV, netCDF; with --gearset CONFIG its mesh "
+                       "orders, natural frequencies and catalogue) into report.html and "
+                       "report.pdf. See docs/measurements.md.")
+    r.add_argument("inputs", nargs="+", help="a study .toml, one or more run .nc files, or "
+                   "one measurement file")
+    r.add_argument("--gearset", metavar="CONFIG", help="gear set of a measurement (TOML file "
+                   "or preset name)")
+    _add_speed_options(r)
     r.add_argument("-o", "--output", default="gearvib-report", help="output folder "
                    "(default ./gearvib-report)")
     r.add_argument("-f", "--overwrite", action="store_true", help=_OVERWRITE_HELP)

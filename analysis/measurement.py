@@ -1,0 +1,514 @@
+"""A measurement: vibration channels with the speed of a reference shaft, from any source.
+
+:func:`load_measurement` turns what an engineer brings -- a file in any format
+:mod:`analysis.readers` reads (UFF 58, TDMS, MAT, WAV, CSV, netCDF) or a simulated run-up
+Dataset with virtual sensors (``sensor_acceleration(sensor, time)`` and ``tacho(time)``, see
+``docs/faults-sensors.md``) -- into one :class:`Measurement`: the channels on a ``time``
+coordinate in seconds, the reference-shaft speed [min-1] (and angle [rad], when known) on the
+same coordinate, a sentence saying how the speed was obtained, and the provenance. The report,
+the comparison with a simulation and the diagnosis all start from it.
+
+Speed reference, first match wins:
+
+1. the options: ``tacho=`` (a pulse channel, ``pulses_per_rev=``; default the channel's
+   ``pulses_per_rev`` attribute, else 1), ``speed=`` (a channel in min-1, rpm, rad s-1, or Hz
+   when named as a speed), ``angle=`` (a channel in rad or degree), ``rpm=`` (a constant speed
+   the user states, e.g. from the test log, for a record without a speed channel);
+2. a channel named ``tacho`` (pulse train, :func:`analysis.speed.from_tacho`);
+3. a channel named ``speed`` or ``rpm``;
+4. a single channel whose units are an angle or a rotational speed
+   (:func:`analysis.inputs.find_reference`).
+
+When none is found a :class:`ValueError` names the options and lists the channels.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+from analysis.cf import elapsed_seconds, labels_from_cf
+from analysis.checks import uniform_rate
+from analysis.inputs import ANGLE_UNITS, find_reference
+from analysis.readers import FORMATS, ReaderError, read
+from analysis.speed import SpeedReference, from_angle, from_rpm, from_tacho
+
+__all__ = ["MIN_SAMPLES", "Measurement", "load_measurement"]
+
+MIN_SAMPLES = 64
+"""Fewest samples of a record that order analysis can use."""
+
+MAX_PULSES_PER_REV = 10_000
+"""Largest ``pulses_per_rev`` accepted (as the simulator's tacho)."""
+
+MAX_RPM = 1e7
+"""Largest constant speed ``rpm=`` accepted [min-1]."""
+
+_REFERENCE_NAMES = {"tacho": "tacho", "speed": "speed", "rpm": "speed"}
+_RUN_MARKER = "sensor_acceleration"
+
+
+@dataclass(frozen=True)
+class Measurement:
+    """Vibration channels with the speed of their reference shaft.
+
+    Attributes
+    ----------
+    signals : xarray.Dataset
+        Every channel of the source along ``time`` [s] (``units`` and ``long_name`` on each),
+        the tacho or speed channel included.
+    speed_rpm : xarray.DataArray
+        Reference-shaft speed [min-1] on the same ``time`` coordinate (positive).
+    reference : str
+        How the speed was obtained, e.g. ``"tacho channel 'tacho', 60 pulses/rev"``.
+    source : dict
+        Provenance: ``file``, ``format``, ``reader``, ``channels``, ``vibration_channels``,
+        ``reference_channel`` (``None`` for a stated constant speed), ``kind``
+        (``"file"``, ``"dataset"`` or ``"simulation"``) and, for a simulated run, its
+        ``title`` and ``config_json``.
+    angle : xarray.DataArray or None
+        Reference-shaft angle [rad] from a tacho or angle channel (more accurate than the
+        speed for order tracking); ``None`` for a speed channel or a stated speed.
+    accuracy : dict
+        Estimated accuracy of the speed reference (:class:`analysis.speed.SpeedAccuracy`).
+    """
+
+    signals: xr.Dataset
+    speed_rpm: xr.DataArray
+    reference: str
+    source: dict
+    angle: xr.DataArray | None = None
+    accuracy: dict = field(default_factory=dict)
+
+    @property
+    def vibration_channels(self) -> tuple[str, ...]:
+        """Channel names that are not the speed reference (tacho, speed, angle)."""
+        return tuple(self.source.get("vibration_channels", ()))
+
+    @property
+    def time(self) -> np.ndarray:
+        """Time [s]."""
+        return np.asarray(self.signals["time"].values, dtype=float)
+
+    @property
+    def fs(self) -> float:
+        """Sample rate [Hz]."""
+        return float(self.signals.attrs.get("sample_rate_hz", 1.0 / np.median(np.diff(self.time))))
+
+    @property
+    def name(self) -> str:
+        """Short name of the measurement (the file stem, else the title)."""
+        f = self.source.get("file")
+        return Path(str(f)).stem if f else str(self.source.get("title", "measurement"))
+
+    def channel(self, name: str | None = None) -> xr.DataArray:
+        """One channel along ``time``.
+
+        Parameters
+        ----------
+        name : str, optional
+            Channel name; default the first vibration channel (not the tacho or speed).
+
+        Raises
+        ------
+        ValueError
+            Unknown name (the channels are listed), or no vibration channel at all.
+        """
+        if name is None:
+            if not self.vibration_channels:
+                raise ValueError(
+                    "the measurement has no vibration channel (only the speed reference "
+                    f"{self.source.get('reference_channel')!r}); channels: "
+                    f"{list(self.signals.data_vars)}"
+                )
+            name = self.vibration_channels[0]
+        if name not in self.signals.data_vars:
+            raise ValueError(
+                f"channel = {name!r} is not a channel of the measurement; channels: "
+                f"{list(self.signals.data_vars)}"
+            )
+        return self.signals[name]
+
+    def to_dataset(self) -> xr.Dataset:
+        """The channels plus ``reference_speed`` [min-1] (and ``reference_angle`` [rad]), with
+        the reference and the provenance as global attributes (CF, netCDF-safe)."""
+        ds = self.signals.copy()
+        ds["reference_speed"] = self.speed_rpm.rename(None).assign_attrs(
+            units="min-1", long_name=f"reference shaft speed ({self.reference})"
+        )
+        if self.angle is not None:
+            ds["reference_angle"] = self.angle.rename(None).assign_attrs(
+                units="rad", long_name=f"reference shaft angle ({self.reference})"
+            )
+        src = {k: v for k, v in self.source.items() if k != "config_json"}
+        ds.attrs.update(
+            speed_reference=self.reference,
+            measurement_source=json.dumps(src, sort_keys=True, default=str),
+        )
+        for k, v in self.accuracy.items():
+            ds.attrs[f"speed_{k}"] = v
+        return ds
+
+
+# ---------------------------------------------------------------------------------------------
+# sources
+# ---------------------------------------------------------------------------------------------
+
+
+def _is_run(ds: xr.Dataset) -> bool:
+    return _RUN_MARKER in ds.variables
+
+
+def _read_file(path: Path, options: dict | None) -> tuple[xr.Dataset, dict]:
+    """The file's Dataset (common layout, or a gearvib run) and its provenance."""
+    if not path.exists():
+        raise FileNotFoundError(f"measurement file not found: {path}")
+    if path.is_dir():
+        raise ValueError(f"measurement {str(path)!r} is a directory; give a file")
+    ext = path.suffix.lower()
+    if ext in FORMATS["netcdf"][1]:
+        try:
+            with xr.open_dataset(path, decode_times=False, decode_timedelta=False) as probe:
+                run = _is_run(probe)
+                if run:
+                    ds = labels_from_cf(probe.load())
+        except (OSError, ValueError, RuntimeError) as exc:
+            raise ReaderError(f"{path}: not a readable netCDF file ({exc})") from None
+        if run:
+            return ds, {"file": str(path), "format": "netcdf (gearvib run)",
+                        "reader": "xarray.open_dataset"}
+    opts = dict(options or {})
+    if ext in FORMATS["csv"][1] and not opts:
+        opts = {"time_column": "time"}  # the layout write_csv writes: "time [s]" first
+        try:
+            ds = read(path, **opts)
+        except ValueError as exc:
+            raise ValueError(f"{exc} (a CSV file needs its time column named 'time', or give "
+                             "reader_options={'fs': ...} or {'time_column': ...})") from None
+    else:
+        ds = read(path, **opts)
+    fmt = str(ds.attrs.get("source_format", ext.lstrip(".")))
+    reader = next((f"analysis.readers.{fn.__name__}" for name, (fn, exts) in FORMATS.items()
+                   if ext in exts), "analysis.readers.read")
+    return ds, {"file": str(path), "format": fmt, "reader": reader}
+
+
+def _time_seconds(ds: xr.Dataset, where: str) -> np.ndarray:
+    if "time" not in ds.coords:
+        raise ValueError(f"{where} has no 'time' coordinate; a measurement needs one in seconds")
+    t = np.asarray(elapsed_seconds(ds["time"].values), dtype=float)
+    if t.ndim != 1 or t.size < MIN_SAMPLES:
+        raise ValueError(
+            f"{where} has {t.size} samples; a measurement needs at least {MIN_SAMPLES}"
+        )
+    uniform_rate(t, f"{where}: time")
+    return t
+
+
+def _channels_of_run(ds: xr.Dataset, t: np.ndarray) -> tuple[xr.Dataset, dict]:
+    """Channels of a simulated run: one per virtual sensor, plus its tacho."""
+    acc = ds[_RUN_MARKER]
+    if "sensor" not in acc.dims or acc.dims[-1] != "time" or acc.ndim != 2:
+        raise ValueError(f"{_RUN_MARKER} has dims {acc.dims}; expected (sensor, time)")
+    names = ([str(s) for s in ds["sensor"].values] if "sensor" in ds.coords
+             else [f"sensor{i}" for i in range(acc.sizes["sensor"])])
+    variables: dict[str, Any] = {}
+    for i, n in enumerate(names):
+        key = n if n not in _REFERENCE_NAMES and n not in variables else f"sensor_{n}"
+        attrs = {"units": str(acc.attrs.get("units", "m s-2")),
+                 "long_name": f"virtual accelerometer {n!r} (simulated housing acceleration)",
+                 "source_channel": f"{_RUN_MARKER}[sensor={n}]"}
+        if "sensor_angle" in ds.variables:
+            attrs["sensor_angle_deg"] = float(np.asarray(ds["sensor_angle"].values)[i])
+        variables[key] = ("time", np.asarray(acc.isel(sensor=i).values, dtype=float), attrs)
+    if "tacho" in ds.variables and ds["tacho"].dims == ("time",):
+        variables["tacho"] = ("time", np.asarray(ds["tacho"].values, dtype=float),
+                              {k: v for k, v in ds["tacho"].attrs.items()
+                               if isinstance(v, str | int | float | np.number)})
+    signals = xr.Dataset(variables, coords={"time": ("time", t, {"units": "s",
+                                                                  "long_name": "time",
+                                                                  "standard_name": "time"})})
+    fs = float(ds.attrs.get("fs_out", 1.0 / np.median(np.diff(t))))
+    signals.attrs.update(Conventions="CF-1.11", sample_rate_hz=fs,
+                         title=str(ds.attrs.get("title", "gearvib run")),
+                         source_format="gearvib run")
+    extra = {"kind": "simulation", "title": str(ds.attrs.get("title", "")),
+             "config_json": str(ds.attrs.get("config_json", "")),
+             "sensors": names}
+    return signals, extra
+
+
+def _channels_of_layout(ds: xr.Dataset, t: np.ndarray) -> xr.Dataset:
+    """The channels (variables along ``time`` only) of a Dataset in the common layout."""
+    keep = {str(k): v for k, v in ds.data_vars.items() if v.dims == ("time",)}
+    if not keep:
+        raise ValueError(
+            "the dataset has no channel along 'time' (variables: "
+            f"{[f'{k}{tuple(v.dims)}' for k, v in ds.data_vars.items()]})"
+        )
+    variables = {}
+    for k, v in keep.items():
+        arr = np.asarray(v.values)
+        if not np.issubdtype(arr.dtype, np.number) or np.iscomplexobj(arr):
+            raise ValueError(f"channel {k!r} must hold real numbers; it has dtype {arr.dtype}")
+        attrs = dict(v.attrs)
+        attrs.setdefault("units", "1")
+        attrs.setdefault("long_name", k)
+        variables[k] = ("time", arr.astype(float), attrs)
+    signals = xr.Dataset(variables, coords={"time": ("time", t, {"units": "s",
+                                                                  "long_name": "time",
+                                                                  "standard_name": "time"})})
+    signals.attrs.update({k: v for k, v in ds.attrs.items() if k not in ("config_json",)})
+    signals.attrs.setdefault("sample_rate_hz", float(1.0 / np.median(np.diff(t))))
+    return signals
+
+
+# ---------------------------------------------------------------------------------------------
+# speed reference
+# ---------------------------------------------------------------------------------------------
+
+
+def _require_channel(signals: xr.Dataset, name: str, option: str) -> xr.DataArray:
+    if not isinstance(name, str) or name not in signals.data_vars:
+        raise ValueError(
+            f"{option} = {name!r} is not a channel of the measurement; channels: "
+            f"{list(signals.data_vars)}"
+        )
+    return signals[name]
+
+
+def _ppr(value: Any, channel: xr.DataArray) -> tuple[int, str]:
+    """Pulses per revolution: the option, else the channel's attribute, else 1."""
+    origin = "given"
+    if value is None:
+        value = channel.attrs.get("pulses_per_rev")
+        origin = "from the channel's attributes"
+        if value is None:
+            return 1, "assumed (no pulses_per_rev given or stored)"
+    if isinstance(value, bool) or not isinstance(value, int | np.integer) or not (
+        1 <= int(value) <= MAX_PULSES_PER_REV
+    ):
+        raise ValueError(
+            f"pulses_per_rev = {value!r} is not admissible: an integer in "
+            f"1..{MAX_PULSES_PER_REV}"
+        )
+    return int(value), origin
+
+
+def _speed_from_tacho(signals: xr.Dataset, name: str, ppr: Any, t: np.ndarray
+                      ) -> tuple[SpeedReference, str]:
+    ch = _require_channel(signals, name, "tacho")
+    n, origin = _ppr(ppr, ch)
+    fs = 1.0 / float(np.median(np.diff(t)))
+    try:
+        ref = from_tacho(np.asarray(ch.values, dtype=float), fs, pulses_per_rev=n,
+                         output_time=t - t[0])
+    except ValueError as exc:
+        raise ValueError(f"tacho channel {name!r}: {exc}") from None
+    member = ch.attrs.get("member")
+    shaft = f" ({member} shaft)" if member else ""
+    text = (f"tacho channel {name!r}{shaft}, {n} pulse{'s' if n != 1 else ''}/rev "
+            f"({origin}), {ref.accuracy.n_pulses} pulses")
+    return ref, text
+
+
+def _speed_from_channel(signals: xr.Dataset, name: str, t: np.ndarray, kind: str
+                        ) -> tuple[SpeedReference, str]:
+    ch = _require_channel(signals, name, kind)
+    found = find_reference(signals[[name]], **{kind: name})
+    values = np.asarray(found.values, dtype=float)
+    if kind == "speed":
+        if np.nanmean(values) < 0:
+            values = -values
+            note = ", sign reversed (reverse rotation)"
+        else:
+            note = ""
+        ref = from_rpm(t - t[0], values)
+        return ref, f"speed channel {name!r} [{ch.attrs.get('units', '')}]{note}"
+    if values[-1] < values[0]:
+        values = -values
+    try:
+        ref = from_angle(t - t[0], values)
+    except ValueError as exc:
+        raise ValueError(f"angle channel {name!r}: {exc}") from None
+    return ref, f"angle channel {name!r} [{ch.attrs.get('units', '')}]"
+
+
+def _by_name(signals: xr.Dataset) -> tuple[str, str] | None:
+    """``(kind, channel)`` of a channel named tacho / speed / rpm (case-insensitive)."""
+    for wanted in ("tacho", "speed"):
+        for k in signals.data_vars:
+            if _REFERENCE_NAMES.get(str(k).lower()) == wanted:
+                return wanted, str(k)
+    return None
+
+
+def _by_units(signals: xr.Dataset) -> tuple[str, str] | None:
+    try:
+        ref = find_reference(signals)
+    except ValueError:
+        return None
+    return ("angle" if ref.kind == "angle" else "speed"), str(ref.variable)
+
+
+def _check_rpm(rpm: Any) -> float:
+    try:
+        v = float(rpm)
+    except (TypeError, ValueError):
+        raise ValueError(f"rpm = {rpm!r} is not a number (a constant speed in min-1)") from None
+    if isinstance(rpm, bool) or not np.isfinite(v) or not 0 < v <= MAX_RPM:
+        raise ValueError(f"rpm = {rpm!r} is not admissible: a speed in (0, {MAX_RPM:g}] min-1")
+    return v
+
+
+# ---------------------------------------------------------------------------------------------
+# entry point
+# ---------------------------------------------------------------------------------------------
+
+
+def load_measurement(
+    source: str | os.PathLike | xr.Dataset,
+    *,
+    channel: str | None = None,
+    tacho: str | None = None,
+    pulses_per_rev: int | None = None,
+    speed: str | None = None,
+    angle: str | None = None,
+    rpm: float | None = None,
+    reader_options: dict | None = None,
+) -> Measurement:
+    """Load a measurement (file or Dataset) with the speed of its reference shaft.
+
+    Parameters
+    ----------
+    source : path-like or xarray.Dataset
+        A file :func:`analysis.readers.read` reads (by extension), a gearvib run file
+        (``.nc`` with ``sensor_acceleration``), or a Dataset (common layout or a run).
+    channel : str, optional
+        The vibration channel to analyse first (checked here; default the first channel that
+        is not the speed reference).
+    tacho : str, optional
+        Tacho (pulse) channel; ``pulses_per_rev`` pulses per revolution of the reference shaft
+        (default its ``pulses_per_rev`` attribute, else 1).
+    pulses_per_rev : int, optional
+        1..10 000; only with a tacho.
+    speed : str, optional
+        Speed channel (min-1, rpm, rad s-1; Hz or s-1 when named as a speed).
+    angle : str, optional
+        Angle channel (rad or degree).
+    rpm : float, optional
+        A constant speed of the reference shaft [min-1] stated by the user, for records
+        without a speed channel (stated in :attr:`Measurement.reference`).
+    reader_options : dict, optional
+        Passed to the file's reader (e.g. ``{"fs": 25600}`` or ``{"time_column": "t"}`` for
+        a CSV file, ``{"sets": [0, 1]}`` for UFF); a CSV file defaults to its ``time`` column.
+
+    Returns
+    -------
+    Measurement
+
+    Raises
+    ------
+    FileNotFoundError
+        The file does not exist.
+    analysis.readers.ReaderError
+        The file cannot be read (a :class:`ValueError`).
+    ValueError
+        More than one of ``tacho``/``speed``/``angle``/``rpm``; ``pulses_per_rev`` without a
+        tacho; an unknown channel (the channels are listed); no speed reference found (the
+        options are named, the channels listed); fewer than 64 samples; a shaft that does not
+        turn.
+    """
+    given = {k: v for k, v in (("tacho", tacho), ("speed", speed), ("angle", angle),
+                                ("rpm", rpm)) if v is not None}
+    if len(given) > 1:
+        raise ValueError(f"give one speed reference, not {' and '.join(given)}")
+    if pulses_per_rev is not None and (speed is not None or angle is not None
+                                       or rpm is not None):
+        raise ValueError("pulses_per_rev applies to a tacho channel, not to speed/angle/rpm")
+    if isinstance(source, xr.Dataset):
+        ds, prov = source, {"file": str(source.attrs.get("source_file", "")) or None,
+                            "format": str(source.attrs.get("source_format", "dataset")),
+                            "reader": "in-memory Dataset"}
+        where = "the dataset"
+    elif isinstance(source, str | os.PathLike):
+        p = Path(source)
+        ds, prov = _read_file(p, reader_options)
+        where = str(p)
+    else:
+        raise TypeError(f"source must be a path or an xarray.Dataset, not {type(source).__name__}")
+    t = _time_seconds(ds, where)
+    if _is_run(ds):
+        signals, extra = _channels_of_run(ds, t)
+    else:
+        signals = _channels_of_layout(ds, t)
+        extra = {"kind": "file" if prov.get("reader") != "in-memory Dataset" else "dataset"}
+    prov.update(extra)
+    angle_da = None
+    accuracy: dict = {}
+    if rpm is not None:
+        v = _check_rpm(rpm)
+        ref_channel = None
+        speed_values = np.full(t.size, v)
+        reference = f"constant speed {v:g} min-1 stated by the user (no speed channel used)"
+    else:
+        if tacho is not None:
+            kind, name = "tacho", tacho
+        elif speed is not None:
+            kind, name = "speed", speed
+        elif angle is not None:
+            kind, name = "angle", angle
+        else:
+            found = _by_name(signals) or _by_units(signals)
+            if found is None:
+                raise ValueError(
+                    "no speed reference found: give --tacho CHANNEL [--pulses-per-rev N], "
+                    "--speed CHANNEL (min-1), --angle CHANNEL (rad) or --rpm N (a constant "
+                    "speed) (tacho=, speed=, angle=, rpm= in Python); no channel is named "
+                    f"'tacho', 'speed' or 'rpm' or has speed/angle units; channels: "
+                    f"{list(signals.data_vars)}"
+                )
+            kind, name = found
+        if pulses_per_rev is not None and kind != "tacho":
+            raise ValueError(f"pulses_per_rev applies to a tacho channel; the reference is the "
+                             f"{kind} channel {name!r}")
+        if kind == "tacho":
+            sref, reference = _speed_from_tacho(signals, name, pulses_per_rev, t)
+        else:
+            sref, reference = _speed_from_channel(signals, name, t, kind)
+        ref_channel = name
+        speed_values = np.asarray(sref.rpm, dtype=float)
+        if kind in ("tacho", "angle"):
+            angle_da = xr.DataArray(np.asarray(sref.angle, dtype=float), dims="time",
+                                    coords={"time": signals["time"]},
+                                    attrs={"units": "rad",
+                                           "long_name": "reference shaft angle"})
+        accuracy = {k: (float(v) if isinstance(v, float) else int(v))
+                    for k, v in sref.accuracy.__dict__.items()}
+    if not np.all(np.isfinite(speed_values)) or float(np.max(speed_values)) <= 0:
+        raise ValueError(f"the reference shaft does not turn ({reference}): highest speed "
+                         f"{float(np.nanmax(speed_values)):.6g} min-1")
+    reference_vars = {ref_channel} if ref_channel else set()
+    if "tacho" in signals.data_vars and prov.get("kind") == "simulation":
+        reference_vars.add("tacho")
+    vib = [str(k) for k in signals.data_vars if str(k) not in reference_vars
+           and _REFERENCE_NAMES.get(str(k).lower()) is None
+           and str(signals[k].attrs.get("units", "")).strip().lower() not in ANGLE_UNITS]
+    if channel is not None:
+        _require_channel(signals, channel, "channel")
+        if channel in reference_vars:
+            raise ValueError(f"channel = {channel!r} is the speed reference; choose a vibration "
+                             f"channel: {vib}")
+        vib = [channel] + [c for c in vib if c != channel]
+    prov.update(channels=[str(k) for k in signals.data_vars], vibration_channels=vib,
+                reference_channel=ref_channel)
+    speed_da = xr.DataArray(speed_values, dims="time", coords={"time": signals["time"]},
+                            attrs={"units": "min-1", "long_name": "reference shaft speed"})
+    return Measurement(signals=signals, speed_rpm=speed_da, reference=reference, source=prov,
+                       angle=angle_da, accuracy=accuracy)

@@ -1,0 +1,183 @@
+"""Reports of measurements: ``gearvib report MEASURED [--gearset CONFIG]``.
+
+The "measurement" is a simulated run-up of ``paper-case1`` seen by a housing accelerometer
+(a housing mode at 3 kHz the model does not know) with a 60-pulse tacho and noise, written in
+the common layout (no gearvib markers), so it goes through the readers like a measured file.
+"""
+
+from __future__ import annotations
+
+import shutil
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from analysis.measurement import load_measurement
+from analysis.readers import write_netcdf
+from gearvib.assembly import assemble
+from gearvib.cli import main
+from gearvib.config import load_gearset
+from gearvib.report.crosscheck import cross_check, parse_report
+from gearvib.report.measured import (
+    MEASURED_SECTION_IDS,
+    analyse_measurement,
+    build_measured_report,
+)
+from gearvib.sensors import HousingMode, HousingSensor, Tacho
+from gearvib.simulate import SpeedRamp, simulate
+
+UFF = Path("/work/shared/data/uff")
+UFF_FILES = sorted(UFF.glob("*.uff")) if UFF.is_dir() else []
+MESH_ORDER = 0.426531 * 60  # paper-case1: mesh cycles per sun revolution (25.59)
+
+
+@pytest.fixture(scope="module")
+def measured_file(tmp_path_factory) -> Path:
+    model = assemble(load_gearset("paper-case1")).with_sensors([
+        HousingSensor("top", 90.0, housing_modes=(HousingMode(3000.0, 0.02, 1.0),)),
+        Tacho("tacho", pulses_per_rev=60)])
+    res = simulate(model, SpeedRamp(300, 3600, 0.6, input_torque=60.0), progress=False)
+    m = load_measurement(res.to_dataset())
+    ds = m.signals.copy()
+    rng = np.random.default_rng(17)
+    acc = ds["top"].values
+    ds["top"].values = acc + 0.02 * np.std(acc) * rng.standard_normal(acc.size)
+    ds["top"].attrs.update(units="m s-2", long_name="housing accelerometer top")
+    ds.attrs.pop("title", None)
+    return write_netcdf(ds, tmp_path_factory.mktemp("meas") / "runup.nc")
+
+
+@pytest.fixture(scope="module")
+def with_gearset(measured_file, tmp_path_factory):
+    out = tmp_path_factory.mktemp("rep")
+    return build_measured_report(measured_file, out, gearset="paper-case1")
+
+
+def test_measured_report_with_gearset_passes_the_cross_check(with_gearset):
+    p = with_gearset
+    assert p.sections == MEASURED_SECTION_IDS
+    html = p.html.read_text()
+    assert cross_check(html) == []
+    tables, _ = parse_report(html)
+    caps = [t.caption for t in tables]
+    for prefix in ("Record of runup", "Channels of runup", "Gear set of runup",
+                   "Natural frequencies of the model of runup", "Spectrum peaks of runup",
+                   "Order peaks of runup", "Resonance regions of runup", "Rises of runup",
+                   "Provenance of runup"):
+        assert any(c.startswith(prefix) for c in caps), prefix
+    # no simulated-force section in a measured report
+    assert not any("tooth force" in c.lower() or "Floquet" in c for c in caps)
+    rec = next(t for t in tables if t.caption.startswith("Record of runup"))
+    assert any("tacho channel 'tacho'" in r[1] and "60 pulses/rev" in r[1] for r in rec.rows)
+    assert 2 <= p.pdf_pages <= 8
+
+
+def test_mesh_orders_are_identified_in_the_order_spectrum(with_gearset):
+    mc = with_gearset.case
+    ident = mc.order_identification
+    found = {}
+    for i, o in enumerate(ident.peaks):
+        if ident.status[i] == "explained":
+            found[ident.matches[i][0].expression] = float(o)
+    # the first two mesh harmonics, within 0.5 % of the kinematic order
+    for k, name in ((1, "f_mesh"), (2, "2 f_mesh")):
+        assert name in found, (name, found)
+        assert found[name] == pytest.approx(k * MESH_ORDER, rel=5e-3)
+    # the housing mode (not in the model) is a frequency-locked line of the map, and rises
+    # where the mesh orders cross it are found and explained by it
+    assert any(abs(f - 3000.0) < 150.0 for f in mc.features.frequencies)
+    causes = [str(c) for c in mc.resonances.cause]
+    assert any("f_mesh = line" in c for c in causes), causes
+
+
+def test_measured_report_without_gearset_says_so(measured_file, tmp_path):
+    p = build_measured_report(measured_file, tmp_path / "r")
+    html = p.html.read_text()
+    assert cross_check(html) == []
+    assert "no gear set was given" in html
+    tables, _ = parse_report(html)
+    assert not any(t.caption.startswith("Gear set of") for t in tables)
+    mc = p.case
+    assert mc.model is None and mc.natural_frequencies_hz.size == 0
+    # rays of the map near the mesh orders, at their measured orders
+    assert any(abs(o - MESH_ORDER) < 0.02 * MESH_ORDER for o in mc.features.orders)
+
+
+def test_constant_speed_record_reports_spectra_without_maps(measured_file, tmp_path):
+    m = load_measurement(measured_file, rpm=1500)
+    mc = analyse_measurement(m, gearset="paper-case1")
+    assert mc.fmap is None and mc.resonances is None and not mc.varying_speed
+    assert any("no rpm maps" in n for n in mc.notes)
+
+
+def test_cli_measured_report_and_its_errors(measured_file, tmp_path, capsys):
+    out = tmp_path / "cli"
+    assert main(["report", str(measured_file), "--gearset", "paper-case1", "-o", str(out)]) == 0
+    assert (out / "report.html").is_file() and (out / "report.pdf").is_file()
+    capsys.readouterr()
+    # the output rule: no silent replacement
+    assert main(["report", str(measured_file), "--gearset", "paper-case1", "-o",
+                 str(out)]) == 2
+    assert "--overwrite" in capsys.readouterr().err
+    cases = [
+        (["--tacho", "nope"], "tacho = 'nope' is not a channel"),
+        (["--speed", "top"], "speed 'top' has units 'm s-2'"),
+        (["--channel", "x"], "channel = 'x' is not a channel"),
+        (["--gearset", "no-such-set"], "no-such-set"),
+        (["--gearset", "paper-case1", "--reference", "moon"], "reference = 'moon'"),
+    ]
+    for extra, msg in cases:
+        code = main(["report", str(measured_file), "-o", str(tmp_path / "x"), *extra])
+        err = capsys.readouterr().err
+        assert code == 2, (extra, err)
+        assert msg in err and len(err.strip().splitlines()) == 1, err
+        assert not (tmp_path / "x").exists()
+    with pytest.raises(SystemExit) as exc:  # range-checked numbers, exclusive options
+        main(["report", str(measured_file), "--pulses-per-rev", "0"])
+    assert exc.value.code == 2
+    with pytest.raises(SystemExit):
+        main(["report", str(measured_file), "--tacho", "tacho", "--rpm", "100"])
+    with pytest.raises(SystemExit):
+        main(["report", str(measured_file), "--rpm", "nan"])
+    assert "admissible" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("path", UFF_FILES, ids=[p.name for p in UFF_FILES])
+def test_real_uff_files_give_a_report_or_a_clear_error(path, tmp_path, capsys):
+    """No file carries a speed channel: without --rpm a one-line error naming the options and
+    the channels; with a stated speed a report that passes the cross-check (the 13-sample
+    catman export is refused as too short)."""
+    code = main(["report", str(path), "-o", str(tmp_path / "a")])
+    err = capsys.readouterr().err
+    assert code == 2 and len(err.strip().splitlines()) == 1
+    assert ("no speed reference found" in err and "--rpm" in err and "channels:" in err) or \
+        "needs at least 64" in err
+    code = main(["report", str(path), "--rpm", "1500", "-o", str(tmp_path / "b")])
+    err = capsys.readouterr().err
+    if "not-all-columns" in path.name:
+        assert code == 2 and "13 samples; a measurement needs at least 64" in err
+        return
+    assert code == 0, err
+    assert cross_check((tmp_path / "b" / "report.html").read_text()) == []
+
+
+def test_measured_html_renders_in_headless_chromium(with_gearset, tmp_path):
+    exe = shutil.which("chromium") or shutil.which("chromium-browser")
+    if exe is None:
+        pytest.skip("chromium not on PATH")
+    from PIL import Image
+
+    shot = tmp_path / "shot.png"
+    cmd = [exe, "--headless", "--no-sandbox", "--disable-gpu",
+           "--disable-background-networking", "--disable-component-update", "--no-first-run",
+           "--disable-sync", f"--user-data-dir={tmp_path / 'profile'}", "--enable-logging=stderr",
+           "--v=0", "--hide-scrollbars", "--window-size=1100,6000", "--virtual-time-budget=5000",
+           f"--screenshot={shot}", with_gearset.html.as_uri()]
+    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=120, check=False)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert "ERR_" not in "\n".join(ln for ln in proc.stderr.splitlines() if "net::" in ln)
+    im = np.asarray(Image.open(shot).convert("RGB"), dtype=float)
+    r, g, b = im[..., 0], im[..., 1], im[..., 2]
+    assert ((g > r + 40) & (b > r + 20)).sum() > 5000  # the maps are drawn
