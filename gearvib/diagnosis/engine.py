@@ -9,6 +9,7 @@ candidates with :mod:`analysis.diagnosis`.
 
 from __future__ import annotations
 
+import functools
 import json
 import os
 import time as _time
@@ -36,6 +37,7 @@ from analysis.diagnosis import (
 )
 from gearvib.config import ConfigError, gearset_from_dict
 from gearvib.diagnosis.candidates import KINDS, Candidate, candidate_faults, severity_text
+from gearvib.diagnosis.cases import ProfileSettings, profile_case, profile_path
 
 __all__ = ["ASSUMED_SENSORS", "Record", "diagnose"]
 
@@ -105,16 +107,23 @@ class Record:
         return self.signal.size / self.fs
 
     @classmethod
-    def from_measurement(cls, m: Any, channel: str | None = None,
+    def from_measurement(cls, m: Any, channel: str | None = None, member: str | None = None,
                          name: str = "measured") -> Record:
-        """From an :class:`analysis.measurement.Measurement` (its channel and speed)."""
+        """From an :class:`analysis.measurement.Measurement` (its channel and speed).
+
+        ``member``: the shaft whose speed the measurement's reference gives (default: the
+        ``member`` attribute of its reference channel, e.g. a simulated tacho's, else the
+        gear set's input member).
+        """
         x = m.channel(channel)
         t = np.asarray(x["time"].values, float)
         fs = (t.size - 1) / (t[-1] - t[0])
         sp = m.speed_rpm
         rpm = np.interp(t, np.asarray(sp["time"].values, float), np.asarray(sp.values, float))
-        ref = getattr(m, "reference", None)
-        member = ref if isinstance(ref, str) and ref else None
+        if member is None:
+            ch = m.source.get("reference_channel")
+            if ch and ch in m.signals:
+                member = str(m.signals[ch].attrs.get("member", "")) or None
         return cls(np.asarray(x.values, float), float(fs), rpm, member,
                    str(x.attrs.get("units", "1")), name)
 
@@ -148,32 +157,44 @@ def _fundamentals(cat: Any) -> dict[str, float]:
 
 
 def _sweep_runs(config: str, candidates: list[Candidate], run: dict, sensors: list[dict],
-                work_dir: Path, workers: int | None, progress: bool) -> tuple[list, Any]:
+                settings: ProfileSettings, work_dir: Path, workers: int | None,
+                progress: bool) -> tuple[list[list[OrderProfile]], np.ndarray, Any]:
     """Simulate the healthy set and every candidate through :func:`gearvib.sweep.run_sweep`.
 
-    One case per candidate (parameter ``fault``; the assumed sensor replaces the description's
-    ``[[sensor]]`` tables). Run files are kept in ``work_dir/runs`` and reused by the next
-    diagnosis with the same gear set, speed profile and candidates.
+    One case per candidate (parameter ``fault``; the assumed sensors replace the
+    description's ``[[sensor]]`` tables); each worker returns the order profiles of its run
+    (:func:`gearvib.diagnosis.cases.profile_case`). Run files are kept in ``work_dir/runs``
+    and reused by the next diagnosis at the same operating point.
+
+    Returns the profiles (per case, per sensor), the healthy model's natural frequencies
+    [Hz] and the sweep result.
     """
-    from gearvib.io import read_run
-    from gearvib.sweep import Parameter, SummarySettings, Sweep, run_sweep
+    from gearvib.sweep import Parameter, Sweep, run_sweep
 
     values = [[]] + [[c.fault] for c in candidates]
     labels = ["healthy"] + [c.label for c in candidates]
     sweep = Sweep(base=config, parameters=(
         Parameter("fault", tuple(values), tuple(labels)),
         Parameter("sensor", (list(sensors),), ("assumed sensors",))),
-        simulation=dict(run), title="gearvib diagnosis: candidate faults",
-        # one order kept: with none, the sweep's summary of a run with a virtual sensor has an
-        # `order` dimension without coordinate, which the combination step cannot take
-        summary=SummarySettings(orders=(1.0,)), max_cases=10_000)
-    result = run_sweep(sweep, work_dir, workers=workers, progress=progress, report=False)
+        simulation=dict(run), title="gearvib diagnosis: candidate faults", max_cases=10_000)
+    result = run_sweep(sweep, work_dir, workers=workers, progress=progress, report=False,
+                       runner=functools.partial(profile_case, settings))
+    ds = result.dataset
     if result.failed:
         i = result.failed[0]
         raise RuntimeError(f"diagnosis: the simulation of {labels[i]!r} failed: "
-                           f"{result.dataset['failure'].values[i]}")
-    files = [work_dir / str(f) for f in result.dataset["run_file"].values]
-    return [read_run(f) for f in files], result
+                           f"{ds['failure'].values[i]}")
+    data = []
+    for f in ds["run_file"].values:
+        with np.load(profile_path(str(work_dir / str(f)), settings)) as z:
+            data.append({k: z[k] for k in z.files})
+    n = min(d["order"].size for d in data)
+    order = data[0]["order"][:n]
+    profiles = [[OrderProfile(order, d["amplitude"][k, :n], "m s-2", settings.revolutions,
+                              int(d["segments"]), (0.0, 0.0, 0.0), lab)
+                 for k in range(d["amplitude"].shape[0])]
+                for d, lab in zip(data, labels, strict=True)]
+    return profiles, data[0]["natural_frequency"], result
 
 
 def _fit_ramp(t: np.ndarray, rpm: np.ndarray) -> tuple[float, float]:
@@ -196,8 +217,8 @@ def _family_table(fund: dict[str, float], ms: dict[str, float], n_planets: int, 
     out = {}
     for name, f in base.items():
         if f > 0:
-            out[name] = (f, family_lines(f, mesh_order=mesh, mesh_harmonics=3, harmonics=6,
-                                         sidebands=3, max_order=max_order))
+            out[name] = (f, family_lines(f, mesh_order=mesh, mesh_harmonics=6, harmonics=10,
+                                         sidebands=10, max_order=max_order))
     return out
 
 
@@ -285,23 +306,17 @@ def diagnose(measured: Record, config: str, *, baseline: Record | None = None,
                          "record at speed")
     fc_max = max(start, end) / abs(ms[input_member]) / 60.0
     fs_out = float(max(5000.0, 1000.0 * np.ceil(2.6 * max_order * fc_max * 1.05 / 1000.0)))
-    run = {"speed_start_rpm": round(start, 3), "speed_end_rpm": round(end, 3),
-           "duration": round(n_use / measured.fs + SKIP_S, 6), "fs_out": fs_out}
+    # rounded (1 min-1, 0.1 s) so that records of one operating point share candidate runs
+    run = {"speed_start_rpm": float(round(start)), "speed_end_rpm": float(round(end)),
+           "duration": round(n_use / measured.fs + SKIP_S, 1), "fs_out": fs_out}
     sim_t0 = _time.perf_counter()
     sensors = [dict(x) for x in (sensors or ASSUMED_SENSORS)]
-    runs, sweep_result = _sweep_runs(config, candidates, run, sensors, Path(work_dir), workers,
-                                     progress)
+    settings = ProfileSettings(tuple(x["name"] for x in sensors), 1.0 / abs(ms[input_member]),
+                               max_order, int(revolutions), SKIP_S)
+    profiles, natural_hz, sweep_result = _sweep_runs(config, candidates, run, sensors,
+                                                     settings, Path(work_dir), workers,
+                                                     progress)
     sim_time = _time.perf_counter() - sim_t0
-    in_ratio = abs(ms[input_member])
-    profiles = []  # per run: one profile per assumed sensor
-    for lab, ds in zip(["healthy"] + [c.label for c in candidates], runs, strict=True):
-        rpm = np.abs(ds["input_speed"].values) / in_ratio
-        tt = ds["time"].values
-        fs = (tt.size - 1) / (tt[-1] - tt[0])
-        profiles.append([order_profile(ds["sensor_acceleration"].sel(sensor=x["name"]).values,
-                                       fs, rpm, max_order=max_order, revolutions=revolutions,
-                                       name=lab, skip_s=SKIP_S, units="m s-2")
-                         for x in sensors])
     if baseline is not None:
         b_ratio = ratio if (baseline.member or input_member) == member else \
             _speed_ratio(cfg, base, baseline.member or input_member)[0]
@@ -337,10 +352,8 @@ def diagnose(measured: Record, config: str, *, baseline: Record | None = None,
     strength = np.interp(peaks, order, d_meas) if peaks.size else np.array([])
     top_peaks = peaks[np.argsort(-strength)][:10] if peaks.size else peaks
     fc_mean = meas.speed_rpm[1] / 60.0
-    natural = {}
-    if "natural_frequency" in runs[0]:
-        for i, f in enumerate(np.atleast_1d(runs[0]["natural_frequency"].values)):
-            natural[f"f{i + 1}"] = float(f)
+    natural = {f"f{i + 1}": float(f) for i, f in enumerate(np.atleast_1d(natural_hz))
+               if np.isfinite(f)}
     mode_notes = near_modes(top_peaks, fc_mean, natural)
     locking = order_locking(meas, measured.signal, measured.fs, c_rpm, top_peaks)
     # one entry per (cause, member): the best-scoring variant
@@ -393,6 +406,13 @@ def diagnose(measured: Record, config: str, *, baseline: Record | None = None,
                        "the ring gear, more averaging or a higher load")
         if causes[0].cause != "none" and any(c.member == "planet" for c in causes[:2]):
             nxt.append("a once-per-revolution carrier tacho to tell which planet")
+    local = ("crack", "pitting", "broken_tooth")
+    if (len(causes) > 1 and causes[0].cause in local and causes[1].cause in local
+            and causes[0].member == causes[1].member
+            and causes[0].score - causes[1].score < 0.1):
+        nxt.append(f"an inspection of {causes[0].member} (borescope, oil debris): the kind of "
+                   f"local tooth fault ({causes[0].cause} or {causes[1].cause}) differs in "
+                   "the spectrum mainly by its size, which an unknown transfer path hides")
         if not nxt:
             nxt.append("a second sensor position and another load: the leading causes differ "
                        "little on this record")
@@ -401,7 +421,7 @@ def diagnose(measured: Record, config: str, *, baseline: Record | None = None,
              f"band up to order {max_order:.0f} ({max_order / mesh:.1f} mesh harmonics)",
              f"{len(candidates)} candidate faults simulated in {sim_time:.1f} s "
              f"({len(sweep_result.simulated)} simulated, {len(sweep_result.reused)} reused)"]
-    attrs = {"gear_set": str(config), "speed_member": member,
+    attrs = {"gear_set": str(config), "speed_member": member, "mesh_order": float(mesh),
              "simulated_speed_rpm": f"{run['speed_start_rpm']} -> {run['speed_end_rpm']}",
              "simulated_duration_s": run["duration"],
              "assumed_sensors_json": json.dumps(sensors),

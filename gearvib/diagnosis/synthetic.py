@@ -86,16 +86,10 @@ def synthetic_measurement(config: str, faults: Sequence[dict] = (), *,
 
 
 def record_from_run(ds: xr.Dataset, sensor: str | None = None, *, name: str = "measured"):
-    """A :class:`gearvib.diagnosis.Record` of a run's sensor, the speed from its tacho."""
-    from analysis.speed import from_tacho
+    """A :class:`gearvib.diagnosis.Record` of a run's sensor, the speed from its tacho channel
+    (:func:`analysis.measurement.load_measurement`)."""
+    from analysis.measurement import load_measurement
     from gearvib.diagnosis.engine import Record
 
-    acc = ds["sensor_acceleration"]
-    sensor = sensor or str(acc["sensor"].values[0])
-    t = ds["time"].values
-    fs = (t.size - 1) / (t[-1] - t[0])
-    tacho = ds["tacho"]
-    ref = from_tacho(tacho.values, fs, int(tacho.attrs.get("pulses_per_rev", 1)),
-                     output_time=t - t[0])
-    return Record(acc.sel(sensor=sensor).values, float(fs), np.asarray(ref.rpm, float),
-                  str(tacho.attrs.get("member", "")) or None, "m s-2", name)
+    m = load_measurement(ds, channel=sensor, tacho="tacho")
+    return Record.from_measurement(m, sensor, name=name)
