@@ -29,7 +29,7 @@ def _ramp(duration=20.0, rpm0=600.0, rpm1=900.0):
 
 def test_order_profile_amplitude_of_an_order_line_in_a_run_up():
     # order 10.5 with amplitude 2 (RMS sqrt(2)) and order 37 with 0.5 during a run-up
-    t, rpm, ang = _ramp()
+    _t, rpm, ang = _ramp()
     x = 2.0 * np.sin(10.5 * ang) + 0.5 * np.cos(37 * ang)
     p = order_profile(x, FS, rpm, max_order=60, revolutions=16)
     assert p.order[1] == pytest.approx(1 / 16)
@@ -45,7 +45,7 @@ def test_order_profile_amplitude_of_an_order_line_in_a_run_up():
 
 
 def test_order_profile_refuses_short_records_and_bad_speed():
-    t, rpm, ang = _ramp(duration=0.5)
+    _t, rpm, ang = _ramp(duration=0.5)
     with pytest.raises(ValueError, match="at least 16"):
         order_profile(np.sin(3 * ang), FS, rpm, max_order=20)
     with pytest.raises(ValueError, match="> 0"):

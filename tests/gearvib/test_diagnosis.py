@@ -100,7 +100,7 @@ def test_measured_baseline(work):
     healthy = diagnose(record_from_run(_measure([], seed=8)), "paper-case1", baseline=base,
                        work_dir=work, workers=2)
     assert healthy.causes[0].cause == "none"
-    fault, member = FAULTS["eccentricity-sun"]
+    fault, _member = FAULTS["eccentricity-sun"]
     d = diagnose(record_from_run(_measure([fault], seed=9)), "paper-case1", baseline=base,
                  work_dir=work, workers=2)
     assert (d.causes[0].cause, d.causes[0].member) == ("eccentricity", "sun")
