@@ -441,6 +441,8 @@ class Diagnosis:
         Reference shaft of the orders.
     attrs : dict
         Provenance (written to the Dataset's attributes).
+    timing : dict
+        Wall times [s] and run counts (not written: the same input gives the same output).
     """
 
     causes: list[Cause]
@@ -456,6 +458,7 @@ class Diagnosis:
     notes: list[str] = field(default_factory=list)
     reference: str = "carrier"
     attrs: dict[str, Any] = field(default_factory=dict)
+    timing: dict[str, float] = field(default_factory=dict)
 
     @property
     def likely(self) -> list[Cause]:

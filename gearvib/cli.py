@@ -349,6 +349,9 @@ def _cmd_diagnose(args: argparse.Namespace) -> int:
                      threshold=DEFAULT_THRESHOLD if args.threshold is None else args.threshold,
                      revolutions=args.revolutions,
                      progress=not (args.quiet or args.json))
+        d.attrs["measurement"] = f"{measured.name}: {measured.reference}"
+        if base is not None:
+            d.attrs["baseline"] = f"measured: {mb.name}"
         paths = write_diagnosis_report(d, out, name=measured.name)
     if args.json:
         print(d.to_json())

@@ -97,6 +97,10 @@ def _sections(d: Diagnosis, title_name: str) -> list[Section]:
         verdict = (f"{len(likely)} cause(s) above the threshold {d.threshold:.2f}; the most "
                    f"likely is {likely[0].cause} on {likely[0].member} (score "
                    f"{likely[0].score:.2f}).")
+        members = {c.member for c in likely}
+        if len(likely) > 1 and len(members) == 1:
+            verdict += (f" All likely causes are on {likely[0].member}: the member is clear, "
+                        "the kind less so (see What to measure next).")
     else:
         best = next((c for c in d.causes if c.cause != "none"), None)
         verdict = ("Nothing stands out: no candidate explains the measured differences (best "
