@@ -101,7 +101,7 @@ diagnose_args = st.tuples(
                                  "--baseline", "--reference", "--json", "-q", "--overwrite"]),
 ).map(lambda t: ["diagnose", *t[0], "--gearset", t[1], "-o", t[2], *t[3]])
 argv = st.one_of(simulate_args, simulate_args, modes_args, catalogue_args, preset_args,
-                 report_args, demo_args, diagnose_args, other_args)
+                 report_args, demo_args, other_args)
 
 
 def _fake_run_study(study, out_dir, *, progress=True, duration=None):
@@ -207,6 +207,18 @@ class CliOutcome(Exception):
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 @given(args=argv)
 def test_command_line_gives_one_line_errors_and_clean_folders(template, args):
+    _check_command(template, args)
+
+
+@settings(max_examples=fz.examples(100), deadline=None, database=None,
+          derandomize=fz.derandomize(),
+          suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
+@given(args=diagnose_args)
+def test_diagnose_command_line_gives_one_line_errors_and_clean_folders(template, args):
+    _check_command(template, args)
+
+
+def _check_command(template, args):
     folder = Path(tempfile.mkdtemp(prefix="gearvib-cli-fuzz-"))
     try:
         shutil.copytree(template, folder, dirs_exist_ok=True)
