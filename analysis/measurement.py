@@ -25,11 +25,13 @@ When none is found a :class:`ValueError` names the options and lists the channel
 from __future__ import annotations
 
 import json
+import math
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import netCDF4
 import numpy as np
 import xarray as xr
 
@@ -37,6 +39,8 @@ from analysis.cf import elapsed_seconds, labels_from_cf
 from analysis.checks import uniform_rate
 from analysis.inputs import ANGLE_UNITS, find_reference
 from analysis.readers import FORMATS, ReaderError, read
+from analysis.readers.cdf3 import check_cdf3, is_cdf3
+from analysis.readers.integrity import require_memory
 from analysis.speed import SpeedReference, from_angle, from_rpm, from_tacho
 
 __all__ = ["MIN_SAMPLES", "Measurement", "load_measurement"]
@@ -172,17 +176,14 @@ def _read_file(path: Path, options: dict | None) -> tuple[xr.Dataset, dict]:
     if path.is_dir():
         raise ValueError(f"measurement {str(path)!r} is a directory; give a file")
     ext = path.suffix.lower()
-    if ext in FORMATS["netcdf"][1]:
+    if ext in FORMATS["netcdf"][1] and _netcdf_run_bytes(path) is not None:
         try:
             with xr.open_dataset(path, decode_times=False, decode_timedelta=False) as probe:
-                run = _is_run(probe)
-                if run:
-                    ds = labels_from_cf(probe.load())
+                ds = labels_from_cf(probe.load())
         except (OSError, ValueError, RuntimeError) as exc:
             raise ReaderError(f"{path}: not a readable netCDF file ({exc})") from None
-        if run:
-            return ds, {"file": str(path), "format": "netcdf (gearvib run)",
-                        "reader": "xarray.open_dataset"}
+        return ds, {"file": str(path), "format": "netcdf (gearvib run)",
+                    "reader": "xarray.open_dataset"}
     opts = dict(options or {})
     if ext in FORMATS["csv"][1] and not opts:
         opts = {"time_column": "time"}  # the layout write_csv writes: "time [s]" first
@@ -197,6 +198,28 @@ def _read_file(path: Path, options: dict | None) -> tuple[xr.Dataset, dict]:
     reader = next((f"analysis.readers.{fn.__name__}" for name, (fn, exts) in FORMATS.items()
                    if ext in exts), "analysis.readers.read")
     return ds, {"file": str(path), "format": fmt, "reader": reader}
+
+
+def _netcdf_run_bytes(path: Path) -> int | None:
+    """Declared bytes of a simulated run's netCDF file (``None``: not a run with sensors).
+
+    Only the header is read (netCDF4, after the netCDF-3 header walk): xarray would load the
+    index coordinates while opening, whatever size a corrupt header claims. A run's declared
+    data must fit into memory (twice: the load and its copy).
+    """
+    if is_cdf3(path):
+        check_cdf3(path)
+    try:
+        with netCDF4.Dataset(path, "r") as nc:
+            if _RUN_MARKER not in nc.variables:
+                return None
+            declared = sum(math.prod(int(n) for n in v.shape)
+                           * max(getattr(v.dtype, "itemsize", 8), 1)
+                           for v in nc.variables.values())
+    except OSError as exc:
+        raise ReaderError(f"{path}: not a readable netCDF file ({exc})") from None
+    require_memory(2 * declared, path, f"the run's variables ({declared} bytes declared)")
+    return declared
 
 
 def _time_seconds(ds: xr.Dataset, where: str) -> np.ndarray:
@@ -444,6 +467,10 @@ def load_measurement(
     else:
         raise TypeError(f"source must be a path or an xarray.Dataset, not {type(source).__name__}")
     t = _time_seconds(ds, where)
+    if not _is_run(ds) and "normal_force" in ds.variables:
+        raise ValueError(f"{where} is a simulated run without a virtual sensor: add a "
+                         "[[sensor]] table to the gear set (docs/faults-sensors.md) and "
+                         "simulate again")
     if _is_run(ds):
         signals, extra = _channels_of_run(ds, t)
     else:

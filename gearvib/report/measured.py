@@ -22,11 +22,13 @@ from __future__ import annotations
 import json
 import math
 import os
+import re
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+import netCDF4
 import numpy as np
 import xarray as xr
 
@@ -45,14 +47,21 @@ from analysis.orders import OrderSpectrum, order_spectrum
 from analysis.plots import rpm_frequency_map_figure, rpm_order_map_figure
 from analysis.runup import MapFeatures, map_features
 from analysis.spectrum import Peaks, Spectrum, find_peaks, spectrum, to_db
+from gearvib.assembly import assemble
+from gearvib.catalogue import gear_set_catalogue
+from gearvib.config import GearSet, load_gearset
 from gearvib.io import atomic_write
+from gearvib.modal import modal_analysis
 from gearvib.report.case import RISE_HEADER, ResonanceRegion, resonance_regions
 from gearvib.report.document import FigureImages
+from gearvib.report.figures import Label, place_labels
 from gearvib.report.html import render_html
 from gearvib.report.pdf import write_pdf
+from gearvib.report.runner import check_output_dir
 from gearvib.report.sections import Block, Section
-from gearvib.report.study import AnalysisSettings
+from gearvib.report.study import AnalysisSettings, check_report_size
 from gearvib.report.wording import count
+from gearvib.stability import gear_set_candidates
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -355,7 +364,6 @@ def _load_gearset(gearset: Any):
     """A GearSet from a path, a preset name or a GearSet (None stays None)."""
     if gearset is None:
         return None
-    from gearvib.config import GearSet, load_gearset
 
     if isinstance(gearset, GearSet):
         return gearset
@@ -421,6 +429,7 @@ def analyse_measurement(measurement: Measurement, *, gearset: Any = None,
     st = settings or AnalysisSettings()
     m = measurement
     x = m.channel(channel)
+    check_report_size(m.time.size, m.fs, st, f"the measurement {name or m.name!r}")
     ch = str(x.name)
     units = str(x.attrs.get("units", "1"))
     t = m.time
@@ -436,9 +445,6 @@ def analyse_measurement(measurement: Measurement, *, gearset: Any = None,
     groups: list[tuple[str, float, int]] = []
     ref_member, in_per_ref = "", 1.0
     if gs is not None:
-        from gearvib.assembly import assemble
-        from gearvib.catalogue import gear_set_catalogue
-        from gearvib.modal import modal_analysis
 
         model = assemble(gs)
         modal = modal_analysis(model)
@@ -470,7 +476,8 @@ def analyse_measurement(measurement: Measurement, *, gearset: Any = None,
 
     # spectrum over the record, peaks identified against frequency-locked lines (natural
     # frequencies) and, at constant speed, the catalogue at the mean speed
-    seg = _segment(t.size, fs, max(st.map_resolution_hz / 4.0, 1.5 * fs / t.size))
+    # about 4096 lines, at least four segments to average
+    seg = _segment(t.size, fs, max(1.5 * fs / 4096, 1.5 * fs / max(t.size // 4, 16)))
     sp = spectrum(x, window="hann", amplitude="rms", segment_length=seg, name=ch)
     band = sp.frequency <= fmax
     pk = find_peaks(sp, prominence_db=6.0, max_peaks=_PEAKS,
@@ -592,7 +599,6 @@ def _revolutions(m: Measurement) -> float:
 
 def _select_peaks(pk: Peaks, keep: np.ndarray, scaling: str = "rms") -> Peaks:
     """The peaks where ``keep`` is true and within :data:`PEAK_RANGE_DB` of the strongest."""
-    from dataclasses import replace
 
     if keep.any():
         lv = to_db(pk.amplitude, scaling)
@@ -626,8 +632,6 @@ def _map_lines(features: MapFeatures, tolerance: float) -> CandidateLines:
 
 def _ray_causes(res: Resonances) -> Resonances:
     """Causes of rises on the map's rays named after the ray: ``order 76.87 = line 3013 Hz``."""
-    import re
-    from dataclasses import replace
 
     cause = np.asarray([re.sub(r"^1 f_mesh = (.*) \[(order [^\]]+)\]$", r"\2 = \1", str(c))
                         for c in res.cause], dtype=object)
@@ -643,7 +647,6 @@ def _resonances(map_ds: xr.Dataset, features: MapFeatures | None, fn: np.ndarray
     hop = float(np.median(np.abs(np.diff(map_ds["rpm"].values)))) if map_ds.sizes["time"] > 1 \
         else 0.0
     if fn.size:
-        from gearvib.stability import gear_set_candidates
 
         cands = gear_set_candidates(model, modal, n_max=st.n_max,
                                     speed_range=(span[0] * in_per_ref, span[1] * in_per_ref))
@@ -790,7 +793,6 @@ def spectra_figure(mc: MeasuredCase, figsize: tuple[float, float] = (8.0, 6.4)) 
                              [_short(mc.order_identification, i, "order")
                               for i in range(len(mc.order_peaks))]))
     fig.suptitle(f"{mc.name}: {mc.channel} ('?' unexplained, '~' ambiguous)", fontsize=10)
-    from gearvib.report.figures import Label, place_labels
 
     items = []
     for a, xs, ys, texts in labelled:
@@ -807,7 +809,6 @@ def sonogram_figure(mc: MeasuredCase, figsize: tuple[float, float] = (7.5, 6.2)
     """Rpm-frequency map with the mesh orders (or shaft orders) and natural frequencies."""
     if mc.fmap is None:
         return None
-    from gearvib.report.figures import Label, place_labels
 
     fig = rpm_frequency_map_figure(mc.fmap, hz_per_rpm=(), orders=(),
                                    dynamic_range_db=_DYNAMIC_RANGE_DB,
@@ -866,13 +867,15 @@ def sonogram_figure(mc: MeasuredCase, figsize: tuple[float, float] = (7.5, 6.2)
                                      "va": "bottom", "rotation": 90}))
     r = mc.resonances
     if r is not None and len(r):
-        forced = np.asarray([str(x) == "forced resonance" for x in r.mechanism])
-        if forced.any():
-            ax.plot(r.frequency[forced], r.rpm[forced], "o", mfc="none", mec="r", ms=7,
-                    label="forced resonance")
-        if (~forced).any():
-            ax.plot(r.frequency[~forced], r.rpm[~forced], "x", color="0.8", ms=4,
-                    label="other rise")
+        mech = np.asarray([str(x) for x in r.mechanism])
+        for which, mk, col, lab in (("forced resonance", "o", "r", "forced resonance"),
+                                    ("parametric instability", "s", "#ff66ff",
+                                     "parametric (theory candidate)"),
+                                    ("unexplained", "x", "0.8", "unexplained rise")):
+            sel = mech == which
+            if sel.any():
+                ax.plot(r.frequency[sel], r.rpm[sel], mk, mfc="none", mec=col, color=col,
+                        ms=7 if mk != "x" else 4, label=lab)
     ax.legend(loc="lower right", fontsize=7)
     fig.suptitle(f"{mc.name}: rpm-frequency map of {mc.channel}", fontsize=10)
     place_labels(fig, ax, labels)
@@ -959,8 +962,8 @@ def measured_sections(mc: MeasuredCase) -> list[Section]:
                   + (", dotted vertical lines = natural frequencies of the model"
                      if mc.natural_frequencies_hz.size else "")
                   + ", dash-dotted grey lines = frequency-locked lines of the map that no "
-                  "natural frequency explains, circles = forced resonances, crosses = other "
-                  "rises.",
+                  "natural frequency explains, circles = forced resonances, squares = "
+                  "parametric rises (theory candidates), crosses = unexplained rises.",
                   figure=lambda: sonogram_figure(mc))]
         if mc.omap is not None:
             s["sonograms"] += [Block("figure", f"{n}: rpm-order map of {mc.channel} (order "
@@ -1042,8 +1045,6 @@ def build_measured_report(source: Measurement | str | os.PathLike | xr.Dataset,
     -------
     MeasuredReportPaths
     """
-    from gearvib.report.runner import check_output_dir
-
     m = source if isinstance(source, Measurement) else load_measurement(
         source, channel=channel, **speed)
     out = check_output_dir(out_dir)
@@ -1066,9 +1067,13 @@ def build_measured_report(source: Measurement | str | os.PathLike | xr.Dataset,
 
 
 def is_simulated_run(path: str | os.PathLike) -> bool:
-    """True for a netCDF file written by the simulator (it has ``normal_force``)."""
+    """True for a netCDF file written by the simulator (it has ``normal_force``).
+
+    Only the header is read (netCDF4 parses a header without loading data); a file whose
+    header cannot be read counts as a run, so that the run reader reports what is wrong.
+    """
     try:
-        with xr.open_dataset(path, decode_times=False, decode_timedelta=False) as ds:
-            return "normal_force" in ds.variables and "input_speed" in ds.variables
-    except (OSError, ValueError, RuntimeError):
-        return False
+        with netCDF4.Dataset(path, "r") as nc:
+            return "normal_force" in nc.variables
+    except OSError:
+        return Path(path).is_file() and Path(path).suffix in (".nc", ".nc4")

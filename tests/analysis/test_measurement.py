@@ -163,6 +163,10 @@ def test_bad_sources(tmp_path) -> None:
     flat["tacho"].values[:] = 1.0
     with pytest.raises(ValueError, match="tacho channel 'tacho': tacho signal: no pulses"):
         load_measurement(flat)
+    run = layout().assign(normal_force=(("mesh", "time"), np.zeros((2, N))))
+    with pytest.raises(ValueError, match="simulated run without a virtual sensor: add a "
+                       r"\[\[sensor\]\] table"):
+        load_measurement(run)
     still = layout({"speed": (np.zeros(N), "min-1")}).drop_vars("tacho")
     with pytest.raises(ValueError, match="does not turn"):
         load_measurement(still)

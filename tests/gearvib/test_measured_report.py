@@ -72,6 +72,9 @@ def test_measured_report_with_gearset_passes_the_cross_check(with_gearset):
     rec = next(t for t in tables if t.caption.startswith("Record of runup"))
     assert any("tacho channel 'tacho'" in r[1] and "60 pulses/rev" in r[1] for r in rec.rows)
     assert 2 <= p.pdf_pages <= 8
+    ds = p.case.to_dataset()
+    assert ds["spectrum"].attrs["units"] == "m s-2" and ds["frequency"].attrs["units"] == "Hz"
+    assert ds["order_spectrum"].dims == ("order",) and ds.attrs["gear_set"] == "paper-case1"
 
 
 def test_mesh_orders_are_identified_in_the_order_spectrum(with_gearset):
@@ -181,3 +184,123 @@ def test_measured_html_renders_in_headless_chromium(with_gearset, tmp_path):
     im = np.asarray(Image.open(shot).convert("RGB"), dtype=float)
     r, g, b = im[..., 0], im[..., 1], im[..., 2]
     assert ((g > r + 40) & (b > r + 20)).sum() > 5000  # the maps are drawn
+
+
+# --------------------------------------------------------------------------- compare
+
+
+@pytest.fixture(scope="module")
+def simulated_file(tmp_path_factory) -> Path:
+    """The healthy model's run over the same speeds, carrying its gear-set description."""
+    from gearvib.config import load_config
+
+    cfg, _ = load_config("paper-case1")
+    model = assemble(load_gearset("paper-case1")).with_sensors([
+        HousingSensor("top", 90.0, housing_modes=(HousingMode(3000.0, 0.02, 1.0),)),
+        Tacho("tacho", pulses_per_rev=60)])
+    res = simulate(model, SpeedRamp(300, 3600, 0.6, input_torque=60.0), progress=False,
+                   config={"gearset": cfg})
+    from gearvib.io import write_netcdf as write_run
+
+    return write_run(res.to_dataset(), tmp_path_factory.mktemp("sim") / "healthy.nc")
+
+
+def test_strain_energy_shares_predict_the_stiffness_sensitivity():
+    """(f'/f)^2 - 1 = sum_j e_j s_j: scaling every mesh stiffness by 1 % moves each mode as
+    its mesh share predicts (an independent modal analysis with stiffness_scale)."""
+    from gearvib.modal import modal_analysis
+    from gearvib.report.measured_compare import stiffness_shares
+
+    for preset in ("paper-case1", "paper-case1-elastic"):
+        model = assemble(load_gearset(preset))
+        base = modal_analysis(model)
+        stiff = modal_analysis(model, stiffness_scale=1.01)
+        for i, kind in enumerate(base.kinds):
+            if kind == "rigid-body":
+                continue
+            shares = stiffness_shares(base, i, 0.0)
+            assert sum(p.share for p in shares) == pytest.approx(1.0, abs=1e-6)
+            mesh = sum(p.share for p in shares if p.parameter.startswith("mesh"))
+            ratio = (stiff.frequencies_hz[i] / base.frequencies_hz[i]) ** 2 - 1
+            assert ratio == pytest.approx(0.01 * mesh, rel=0.02, abs=2e-5), (preset, i)
+        top = stiffness_shares(base, 1, 0.05)[0]
+        assert top.change == pytest.approx((1.05**2 - 1) / top.share)
+
+
+def test_compare_measured_with_the_simulation(measured_file, simulated_file, tmp_path, capsys):
+    out = tmp_path / "cmp"
+    assert main(["compare", str(measured_file), str(simulated_file), "-o", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "matched" in text and "calibrated: dB re 1 m s-2" in text
+    for f in ("comparison.html", "comparison.pdf", "comparison.nc"):
+        assert (out / f).is_file()
+    import xarray as xr
+
+    with xr.open_dataset(out / "comparison.nc") as ds:
+        assert ds["level_difference"].dims == ("rpm", "order")
+        assert ds.attrs["gear_set"] == "paper-case1"  # rebuilt from the run's config_json
+        status = [str(s) for s in ds["peak_status"].values]
+        labels = [str(s) for s in ds["peak_label"].values]
+        dlev = ds["peak_level_difference"].values
+        # the mesh harmonics are in both, at the same level (the same model, noise apart)
+        mesh = [i for i, lab in enumerate(labels) if lab in ("f_mesh", "2 f_mesh")]
+        assert len(mesh) == 2 and all(status[i] == "matched" for i in mesh)
+        assert np.all(np.abs(dlev[mesh]) < 1.5)
+        # the housing mode at 3 kHz: a measured line no gear mode explains, in the simulation too
+        lf = ds["line_frequency"].values
+        k = int(np.argmin(np.abs(lf - 3000.0)))
+        assert abs(lf[k] - 3000.0) < 150.0 and abs(float(ds["line_offset"].values[k])) > 0.1
+    html = (out / "comparison.html").read_text()
+    assert "a resonance outside the gear model" in html
+    assert cross_check(html) == []
+    # output rule, bad input
+    assert main(["compare", str(measured_file), str(simulated_file), "-o", str(out)]) == 2
+    assert "--overwrite" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        main(["compare", str(measured_file), str(simulated_file), "--max-order", "0"])
+    with pytest.raises(SystemExit):
+        main(["compare", str(measured_file), str(simulated_file), "--order-resolution", "50"])
+    code = main(["compare", str(measured_file), str(simulated_file), "--simulated-channel",
+                 "nope", "-o", str(tmp_path / "w")])
+    err = capsys.readouterr().err
+    assert code == 2 and "channel = 'nope' is not a channel" in err
+    assert not (tmp_path / "w").exists()
+
+
+@pytest.mark.parametrize("path", UFF_FILES, ids=[p.name for p in UFF_FILES])
+def test_real_uff_files_compare_or_a_clear_error(path, simulated_file, tmp_path, capsys):
+    code = main(["compare", str(path), str(simulated_file), "--rpm", "1500", "-o",
+                 str(tmp_path / "c")])
+    captured = capsys.readouterr()
+    if "not-all-columns" in path.name:
+        assert code == 2 and "needs at least 64" in captured.err
+        return
+    assert code == 0, captured.err
+    assert "compare:" in captured.out and "matched" in captured.out
+    assert (tmp_path / "c" / "comparison.nc").is_file()
+
+
+def test_measured_pdf_text_stays_inside_the_margins(with_gearset):
+    from pdfminer.high_level import extract_pages
+    from pdfminer.layout import LAParams, LTChar
+
+    from gearvib.report.pdf import PAGE
+
+    def chars(obj):
+        if isinstance(obj, LTChar):
+            yield obj
+        elif hasattr(obj, "__iter__"):
+            for child in obj:
+                yield from chars(child)
+
+    bad = []
+    pages = list(extract_pages(with_gearset.pdf, laparams=LAParams()))
+    assert len(pages) == with_gearset.pdf_pages
+    for page in pages:
+        for c in chars(page):
+            inside_x = PAGE.left - 0.5 <= c.x0 and c.x1 <= PAGE.width - PAGE.right + 0.5
+            in_frame = PAGE.bottom - 0.5 <= c.y0 and c.y1 <= PAGE.height - PAGE.top + 0.5
+            in_footer = PAGE.footer - 3 <= c.y0 and c.y1 <= PAGE.bottom
+            if not (inside_x and (in_frame or in_footer)):
+                bad.append((page.pageid, c.get_text(), round(c.x0), round(c.y0)))
+    assert not bad, bad[:20]
