@@ -1,4 +1,5 @@
-"""Command line: ``gearvib demo | modes | catalogue | simulate | preset | report | sweep``.
+"""Command line: ``gearvib demo | modes | catalogue | simulate | preset | report | sweep |
+diagnose``.
 
 Every subcommand has ``--help``. Errors are printed as one line on stderr with exit code 2
 (bad input: a description, a setting, an option, an output that exists or cannot be
@@ -322,6 +323,45 @@ def _pulses(text: str) -> int:
     return v
 
 
+def _cmd_diagnose(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from analysis.diagnosis import DEFAULT_THRESHOLD
+    from analysis.measurement import load_measurement
+    from gearvib.config import load_config
+    from gearvib.diagnosis import Record, diagnose
+    from gearvib.diagnosis.report import REPORT_FILES, write_diagnosis_report
+    from gearvib.outputs import check_output_folder, removed_if_left_empty
+
+    load_config(args.gearset)  # inputs first: the gear set, the records, then the outputs
+    speed = _speed_options(args)
+    measured = load_measurement(args.measured, channel=args.channel, **speed)
+    rec = Record.from_measurement(measured, args.channel, args.reference)
+    base = None
+    if args.baseline is not None:
+        mb = load_measurement(args.baseline, channel=args.channel, **speed)
+        base = Record.from_measurement(mb, args.channel, args.reference, name="baseline")
+    out = Path(args.output)
+    _report_removed(check_output_folder(out, REPORT_FILES, overwrite=args.overwrite)[1])
+    with removed_if_left_empty(out):
+        d = diagnose(rec, args.gearset, baseline=base, work_dir=out / "candidates",
+                     workers=args.workers,
+                     threshold=DEFAULT_THRESHOLD if args.threshold is None else args.threshold,
+                     revolutions=args.revolutions,
+                     progress=not (args.quiet or args.json))
+        d.attrs["measurement"] = f"{measured.name}: {measured.reference}"
+        if base is not None:
+            d.attrs["baseline"] = f"measured: {mb.name}"
+        paths = write_diagnosis_report(d, out, name=measured.name)
+    if args.json:
+        print(d.to_json())
+        return 0
+    for c in d.causes[:5]:
+        flag = "likely" if c.cause != "none" and c.score >= d.threshold else ""
+        print(f"  {c.score:5.2f}  {c.cause:<13s} {c.member or '-':<9s} {flag}")
+    print(f"report: {paths.html}")
+    print(f"        {paths.pdf}")
+    print(f"        {paths.dataset}")
 def _cmd_compare(args: argparse.Namespace) -> int:
     from pathlib import Path
 
@@ -432,6 +472,17 @@ def _workers(text: str) -> int:
     return v
 
 
+def _revolutions(text: str) -> int:
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text[:40]!r} is not an integer") from None
+    if not 4 <= v <= 256:
+        raise argparse.ArgumentTypeError(f"{text[:40]!r} is not admissible (admissible: "
+                                         "4..256)")
+    return v
+
+
 _OVERWRITE_HELP = ("replace existing output files (atomically, once the new ones are "
                    "complete); without it an existing output is an error")
 
@@ -527,6 +578,36 @@ def _parser() -> argparse.ArgumentParser:
     r.add_argument("-q", "--quiet", action="store_true", help="no progress display")
     r.set_defaults(func=_cmd_report)
 
+    g = sub.add_parser("diagnose", help="fault-cause diagnosis of a measurement (simulation "
+                       "in the loop)", description="Rank the candidate causes (tooth faults of "
+                       "sun, planets and ring, eccentricity, pin position errors) of what a "
+                       "measurement shows beyond a healthy baseline: every candidate is "
+                       "simulated on the gear set (sweep machinery, all cores) and scored by "
+                       "how well its change explains the measured one. Writes report.html, "
+                       "report.pdf and diagnosis.nc (candidate runs in DIR/candidates, reused). "
+                       "See docs/diagnosis.md.")
+    g.add_argument("measured", metavar="MEASURED", help="measurement file (any readable "
+                   "format) or a gearvib run .nc")
+    g.add_argument("--gearset", metavar="CONFIG", required=True, help="the healthy gear set "
+                   "(TOML file or preset name)")
+    g.add_argument("--baseline", metavar="HEALTHY", help="a measurement of the healthy gearbox "
+                   "with the same sensor (default: the healthy simulation)")
+    _add_speed_options(g)
+    g.add_argument("-o", "--output", default="gearvib-diagnosis", help="output folder "
+                   "(default ./gearvib-diagnosis)")
+    g.add_argument("-f", "--overwrite", action="store_true", help=_OVERWRITE_HELP)
+    g.add_argument("--workers", type=_workers, metavar="N", help="local worker processes of "
+                   "the candidate simulations (default: the CPUs available)")
+    g.add_argument("--threshold", type=_limits(0.0, 1.0, strict=True), default=None,
+                   metavar="S", help="score above which a cause is likely, 0 < S < 1 "
+                   "(default 0.4)")
+    g.add_argument("--revolutions", type=_revolutions, default=16, metavar="N",
+                   help="carrier revolutions per averaged segment, 4..256 (resolution 1/N "
+                   "orders; default 16)")
+    g.add_argument("--json", action="store_true", help='print {"threshold": ..., "causes": '
+                   '[{"cause", "member", "score", "evidence"}, ...]}, best first')
+    g.add_argument("-q", "--quiet", action="store_true", help="no progress display")
+    g.set_defaults(func=_cmd_diagnose)
     cp = sub.add_parser("compare", help="a measurement against a simulated run (HTML, PDF, "
                         "netCDF)", description="Compare a measurement with a simulated run "
                         "(its virtual sensor and tacho) on one reference shaft: order spectra "

@@ -13,6 +13,8 @@ missing folder, an existing file with and without ``--overwrite``) -- and runs
   ``gearvib: failed:`` (exit 1); no traceback is ever printed;
 * no temporary file is left in the folder.
 
+``diagnose`` runs its argument, input and output checks and a stand-in for the simulations
+and the report (the checks the diagnosis makes first: the gear set and its candidates).
 ``simulate`` runs for real, with ``--max-steps 20000`` appended so that accepted runs stay
 short (longer ones are refused by the run-size check). ``report`` and ``demo`` run their real
 argument and output checks, and a stand-in for the simulations and the rendering (the checks a
@@ -91,6 +93,13 @@ demo_args = st.tuples(output_dir, options(["--duration", "-q", "--overwrite", "-
     lambda t: ["demo", "-o", t[0], *t[1]])
 other_args = st.one_of(st.just([]), st.lists(st.sampled_from(
     ["bogus", "--version", "--help", "-x", "simulate", "modes", "catalogue"]), max_size=2))
+diagnose_args = st.tuples(
+    st.sampled_from([["meas.nc"], ["existing.nc"], ["missing.nc"], ["broken.nc"], ["adir"],
+                     ["meas.nc", "meas.nc"], []]),
+    config, output_dir, options(["--threshold", "--revolutions", "--workers", "--tacho",
+                                 "--pulses-per-rev", "--speed", "--rpm", "--channel",
+                                 "--baseline", "--reference", "--json", "-q", "--overwrite"]),
+).map(lambda t: ["diagnose", *t[0], "--gearset", t[1], "-o", t[2], *t[3]])
 argv = st.one_of(simulate_args, simulate_args, modes_args, catalogue_args, preset_args,
                  report_args, demo_args, other_args)
 
@@ -118,12 +127,32 @@ def _fake_build_report(inputs, out_dir, **kwargs):
     return SimpleNamespace(html=out / "report.html", pdf=out / "report.pdf")
 
 
+def _fake_diagnose(rec, config, *, threshold=0.4, **kwargs):
+    """The checks of :func:`gearvib.diagnosis.diagnose` before its first simulation."""
+    from gearvib.config import load_config
+    from gearvib.diagnosis import candidate_faults
+
+    cfg, _ = load_config(config)
+    candidate_faults(cfg)
+    return SimpleNamespace(causes=[], threshold=threshold, attrs={}, to_json=lambda: "{}")
+
+
+def _fake_write_diagnosis(d, out_dir, **kwargs):
+    out = Path(out_dir)
+    return SimpleNamespace(html=out / "report.html", pdf=out / "report.pdf",
+                           dataset=out / "diagnosis.nc")
+
+
 @pytest.fixture(scope="module")
 def template(tmp_path_factory) -> Path:
     """Files every example finds in its folder."""
     d = tmp_path_factory.mktemp("cli-fuzz-template")
     assert main(["simulate", "paper-case1", "-o", str(d / "existing.nc"), "--speed",
                  "1400:1600", "--duration", "0.01", "-q"]) == 0
+    from gearvib.diagnosis.synthetic import synthetic_measurement
+    from gearvib.io import write_netcdf
+
+    write_netcdf(synthetic_measurement("paper-case1", duration=0.05), d / "meas.nc")
     (d / "adir").mkdir()
     (d / "filled").mkdir()
     (d / "filled" / "report.html").write_text("an earlier report")
@@ -139,10 +168,17 @@ def template(tmp_path_factory) -> Path:
 
 @pytest.fixture(scope="module", autouse=True)
 def _stand_ins():
+    import gearvib.diagnosis as diagnosis_pkg
+    import gearvib.diagnosis.report as diagnosis_report
+
     old = report_pkg.run_study, report_pkg.build_report
+    old_d = diagnosis_pkg.diagnose, diagnosis_report.write_diagnosis_report
     report_pkg.run_study, report_pkg.build_report = _fake_run_study, _fake_build_report
+    diagnosis_pkg.diagnose = _fake_diagnose
+    diagnosis_report.write_diagnosis_report = _fake_write_diagnosis
     yield
     report_pkg.run_study, report_pkg.build_report = old
+    diagnosis_pkg.diagnose, diagnosis_report.write_diagnosis_report = old_d
     fz.write_report()
 
 
@@ -171,6 +207,18 @@ class CliOutcome(Exception):
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 @given(args=argv)
 def test_command_line_gives_one_line_errors_and_clean_folders(template, args):
+    _check_command(template, args)
+
+
+@settings(max_examples=fz.examples(100), deadline=None, database=None,
+          derandomize=fz.derandomize(),
+          suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
+@given(args=diagnose_args)
+def test_diagnose_command_line_gives_one_line_errors_and_clean_folders(template, args):
+    _check_command(template, args)
+
+
+def _check_command(template, args):
     folder = Path(tempfile.mkdtemp(prefix="gearvib-cli-fuzz-"))
     try:
         shutil.copytree(template, folder, dirs_exist_ok=True)

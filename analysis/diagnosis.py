@@ -1,0 +1,547 @@
+"""Fault-cause evidence: what a measurement shows that a healthy baseline does not explain.
+
+The engine of ``gearvib diagnose`` (the simulation in the loop lives in
+:mod:`gearvib.diagnosis`; this module knows nothing of the simulator).
+
+Method (``docs/diagnosis.md``)
+------------------------------
+1. **Order profile.** A signal is order-tracked on the reference shaft (carrier orders for a
+   planetary set) and its amplitude spectrum averaged over segments of ``revolutions``
+   reference revolutions (Hann window, 50 % overlap): :func:`order_profile`. Resolution
+   ``1 / revolutions`` orders, the same for every record however long it is.
+2. **Prominence.** An unknown transfer path (housing modes, sensor position, gain) multiplies
+   the spectrum by a function that varies slowly with frequency; the *prominence* of a line,
+   its level above the local floor (running median over ``±width`` orders, at most
+   ``dynamic_range`` dB below the local maximum), is blind to it: :func:`prominence_db`.
+3. **Difference.** ``D = P(measured) − P(baseline)`` [dB] per order bin: where the measurement
+   has lines the healthy baseline lacks, or stronger ones. A candidate cause's *signature*
+   is the same difference between a simulation with the fault and one without.
+4. **Score.** The cosine similarity of the positive parts of ``D`` (above a deadband of three
+   robust standard deviations of ``D``, which removes the noise) and of the signature:
+   :func:`signature_score`, in [0, 1], 1 when the measured rises are exactly the simulated
+   ones up to a common factor in dB. Level scaling (calibration, severity) changes it
+   little; which orders rise decides it.
+
+Further evidence: catalogue families whose lines the rising peaks hit, with the chance of as
+many hits by coincidence (:func:`family_evidence`), order-locked vs frequency-locked
+behaviour (:func:`order_locking`) and lines near natural frequencies (:func:`near_modes`).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import xarray as xr
+from scipy import ndimage, signal, stats
+
+from analysis.resample import resample_to_angle
+
+__all__ = [
+    "DEFAULT_THRESHOLD",
+    "Cause",
+    "Diagnosis",
+    "FamilyEvidence",
+    "OrderProfile",
+    "deadband_db",
+    "family_evidence",
+    "family_lines",
+    "near_modes",
+    "order_locking",
+    "order_profile",
+    "prominence_db",
+    "rising_peaks",
+    "signature_score",
+]
+
+DEFAULT_THRESHOLD = 0.4
+"""Score above which a cause is reported as likely (see ``docs/diagnosis.md``)."""
+
+DEFAULT_REVOLUTIONS = 16
+"""Reference revolutions per averaged segment (resolution 1/16 order)."""
+
+
+@dataclass(frozen=True)
+class OrderProfile:
+    """Averaged amplitude spectrum of a signal over orders of a reference shaft.
+
+    Attributes
+    ----------
+    order : numpy.ndarray
+        Orders of the reference shaft (bins ``k / revolutions``).
+    amplitude : numpy.ndarray
+        RMS amplitude per bin, averaged over the segments (power average) [units].
+    units : str
+        Units of the signal.
+    revolutions : int
+        Reference revolutions per segment.
+    segments : int
+        Number of averaged segments.
+    speed_rpm : tuple of float
+        Minimum, mean and maximum speed of the reference shaft over the record [min-1].
+    name : str
+        What the profile is of (e.g. ``"measured"``).
+    """
+
+    order: np.ndarray
+    amplitude: np.ndarray
+    units: str
+    revolutions: int
+    segments: int
+    speed_rpm: tuple[float, float, float]
+    name: str = "signal"
+
+    @property
+    def level_db(self) -> np.ndarray:
+        """Level [dB re 1 unit RMS], floored at 1e-300."""
+        return 20.0 * np.log10(np.maximum(self.amplitude, 1e-300))
+
+    def to_dataarray(self) -> xr.DataArray:
+        """The amplitude as a DataArray along ``order``."""
+        return xr.DataArray(
+            self.amplitude, dims=("order",),
+            coords={"order": ("order", self.order, {"units": "1",
+                                                    "long_name": "order of the reference shaft"})},
+            name=self.name,
+            attrs={"units": self.units, "long_name": f"RMS order spectrum ({self.name})",
+                   "revolutions_per_segment": int(self.revolutions),
+                   "segments": int(self.segments),
+                   "speed_rpm_min_mean_max": list(self.speed_rpm)})
+
+
+def _check_positive(value: float, name: str, low: float = 0.0) -> float:
+    v = float(value)
+    if not math.isfinite(v) or v <= low:
+        raise ValueError(f"{name} = {value!r} is not admissible (admissible: finite, > {low:g})")
+    return v
+
+
+def order_profile(x: Any, fs: float, rpm: Any, *, max_order: float,
+                  revolutions: int = DEFAULT_REVOLUTIONS, name: str = "signal",
+                  units: str = "1", skip_s: float = 0.0) -> OrderProfile:
+    """Order-track ``x`` and average its amplitude spectrum over segments.
+
+    Parameters
+    ----------
+    x : array_like
+        Signal samples (1-D, uniform at ``fs``).
+    fs : float
+        Sample rate [Hz].
+    rpm : array_like
+        Speed of the reference shaft at every sample [min-1] (> 0).
+    max_order : float
+        Highest order analysed (limited by ``fs`` at the top speed).
+    revolutions : int, optional
+        Reference revolutions per segment (resolution ``1/revolutions`` orders).
+    name, units : str, optional
+        Metadata.
+    skip_s : float, optional
+        Seconds left out at the start (a simulation's start-up transient).
+
+    Raises
+    ------
+    ValueError
+        Fewer than ``revolutions`` reference revolutions in the record; a bad speed.
+    """
+    fs = _check_positive(fs, "fs")
+    max_order = _check_positive(max_order, "max_order")
+    revolutions = int(revolutions)
+    if revolutions < 2:
+        raise ValueError(f"revolutions = {revolutions} is not admissible (admissible: >= 2)")
+    x = np.asarray(x, dtype=float)
+    rpm = np.asarray(rpm, dtype=float)
+    if x.ndim != 1 or rpm.shape != x.shape:
+        raise ValueError(f"signal and speed need one value per sample (signal {x.shape}, speed "
+                         f"{rpm.shape})")
+    a = round(skip_s * fs)
+    x, rpm = x[a:], rpm[a:]
+    if x.size < 16:
+        raise ValueError(f"{name}: {x.size} samples are too few for an order spectrum")
+    if not np.all(np.isfinite(rpm)) or np.min(rpm) <= 0:
+        raise ValueError(f"{name}: the reference speed must be finite and > 0 throughout "
+                         f"(minimum {np.nanmin(rpm):g} min-1)")
+    rpm_max = float(np.max(rpm))
+    mo_fs = fs / 2.56 / (rpm_max / 60.0)  # highest order below 0.39 fs at the top speed
+    mo = min(max_order, mo_fs)
+    spr = int(2 ** math.ceil(math.log2(2.56 * mo)))
+    ang = resample_to_angle(x, fs, rpm=rpm, samples_per_rev=spr, max_order=mo, min_rpm=0.0)
+    y = ang.values
+    nseg = revolutions * spr
+    total = y.size / spr
+    if y.size < nseg:
+        raise ValueError(f"{name}: the record covers {total:.1f} revolutions of the reference "
+                         f"shaft; the diagnosis needs at least {revolutions} (a longer record "
+                         "or a higher speed)")
+    f, p = signal.welch(y, fs=spr, window="hann", nperseg=nseg, noverlap=nseg // 2,
+                        detrend=False, scaling="spectrum", average="mean")
+    nseg_used = 1 + (y.size - nseg) // (nseg - nseg // 2)
+    keep = f <= mo
+    return OrderProfile(f[keep], np.sqrt(p[keep]), units, revolutions, nseg_used,
+                        (float(np.min(rpm)), float(np.mean(rpm)), rpm_max), name)
+
+
+def prominence_db(profile: OrderProfile, *, width: float = 6.0,
+                  dynamic_range: float = 40.0) -> np.ndarray:
+    """Level of every bin above its local floor [dB], in ``[0, dynamic_range]``.
+
+    The floor is the running median of the level over ``±width`` orders, raised to at most
+    ``dynamic_range`` dB below the running maximum (so a noise-free simulation has the same
+    dynamic range as a measurement). A slowly varying transfer function cancels.
+    """
+    lv = profile.level_db
+    n = max(3, round(2 * width * profile.revolutions) | 1)
+    med = ndimage.median_filter(lv, size=n, mode="nearest")
+    top = ndimage.maximum_filter1d(lv, size=n, mode="nearest")
+    floor = np.maximum(med, top - dynamic_range)
+    return np.clip(lv - floor, 0.0, dynamic_range)
+
+
+def deadband_db(diff: np.ndarray, *, k: float = 3.0, minimum: float = 1.0) -> float:
+    """``k`` robust standard deviations (1.4826 MAD) of a difference [dB], at least ``minimum``."""
+    d = np.asarray(diff, dtype=float)
+    d = d[np.isfinite(d)]
+    if d.size == 0:
+        return minimum
+    mad = float(np.median(np.abs(d - np.median(d))))
+    return max(minimum, k * 1.4826 * mad)
+
+
+def signature_score(measured_diff: np.ndarray, signature: np.ndarray, *,
+                    deadband: float, signature_deadband: float = 3.0) -> float:
+    """Cosine similarity of the measured rises and a candidate's simulated rises, in [0, 1].
+
+    Both are differences of prominence [dB] on the same order bins; only rises above the
+    deadbands count. 0 when either has no rise.
+    """
+    a = np.clip(np.asarray(measured_diff, float) - deadband, 0.0, None)
+    b = np.clip(np.asarray(signature, float) - signature_deadband, 0.0, None)
+    na, nb = float(np.linalg.norm(a)), float(np.linalg.norm(b))
+    if na == 0.0 or nb == 0.0:
+        return 0.0
+    return float(min(1.0, max(0.0, np.dot(a, b) / (na * nb))))
+
+
+def rising_peaks(order: np.ndarray, diff: np.ndarray, deadband: float) -> np.ndarray:
+    """Orders of the local maxima of ``diff`` above ``deadband`` (the measured rises)."""
+    d = np.asarray(diff, float)
+    idx, _ = signal.find_peaks(np.concatenate(([-np.inf], d, [-np.inf])), height=deadband)
+    return np.asarray(order)[idx - 1]
+
+
+def family_lines(fundamental: float, *, mesh_order: float, mesh_harmonics: int,
+                 harmonics: int, sidebands: int, max_order: float) -> np.ndarray:
+    """Lines of a fault family: harmonics ``k f`` and sidebands ``m f_mesh ± k f``.
+
+    All in orders of the reference shaft, ``0 < order <= max_order``, unique (to 1e-9).
+    """
+    k = np.arange(1, harmonics + 1) * fundamental
+    lines = [k]
+    ks = np.arange(1, sidebands + 1) * fundamental
+    for m in range(1, mesh_harmonics + 1):
+        c = m * mesh_order
+        lines += [c - ks, c + ks]
+    o = np.concatenate(lines)
+    o = o[(o > 0) & (o <= max_order)]
+    return np.unique(np.round(o, 9))
+
+
+@dataclass(frozen=True)
+class FamilyEvidence:
+    """How a family of kinematic lines explains the measured rises.
+
+    Attributes
+    ----------
+    family : str
+        Family name (``sun_fault``, ``planet_fault``, ...).
+    fundamental : float
+        Its fundamental order.
+    rising : int
+        Measured rising peaks in the band.
+    hits : int
+        Of those, how many fall on a line of the family (within the tolerance).
+    coverage : float
+        Fraction of the band within the tolerance of a family line.
+    chance : float
+        Probability of at least ``hits`` hits if the rises fell at random orders (binomial).
+    """
+
+    family: str
+    fundamental: float
+    rising: int
+    hits: int
+    coverage: float
+    chance: float
+
+    def text(self) -> str:
+        """One line for a report."""
+        return (f"{self.family} (order {self.fundamental:.4g}): {self.hits} of {self.rising} "
+                f"rising peaks on its lines (coincidence chance {self.chance:.2g})")
+
+
+def family_evidence(order: np.ndarray, diff: np.ndarray, deadband: float,
+                    families: Mapping[str, tuple[float, np.ndarray]], *,
+                    tolerance: float | None = None) -> list[FamilyEvidence]:
+    """Which catalogue families the measured rises fall on, with the coincidence chance.
+
+    Parameters
+    ----------
+    order, diff : numpy.ndarray
+        Order bins and the measured prominence difference [dB].
+    deadband : float
+        Rises below it are noise.
+    families : mapping
+        ``name -> (fundamental order, line orders)`` (:func:`family_lines`).
+    tolerance : float, optional
+        Half-width of a hit [orders]; default one bin.
+    """
+    order = np.asarray(order, float)
+    step = float(order[1] - order[0]) if order.size > 1 else 1.0
+    tol = step * 1.01 if tolerance is None else float(tolerance)
+    lo, hi = float(order[0]), float(order[-1])
+    peaks = rising_peaks(order, diff, deadband)
+    out = []
+    for name, (fund, lines) in families.items():
+        lines = np.sort(np.asarray(lines, float))
+        if lines.size == 0:
+            continue
+        # fraction of the band within tol of a line (union of intervals)
+        starts, ends = np.maximum(lines - tol, lo), np.minimum(lines + tol, hi)
+        covered, cur_s, cur_e = 0.0, starts[0], ends[0]
+        for s, e in zip(starts[1:], ends[1:], strict=True):
+            if s > cur_e:
+                covered += max(0.0, cur_e - cur_s)
+                cur_s, cur_e = s, e
+            else:
+                cur_e = max(cur_e, e)
+        covered += max(0.0, cur_e - cur_s)
+        cov = min(1.0, covered / max(hi - lo, 1e-12))
+        if peaks.size:
+            j = np.searchsorted(lines, peaks)
+            near = np.full(peaks.size, np.inf)
+            for jj in (j - 1, j):
+                ok = (jj >= 0) & (jj < lines.size)
+                near[ok] = np.minimum(near[ok], np.abs(lines[jj[ok]] - peaks[ok]))
+            hits = int(np.sum(near <= tol))
+        else:
+            hits = 0
+        chance = float(stats.binom.sf(hits - 1, peaks.size, cov)) if hits else 1.0
+        out.append(FamilyEvidence(name, float(fund), int(peaks.size), hits, cov, chance))
+    return out
+
+
+def order_locking(profile_orders: OrderProfile, x: Any, fs: float, rpm: Any,
+                  peak_orders: Sequence[float]) -> str:
+    """Whether the strongest measured rises are order-locked or frequency-locked.
+
+    Compares the prominence of the rising lines in the order spectrum with their prominence
+    in the frequency spectrum (same resolution at the mean speed). A line locked to the
+    shaft stays sharp in orders and smears in frequency when the speed varies; a line at a
+    fixed frequency (a resonance, an electrical line) does the opposite. With the speed
+    constant within 3 % the two cannot be told apart and the answer says so.
+    """
+    lo, mean, hi = profile_orders.speed_rpm
+    spread = (hi - lo) / mean if mean > 0 else 0.0
+    if not len(peak_orders):
+        return "no rising lines to test for order locking"
+    if spread < 0.03:
+        return (f"speed constant within {100 * spread:.1f} %: order-locked and frequency-locked "
+                "lines cannot be told apart (a run-up would)")
+    x = np.asarray(x, float)
+    f_ref = mean / 60.0
+    nper = int(min(x.size, round(fs * profile_orders.revolutions / f_ref)))
+    f, p = signal.welch(x, fs=fs, window="hann", nperseg=nper, noverlap=nper // 2,
+                        detrend=False, scaling="spectrum")
+    fp = OrderProfile(f / f_ref, np.sqrt(p), profile_orders.units, profile_orders.revolutions,
+                      1, profile_orders.speed_rpm)
+    po, pf = prominence_db(profile_orders), prominence_db(fp)
+    so = float(np.mean(np.interp(peak_orders, profile_orders.order, po)))
+    sf = float(np.mean(np.interp(peak_orders, fp.order, pf)))
+    verdict = ("order-locked" if so > sf + 3 else "frequency-locked" if sf > so + 3
+               else "undecided")
+    return (f"{verdict}: the rising lines stand {so:.1f} dB above their floor in the order "
+            f"spectrum, {sf:.1f} dB in the frequency spectrum (speed range "
+            f"{lo:.0f}-{hi:.0f} min-1)")
+
+
+def near_modes(orders: Sequence[float], reference_hz: float, natural_hz: Mapping[str, float],
+               *, rtol: float = 0.05) -> list[str]:
+    """Lines (orders at the reference frequency) within ``rtol`` of a natural frequency."""
+    out = []
+    for o in orders:
+        f = float(o) * reference_hz
+        for name, fn in natural_hz.items():
+            if fn > 0 and abs(f - fn) <= rtol * fn:
+                out.append(f"line at order {o:.3f} ({f:.0f} Hz) within {100 * abs(f / fn - 1):.1f}"
+                           f" % of natural frequency {name} ({fn:.0f} Hz): its level may be a "
+                           "resonance rather than a fault")
+    return out
+
+
+@dataclass(frozen=True)
+class Cause:
+    """One candidate cause and how well it explains the measurement.
+
+    Attributes
+    ----------
+    cause : str
+        Fault kind as in a gear-set description (``crack``, ``eccentricity``, ...) or
+        ``none``.
+    member : str
+        The member (``sun``, ``planet``, ``planet2``, ``ring``; ``""`` for ``none``).
+    score : float
+        In [0, 1].
+    evidence : tuple of str
+        Why.
+    variant : str
+        The simulated fault that scored best (its description), ``""`` for ``none``.
+    """
+
+    cause: str
+    member: str
+    score: float
+    evidence: tuple[str, ...] = ()
+    variant: str = ""
+
+    def to_dict(self) -> dict[str, Any]:
+        """``{"cause", "member", "score", "evidence"}`` (the JSON of ``gearvib diagnose``)."""
+        return {"cause": self.cause, "member": self.member, "score": round(self.score, 4),
+                "evidence": list(self.evidence)}
+
+
+@dataclass
+class Diagnosis:
+    """Ranked causes of a measurement and the spectra behind them.
+
+    Attributes
+    ----------
+    causes : list of Cause
+        Best first. ``none`` leads when no candidate reaches ``threshold``.
+    threshold : float
+        Score above which a cause is likely.
+    order : numpy.ndarray
+        Order bins of the reference shaft.
+    measured, baseline : OrderProfile
+        Profiles of the measurement and the healthy baseline.
+    measured_diff : numpy.ndarray
+        Prominence difference measured − baseline [dB].
+    deadband : float
+        Noise deadband of ``measured_diff`` [dB].
+    signatures : dict
+        ``label -> simulated prominence difference`` [dB] of every candidate variant.
+    families : list of FamilyEvidence
+    next_steps : list of str
+        What to measure next when the evidence is weak.
+    notes : list of str
+        General evidence (order locking, modes, resolution).
+    reference : str
+        Reference shaft of the orders.
+    attrs : dict
+        Provenance (written to the Dataset's attributes).
+    timing : dict
+        Wall times [s] and run counts (not written: the same input gives the same output).
+    """
+
+    causes: list[Cause]
+    threshold: float
+    order: np.ndarray
+    measured: OrderProfile
+    baseline: OrderProfile
+    measured_diff: np.ndarray
+    deadband: float
+    signatures: dict[str, np.ndarray] = field(default_factory=dict)
+    families: list[FamilyEvidence] = field(default_factory=list)
+    next_steps: list[str] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)
+    reference: str = "carrier"
+    attrs: dict[str, Any] = field(default_factory=dict)
+    timing: dict[str, float] = field(default_factory=dict)
+
+    @property
+    def likely(self) -> list[Cause]:
+        """Causes (not ``none``) at or above the threshold."""
+        return [c for c in self.causes if c.cause != "none" and c.score >= self.threshold]
+
+    def to_dict(self) -> dict[str, Any]:
+        """``{"threshold": ..., "causes": [...]}``, best first."""
+        return {"threshold": self.threshold, "causes": [c.to_dict() for c in self.causes]}
+
+    def to_json(self) -> str:
+        """:meth:`to_dict` as JSON."""
+        return json.dumps(self.to_dict())
+
+    def to_dataset(self) -> xr.Dataset:
+        """Profiles, differences, signatures and the ranked causes as a CF Dataset."""
+        oc = {"order": ("order", self.order, {"units": "1", "long_name":
+                                               f"order of the {self.reference}"})}
+        labels = list(self.signatures)
+        ds = xr.Dataset(
+            {
+                "measured_amplitude": ("order", self.measured.amplitude,
+                                       {"units": self.measured.units,
+                                        "long_name": "RMS order spectrum of the measurement"}),
+                "baseline_amplitude": ("order", self.baseline.amplitude,
+                                       {"units": self.baseline.units,
+                                        "long_name": "RMS order spectrum of the healthy "
+                                                     "baseline"}),
+                "measured_difference": ("order", self.measured_diff,
+                                        {"units": "dB", "long_name": "prominence of the "
+                                         "measurement minus prominence of the baseline"}),
+                "signature": (("variant", "order"),
+                              np.array([self.signatures[k] for k in labels]).reshape(
+                                  len(labels), self.order.size),
+                              {"units": "dB", "long_name": "simulated prominence difference "
+                               "faulty minus healthy"}),
+                "score": ("rank", np.array([c.score for c in self.causes], float),
+                          {"units": "1", "long_name": "how well the cause explains the "
+                           "measured difference (0-1)"}),
+            },
+            coords={**oc,
+                    "variant": ("variant", np.array(labels, dtype=str),
+                                {"long_name": "simulated candidate fault"}),
+                    "rank": ("rank", np.arange(1, len(self.causes) + 1),
+                             {"units": "1", "long_name": "rank of the cause"}),
+                    "cause": ("rank", np.array([c.cause for c in self.causes], dtype=str),
+                              {"long_name": "fault kind"}),
+                    "member": ("rank", np.array([c.member for c in self.causes], dtype=str),
+                               {"long_name": "faulty member"})},
+            attrs={"title": "gearvib fault-cause diagnosis", "Conventions": "CF-1.11",
+                   "threshold": self.threshold, "deadband_db": self.deadband,
+                   "reference_shaft": self.reference,
+                   "diagnosis_json": self.to_json(),
+                   "evidence_json": json.dumps({f"{c.cause}:{c.member}": list(c.evidence)
+                                                for c in self.causes}),
+                   "next_steps": "; ".join(self.next_steps),
+                   "notes": "; ".join(self.notes), **self.attrs})
+        return ds
+
+    def plot(self, *, top: int = 3, figsize: tuple[float, float] = (9.0, 7.0)):
+        """The measured difference against the signatures of the ``top`` causes.
+
+        Returns the matplotlib Figure.
+        """
+        from matplotlib.figure import Figure
+
+        fig = Figure(figsize=figsize, layout="constrained")
+        shown = [c for c in self.causes if c.cause != "none"][:top]
+        axes = fig.subplots(1 + len(shown), 1, sharex=True, squeeze=False)[:, 0]
+        ax = axes[0]
+        ax.plot(self.order, self.measured_diff, lw=0.7, color="k")
+        ax.axhline(self.deadband, color="tab:red", lw=0.8, ls="--",
+                   label=f"noise deadband {self.deadband:.1f} dB")
+        ax.set_ylabel("ΔP [dB]")
+        ax.set_title("measured minus healthy baseline (prominence above the local floor)",
+                     fontsize=9)
+        ax.legend(loc="upper right", fontsize=8)
+        for axc, c in zip(axes[1:], shown, strict=True):
+            sig = self.signatures.get(c.variant)
+            if sig is not None:
+                axc.plot(self.order, sig, lw=0.7, color="tab:blue")
+            axc.set_ylabel("ΔP [dB]")
+            axc.set_title(f"simulated {c.variant}: score {c.score:.2f}"
+                          f"{' (likely)' if c.score >= self.threshold else ''}", fontsize=9)
+        axes[-1].set_xlabel(f"order of the {self.reference}")
+        return fig

@@ -1,0 +1,134 @@
+"""Candidate causes of a diagnosis: the faults and errors simulated one by one.
+
+Every candidate is a ``[[fault]]`` table of the gear-set description
+(``docs/faults-sensors.md``) with a typical size; a candidate's *cause* is the fault ``kind``
+and its *member* the body it sits on. Planets that the gear set cannot tell apart (identical
+and equally spaced: a rotation of the carrier by the planet spacing maps one onto the next,
+so without a carrier phase reference their faults give the same spectra) are one candidate
+member ``planet``, simulated on ``planet1``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+from gearvib.config import ConfigError
+
+__all__ = ["KINDS", "Candidate", "candidate_faults", "planets_equivalent", "severity_text"]
+
+KINDS = ("crack", "pitting", "broken_tooth", "eccentricity", "pin_error")
+"""Fault kinds a diagnosis considers (a subset may be asked for)."""
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """One simulated candidate fault.
+
+    Attributes
+    ----------
+    cause : str
+        Fault kind.
+    member : str
+        Reported member (``planet`` for interchangeable planets).
+    fault : dict
+        The ``[[fault]]`` table simulated.
+    label : str
+        Short unique label, e.g. ``"crack sun 50 %"``.
+    """
+
+    cause: str
+    member: str
+    fault: dict
+    label: str
+
+
+def planets_equivalent(cfg: dict) -> bool:
+    """Whether the planets of a simple set are equally spaced (and so interchangeable)."""
+    angles = sorted(float(a) % 360.0 for a in cfg.get("geometry", {}).get("planet_angles_deg",
+                                                                          []))
+    n = len(angles)
+    if n < 2:
+        return True
+    step = 360.0 / n
+    return all(abs((a - angles[0]) - i * step) < 1e-6 for i, a in enumerate(angles))
+
+
+def _local(kind: str, member: str, target: str) -> Candidate:
+    if kind == "crack":
+        return Candidate(kind, member, {"kind": "crack", "member": target, "tooth": 0,
+                                        "severity": 0.5}, f"crack {member} 50 %")
+    if kind == "pitting":
+        return Candidate(kind, member, {"kind": "pitting", "member": target, "tooth": 0,
+                                        "severity": 0.6, "path_start": 0.3, "path_end": 0.7,
+                                        "depth": 10e-6, "flank": "both"},
+                         f"pitting {member} 60 % 10 um")
+    return Candidate(kind, member, {"kind": "broken_tooth", "member": target, "tooth": 0},
+                     f"broken_tooth {member}")
+
+
+def candidate_faults(cfg: dict, kinds: Sequence[str] = KINDS) -> list[Candidate]:
+    """The candidate faults of a simple planetary gear set.
+
+    Parameters
+    ----------
+    cfg : dict
+        Gear-set description (``type = "simple"``).
+    kinds : sequence of str
+        Fault kinds to consider (default :data:`KINDS`).
+
+    Raises
+    ------
+    ConfigError
+        Another type of gear set, or an unknown kind.
+    """
+    bad = [k for k in kinds if k not in KINDS]
+    if bad:
+        raise ConfigError(f"diagnosis: unknown fault kind(s) {bad} (admissible: "
+                          f"{', '.join(KINDS)})")
+    if cfg.get("type", "simple") != "simple":
+        raise ConfigError(f"diagnosis: gear-set type {cfg.get('type')!r} is not supported yet "
+                          "(admissible: a simple planetary set, type = \"simple\")")
+    if cfg.get("fault"):
+        raise ConfigError("diagnosis: the gear set must describe the healthy gearbox (remove "
+                          "its [[fault]] tables)")
+    n = len(cfg.get("geometry", {}).get("planet_angles_deg", []))
+    if n < 1:
+        raise ConfigError("diagnosis: the gear set has no planets (geometry.planet_angles_deg)")
+    if planets_equivalent(cfg):
+        planets = [("planet", "planet1")]
+    else:
+        planets = [(f"planet{i + 1}", f"planet{i + 1}") for i in range(n)]
+    out: list[Candidate] = []
+    for kind in ("crack", "pitting", "broken_tooth"):
+        if kind in kinds:
+            out += [_local(kind, "sun", "sun"), *(_local(kind, m, t) for m, t in planets),
+                    _local(kind, "ring", "ring")]
+    if "eccentricity" in kinds:
+        for m, t in [("sun", "sun"), *planets]:
+            out.append(Candidate("eccentricity", m, {"kind": "eccentricity", "member": t,
+                                                     "eccentricity": 20e-6, "phase_deg": 0.0},
+                                 f"eccentricity {m} 20 um"))
+    if "pin_error" in kinds:
+        for m, t in planets:
+            out.append(Candidate("pin_error", m, {"kind": "pin_error", "member": t,
+                                                  "tangential": 30e-6, "radial": 0.0},
+                                 f"pin_error {m} 30 um"))
+    assert len({c.label for c in out}) == len(out)
+    return out
+
+
+def severity_text(c: Candidate) -> str:
+    """What was simulated, for the evidence."""
+    f = c.fault
+    if c.cause == "crack":
+        return f"tooth crack, stiffness loss {100 * f['severity']:.0f} %"
+    if c.cause == "pitting":
+        return (f"pitting {100 * f['severity']:.0f} %, {f['depth'] * 1e6:.0f} µm deep over "
+                f"{100 * f['path_start']:.0f}-{100 * f['path_end']:.0f} % of the path")
+    if c.cause == "broken_tooth":
+        return "missing tooth"
+    if c.cause == "eccentricity":
+        return f"eccentricity {f['eccentricity'] * 1e6:.0f} µm"
+    return f"pin position error {math.hypot(f['tangential'], f['radial']) * 1e6:.0f} µm"

@@ -1,0 +1,441 @@
+"""Simulation in the loop: simulate every candidate fault and score it against a measurement.
+
+:func:`diagnose` takes a measured housing signal with the speed of a shaft, the healthy gear set
+and optionally a measured healthy baseline, simulates the healthy gear set and every candidate
+fault (:mod:`gearvib.diagnosis.candidates`) through the sweep machinery (one case per
+candidate, all cores, run files reused when the same diagnosis runs again) and ranks the
+candidates with :mod:`analysis.diagnosis`.
+"""
+
+from __future__ import annotations
+
+import functools
+import json
+import os
+import time as _time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from analysis.diagnosis import (
+    DEFAULT_REVOLUTIONS,
+    DEFAULT_THRESHOLD,
+    Cause,
+    Diagnosis,
+    OrderProfile,
+    deadband_db,
+    family_evidence,
+    family_lines,
+    near_modes,
+    order_locking,
+    order_profile,
+    prominence_db,
+    rising_peaks,
+    signature_score,
+)
+from gearvib.config import ConfigError, gearset_from_dict
+from gearvib.diagnosis.candidates import KINDS, Candidate, candidate_faults, severity_text
+from gearvib.diagnosis.cases import ProfileSettings, profile_case, profile_path
+
+__all__ = ["ASSUMED_SENSORS", "Record", "diagnose"]
+
+_FLAT = [{"frequency_hz": 5.0, "damping_ratio": 0.7, "gain": 1.0}]
+ASSUMED_SENSORS = (
+    {"name": "hann60", "angle_deg": 90.0, "window": "hann", "width_deg": 60.0,
+     "housing_modes": _FLAT},
+    {"name": "hann120", "angle_deg": 90.0, "window": "hann", "width_deg": 120.0,
+     "housing_modes": _FLAT},
+    {"name": "exp30", "angle_deg": 90.0, "window": "exponential", "width_deg": 30.0,
+     "housing_modes": _FLAT},
+    {"name": "exp70", "angle_deg": 90.0, "window": "exponential", "width_deg": 70.0,
+     "housing_modes": _FLAT},
+)
+"""Transfer paths the simulations assume: accelerometers with Hann and exponential windows
+of several widths and a housing response that is flat (1 kg-1) above 10 Hz (a heavily damped
+mode at 5 Hz). A spectrum's prominence is taken as the largest over these paths: what a
+healthy gearbox can show through any of them is not counted as a fault."""
+
+MESH_HARMONICS = 5.5
+"""Analysed band: up to 5.5 mesh harmonics (limited by the sample rate)."""
+
+SKIP_S = 0.2
+"""Start-up transient left out of every simulation [s]."""
+
+
+@dataclass(frozen=True)
+class Record:
+    """A housing signal with the speed of a shaft, sample by sample.
+
+    Attributes
+    ----------
+    signal : numpy.ndarray
+        Samples [units].
+    fs : float
+        Sample rate [Hz].
+    speed_rpm : numpy.ndarray
+        Speed of ``member`` at every sample [min-1].
+    member : str
+        The shaft the speed belongs to (default: the gear set's input member).
+    units : str
+    name : str
+    """
+
+    signal: np.ndarray
+    fs: float
+    speed_rpm: np.ndarray
+    member: str | None = None
+    units: str = "m s-2"
+    name: str = "measured"
+
+    def __post_init__(self) -> None:
+        s = np.asarray(self.signal, float)
+        v = np.asarray(self.speed_rpm, float)
+        if s.ndim != 1 or v.shape != s.shape:
+            raise ValueError(f"{self.name}: signal and speed need one value per sample "
+                             f"(signal {s.shape}, speed {v.shape})")
+        if not np.all(np.isfinite(s)):
+            raise ValueError(f"{self.name}: the signal has non-finite samples")
+        if not (np.isfinite(self.fs) and self.fs > 0):
+            raise ValueError(f"{self.name}: sample rate {self.fs!r} Hz is not admissible "
+                             "(admissible: finite, > 0)")
+
+    @property
+    def duration(self) -> float:
+        """Record length [s]."""
+        return self.signal.size / self.fs
+
+    @classmethod
+    def from_measurement(cls, m: Any, channel: str | None = None, member: str | None = None,
+                         name: str = "measured") -> Record:
+        """From an :class:`analysis.measurement.Measurement` (its channel and speed).
+
+        ``member``: the shaft whose speed the measurement's reference gives (default: the
+        ``member`` attribute of its reference channel, e.g. a simulated tacho's, else the
+        gear set's input member).
+        """
+        x = m.channel(channel)
+        t = np.asarray(x["time"].values, float)
+        fs = (t.size - 1) / (t[-1] - t[0])
+        sp = m.speed_rpm
+        rpm = np.interp(t, np.asarray(sp["time"].values, float), np.asarray(sp.values, float))
+        if member is None:
+            ch = m.source.get("reference_channel")
+            if ch and ch in m.signals:
+                member = str(m.signals[ch].attrs.get("member", "")) or None
+        return cls(np.asarray(x.values, float), float(fs), rpm, member,
+                   str(x.attrs.get("units", "1")), name)
+
+
+def _speed_ratio(cfg: dict, base: Path | None, member: str) -> tuple[float, dict[str, float],
+                                                                      Any]:
+    """Carrier speed per unit speed of ``member``, member speeds in carrier orders, gear set."""
+    from gearvib.catalogue import gear_set_catalogue
+
+    gs = gearset_from_dict(cfg, base=base)
+    cat = gear_set_catalogue(gs, reference="carrier", speed_rpm=1000.0, mesh_harmonics=4,
+                             harmonics=6, sidebands=3)
+    ms = {k: float(v) for k, v in cat.member_speeds.items()}
+    if member not in ms or ms[member] == 0:
+        raise ConfigError(f"the speed reference {member!r} is not a rotating member of the gear "
+                          f"set (admissible: {', '.join(k for k, v in ms.items() if v)})")
+    return 1.0 / abs(ms[member]), ms, cat
+
+
+def _fundamentals(cat: Any) -> dict[str, float]:
+    fam = np.asarray(cat.family)
+    order = np.asarray(cat.order, float)
+    harm = np.asarray(cat.harmonic)
+    side = np.asarray(cat.sideband)
+    out = {}
+    for name in ("sun_fault", "planet_fault", "ring_fault", "mesh"):
+        sel = (fam == name) & (harm == 1) & (side == 0)
+        if sel.any():
+            out[name] = float(order[sel][0])
+    return out
+
+
+def _sweep_runs(config: str, candidates: list[Candidate], run: dict, sensors: list[dict],
+                settings: ProfileSettings, work_dir: Path, workers: int | None,
+                progress: bool) -> tuple[list[list[OrderProfile]], np.ndarray, Any]:
+    """Simulate the healthy set and every candidate through :func:`gearvib.sweep.run_sweep`.
+
+    One case per candidate (parameter ``fault``; the assumed sensors replace the
+    description's ``[[sensor]]`` tables); each worker returns the order profiles of its run
+    (:func:`gearvib.diagnosis.cases.profile_case`). Run files are kept in ``work_dir/runs``
+    and reused by the next diagnosis at the same operating point.
+
+    Returns the profiles (per case, per sensor), the healthy model's natural frequencies
+    [Hz] and the sweep result.
+    """
+    from gearvib.sweep import Parameter, Sweep, run_sweep
+
+    values = [[]] + [[c.fault] for c in candidates]
+    labels = ["healthy"] + [c.label for c in candidates]
+    sweep = Sweep(base=config, parameters=(
+        Parameter("fault", tuple(values), tuple(labels)),
+        Parameter("sensor", (list(sensors),), ("assumed sensors",))),
+        simulation=dict(run), title="gearvib diagnosis: candidate faults", max_cases=10_000)
+    result = run_sweep(sweep, work_dir, workers=workers, progress=progress, report=False,
+                       runner=functools.partial(profile_case, settings))
+    ds = result.dataset
+    if result.failed:
+        i = result.failed[0]
+        raise RuntimeError(f"diagnosis: the simulation of {labels[i]!r} failed: "
+                           f"{ds['failure'].values[i]}")
+    data = []
+    for f in ds["run_file"].values:
+        with np.load(profile_path(str(work_dir / str(f)), settings)) as z:
+            data.append({k: z[k] for k in z.files})
+    n = min(d["order"].size for d in data)
+    order = data[0]["order"][:n]
+    profiles = [[OrderProfile(order, d["amplitude"][k, :n], "m s-2", settings.revolutions,
+                              int(d["segments"]), (0.0, 0.0, 0.0), lab)
+                 for k in range(d["amplitude"].shape[0])]
+                for d, lab in zip(data, labels, strict=True)]
+    return profiles, data[0]["natural_frequency"], result
+
+
+def _fit_ramp(t: np.ndarray, rpm: np.ndarray) -> tuple[float, float]:
+    """Start and end speed of the straight line fitted to a speed record."""
+    t = t - t[0]
+    if t[-1] <= 0:
+        return float(rpm[0]), float(rpm[0])
+    a, b = np.polyfit(t, rpm, 1)
+    return float(b), float(b + a * t[-1])
+
+
+def _family_table(fund: dict[str, float], ms: dict[str, float], n_planets: int, mesh: float,
+                  max_order: float) -> dict[str, tuple[float, np.ndarray]]:
+    sun_rel = abs(ms.get("sun", 0.0) - ms.get("carrier", 1.0))
+    planet_rel = abs(ms.get("planet1", 0.0) - ms.get("carrier", 1.0))
+    base = {"sun_fault": fund.get("sun_fault", n_planets * sun_rel),
+            "planet_fault": fund.get("planet_fault", planet_rel),
+            "ring_fault": fund.get("ring_fault", float(n_planets)),
+            "sun_rotation": sun_rel, "planet_rotation": planet_rel, "carrier": 1.0}
+    out = {}
+    for name, f in base.items():
+        if f > 0:
+            out[name] = (f, family_lines(f, mesh_order=mesh, mesh_harmonics=6, harmonics=10,
+                                         sidebands=10, max_order=max_order))
+    return out
+
+
+_CAUSE_FAMILY = {("crack", "sun"): "sun_fault", ("pitting", "sun"): "sun_fault",
+                 ("broken_tooth", "sun"): "sun_fault", ("crack", "ring"): "ring_fault",
+                 ("pitting", "ring"): "ring_fault", ("broken_tooth", "ring"): "ring_fault",
+                 ("eccentricity", "sun"): "sun_rotation"}
+
+
+def _cause_family(cause: str, member: str) -> str:
+    if (cause, member) in _CAUSE_FAMILY:
+        return _CAUSE_FAMILY[(cause, member)]
+    if member.startswith("planet"):
+        if cause == "pin_error":
+            return "carrier"
+        return "planet_rotation" if cause == "eccentricity" else "planet_fault"
+    return "carrier"
+
+
+def diagnose(measured: Record, config: str, *, baseline: Record | None = None,
+             work_dir: str | os.PathLike, workers: int | None = None,
+             kinds: tuple[str, ...] = KINDS, sensors: tuple[dict, ...] | None = None,
+             revolutions: int = DEFAULT_REVOLUTIONS, threshold: float = DEFAULT_THRESHOLD,
+             max_duration: float = 30.0, progress: bool = False) -> Diagnosis:
+    """Rank the candidate causes of what a measurement shows beyond a healthy baseline.
+
+    Parameters
+    ----------
+    measured : Record
+        Housing signal and shaft speed of the gearbox under investigation.
+    config : str
+        The healthy gear set: preset name or TOML path (no ``[[fault]]`` tables).
+    baseline : Record, optional
+        A measurement of the healthy gearbox with the same sensor. Without it the healthy
+        simulation is the baseline (the transfer path then differs; prominences absorb the
+        slowly varying part of the difference).
+    work_dir : path-like
+        Folder of the candidate runs (``runs/*.nc``, ``sweep.nc``; reused).
+    workers : int, optional
+        Local worker processes of the sweep (default all CPUs).
+    kinds : tuple of str
+        Fault kinds considered.
+    sensors : tuple of dict, optional
+        The ``[[sensor]]`` tables the simulations assume (default :data:`ASSUMED_SENSORS`);
+        a simulated spectrum's prominence is the largest over them.
+    revolutions : int
+        Carrier revolutions per averaged segment (resolution ``1/revolutions`` orders).
+    threshold : float
+        Score above which a cause is likely, in (0, 1).
+    max_duration : float
+        Longest simulated run [s] (the measured speed profile is fitted by a ramp over at most
+        this time).
+
+    Returns
+    -------
+    analysis.diagnosis.Diagnosis
+    """
+    from gearvib.config import load_config
+
+    t0 = _time.perf_counter()
+    if not 0.0 < float(threshold) < 1.0:
+        raise ValueError(f"threshold = {threshold!r} is not admissible (admissible: 0 < "
+                         "threshold < 1)")
+    cfg, base = load_config(config)
+    candidates = candidate_faults(cfg, kinds)
+    input_member = cfg.get("operation", {}).get("input", "sun")
+    member = measured.member or input_member
+    ratio, ms, cat = _speed_ratio(cfg, base, member)
+    fund = _fundamentals(cat)
+    mesh = fund.get("mesh")
+    if mesh is None:
+        raise ConfigError("diagnosis: the gear set has no planet meshes")
+    max_order = MESH_HARMONICS * mesh
+    c_rpm = np.abs(measured.speed_rpm) * ratio
+    meas = order_profile(measured.signal, measured.fs, c_rpm, max_order=max_order,
+                         revolutions=revolutions, name="measured", units=measured.units)
+    max_order = float(meas.order[-1])
+    # simulate the measured speed profile (a fitted ramp of the input member)
+    t = np.arange(measured.signal.size) / measured.fs
+    n_use = min(t.size, int(max_duration * measured.fs))
+    in_rpm = np.abs(measured.speed_rpm[:n_use]) * ratio * abs(ms[input_member])
+    start, end = _fit_ramp(t[:n_use], in_rpm)
+    if min(start, end) <= 0:
+        raise ValueError("diagnosis: the measured speed profile reaches standstill; give a "
+                         "record at speed")
+    fc_max = max(start, end) / abs(ms[input_member]) / 60.0
+    fs_out = float(max(5000.0, 1000.0 * np.ceil(2.6 * max_order * fc_max * 1.05 / 1000.0)))
+    # rounded (1 min-1, 0.1 s) so that records of one operating point share candidate runs
+    run = {"speed_start_rpm": float(round(start)), "speed_end_rpm": float(round(end)),
+           "duration": round(n_use / measured.fs + SKIP_S, 1), "fs_out": fs_out}
+    sim_t0 = _time.perf_counter()
+    sensors = [dict(x) for x in (sensors or ASSUMED_SENSORS)]
+    settings = ProfileSettings(tuple(x["name"] for x in sensors), 1.0 / abs(ms[input_member]),
+                               max_order, int(revolutions), SKIP_S)
+    profiles, natural_hz, sweep_result = _sweep_runs(config, candidates, run, sensors,
+                                                     settings, Path(work_dir), workers,
+                                                     progress)
+    sim_time = _time.perf_counter() - sim_t0
+    if baseline is not None:
+        b_ratio = ratio if (baseline.member or input_member) == member else \
+            _speed_ratio(cfg, base, baseline.member or input_member)[0]
+        base_prof = order_profile(baseline.signal, baseline.fs,
+                                  np.abs(baseline.speed_rpm) * b_ratio, max_order=max_order,
+                                  revolutions=revolutions, name="baseline",
+                                  units=baseline.units)
+    else:
+        base_prof = profiles[0][0]
+    n = min(p.order.size for p in [meas, base_prof, *(q for ps in profiles for q in ps)])
+    order = meas.order[:n]
+
+    def prom(p: OrderProfile) -> np.ndarray:
+        return prominence_db(p)[:n]
+
+    def envelope(ps: list[OrderProfile]) -> np.ndarray:
+        return np.max([prom(p) for p in ps], axis=0)
+
+    p_h = envelope(profiles[0])
+    p_meas = prom(meas)
+    p_base = prom(base_prof) if baseline is not None else p_h
+    d_meas = p_meas - p_base
+    dead = deadband_db(d_meas)
+    signatures = {c.label: envelope(ps) - p_h
+                  for c, ps in zip(candidates, profiles[1:], strict=True)}
+    scores = {lab: signature_score(d_meas, sig, deadband=dead) for lab, sig in signatures.items()}
+    n_pl = len(cfg.get("geometry", {}).get("planet_angles_deg", []))
+    fams = _family_table(fund, ms, n_pl, mesh, max_order)
+    fam_ev = family_evidence(order, d_meas, dead, fams)
+    fam_by = {f.family: f for f in fam_ev}
+    peaks = rising_peaks(order, d_meas, dead)
+    # strongest rises first
+    strength = np.interp(peaks, order, d_meas) if peaks.size else np.array([])
+    top_peaks = peaks[np.argsort(-strength)][:10] if peaks.size else peaks
+    fc_mean = meas.speed_rpm[1] / 60.0
+    natural = {f"f{i + 1}": float(f) for i, f in enumerate(np.atleast_1d(natural_hz))
+               if np.isfinite(f)}
+    mode_notes = near_modes(top_peaks, fc_mean, natural)
+    locking = order_locking(meas, measured.signal, measured.fs, c_rpm, top_peaks)
+    # one entry per (cause, member): the best-scoring variant
+    best: dict[tuple[str, str], tuple[float, Candidate]] = {}
+    for c in candidates:
+        s = scores[c.label]
+        key = (c.cause, c.member)
+        if key not in best or s > best[key][0]:
+            best[key] = (s, c)
+    causes = []
+    for (cause, mem), (s, c) in best.items():
+        sig = signatures[c.label]
+        sig_rises = order[sig > 3.0]
+        found = 0
+        if sig_rises.size:
+            found = int(np.sum(np.interp(sig_rises, order, d_meas) > dead))
+        ev = [f"simulated {severity_text(c)} on {c.fault['member']}: score {s:.2f}",
+              f"the measurement rises above the noise deadband ({dead:.1f} dB) at {found} of "
+              f"the {sig_rises.size} orders where the simulation rises by more than 3 dB"]
+        fe = fam_by.get(_cause_family(cause, mem))
+        if fe is not None:
+            ev.append(fe.text())
+        if mem == "planet":
+            ev.append("the planets are interchangeable (equally spaced): which planet cannot "
+                      "be told without a carrier phase reference")
+        causes.append(Cause(cause, mem, float(s), tuple(ev), c.label))
+    causes.sort(key=lambda c: (-c.score, c.cause, c.member))
+    best_score = causes[0].score if causes else 0.0
+    if best_score < threshold:
+        causes.insert(0, Cause("none", "", 1.0 - best_score, (
+            f"no candidate explains the measured differences (best score {best_score:.2f} < "
+            f"threshold {threshold:.2f})", f"{peaks.size} rising peaks above the noise "
+            f"deadband of {dead:.1f} dB"), ""))
+    # what to measure next
+    nxt = []
+    if best_score < threshold or (len(causes) > 1 and causes[0].cause != "none"
+                                  and causes[0].score - causes[1].score < 0.05):
+        lo, mean, hi = meas.speed_rpm
+        if (hi - lo) / mean < 0.03:
+            nxt.append("a run-up over the operating range: it tells order-locked features "
+                       "(gear faults) from resonances")
+        if meas.segments < 4:
+            nxt.append(f"a longer record: {meas.segments} averaged segments of {revolutions} "
+                       "carrier revolutions; 8 or more halve the noise deadband")
+        if baseline is None:
+            nxt.append("the same sensor on the gearbox in a known healthy state (--baseline): "
+                       "removes the difference between the real and the assumed transfer path")
+        if dead > 6.0:
+            nxt.append(f"a quieter signal (noise deadband {dead:.1f} dB): a sensor closer to "
+                       "the ring gear, more averaging or a higher load")
+        if causes[0].cause != "none" and any(c.member == "planet" for c in causes[:2]):
+            nxt.append("a once-per-revolution carrier tacho to tell which planet")
+    local = ("crack", "pitting", "broken_tooth")
+    if (len(causes) > 1 and causes[0].cause in local and causes[1].cause in local
+            and causes[0].member == causes[1].member
+            and causes[0].score - causes[1].score < 0.1):
+        nxt.append(f"an inspection of {causes[0].member} (borescope, oil debris): the kind of "
+                   f"local tooth fault ({causes[0].cause} or {causes[1].cause}) differs in "
+                   "the spectrum mainly by its size, which an unknown transfer path hides")
+        if not nxt:
+            nxt.append("a second sensor position and another load: the leading causes differ "
+                       "little on this record")
+    notes = [f"order locking: {locking}", *mode_notes,
+             f"resolution {1 / revolutions:.4g} carrier orders, {meas.segments} segments, "
+             f"band up to order {max_order:.0f} ({max_order / mesh:.1f} mesh harmonics)",
+             f"{len(candidates)} candidate faults and the healthy set simulated over "
+             f"{run['duration']:g} s at {run['speed_start_rpm']:g} -> "
+             f"{run['speed_end_rpm']:g} min-1 (input)"]
+    attrs = {"gear_set": str(config), "speed_member": member, "mesh_order": float(mesh),
+             "simulated_speed_rpm": f"{run['speed_start_rpm']} -> {run['speed_end_rpm']}",
+             "simulated_duration_s": run["duration"],
+             "assumed_sensors_json": json.dumps(sensors),
+             "baseline": "measured" if baseline is not None else "simulated healthy gear set",
+             "candidates_json": json.dumps([c.fault for c in candidates])}
+    # profiles cut to the common bins
+    def cut(p: OrderProfile) -> OrderProfile:
+        return OrderProfile(p.order[:n], p.amplitude[:n], p.units, p.revolutions, p.segments,
+                            p.speed_rpm, p.name)
+
+    d = Diagnosis(causes, float(threshold), order, cut(meas), cut(base_prof), d_meas, dead,
+                  signatures, fam_ev, nxt, notes, "carrier", attrs)
+    # timing: not part of the report or the Dataset (same input, same output)
+    d.timing = {"simulation_s": sim_time, "total_s": _time.perf_counter() - t0,
+                "simulated": len(sweep_result.simulated), "reused": len(sweep_result.reused)}
+    return d

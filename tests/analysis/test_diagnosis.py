@@ -1,0 +1,135 @@
+"""analysis.diagnosis: order profiles, prominence, scores, family evidence (no simulator)."""
+
+import json
+
+import numpy as np
+import pytest
+
+from analysis.diagnosis import (
+    Cause,
+    Diagnosis,
+    OrderProfile,
+    deadband_db,
+    family_evidence,
+    family_lines,
+    order_profile,
+    prominence_db,
+    signature_score,
+)
+
+FS = 8192.0
+
+
+def _ramp(duration=20.0, rpm0=600.0, rpm1=900.0):
+    t = np.arange(int(duration * FS)) / FS
+    rpm = rpm0 + (rpm1 - rpm0) * t / duration
+    angle = 2 * np.pi * np.cumsum(rpm / 60.0) / FS
+    return t, rpm, angle
+
+
+def test_order_profile_amplitude_of_an_order_line_in_a_run_up():
+    # order 10.5 with amplitude 2 (RMS sqrt(2)) and order 37 with 0.5 during a run-up
+    _t, rpm, ang = _ramp()
+    x = 2.0 * np.sin(10.5 * ang) + 0.5 * np.cos(37 * ang)
+    p = order_profile(x, FS, rpm, max_order=60, revolutions=16)
+    assert p.order[1] == pytest.approx(1 / 16)
+    a = p.amplitude
+    i, j = np.argmin(abs(p.order - 10.5)), np.argmin(abs(p.order - 37))
+    # Hann window: the line falls on a bin; power summed over the main lobe = RMS^2
+    assert np.sqrt(np.sum(a[i - 2:i + 3] ** 2) / 1.5) == pytest.approx(np.sqrt(2), rel=0.02)
+    assert np.sqrt(np.sum(a[j - 2:j + 3] ** 2) / 1.5) == pytest.approx(0.5 / np.sqrt(2),
+                                                                      rel=0.02)
+    assert p.segments >= 3
+    assert p.speed_rpm[0] == pytest.approx(600) and p.speed_rpm[2] == pytest.approx(900,
+                                                                                    rel=1e-3)
+
+
+def test_order_profile_refuses_short_records_and_bad_speed():
+    _t, rpm, ang = _ramp(duration=0.5)
+    with pytest.raises(ValueError, match="at least 16"):
+        order_profile(np.sin(3 * ang), FS, rpm, max_order=20)
+    with pytest.raises(ValueError, match="> 0"):
+        order_profile(np.ones(1000), FS, np.zeros(1000), max_order=20)
+    with pytest.raises(ValueError, match="one value per sample"):
+        order_profile(np.ones(1000), FS, np.ones(999), max_order=20)
+
+
+def test_prominence_ignores_a_slow_transfer_function():
+    rng = np.random.default_rng(0)
+    order = np.arange(4000) / 16
+    amp = 1e-3 * (1 + 0.1 * rng.standard_normal(order.size) ** 2)
+    amp[(np.arange(order.size) % 57) == 0] = 1e-2  # 20 dB above the floor
+    p1 = OrderProfile(order, amp, "1", 16, 4, (1, 1, 1))
+    gain = 10 ** (np.sin(order / 40))  # +-20 dB, slow against the floor window
+    p2 = OrderProfile(order, amp * gain, "1", 16, 4, (1, 1, 1))
+    d = prominence_db(p1) - prominence_db(p2)
+    lines = (np.arange(order.size) % 57) == 0
+    assert np.max(np.abs(d[lines][3:-3])) < 1.5
+    assert prominence_db(p1).max() <= 40.0 and prominence_db(p1).min() >= 0.0
+
+
+def test_signature_score_bounds_and_scaling():
+    rng = np.random.default_rng(1)
+    sig = np.zeros(2000)
+    sig[rng.choice(2000, 60, replace=False)] = 20.0
+    noise = rng.normal(0, 1.0, 2000)
+    dead = deadband_db(noise)
+    assert 2.0 < dead < 4.5  # 3 robust sigma of unit noise
+    # the measured rises are the simulated ones at half the level, plus noise
+    meas = 0.5 * sig + noise
+    s = signature_score(meas, sig, deadband=deadband_db(meas))
+    assert s > 0.8
+    # noise alone, or rises elsewhere, explain nothing
+    assert signature_score(noise, sig, deadband=dead) < 0.1
+    other = np.roll(sig, 7) + noise
+    assert signature_score(other, sig, deadband=deadband_db(other)) < 0.2
+    assert signature_score(np.zeros(10), np.ones(10), deadband=1.0) == 0.0
+
+
+def test_family_evidence_chance_on_random_peaks():
+    """False-positive rate: random rises hit a family by chance at the stated rate."""
+    order = np.arange(1, 6000) / 16
+    lines = family_lines(2.85, mesh_order=114, mesh_harmonics=3, harmonics=6, sidebands=3,
+                         max_order=order[-1])
+    assert np.all(lines > 0) and lines.size == 6 + 3 * 6
+    rng = np.random.default_rng(2)
+    small = 0
+    trials = 200
+    for _ in range(trials):
+        d = np.zeros(order.size)
+        d[rng.choice(order.size, 40, replace=False)] = 10.0
+        ev = family_evidence(order, d, 3.0, {"planet_fault": (2.85, lines)})[0]
+        small += ev.chance < 0.01
+    assert small / trials <= 0.03  # at most the nominal 1 % (+ discreteness)
+    # rises on the family's lines: tiny chance
+    d = np.zeros(order.size)
+    for o in lines:
+        d[np.argmin(abs(order - o))] = 10.0
+    ev = family_evidence(order, d, 3.0, {"planet_fault": (2.85, lines)})[0]
+    assert ev.hits == lines.size and ev.chance < 1e-20
+
+
+def _diagnosis():
+    order = np.arange(100) / 16
+    prof = OrderProfile(order, np.ones(100), "m s-2", 16, 3, (1.0, 2.0, 3.0), "measured")
+    causes = [Cause("crack", "sun", 0.7, ("a", "b"), "crack sun 50 %"),
+              Cause("pin_error", "planet", 0.1, ("c",), "pin_error planet 30 um")]
+    return Diagnosis(causes, 0.4, order, prof, prof, np.zeros(100), 2.0,
+                     {"crack sun 50 %": np.ones(100), "pin_error planet 30 um": np.zeros(100)})
+
+
+def test_result_json_dataset_and_plot():
+    d = _diagnosis()
+    js = json.loads(d.to_json())
+    assert list(js) == ["threshold", "causes"]
+    assert [list(c) for c in js["causes"]] == [["cause", "member", "score", "evidence"]] * 2
+    assert js["causes"][0] == {"cause": "crack", "member": "sun", "score": 0.7,
+                               "evidence": ["a", "b"]}
+    assert [c.cause for c in d.likely] == ["crack"]
+    ds = d.to_dataset()
+    for v in ds.variables:
+        assert "long_name" in ds[v].attrs or v in ("cause", "member", "variant"), v
+    assert ds["signature"].dims == ("variant", "order")
+    assert ds["score"].attrs["units"] == "1"
+    fig = d.plot()
+    assert len(fig.axes) == 3
