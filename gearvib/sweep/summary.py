@@ -410,6 +410,9 @@ def summarise_run(ds: xr.Dataset, model: AssembledModel, conditions: Conditions,
         out.add(f"{name}_rms", tuple(other), np.sqrt(np.mean(x * x, axis=-1)),
                 str(da.attrs.get("units", "1")), f"rms of the virtual sensor {name} over the "
                 "window")
+        for d in other:  # the sensor names label the rms values, with or without orders
+            if d in ds.coords and d not in coords:
+                coords[str(d)] = ds[d].variable.copy()
         if s.orders:
             signals.append((name, da, name))
     if s.orders:

@@ -338,6 +338,10 @@ def test_virtual_sensor_hook(tiny_run):
                                rtol=2e-3)
     assert out.accel_rms.attrs["units"] == "m s-2"
     assert out.accel_order_level.dims == ("sensor", "order")
+    # without order levels too, the sensor names label the rms values (sweep.nc needs them)
+    bare = summarise_run(ds.assign(accel=sensor), model, cond)
+    assert bare.accel_rms.dims == ("sensor",)
+    assert bare["sensor"].values.tolist() == ["a", "b"]
 
 
 def test_summary_window_and_reference(tiny_run):
