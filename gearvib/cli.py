@@ -57,10 +57,19 @@ def _cmd_modes(args: argparse.Namespace) -> int:
     return 0
 
 
+MAX_SIDEBAND_LINES = 20_000
+"""Most mesh-harmonic x sideband combinations ``gearvib catalogue`` lists (about 1 s, 1 MB)."""
+
+
 def _cmd_catalogue(args: argparse.Namespace) -> int:
     from gearvib.catalogue import gear_set_catalogue
     from gearvib.config import load_gearset
 
+    combos = args.mesh_harmonics * (2 * args.sidebands + 1)
+    if combos > MAX_SIDEBAND_LINES:
+        raise CliError(f"--mesh-harmonics {args.mesh_harmonics} with --sidebands "
+                       f"{args.sidebands} asks for {combos} sideband lines per mesh frequency; "
+                       f"admissible: mesh harmonics x (2 sidebands + 1) <= {MAX_SIDEBAND_LINES}")
     cat = gear_set_catalogue(load_gearset(args.config), reference=args.reference,
                              speed_rpm=args.speed, mesh_harmonics=args.mesh_harmonics,
                              harmonics=args.harmonics, sidebands=args.sidebands)

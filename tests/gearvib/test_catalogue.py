@@ -212,3 +212,14 @@ def test_cli_catalogue_json_and_table(capsys):
     assert "sideband" in out and "reference: sun at 1000 min-1" in out
     assert main(["catalogue", "paper-case1", "--speed", "1000", "--reference", "nope"]) == 2
     assert "reference = 'nope'" in capsys.readouterr().err
+
+
+def test_cli_catalogue_refuses_a_sideband_count_it_cannot_list(capsys):
+    """1000 mesh harmonics with 1000 sidebands each took a minute and hundreds of MB of output:
+    refused at once, naming both options and the bound."""
+    assert main(["catalogue", "paper-case1", "--speed", "1500", "--mesh-harmonics", "1000",
+                 "--sidebands", "1000"]) == 2
+    err = capsys.readouterr().err
+    assert "--mesh-harmonics 1000" in err and "--sidebands 1000" in err and "<= 20000" in err
+    assert main(["catalogue", "paper-case1", "--speed", "1500", "--mesh-harmonics", "100",
+                 "--sidebands", "99", "--json"]) == 0
