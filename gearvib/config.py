@@ -25,6 +25,7 @@ from typing import Any
 
 from gearvib.faults.description import FaultError, faults_from_list
 from gearvib.geometry import Toothing
+from gearvib.paths import exists, is_file
 from gearvib.rolling_bearings import RollingBearingError, rolling_bearings_from_list
 from gearvib.sensors.description import SensorError, sensors_from_list
 from gearvib.stiffness import stiffness_from_dict
@@ -824,8 +825,8 @@ def load_config(name_or_path: str | Path) -> tuple[dict, Path | None]:
         The parsed description and the directory of the file (None for presets).
     """
     p = Path(name_or_path)
-    if p.suffix == ".toml" or p.exists():
-        if not p.is_file():
+    if p.suffix == ".toml" or exists(p):
+        if not is_file(p):
             raise ConfigError(f"configuration file {str(p)!r} not found")
         try:
             return tomllib.loads(p.read_text(encoding="utf-8")), p.parent

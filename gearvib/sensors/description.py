@@ -26,6 +26,8 @@ from typing import Any
 
 import numpy as np
 
+from gearvib.paths import is_file
+
 __all__ = [
     "WINDOWS",
     "HousingMode",
@@ -329,7 +331,7 @@ def _frf(value: Any, where: str, base: Path | None) -> MeasuredFrf:
     if isinstance(set_index, bool) or not isinstance(set_index, int) or set_index < 0:
         raise SensorError(f"{where}: frf.set = {set_index!r} is not admissible (admissible: an "
                           "integer >= 0)")
-    if not path.is_file():
+    if not is_file(path):
         raise SensorError(f"{where}: frf file {str(path)!r} does not exist")
     try:
         return MeasuredFrf.read(path, quantity=quantity, columns=columns, set_index=set_index)

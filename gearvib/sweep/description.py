@@ -45,6 +45,7 @@ from scipy import special
 
 from gearvib import __version__
 from gearvib.config import ConfigError, check_keys, config_hash, gearset_from_dict, load_config
+from gearvib.paths import is_file
 from gearvib.simulation.settings import SIMULATION_KEYS, read_run_settings
 from gearvib.sweep.keys import get_path, parse_path, path_units, set_path, value_kind, value_label
 from gearvib.sweep.summary import SummarySettings
@@ -568,7 +569,7 @@ def load_sweep(path: str | Path) -> Sweep:
         Missing file, invalid TOML, unknown or invalid keys (the message names the key).
     """
     p = Path(path)
-    if not p.is_file():
+    if not is_file(p):
         raise ConfigError(f"sweep file {str(p)!r} not found")
     try:
         d = tomllib.loads(p.read_text(encoding="utf-8"))
