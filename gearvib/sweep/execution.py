@@ -30,9 +30,12 @@ once.
 from __future__ import annotations
 
 import contextlib
+import ctypes
 import multiprocessing
 import os
+import signal
 import sys
+import time
 from collections.abc import Callable, Iterator
 from concurrent.futures import Executor, Future, ProcessPoolExecutor
 from typing import Any
@@ -44,6 +47,7 @@ __all__ = [
     "default_start_method",
     "default_workers",
     "local_executor",
+    "stop_workers",
     "worker_environment",
 ]
 
@@ -144,7 +148,59 @@ def local_executor(workers: int, *, start_method: str | None = None) -> Executor
     if method not in multiprocessing.get_all_start_methods():
         raise ValueError(f"start_method = {method!r}; admissible here: "
                          f"{', '.join(multiprocessing.get_all_start_methods())}")
-    return ProcessPoolExecutor(max_workers=n, mp_context=multiprocessing.get_context(method))
+    return ProcessPoolExecutor(max_workers=n, mp_context=multiprocessing.get_context(method),
+                               initializer=init_worker)
+
+
+_PR_SET_PDEATHSIG = 1
+
+
+def init_worker() -> None:
+    """Start-up of a local worker: it leaves interrupts to the command and dies with it.
+
+    * SIGINT is ignored (Ctrl-C reaches the whole process group; the command's process stops
+      the workers itself, see :func:`stop_workers`), SIGTERM and SIGHUP end the worker (the
+      handlers a forked worker inherited from the command would raise there instead);
+    * on Linux the kernel sends the worker SIGTERM when its parent ends, however it ends
+      (``prctl(PR_SET_PDEATHSIG)``; also after SIGKILL of the command), so no worker outlives
+      the command.
+    """
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    if hasattr(signal, "SIGHUP"):
+        signal.signal(signal.SIGHUP, signal.SIG_DFL)
+    if sys.platform.startswith("linux"):
+        with contextlib.suppress(OSError, AttributeError):
+            libc = ctypes.CDLL(None, use_errno=True)
+            libc.prctl(_PR_SET_PDEATHSIG, int(signal.SIGTERM), 0, 0, 0)
+            if os.getppid() == 1:  # the parent ended before prctl took effect
+                os._exit(128 + int(signal.SIGTERM))
+
+
+def stop_workers(executor: Executor, timeout: float = 0.5) -> None:
+    """End the worker processes of a local :class:`ProcessPoolExecutor` now (an interrupt).
+
+    The running cases are abandoned (their run files are not written; a worker's temporary
+    file is left for :func:`gearvib.tempfiles.remove_stale`), queued ones are cancelled.
+    Waits up to ``timeout`` seconds for the processes to end, then kills those left.
+    """
+    if not isinstance(executor, ProcessPoolExecutor):
+        return
+    # the standard library offers no public way to reach the processes before Python 3.14
+    # (ProcessPoolExecutor.terminate_workers); _processes is {pid: Process}
+    procs = list((getattr(executor, "_processes", None) or {}).values())
+    for p in procs:
+        with contextlib.suppress(OSError, ValueError, AttributeError):
+            p.terminate()
+    end = time.monotonic() + timeout
+    for p in procs:
+        with contextlib.suppress(OSError, ValueError, AttributeError):
+            p.join(max(0.0, end - time.monotonic()))
+            if p.is_alive():
+                p.kill()
+                p.join(0.1)
+    with contextlib.suppress(Exception):
+        executor.shutdown(wait=False, cancel_futures=True)
 
 
 def dask_executor(address: str) -> tuple[Executor, Any]:
