@@ -16,7 +16,8 @@ Conventions
 -----------
 Speeds are signed (one sense of rotation is positive) and given per any common unit, e.g. per
 unit input speed. Tooth numbers are signed: negative for internal toothing. The member named
-``"ground"`` (the housing) is always at rest. Formulas and sources: ``docs/catalogue.md``.
+``"ground"`` (the housing) is always at rest. Formulas and sources:
+``docs/catalogue-identification.md``.
 """
 
 from __future__ import annotations
@@ -517,7 +518,7 @@ def kinematic_catalogue(
     Notes
     -----
     With ``n`` the signed speeds (``n_ground = 0``), ``N`` the planets on a carrier and
-    ``f_ref = |n_reference|`` (see ``docs/catalogue.md`` for sources):
+    ``f_ref = |n_reference|`` (see ``docs/catalogue-identification.md`` for sources):
 
     * shaft: ``h |n_member|``; planets are listed once per group of identical planets;
     * mesh: ``m |z_gear (n_gear - n_carrier)|``; meshes with the same frequency on one carrier

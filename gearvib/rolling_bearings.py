@@ -18,7 +18,7 @@ its geometry::
 The defect frequencies (:mod:`analysis.catalogue`, families ``bearing_ftf``, ``bearing_bpfo``,
 ``bearing_bpfi``, ``bearing_bsf``) follow from the speed of the inner ring relative to the outer
 ring; the rotating race decides which member carries which ring. Formulas and sources:
-``docs/catalogue.md``.
+``docs/catalogue-identification.md``.
 """
 
 from __future__ import annotations
