@@ -84,7 +84,11 @@ def _number(value: Any, where: str, key: str, *, low: float | None = None,
             high: float | None = None, low_open: bool = False) -> float:
     if isinstance(value, bool) or not isinstance(value, int | float | np.integer | np.floating):
         raise FaultError(f"{where}: {key} must be a number, got {value!r}")
-    v = float(value)
+    try:
+        v = float(value)
+    except OverflowError:  # an integer of hundreds of digits
+        raise FaultError(f"{where}: {key} = {str(value)[:20]}... ({len(str(value))} digits) "
+                         "is not admissible (admissible: a finite number)") from None
     if not math.isfinite(v):
         raise FaultError(f"{where}: {key} = {v!r} is not admissible (admissible: finite)")
     bad = (low is not None and (v < low or (low_open and v == low))) or (

@@ -61,7 +61,11 @@ def _num(value: Any, where: str, key: str, *, low: float | None = None,
          high: float | None = None, low_open: bool = False, high_open: bool = False) -> float:
     if isinstance(value, bool) or not isinstance(value, int | float | np.integer | np.floating):
         raise SensorError(f"{where}: {key} must be a number, got {value!r}")
-    v = float(value)
+    try:
+        v = float(value)
+    except OverflowError:  # an integer of hundreds of digits
+        raise SensorError(f"{where}: {key} = {str(value)[:20]}... ({len(str(value))} digits) "
+                          "is not admissible (admissible: a finite number)") from None
     if not math.isfinite(v):
         raise SensorError(f"{where}: {key} = {v!r} is not admissible (admissible: finite)")
     bad = (low is not None and (v < low or (low_open and v == low))) or (
@@ -226,10 +230,9 @@ class HousingSensor:
                               "them")
         if self.member is not None:
             _name(self.member, w, "member")
-        b = tuple((str(k), float(v)) for k, v in self.bearings)
-        for k, v in b:
+        b = tuple((str(k), _num(v, w, f"bearings.{k}")) for k, v in self.bearings)
+        for k, _ in b:
             _name(k, w, "bearings")
-            _num(v, w, f"bearings.{k}")
         object.__setattr__(self, "bearings", b)
 
     def accelerance(self, frequency: np.ndarray) -> np.ndarray:
