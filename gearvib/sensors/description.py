@@ -53,6 +53,10 @@ _ACC_KEYS = {"name", "type", "angle_deg", "member", "window", "width_deg", "hous
 _TACHO_KEYS = {"name", "type", "pulses_per_rev", "member", "level_v", "duty", "comment"}
 _MODE_KEYS = {"frequency_hz", "damping_ratio", "gain"}
 _FRF_KEYS = {"path", "quantity", "columns", "set"}
+MAX_GAIN = 1e6
+"""Largest housing gain [kg^-1] (a modal mass of 1 mg) and measured |accelerance| [m s-2 N-1]."""
+MAX_MODE_HZ = 1e9
+"""Highest housing mode [Hz]."""
 MAX_PULSES_PER_REV = 10_000
 """Most tacho pulses per revolution."""
 
@@ -110,7 +114,11 @@ class HousingMode:
         object.__setattr__(self, "damping_ratio", _num(self.damping_ratio, w, "damping_ratio",
                                                        low=0.0, high=1.0, low_open=True,
                                                        high_open=True))
-        object.__setattr__(self, "gain", _num(self.gain, w, "gain"))
+        object.__setattr__(self, "gain", _num(self.gain, w, "gain", low=-MAX_GAIN,
+                                              high=MAX_GAIN))
+        if self.frequency_hz > MAX_MODE_HZ:
+            raise SensorError(f"{w}: frequency_hz = {self.frequency_hz!r} is not admissible "
+                              f"(admissible: 0 < frequency_hz <= {MAX_MODE_HZ:g})")
 
     def accelerance(self, frequency: np.ndarray) -> np.ndarray:
         """``H`` at frequencies [Hz] [m s-2 N-1]."""
@@ -142,6 +150,14 @@ class MeasuredFrf:
     real: tuple[float, ...]
     imag: tuple[float, ...]
     source: str = ""
+
+    def __post_init__(self) -> None:
+        big = max((abs(complex(r, i)) for r, i in zip(self.real, self.imag, strict=False)),
+                  default=0.0)
+        if not big <= MAX_GAIN:  # NaN included
+            raise SensorError(f"frf {self.source!r}: |H| up to {big:g} m s-2 N-1 is not "
+                              f"admissible (admissible: finite, <= {MAX_GAIN:g}; the values "
+                              "are converted to accelerance in SI units)")
 
     def accelerance(self, frequency: np.ndarray) -> np.ndarray:
         """Linear interpolation of real and imaginary parts; 0 outside the measured band."""
