@@ -14,7 +14,7 @@ and goes the way of ``gearvib sweep`` before its first run: :func:`load_sweep` a
 (:mod:`tests.gearvib.fuzz_support`), each within 60 s; a grid larger than ``max_cases`` is
 refused with its size and the limit before any case is built.
 
-``GEARVIB_FUZZ_EXAMPLES`` sets the number of examples (default 200 here, fixed seed).
+``GEARVIB_FUZZ_EXAMPLES`` sets the number of examples (default 100 here, fixed seed).
 """
 
 from __future__ import annotations
@@ -171,7 +171,7 @@ def test_every_sweep_passes_its_checks_unmutated():
         fz.record("sweep descriptions: unmutated", None)
 
 
-@settings(max_examples=fz.examples(200), deadline=None, database=None,
+@settings(max_examples=fz.examples(100), deadline=None, database=None,
           derandomize=fz.derandomize(),
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 @given(name=st.sampled_from(sorted(SWEEPS)), changes=st.lists(change, min_size=1, max_size=4))
