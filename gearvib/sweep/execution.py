@@ -221,7 +221,7 @@ def dask_executor(address: str) -> tuple[Executor, Any]:
         raise ImportError("a Dask scheduler needs dask.distributed: pip install "
                           "\"gearvib[dask]\"") from None
     try:
-        client = Client(address, timeout=CONNECT_TIMEOUT_S)
+        client = Client(address, timeout=CONNECT_TIMEOUT_S, set_as_default=False)
     except (OSError, TimeoutError) as exc:
         raise OSError(f"cannot connect to the Dask scheduler at {address!r}: {exc}") from None
     return client.get_executor(), client
