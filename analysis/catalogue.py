@@ -16,7 +16,8 @@ Conventions
 -----------
 Speeds are signed (one sense of rotation is positive) and given per any common unit, e.g. per
 unit input speed. Tooth numbers are signed: negative for internal toothing. The member named
-``"ground"`` (the housing) is always at rest. Formulas and sources: ``docs/catalogue.md``.
+``"ground"`` (the housing) is always at rest. Formulas and sources:
+``docs/catalogue-identification.md``.
 """
 
 from __future__ import annotations
@@ -59,7 +60,7 @@ FAMILIES = {
     "assembly_phase": "assembly-phase frequency f_mesh / gcd(z1, z2) (listed when gcd > 1)",
     "sideband": "m f_mesh + s f_c: carrier-order sidebands of mesh harmonic m (s in carrier "
                 "revolutions relative to the sensor; s = k N is m f_mesh + k f_pp)",
-    "bearing_ftf": "rolling bearing: cage frequency relative to the outer ring",
+    "bearing_ftf": "rolling bearing: cage frequency relative to the stationary (loaded) ring",
     "bearing_bpfo": "rolling bearing: ball pass frequency, outer race",
     "bearing_bpfi": "rolling bearing: ball pass frequency, inner race",
     "bearing_bsf": "rolling bearing: ball (roller) spin frequency",
@@ -121,6 +122,11 @@ class RollingBearing:
         Pitch diameter ``D`` [m] (> d).
     contact_angle_deg : float
         Contact angle ``phi`` [deg], 0 <= phi < 90.
+    stationary : {"outer", "inner"}
+        The ring that stands still relative to the load (the housing's ring of a shaft
+        bearing: ``"outer"``; the pin of a planet bearing: ``"inner"``). The cage frequency
+        FTF is counted relative to it: ``f_r (1 - gamma)/2`` for a stationary outer ring,
+        ``f_r (1 + gamma)/2`` for a stationary inner ring (outer race rotating).
     """
 
     name: str
@@ -130,6 +136,7 @@ class RollingBearing:
     rolling_diameter: float
     pitch_diameter: float
     contact_angle_deg: float = 0.0
+    stationary: str = "outer"
 
     def __post_init__(self) -> None:
         n = self.n_rolling
@@ -145,6 +152,9 @@ class RollingBearing:
         if not (math.isfinite(a) and 0.0 <= a < 90.0):
             raise ValueError(f"bearing {self.name!r}: contact_angle_deg = {a!r} is not "
                              "admissible: 0 <= angle < 90")
+        if self.stationary not in ("outer", "inner"):
+            raise ValueError(f"bearing {self.name!r}: stationary = {self.stationary!r} is not "
+                             "admissible: 'outer' or 'inner'")
 
     @property
     def ratio(self) -> float:
@@ -508,7 +518,7 @@ def kinematic_catalogue(
     Notes
     -----
     With ``n`` the signed speeds (``n_ground = 0``), ``N`` the planets on a carrier and
-    ``f_ref = |n_reference|`` (see ``docs/catalogue.md`` for sources):
+    ``f_ref = |n_reference|`` (see ``docs/catalogue-identification.md`` for sources):
 
     * shaft: ``h |n_member|``; planets are listed once per group of identical planets;
     * mesh: ``m |z_gear (n_gear - n_carrier)|``; meshes with the same frequency on one carrier
@@ -527,8 +537,9 @@ def kinematic_catalogue(
       ``N`` survives (McFadden & Smith 1985). The factor is also given for the mesh lines
       (``q = 0``) and the planet-pass lines;
     * bearings (relative speed ``f_r = |n_inner - n_outer|``, ``gamma = d/D cos phi``):
-      FTF ``f_r (1 - gamma)/2``, BPFO ``Z f_r (1 - gamma)/2``, BPFI ``Z f_r (1 + gamma)/2``,
-      BSF ``D f_r (1 - gamma^2)/(2 d)``.
+      FTF ``f_r (1 - gamma)/2`` relative to a stationary outer ring (``f_r (1 + gamma)/2``
+      relative to a stationary inner ring), BPFO ``Z f_r (1 - gamma)/2``, BPFI
+      ``Z f_r (1 + gamma)/2``, BSF ``D f_r (1 - gamma^2)/(2 d)``.
 
     Orders are ``rate / f_ref``. Lines with zero frequency (e.g. the planet pass of a fixed
     carrier) are left out, with a note.
@@ -730,7 +741,8 @@ def kinematic_catalogue(
         g = b.ratio
         z = int(b.n_rolling)
         base = {
-            "bearing_ftf": (fr * (1 - g) / 2, "f_r (1 − γ)/2"),
+            "bearing_ftf": (fr * (1 - g) / 2, "f_r (1 − γ)/2") if b.stationary == "outer"
+            else (fr * (1 + g) / 2, "f_r (1 + γ)/2"),
             "bearing_bpfo": (z * fr * (1 - g) / 2, f"{z} f_r (1 − γ)/2"),
             "bearing_bpfi": (z * fr * (1 + g) / 2, f"{z} f_r (1 + γ)/2"),
             "bearing_bsf": (b.pitch_diameter * fr * (1 - g * g) / (2 * b.rolling_diameter),

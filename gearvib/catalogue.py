@@ -77,7 +77,8 @@ def gear_set_catalogue(
     speeds_rpm : array_like, optional
         Reference speeds of a run-up [min-1].
     bearings : sequence of RollingBearing
-        Rolling bearings with their geometry (a gear-set description has only stiffnesses).
+        Rolling bearings with their geometry, added to those of the gear set's
+        ``[[rolling_bearing]]`` tables (:mod:`gearvib.rolling_bearings`).
     sensor : str, optional
         Member carrying the sensor (default: the first fixed member, else the housing).
     model : AssembledModel, optional
@@ -97,6 +98,8 @@ def gear_set_catalogue(
 
             model = assemble(gear_set)
         name = gear_set.name
+        members = {b.name: b.carrier if b.role == "planet" else None for b in gear_set.bodies}
+        bearings = [*(b.resolve(members) for b in gear_set.rolling_bearings), *bearings]
     elif isinstance(gear_set, AssembledModel):
         model = gear_set
         meshes, angles = _from_model(model)

@@ -519,7 +519,10 @@ def _parser() -> argparse.ArgumentParser:
                        "shaft orders, mesh frequencies and harmonics, planet pass, sun/planet/"
                        "ring fault frequencies, hunting-tooth and assembly-phase frequencies, "
                        "planet-pass sidebands (only those the planet phasing lets through to a "
-                       "sensor on the fixed member). Families: see docs/catalogue.md.")
+                       "sensor on the fixed member), and the defect frequencies of the "
+                       "description's [[rolling_bearing]] tables (bearing_ftf, bearing_bpfo, "
+                       "bearing_bpfi, bearing_bsf). Families: see "
+                       "docs/catalogue-identification.md.")
     c.add_argument("config", help="TOML file or preset name")
     c.add_argument("--speed", type=_limits(0.0, MAX_RPM, strict=True), required=True,
                    metavar="RPM",

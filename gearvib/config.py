@@ -25,6 +25,8 @@ from typing import Any
 
 from gearvib.faults.description import FaultError, faults_from_list
 from gearvib.geometry import Toothing
+from gearvib.paths import exists, is_file
+from gearvib.rolling_bearings import RollingBearingError, rolling_bearings_from_list
 from gearvib.sensors.description import SensorError, sensors_from_list
 from gearvib.stiffness import stiffness_from_dict
 from gearvib.structure import (
@@ -93,9 +95,9 @@ MAX_FOURIER = 1_000
 
 _TOP = {"name", "title", "description", "type", "operation", "geometry", "bodies", "meshes",
         "body", "mesh", "coupling", "stage1", "stage2", "shaft", "simulation", "references",
-        "fault", "sensor"}
+        "fault", "sensor", "rolling_bearing"}
 _COMMON_TOP = {"name", "title", "description", "type", "simulation", "references", "body",
-               "coupling", "operation", "fault", "sensor"}
+               "coupling", "operation", "fault", "sensor", "rolling_bearing"}
 _TYPE_KEYS = {
     "simple": {"geometry", "bodies", "meshes"},
     "wolfrom": {"geometry", "bodies", "meshes"},
@@ -697,8 +699,9 @@ def _general_set(cfg: dict, base: Path | None) -> GearSet:
 
 
 def gearset_from_dict(cfg: dict, *, base: Path | None = None) -> GearSet:
-    """Build a :class:`GearSet` from a description dict (parsed TOML), with its ``[[fault]]``
-    and ``[[sensor]]`` tables (:mod:`gearvib.faults`, :mod:`gearvib.sensors`).
+    """Build a :class:`GearSet` from a description dict (parsed TOML), with its ``[[fault]]``,
+    ``[[sensor]]`` and ``[[rolling_bearing]]`` tables (:mod:`gearvib.faults`,
+    :mod:`gearvib.sensors`, :mod:`gearvib.rolling_bearings`).
 
     See :func:`_gearset_from_dict` for the parameters and errors.
     """
@@ -708,14 +711,19 @@ def gearset_from_dict(cfg: dict, *, base: Path | None = None) -> GearSet:
 def _with_faults_and_sensors(gs: GearSet, cfg: dict, base: Path | None) -> GearSet:
     """The ``[[fault]]`` and ``[[sensor]]`` tables of a description added to its gear set
     (checked here; against the bodies and teeth when the set is assembled)."""
-    if not isinstance(cfg, dict) or ("fault" not in cfg and "sensor" not in cfg):
+    if not isinstance(cfg, dict) or not {"fault", "sensor", "rolling_bearing"} & set(cfg):
         return gs
     try:
         faults = faults_from_list(cfg.get("fault"), base=base)
         sensors = sensors_from_list(cfg.get("sensor"), base=base)
-    except (FaultError, SensorError) as exc:
+        bearings = rolling_bearings_from_list(cfg.get("rolling_bearing"))
+        members = {b.name: b.carrier if b.role == "planet" else None for b in gs.bodies}
+        for b in bearings:  # member names checked now, not when the catalogue is asked for
+            b.resolve(members)
+    except (FaultError, SensorError, RollingBearingError) as exc:
         raise ConfigError(str(exc)) from None
-    return replace(gs, faults=gs.faults + faults, sensors=gs.sensors + sensors)
+    return replace(gs, faults=gs.faults + faults, sensors=gs.sensors + sensors,
+                   rolling_bearings=gs.rolling_bearings + bearings)
 
 
 def _gearset_from_dict(cfg: dict, *, base: Path | None = None) -> GearSet:
@@ -761,7 +769,7 @@ def _gearset_from_dict(cfg: dict, *, base: Path | None = None) -> GearSet:
         if "simulation" in stage:
             raise ConfigError(f"[{key}.simulation] is not admissible: give [simulation] once, "
                               "at the top level")
-        for extra in ("fault", "sensor"):
+        for extra in ("fault", "sensor", "rolling_bearing"):
             if extra in stage:
                 raise ConfigError(f"[[{key}.{extra}]] is not admissible: give [[{extra}]] at "
                                   "the top level (members named s1.sun, s2.planet1, ...)")
@@ -817,8 +825,8 @@ def load_config(name_or_path: str | Path) -> tuple[dict, Path | None]:
         The parsed description and the directory of the file (None for presets).
     """
     p = Path(name_or_path)
-    if p.suffix == ".toml" or p.exists():
-        if not p.is_file():
+    if p.suffix == ".toml" or exists(p):
+        if not is_file(p):
             raise ConfigError(f"configuration file {str(p)!r} not found")
         try:
             return tomllib.loads(p.read_text(encoding="utf-8")), p.parent

@@ -36,8 +36,10 @@ once.
 from __future__ import annotations
 
 import contextlib
+import ctypes
 import multiprocessing
 import os
+import signal
 import sys
 from collections.abc import Callable, Iterator
 from concurrent.futures import Executor, Future, ProcessPoolExecutor
@@ -51,6 +53,7 @@ __all__ = [
     "default_workers",
     "executor_for",
     "local_executor",
+    "stop_workers",
     "worker_environment",
 ]
 
@@ -151,7 +154,47 @@ def local_executor(workers: int, *, start_method: str | None = None) -> Executor
     if method not in multiprocessing.get_all_start_methods():
         raise ValueError(f"start_method = {method!r}; admissible here: "
                          f"{', '.join(multiprocessing.get_all_start_methods())}")
-    return ProcessPoolExecutor(max_workers=n, mp_context=multiprocessing.get_context(method))
+    return ProcessPoolExecutor(max_workers=n, mp_context=multiprocessing.get_context(method),
+                               initializer=init_worker)
+
+
+_PR_SET_PDEATHSIG = 1
+
+
+def init_worker() -> None:
+    """Start-up of a local worker: it leaves interrupts to the command and dies with it.
+
+    * SIGINT is ignored (Ctrl-C reaches the whole process group; the command's process stops
+      the workers itself, see :func:`stop_workers`), SIGTERM and SIGHUP end the worker (the
+      handlers a forked worker inherited from the command would raise there instead);
+    * on Linux the kernel sends the worker SIGTERM when its parent ends, however it ends
+      (``prctl(PR_SET_PDEATHSIG)``; also after SIGKILL of the command), so no worker outlives
+      the command.
+    """
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    if hasattr(signal, "SIGHUP"):
+        signal.signal(signal.SIGHUP, signal.SIG_DFL)
+    if sys.platform.startswith("linux"):
+        with contextlib.suppress(OSError, AttributeError):
+            libc = ctypes.CDLL(None, use_errno=True)
+            libc.prctl(_PR_SET_PDEATHSIG, int(signal.SIGTERM), 0, 0, 0)
+            if os.getppid() == 1:  # the parent ended before prctl took effect
+                os._exit(128 + int(signal.SIGTERM))
+
+
+def stop_workers(executor: Executor) -> None:
+    """End the worker processes of a local :class:`ProcessPoolExecutor` now (an interrupt).
+
+    The running cases are abandoned (their run files are not written; a worker's temporary
+    file is left for :func:`gearvib.tempfiles.remove_stale`), queued ones are cancelled; a
+    worker that does not end on SIGTERM within a second is killed
+    (:func:`analysis.instability.chart.terminate_pool`). Other executors are left alone.
+    """
+    if isinstance(executor, ProcessPoolExecutor):
+        from analysis.instability.chart import terminate_pool  # on demand: a rare path
+
+        terminate_pool(executor)
 
 
 def dask_executor(address: str) -> tuple[Executor, Any]:
@@ -172,7 +215,7 @@ def dask_executor(address: str) -> tuple[Executor, Any]:
         raise ImportError("a Dask scheduler needs dask.distributed: pip install "
                           "\"gearvib[dask]\"") from None
     try:
-        client = Client(address, timeout=CONNECT_TIMEOUT_S)
+        client = Client(address, timeout=CONNECT_TIMEOUT_S, set_as_default=False)
     except (OSError, TimeoutError) as exc:
         raise OSError(f"cannot connect to the Dask scheduler at {address!r}: {exc}") from None
     return client.get_executor(), client
@@ -216,9 +259,7 @@ def executor_for(workers: int | None = 1, scheduler: str | None = None,
         try:
             yield pool, n
         except BaseException:  # an error or an interrupt: stop the workers now
-            from analysis.instability.chart import terminate_pool
-
-            terminate_pool(pool)
+            stop_workers(pool)
             raise
         else:
             pool.shutdown(wait=True)

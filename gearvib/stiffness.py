@@ -27,6 +27,7 @@ from typing import Any
 import numpy as np
 
 from gearvib.geometry import MeshGeometry
+from gearvib.paths import is_file
 
 __all__ = [
     "ConstantStiffness",
@@ -713,7 +714,7 @@ class TabulatedPair(PairSuperposition):
             positions, negative or NaN stiffness, unknown unit.
         """
         p = Path(path)
-        if not p.is_file():
+        if not is_file(p):
             raise ValueError(f"stiffness CSV file {str(p)!r} does not exist")
         for name, c in (
             ("position_column", position_column),

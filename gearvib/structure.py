@@ -356,6 +356,9 @@ class GearSet:
         applied by :func:`gearvib.assembly.assemble` and the run.
     sensors : tuple
         Virtual sensors (:mod:`gearvib.sensors`) that a run computes.
+    rolling_bearings : tuple of RollingBearingSpec
+        Rolling-bearing geometry (:mod:`gearvib.rolling_bearings`) for the catalogue's defect
+        lines; the dynamics do not use it.
     """
 
     name: str
@@ -368,6 +371,7 @@ class GearSet:
     config: dict = field(default_factory=dict, compare=False)
     faults: tuple = ()
     sensors: tuple = ()
+    rolling_bearings: tuple = ()
 
     def with_faults(self, faults) -> GearSet:
         """This gear set with faults added (descriptions or ``[[fault]]`` tables).

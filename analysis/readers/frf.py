@@ -111,7 +111,7 @@ def read_frf_uff(path: str | os.PathLike[str], set_index: int = 0) -> FrequencyR
     except ImportError:
         raise ImportError('reading UFF/UNV files needs pyuff: pip install "gearvib[uff]"') from None
     p = Path(path)
-    if not p.is_file():
+    if not _is_file(p):
         raise FileNotFoundError(f"FRF file not found: {p}")
     try:
         with warnings.catch_warnings():
@@ -150,6 +150,17 @@ def read_frf_uff(path: str | os.PathLike[str], set_index: int = 0) -> FrequencyR
         raise ReaderError(f"{where}: {exc}") from None
 
 
+TEXT_MAX_BYTES = 16 * 2**20
+"""Largest FRF text file read [bytes]."""
+
+
+def _is_file(p: Path) -> bool:
+    try:
+        return p.is_file()
+    except (OSError, ValueError):  # a name too long, a NUL character: no such file
+        return False
+
+
 def read_frf_csv(path: str | os.PathLike[str], *, quantity: str = "accelerance",
                  columns: str = "real_imag") -> FrequencyResponse:
     """Read an FRF from a text file (module docstring).
@@ -172,10 +183,19 @@ def read_frf_csv(path: str | os.PathLike[str], *, quantity: str = "accelerance",
         raise ValueError(f"columns = {columns!r} is not admissible (admissible: real_imag, "
                          "magnitude_phase)")
     p = Path(path)
-    if not p.is_file():
+    if not _is_file(p):
         raise FileNotFoundError(f"FRF file not found: {p}")
+    size = p.stat().st_size
+    if size > TEXT_MAX_BYTES:
+        raise ReaderError(f"{p.name}: {size / 2**20:.1f} MiB is too large for an FRF text file "
+                          f"(admissible: at most {TEXT_MAX_BYTES // 2**20} MiB)")
+    try:
+        text = p.read_bytes().decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise ReaderError(f"{p.name}: not a UTF-8 text file (byte {exc.start}: "
+                          f"{exc.reason})") from None
     rows: list[list[float]] = []
-    for lineno, raw in enumerate(p.read_text(encoding="utf-8-sig").splitlines(), start=1):
+    for lineno, raw in enumerate(text.splitlines(), start=1):
         line = raw.strip()
         if not line or line.startswith("#"):
             continue
@@ -192,7 +212,8 @@ def read_frf_csv(path: str | os.PathLike[str], *, quantity: str = "accelerance",
         except ValueError:
             if rows:
                 raise ReaderError(f"{p.name}, line {lineno}: need three numbers (frequency, "
-                                  f"{columns.replace('_', ', ')}), got {raw!r}") from None
+                                  f"{columns.replace('_', ', ')}) in the first three columns"
+                                  ) from None
             continue  # header
         rows.append(vals)
     if len(rows) < 2:

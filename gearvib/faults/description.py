@@ -39,6 +39,8 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from gearvib.paths import is_file
+
 __all__ = [
     "FAULT_KINDS",
     "BrokenTooth",
@@ -82,7 +84,11 @@ def _number(value: Any, where: str, key: str, *, low: float | None = None,
             high: float | None = None, low_open: bool = False) -> float:
     if isinstance(value, bool) or not isinstance(value, int | float | np.integer | np.floating):
         raise FaultError(f"{where}: {key} must be a number, got {value!r}")
-    v = float(value)
+    try:
+        v = float(value)
+    except OverflowError:  # an integer of hundreds of digits
+        raise FaultError(f"{where}: {key} = {str(value)[:20]}... ({len(str(value))} digits) "
+                         "is not admissible (admissible: a finite number)") from None
     if not math.isfinite(v):
         raise FaultError(f"{where}: {key} = {v!r} is not admissible (admissible: finite)")
     bad = (low is not None and (v < low or (low_open and v == low))) or (
@@ -244,13 +250,29 @@ def _curve(table: Any, where: str, base: Path | None) -> PairCurve:
     return PairCurve(tuple(pair.position), tuple(pair.stiffness), unit, src)
 
 
+FILE_MAX_BYTES = 16 * 2**20
+"""Largest pitch-deviation file read [bytes]."""
+
+
 def _read_deviation_file(path: Path, where: str, unit: str) -> tuple[float, ...]:
     """One deviation per tooth in tooth order: the last column of every numeric line; with
     two or more columns the first must be the tooth index 0, 1, 2, ..."""
-    if not path.is_file():
+    if not is_file(path):
         raise FaultError(f"{where}: file {str(path)!r} does not exist")
+    try:
+        size = path.stat().st_size
+        if size > FILE_MAX_BYTES:
+            raise FaultError(f"{where}: {path.name} has {size / 2**20:.1f} MiB (admissible: at "
+                             f"most {FILE_MAX_BYTES // 2**20} MiB of deviations)")
+        text = path.read_bytes().decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise FaultError(f"{where}: {path.name} is not a UTF-8 text file (byte {exc.start}: "
+                         f"{exc.reason})") from None
+    except OSError as exc:
+        raise FaultError(f"{where}: {path.name} cannot be read ({exc.strerror or exc})") \
+            from None
     rows: list[list[float]] = []
-    for lineno, raw in enumerate(path.read_text(encoding="utf-8-sig").splitlines(), start=1):
+    for lineno, raw in enumerate(text.splitlines(), start=1):
         line = raw.strip()
         if not line or line.startswith("#"):
             continue
@@ -264,8 +286,8 @@ def _read_deviation_file(path: Path, where: str, unit: str) -> tuple[float, ...]
             rows.append([float(p) for p in parts if p])
         except ValueError:
             if rows:
-                raise FaultError(f"{where}: {path.name}, line {lineno}: not a number in "
-                                 f"{raw!r}") from None
+                raise FaultError(f"{where}: {path.name}, line {lineno}: not a number (the "
+                                 "file holds one deviation per tooth)") from None
             continue  # header lines before the data
     if len(rows) < 2 or any(len(r) != len(rows[0]) or not r for r in rows):
         raise FaultError(f"{where}: {path.name} must hold one row per tooth (>= 2 rows, the "
@@ -657,7 +679,7 @@ def fault_from_dict(table: Mapping[str, Any] | Fault, *, base: Path | None = Non
                          f"{type(table).__name__}")
     where = _where(table, index)
     kind = table.get("kind")
-    if kind not in _CLASSES:
+    if not isinstance(kind, str) or kind not in _CLASSES:
         raise FaultError(f"{where}: unknown kind {kind!r} (admissible: "
                          f"{', '.join(FAULT_KINDS)})" if kind is not None else
                          f"{where}: missing key 'kind' (admissible: {', '.join(FAULT_KINDS)})")
@@ -689,7 +711,7 @@ def fault_from_dict(table: Mapping[str, Any] | Fault, *, base: Path | None = Non
             if not isinstance(f, str):
                 raise FaultError(f"{where}: file must be a file name, got {f!r}")
             unit = table.get("unit", "m")
-            if unit not in _FILE_UNITS:
+            if not isinstance(unit, str) or unit not in _FILE_UNITS:
                 raise FaultError(f"{where}: unit = {unit!r} is not admissible (admissible: "
                                  f"{', '.join(_FILE_UNITS)})")
             path = Path(f)

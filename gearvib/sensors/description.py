@@ -26,6 +26,8 @@ from typing import Any
 
 import numpy as np
 
+from gearvib.paths import is_file
+
 __all__ = [
     "WINDOWS",
     "HousingMode",
@@ -51,6 +53,10 @@ _ACC_KEYS = {"name", "type", "angle_deg", "member", "window", "width_deg", "hous
 _TACHO_KEYS = {"name", "type", "pulses_per_rev", "member", "level_v", "duty", "comment"}
 _MODE_KEYS = {"frequency_hz", "damping_ratio", "gain"}
 _FRF_KEYS = {"path", "quantity", "columns", "set"}
+MAX_GAIN = 1e6
+"""Largest housing gain [kg^-1] (a modal mass of 1 mg) and measured |accelerance| [m s-2 N-1]."""
+MAX_MODE_HZ = 1e9
+"""Highest housing mode [Hz]."""
 MAX_PULSES_PER_REV = 10_000
 """Most tacho pulses per revolution."""
 
@@ -59,7 +65,11 @@ def _num(value: Any, where: str, key: str, *, low: float | None = None,
          high: float | None = None, low_open: bool = False, high_open: bool = False) -> float:
     if isinstance(value, bool) or not isinstance(value, int | float | np.integer | np.floating):
         raise SensorError(f"{where}: {key} must be a number, got {value!r}")
-    v = float(value)
+    try:
+        v = float(value)
+    except OverflowError:  # an integer of hundreds of digits
+        raise SensorError(f"{where}: {key} = {str(value)[:20]}... ({len(str(value))} digits) "
+                          "is not admissible (admissible: a finite number)") from None
     if not math.isfinite(v):
         raise SensorError(f"{where}: {key} = {v!r} is not admissible (admissible: finite)")
     bad = (low is not None and (v < low or (low_open and v == low))) or (
@@ -104,7 +114,11 @@ class HousingMode:
         object.__setattr__(self, "damping_ratio", _num(self.damping_ratio, w, "damping_ratio",
                                                        low=0.0, high=1.0, low_open=True,
                                                        high_open=True))
-        object.__setattr__(self, "gain", _num(self.gain, w, "gain"))
+        object.__setattr__(self, "gain", _num(self.gain, w, "gain", low=-MAX_GAIN,
+                                              high=MAX_GAIN))
+        if self.frequency_hz > MAX_MODE_HZ:
+            raise SensorError(f"{w}: frequency_hz = {self.frequency_hz!r} is not admissible "
+                              f"(admissible: 0 < frequency_hz <= {MAX_MODE_HZ:g})")
 
     def accelerance(self, frequency: np.ndarray) -> np.ndarray:
         """``H`` at frequencies [Hz] [m s-2 N-1]."""
@@ -136,6 +150,14 @@ class MeasuredFrf:
     real: tuple[float, ...]
     imag: tuple[float, ...]
     source: str = ""
+
+    def __post_init__(self) -> None:
+        big = max((abs(complex(r, i)) for r, i in zip(self.real, self.imag, strict=False)),
+                  default=0.0)
+        if not big <= MAX_GAIN:  # NaN included
+            raise SensorError(f"frf {self.source!r}: |H| up to {big:g} m s-2 N-1 is not "
+                              f"admissible (admissible: finite, <= {MAX_GAIN:g}; the values "
+                              "are converted to accelerance in SI units)")
 
     def accelerance(self, frequency: np.ndarray) -> np.ndarray:
         """Linear interpolation of real and imaginary parts; 0 outside the measured band."""
@@ -224,10 +246,9 @@ class HousingSensor:
                               "them")
         if self.member is not None:
             _name(self.member, w, "member")
-        b = tuple((str(k), float(v)) for k, v in self.bearings)
-        for k, v in b:
+        b = tuple((str(k), _num(v, w, f"bearings.{k}")) for k, v in self.bearings)
+        for k, _ in b:
             _name(k, w, "bearings")
-            _num(v, w, f"bearings.{k}")
         object.__setattr__(self, "bearings", b)
 
     def accelerance(self, frequency: np.ndarray) -> np.ndarray:
@@ -329,7 +350,7 @@ def _frf(value: Any, where: str, base: Path | None) -> MeasuredFrf:
     if isinstance(set_index, bool) or not isinstance(set_index, int) or set_index < 0:
         raise SensorError(f"{where}: frf.set = {set_index!r} is not admissible (admissible: an "
                           "integer >= 0)")
-    if not path.is_file():
+    if not is_file(path):
         raise SensorError(f"{where}: frf file {str(path)!r} does not exist")
     try:
         return MeasuredFrf.read(path, quantity=quantity, columns=columns, set_index=set_index)

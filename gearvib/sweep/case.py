@@ -31,6 +31,7 @@ from gearvib.assembly import assemble
 from gearvib.config import ConfigError, gearset_from_dict
 from gearvib.io import read_run, write_netcdf
 from gearvib.model import AssembledModel
+from gearvib.paths import is_file
 from gearvib.simulate import Conditions, SimulationError, simulate
 from gearvib.simulation.settings import conditions_from_settings
 from gearvib.sweep.description import SweepCase
@@ -112,7 +113,7 @@ def conditions_for(run: dict, model: AssembledModel) -> Conditions:
 def finished_run(path: str | Path, sha256: str) -> xr.Dataset | None:
     """The run in ``path`` if it is the finished run of the case with hash ``sha256``."""
     p = Path(path)
-    if not p.is_file():
+    if not is_file(p):
         return None
     try:
         with xr.open_dataset(p, engine="netcdf4") as ds:

@@ -35,6 +35,7 @@ from __future__ import annotations
 import copy
 import itertools
 import math
+import pickle
 import tomllib
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -45,6 +46,8 @@ from scipy import special
 
 from gearvib import __version__
 from gearvib.config import ConfigError, check_keys, config_hash, gearset_from_dict, load_config
+from gearvib.memory import format_bytes, require_memory
+from gearvib.paths import is_file
 from gearvib.simulation.settings import SIMULATION_KEYS, read_run_settings
 from gearvib.sweep.keys import get_path, parse_path, path_units, set_path, value_kind, value_label
 from gearvib.sweep.summary import SummarySettings
@@ -152,7 +155,7 @@ class Parameter:
         if self.distribution is not None:
             if self.values is not None:
                 raise ConfigError(f"{where}: give values or a distribution, not both")
-            if self.distribution not in _DISTRIBUTIONS:
+            if not isinstance(self.distribution, str) or self.distribution not in _DISTRIBUTIONS:
                 raise ConfigError(f"{where}: distribution = {self.distribution!r}; admissible: "
                                   f"{', '.join(_DISTRIBUTIONS)}")
             req, opt = _DISTRIBUTIONS[self.distribution]
@@ -472,6 +475,12 @@ class Sweep:
             Unknown path, a value of the wrong type, an invalid value, an invalid run setting.
         """
         base, base_dir = self.load_base()
+        # every case holds its own description: check the memory before building them
+        # (measured: about 20 x the pickled size of the description per case)
+        per_case = 24 * len(pickle.dumps(base)) + 4096
+        require_memory(self.n_cases * per_case, f"building the sweep's {self.n_cases} cases "
+                       f"(about {format_bytes(per_case)} each)",
+                       "use fewer values or samples, or split the sweep")
         for i, p in enumerate(self.parameters):
             exists, old = get_path(base, p.path)  # every table on the way exists
             probes: list[Any]
@@ -568,7 +577,7 @@ def load_sweep(path: str | Path) -> Sweep:
         Missing file, invalid TOML, unknown or invalid keys (the message names the key).
     """
     p = Path(path)
-    if not p.is_file():
+    if not is_file(p):
         raise ConfigError(f"sweep file {str(p)!r} not found")
     try:
         d = tomllib.loads(p.read_text(encoding="utf-8"))

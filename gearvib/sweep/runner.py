@@ -25,11 +25,13 @@ from pathlib import Path
 
 import xarray as xr
 
+from gearvib import tempfiles
 from gearvib.config import ConfigError
 from gearvib.execution import (
     SerialExecutor,
     default_workers,
     local_executor,
+    stop_workers,
     worker_environment,
 )
 from gearvib.io import write_netcdf
@@ -153,6 +155,7 @@ def run_sweep(sweep: Sweep, out_dir: str | os.PathLike, *, workers: int | None =
     own = executor is None
     n_workers = default_workers() if workers is None else workers
     outcomes: dict[int, CaseOutcome] = {}
+    stopped = False
     with contextlib.ExitStack() as stack:
         if own:
             stack.enter_context(worker_environment())
@@ -179,10 +182,14 @@ def run_sweep(sweep: Sweep, out_dir: str | os.PathLike, *, workers: int | None =
             for fut in pending:
                 fut.cancel()
             if own and isinstance(executor, ProcessPoolExecutor):
-                executor.shutdown(wait=True, cancel_futures=True)
+                # an interrupt must not wait for the running cases: end the workers, remove
+                # the temporary files of the run files they were writing
+                stop_workers(executor)
+                stopped = True
+                tempfiles.remove_stale(runs)
             raise
         finally:
-            if own and executor is not None:
+            if own and executor is not None and not stopped:
                 executor.shutdown(wait=True)
     ordered = [outcomes[c.index] for c in cases]
     files = [f if o.summary is not None else "" for f, o in zip(run_files, ordered, strict=True)]

@@ -155,6 +155,8 @@ class SummarySettings:
     @classmethod
     def from_dict(cls, table: Mapping, where: str = "[summary]") -> SummarySettings:
         """Checked settings from a ``[summary]`` table (unknown keys name the admissible)."""
+        if not isinstance(table, Mapping):
+            raise ConfigError(f"{where} must be a table, got {type(table).__name__}")
         check_keys(dict(table), _KEYS, where)
         kw: dict[str, Any] = {}
         if "window_s" in table:

@@ -16,10 +16,15 @@ missing folder, an existing file with and without ``--overwrite``) -- and runs
 ``diagnose`` runs its argument, input and output checks and a stand-in for the simulations
 and the report (the checks the diagnosis makes first: the gear set and its candidates).
 ``simulate`` runs for real, with ``--max-steps 20000`` appended so that accepted runs stay
-short (longer ones are refused by the run-size check). ``report`` and ``demo`` run their real
-argument and output checks, and a stand-in for the simulations and the rendering (the checks a
-study makes before its first simulation: every case's description, run settings and map size;
-for run files: reading them) -- the full commands are tested in ``test_cli.py``.
+short (longer ones are refused by the run-size check); so does ``sweep`` (``--workers 1``
+appended; sweep files of one or two 2 ms runs, one of 2 x 1000^3 cases, one with a wrong
+value, one over a description with a fault and a sensor; outputs new, existing, finished
+(resumed) or unwritable). ``catalogue`` meets descriptions with ``[[rolling_bearing]]``,
+``[[fault]]`` and ``[[sensor]]`` tables and reference members of every kind. ``report`` and
+``demo`` run their real argument and output checks, and a stand-in for the simulations and
+the rendering (the checks a study makes before its first simulation: every case's
+description, run settings and map size; for run files: reading them) -- the full commands
+are tested in ``test_cli.py``.
 
 ``GEARVIB_FUZZ_EXAMPLES`` sets the number of examples (default 500 here, fixed seed).
 """
@@ -54,14 +59,14 @@ value = st.one_of(st.sampled_from(VALUES), st.floats(allow_nan=True).map(repr),
                   st.text(max_size=5))
 config = st.sampled_from(["paper-case1", "paper-case2", "wolfrom-example", "two-stage-example",
                           "paper-case9", "missing.toml", "broken.toml", "mine.toml", "adir",
-                          ""])
+                          "", "bearings.toml", "faulty.toml"])
 output_file = st.sampled_from(["x.nc", "adir", "/proc/x.nc", "no/such/x.nc", "", "existing.nc",
                                "adir/y.nc", "broken.toml"])
 output_dir = st.sampled_from(["out", "adir", "existing.nc", "/proc/out", "no/such/out", "filled"])
 
 
 def options(names: list[str]) -> st.SearchStrategy[list[str]]:
-    flags = {"-q", "--quiet", "--json", "--overwrite", "-f", "--help"}
+    flags = {"-q", "--quiet", "--json", "--overwrite", "-f", "--help", "--list", "--no-report"}
 
     def one(name: str) -> st.SearchStrategy[list[str]]:
         return st.just([name]) if name in flags else value.map(lambda v: [name, v])
@@ -76,10 +81,21 @@ simulate_args = st.tuples(config, output_file, options(
                                      "20000"])
 modes_args = st.tuples(config, options(["--json", "--carrier-speed", "--colour"])).map(
     lambda t: ["modes", t[0], *t[1]])
+reference = st.sampled_from(["sun", "ring", "carrier", "planet1", "ground", "s2.carrier",
+                             "input bearing", "", "nope"])
 catalogue_args = st.tuples(config, options(["--speed", "--reference", "--mesh-harmonics",
                                             "--harmonics", "--sidebands", "--json"]),
-                           st.sampled_from([[], ["--speed", "1500"]])).map(
-    lambda t: ["catalogue", t[0], *t[2], *t[1]])
+                           st.sampled_from([[], ["--speed", "1500"]]),
+                           st.one_of(st.just([]), reference.map(lambda r: ["--reference", r]))
+                           ).map(lambda t: ["catalogue", t[0], *t[2], *t[3], *t[1]])
+sweep_file = st.sampled_from(["sweep.toml", "sweep-huge.toml", "sweep-bad.toml",
+                              "sweep-faults.toml", "missing.toml", "broken.toml", "adir",
+                              "existing.nc", "study.toml", ""])
+sweep_args = st.tuples(sweep_file, st.sampled_from([[], ["-o"], *(
+    ["-o", d] for d in ["out", "adir", "existing.nc", "/proc/out", "no/such/out", "filled",
+                        "done"])]), options(["--workers", "--scheduler", "--list",
+                                             "--no-report", "-q", "--no-report"])).map(
+    lambda t: ["sweep", t[0], *t[1], *t[2], "--workers", "1"])
 preset_args = st.one_of(st.sampled_from([[], ["paper-case1"], ["nope"], ["a", "b"]]),
                         st.lists(st.text(max_size=6), max_size=2)).map(
     lambda t: ["preset", *t])
@@ -100,8 +116,8 @@ diagnose_args = st.tuples(
                                  "--pulses-per-rev", "--speed", "--rpm", "--channel",
                                  "--baseline", "--reference", "--json", "-q", "--overwrite"]),
 ).map(lambda t: ["diagnose", *t[0], "--gearset", t[1], "-o", t[2], *t[3]])
-argv = st.one_of(simulate_args, simulate_args, modes_args, catalogue_args, preset_args,
-                 report_args, demo_args, other_args)
+argv = st.one_of(simulate_args, simulate_args, modes_args, catalogue_args, catalogue_args,
+                 preset_args, report_args, demo_args, sweep_args, sweep_args, other_args)
 
 
 def _fake_run_study(study, out_dir, *, progress=True, duration=None):
@@ -163,6 +179,25 @@ def template(tmp_path_factory) -> Path:
     (d / "study.toml").write_text('[study]\ntitle = "t"\ncases = [{name = "a", config = '
                                   '"paper-case1"}]\n[run]\nduration = 0.05\n')
     (d / "bad-study.toml").write_text('[study]\ncases = [{name = "a/b", config = 3}]\n')
+    (d / "bearings.toml").write_text(text + '\n[[rolling_bearing]]\nname = "input bearing"\n'
+                                     'member = "sun"\nn_rolling = 9\nrolling_diameter = '
+                                     '7.94e-3\npitch_diameter = 39.04e-3\n')
+    (d / "faulty.toml").write_text(text.replace("duration = 1.0", "duration = 0.002") + (
+        '\n[[fault]]\nkind = "crack"\nmember = "sun"\ntooth = 3\nseverity = 0.3\n'
+        '[[sensor]]\nname = "top"\nangle_deg = 90.0\nhousing_modes = [{frequency_hz = 3000.0, '
+        'damping_ratio = 0.02, gain = 1.0}]\n'))
+    sweep = ('base = "{base}"\n[simulation]\nduration = 0.002\nspeed_start_rpm = 1500\n'
+             'speed_end_rpm = 1500\n[[parameter]]\npath = "meshes.sun.damping_ratio"\n'
+             'values = {values}\n[summary]\norders = [1]\n')
+    (d / "sweep.toml").write_text(sweep.format(base="paper-case1", values="[0.01, 0.02]"))
+    (d / "sweep-faults.toml").write_text(sweep.format(base="faulty.toml", values="[0.01]"))
+    (d / "sweep-huge.toml").write_text(
+        sweep.format(base="paper-case1", values="[0.01, 0.02]") + "".join(
+            f'[[parameter]]\npath = "{k}"\nvalues = [{", ".join(["0.01"] * 1000)}]\n'
+            for k in ("meshes.ring.damping_ratio", "bodies.sun.mass", "bodies.ring.mass")))
+    (d / "sweep-bad.toml").write_text(sweep.format(base="paper-case1", values='["x", 0.01]'))
+    assert main(["sweep", str(d / "sweep.toml"), "-o", str(d / "done"), "--workers", "1", "-q",
+                 "--no-report"]) == 0
     return d
 
 
@@ -196,6 +231,9 @@ def run_cli(args: list[str], folder: Path) -> tuple[int, str, str]:
     finally:
         os.chdir(cwd)
     return code, out.getvalue(), err.getvalue()
+
+
+COMMANDS = ("simulate", "modes", "catalogue", "preset", "report", "demo", "sweep")
 
 
 class CliOutcome(Exception):
@@ -243,6 +281,8 @@ def _check_command(template, args):
                     err = fz.SimulationError(lines[-1])
                 else:
                     err = fz.ConfigError(lines[-1])
+        command = args[0] if args and args[0] in COMMANDS else "other"
+        fz.record(f"command line: {command}", err)  # per subcommand, for the README
         fz.check("command line", err, args)
     finally:
         shutil.rmtree(folder, ignore_errors=True)

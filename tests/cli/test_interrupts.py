@@ -1,4 +1,5 @@
-"""SIGINT and SIGTERM at random moments of ``simulate``, ``report`` and ``demo`` (subprocesses).
+"""SIGINT and SIGTERM at random moments of ``simulate``, ``report``, ``demo`` and ``sweep``
+(subprocesses).
 
 Every test starts ``python -m gearvib ...``, waits until its signal handlers are active
 (``/proc/<pid>/status``), and sends the signal after a random delay (seeded, printed with the
@@ -7,6 +8,12 @@ included: netCDF runs and the PDF report). Asserted: exit within 2 s of the sign
 (SIGINT) or 143 (SIGTERM), no temporary file left, and every output present is complete (a
 readable run, no report without both files). The temporary files of a process killed with
 SIGKILL are removed by the next command in the same folder.
+
+``sweep`` (2 local workers) is stopped at a random moment after its process pool started and
+while ``sweep.nc`` is written: exit within 2 s with 130/143, no temporary file anywhere in the
+folder, no ``sweep.nc`` or a complete one, every run file present complete (finished runs stay:
+the sweep resumes), and no worker process left running. After SIGKILL of the command its
+workers end too (``PR_SET_PDEATHSIG``) and the next call reuses the finished runs.
 
 Before the fix, SIGINT during the netCDF write of ``simulate`` deadlocked the process (a
 ``KeyboardInterrupt`` raised inside xarray's backend lock, see ``gearvib.interrupts``).
@@ -193,3 +200,127 @@ def test_handlers_are_installed_only_while_a_command_runs():
         assert signal.getsignal(signal.SIGTERM) is not before
         assert handlers_installed(os.getpid())
     assert signal.getsignal(signal.SIGTERM) is before
+
+
+# --------------------------------------------------------------------------------- sweep
+
+SWEEP = ('base = "paper-case1"\n[simulation]\nduration = {duration}\n[[parameter]]\n'
+         'path = "meshes.sun.damping_ratio"\nvalues = [0.01, 0.02, 0.03, 0.04]\n'
+         '[summary]\norders = [1]\n')
+
+
+def _children(pid: int) -> list[int]:
+    try:
+        text = Path(f"/proc/{pid}/task/{pid}/children").read_text()
+    except OSError:
+        return []
+    return [int(x) for x in text.split()]
+
+
+def _running(pid: int) -> bool:
+    """Alive and not a zombie."""
+    try:
+        status = Path(f"/proc/{pid}/status").read_text()
+    except OSError:
+        return False
+    return "\nState:\tZ" not in status
+
+
+def _sweep_and_signal(folder: Path, sig: int, *, delay: float | None,
+                      at_temp_file: bool = False, duration: float = 0.4,
+                      extra: tuple[str, ...] = ()) -> tuple[object, list[int]]:
+    """``gearvib sweep`` on 2 workers; the signal ``delay`` s after the pool started (or when
+    sweep.nc's temporary file appears). Returns the outcome and the pool's worker pids."""
+    (folder / "s.toml").write_text(SWEEP.format(duration=duration))
+    env = dict(os.environ, MPLBACKEND="Agg")
+    proc = subprocess.Popen([sys.executable, "-m", "gearvib", "sweep", "s.toml", "-o", "out",
+                             "--workers", "2", "-q", *extra], cwd=folder, env=env,
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    workers: list[int] = []
+    try:
+        t0 = time.monotonic()
+        while proc.poll() is None and time.monotonic() - t0 < 120:
+            workers = sorted(set(workers) | set(_children(proc.pid)))
+            if at_temp_file:
+                out = folder / "out"
+                if out.is_dir() and any(p.name.startswith(".sweep.nc.") for p in out.iterdir()):
+                    break
+            elif len(workers) >= 2 and handlers_installed(proc.pid):
+                time.sleep(delay or 0.0)
+                break
+            time.sleep(0.001)
+        t_sig = time.monotonic()
+        signalled = proc.poll() is None
+        if signalled:
+            proc.send_signal(sig)
+        _, err = proc.communicate(timeout=60)
+        from tests.cli.signal_helpers import Stopped
+
+        r = Stopped(proc.returncode, time.monotonic() - t_sig, signalled, err,
+                    f"{delay} s after the pool started" if not at_temp_file
+                    else "while sweep.nc was written")
+        return r, workers
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.communicate()
+
+
+def check_sweep_stopped(r, sig: int, folder: Path, workers: list[int]) -> None:
+    """Exit code and time, no temporary file, finished run files complete, no sweep.nc or a
+    complete one, no worker left."""
+    where = f"({r.moment}; exit {r.returncode} in {r.exit_seconds:.3f} s; stderr " \
+            f"{r.stderr.strip()[-300:]!r})"
+    out = folder / "out"
+    if r.signalled and r.returncode != 0:
+        assert r.returncode == EXIT[sig] and r.exit_seconds < 2.0, where
+        assert "interrupted" in r.stderr, where
+    else:
+        assert r.returncode == 0 and (out / "sweep.nc").is_file(), where
+    assert not list(folder.rglob("*.tmp")), (where, list(folder.rglob("*.tmp")))
+    for p in sorted((out / "runs").glob("*.nc")) if (out / "runs").is_dir() else []:
+        read_run(p)  # finished run files stay (the sweep resumes), each complete
+    if (out / "sweep.nc").exists():
+        import xarray as xr
+
+        with xr.open_dataset(out / "sweep.nc") as ds:
+            assert ds.sizes["case"] == 4, where
+    time.sleep(0.2)
+    assert not [w for w in workers if _running(w)], (where, workers)
+
+
+def test_sweep_interrupted_while_its_pool_runs(tmp_path):
+    rng = random.Random(SEED * 1000 + 1)
+    sig = rng.choice([signal.SIGINT, signal.SIGTERM])
+    delay = rng.uniform(0.0, 1.5)  # cases of 0.4 s on 2 workers: about 1.5 s of pool
+    r, workers = _sweep_and_signal(tmp_path, sig, delay=delay)
+    print(f"seed {SEED}, {sig.name} {delay:.3f} s after the pool started: exit {r.returncode} "
+          f"in {r.exit_seconds:.3f} s, workers {workers}")
+    assert len(workers) >= 2, r
+    check_sweep_stopped(r, sig, tmp_path, workers)
+
+
+def test_sweep_interrupted_while_writing_sweep_nc(tmp_path):
+    sig = random.Random(SEED * 1000 + 2).choice([signal.SIGINT, signal.SIGTERM])
+    r, workers = _sweep_and_signal(tmp_path, sig, delay=None, at_temp_file=True,
+                                   duration=0.05, extra=("--no-report",))
+    assert r.signalled and r.moment == "while sweep.nc was written", r
+    check_sweep_stopped(r, sig, tmp_path, workers)
+    assert not (tmp_path / "out" / "sweep.nc").exists()
+    assert len(list((tmp_path / "out" / "runs").glob("*.nc"))) == 4  # all finished: kept
+
+
+def test_sweep_killed_leaves_no_worker_and_resumes(tmp_path):
+    """SIGKILL of the command: the kernel ends its workers (PR_SET_PDEATHSIG); the next call
+    removes their temporary files and reuses the finished runs."""
+    r, workers = _sweep_and_signal(tmp_path, signal.SIGKILL, delay=0.5)
+    assert r.returncode == -signal.SIGKILL and len(workers) >= 2, r
+    time.sleep(0.3)
+    assert not [w for w in workers if _running(w)], workers
+    kept = sorted((tmp_path / "out" / "runs").glob("*.nc"))
+    res = subprocess.run([sys.executable, "-m", "gearvib", "sweep", "s.toml", "-o", "out",
+                          "--workers", "1", "--no-report"], cwd=tmp_path, capture_output=True,
+                         text=True, check=False)
+    assert res.returncode == 0, res.stderr
+    assert f"{len(kept)} reused" in res.stdout, (res.stdout, kept)
+    assert not list(tmp_path.rglob("*.tmp"))

@@ -7,7 +7,8 @@
   failed computations, other) are merged into that file; they are also printed.
 * :func:`classify` sorts an outcome: ``accepted``; ``clear`` -- a documented input error
   (:class:`~gearvib.config.ConfigError`, including :class:`~gearvib.memory.RunSizeError`, or a
-  ``ValueError`` raised by gearvib's own checks, i.e. in a gearvib source file, with a
+  ``ValueError`` -- or a ``ValueError`` class of gearvib's, such as ``FaultError`` and
+  ``SensorError`` -- raised by gearvib's own checks, i.e. in a gearvib source file, with a
   one-line message); ``failed`` -- :class:`~gearvib.simulate.SimulationError` (a real
   numerical blow-up or no static equilibrium, exit code 1); ``other`` -- anything else, which
   fails the test.
@@ -84,7 +85,9 @@ def classify(exc: BaseException | None) -> str:
         return "failed"
     if isinstance(exc, ConfigError) and one_line:
         return "clear"
-    if type(exc) is ValueError and one_line and _raised_by_gearvib(exc):
+    own_class = type(exc) is ValueError or (isinstance(exc, ValueError) and type(
+        exc).__module__.startswith("gearvib."))  # FaultError, SensorError, RollingBearingError
+    if own_class and one_line and _raised_by_gearvib(exc):
         return "clear"
     return "other"
 
