@@ -26,7 +26,6 @@ from typing import Any
 from gearvib.faults.description import FaultError, faults_from_list
 from gearvib.geometry import Toothing
 from gearvib.paths import exists, is_file
-from gearvib.rolling_bearings import RollingBearingError, rolling_bearings_from_list
 from gearvib.sensors.description import SensorError, sensors_from_list
 from gearvib.stiffness import stiffness_from_dict
 from gearvib.structure import (
@@ -713,6 +712,9 @@ def _with_faults_and_sensors(gs: GearSet, cfg: dict, base: Path | None) -> GearS
     (checked here; against the bodies and teeth when the set is assembled)."""
     if not isinstance(cfg, dict) or not {"fault", "sensor", "rolling_bearing"} & set(cfg):
         return gs
+    # on demand: the bearing lines need analysis.catalogue (xarray), which `modes` does not
+    from gearvib.rolling_bearings import RollingBearingError, rolling_bearings_from_list
+
     try:
         faults = faults_from_list(cfg.get("fault"), base=base)
         sensors = sensors_from_list(cfg.get("sensor"), base=base)
