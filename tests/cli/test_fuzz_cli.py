@@ -116,6 +116,17 @@ diagnose_args = st.tuples(
                                  "--pulses-per-rev", "--speed", "--rpm", "--channel",
                                  "--baseline", "--reference", "--json", "-q", "--overwrite"]),
 ).map(lambda t: ["diagnose", *t[0], "--gearset", t[1], "-o", t[2], *t[3]])
+compare_inputs = st.sampled_from([["long.nc", "long.nc"], ["long.nc", "long.nc"],
+                                  ["meas.nc", "long.nc"], ["long.nc", "existing.nc"],
+                                  ["existing.nc", "meas.nc"], ["meas.nc", "missing.nc"],
+                                  ["broken.nc", "meas.nc"], ["meas.nc", "adir"], ["meas.nc"],
+                                  ["study.toml", "meas.nc"]])
+compare_args = st.tuples(
+    compare_inputs, output_dir, st.one_of(st.just([]), config.map(lambda c: ["--gearset", c])),
+    options(["--simulated-channel", "--max-order", "--order-resolution", "--normalise",
+             "--tacho", "--pulses-per-rev", "--speed", "--rpm", "--channel", "--reference",
+             "--overwrite"]),
+).map(lambda t: ["compare", *t[0], "-o", t[1], *t[2], *t[3]])
 argv = st.one_of(simulate_args, simulate_args, modes_args, catalogue_args, catalogue_args,
                  preset_args, report_args, demo_args, sweep_args, sweep_args, other_args)
 
@@ -169,6 +180,8 @@ def template(tmp_path_factory) -> Path:
     from gearvib.io import write_netcdf
 
     write_netcdf(synthetic_measurement("paper-case1", duration=0.05), d / "meas.nc")
+    # long enough for a tacho speed (compare runs to the end on it)
+    write_netcdf(synthetic_measurement("paper-case1", duration=0.3), d / "long.nc")
     (d / "adir").mkdir()
     (d / "filled").mkdir()
     (d / "filled" / "report.html").write_text("an earlier report")
@@ -253,6 +266,14 @@ def test_command_line_gives_one_line_errors_and_clean_folders(template, args):
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 @given(args=diagnose_args)
 def test_diagnose_command_line_gives_one_line_errors_and_clean_folders(template, args):
+    _check_command(template, args)
+
+
+@settings(max_examples=fz.examples(40), deadline=None, database=None,
+          derandomize=fz.derandomize(),
+          suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
+@given(args=compare_args)
+def test_compare_command_line_gives_one_line_errors_and_clean_folders(template, args):
     _check_command(template, args)
 
 
