@@ -169,5 +169,9 @@ def test_terminate_pool_ends_running_workers_at_once():
     t0 = time.perf_counter()
     terminate_pool(pool)
     assert time.perf_counter() - t0 < 5.0
-    assert not any(p.is_alive() for p in children)
+    deadline = time.monotonic() + 5.0  # a loaded host may take a moment to reap them
+    while any(p.is_alive() for p in children) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    alive = [(p.pid, p.name, p.exitcode) for p in children if p.is_alive()]
+    assert not alive, f"still running after terminate_pool: {alive}"
     assert all(f.cancelled() or f.done() for f in futures[2:])
