@@ -86,15 +86,23 @@ MAX_COUNT = 1000
 """Largest harmonic or sideband count accepted on the command line."""
 
 
-def _non_negative_int(text: str) -> int:
-    try:
-        v = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text[:40]!r} is not an integer") from None
-    if not 0 <= v <= MAX_COUNT:
-        raise argparse.ArgumentTypeError(f"{text[:40]!r} is not admissible (admissible: "
-                                         f"0..{MAX_COUNT})")
-    return v
+def _int_range(low: int, high: int):
+    """An argparse type: an integer in ``low..high`` (the message names the range)."""
+    def parse(text: str) -> int:
+        try:
+            v = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{text[:40]!r} is not an integer") from None
+        if not low <= v <= high:
+            raise argparse.ArgumentTypeError(f"{text[:40]!r} is not admissible (admissible: "
+                                             f"{low}..{high})")
+        return v
+
+    parse.__name__ = "integer"
+    return parse
+
+
+_non_negative_int = _int_range(0, MAX_COUNT)
 
 
 MAX_RPM = 1e9
@@ -321,15 +329,7 @@ def _add_speed_options(p: argparse.ArgumentParser) -> None:
                    "reference measures (default: the tacho's member, else the input)")
 
 
-def _pulses(text: str) -> int:
-    try:
-        v = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text[:40]!r} is not an integer") from None
-    if not 1 <= v <= 10_000:
-        raise argparse.ArgumentTypeError(f"{text[:40]!r} is not admissible (admissible: "
-                                         "1..10000)")
-    return v
+_pulses = _int_range(1, 10_000)
 
 
 def _cmd_diagnose(args: argparse.Namespace) -> int:
@@ -481,15 +481,7 @@ def _workers(text: str) -> int:
     return v
 
 
-def _revolutions(text: str) -> int:
-    try:
-        v = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text[:40]!r} is not an integer") from None
-    if not 4 <= v <= 256:
-        raise argparse.ArgumentTypeError(f"{text[:40]!r} is not admissible (admissible: "
-                                         "4..256)")
-    return v
+_revolutions = _int_range(4, 256)
 
 
 _OVERWRITE_HELP = ("replace existing output files (atomically, once the new ones are "
