@@ -23,6 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from analysis.readers.layout import ReaderError
+from analysis.readers.texttable import table_lines
 
 __all__ = ["FRF_QUANTITIES", "FrequencyResponse", "read_frf", "read_frf_csv", "read_frf_uff"]
 
@@ -195,16 +196,7 @@ def read_frf_csv(path: str | os.PathLike[str], *, quantity: str = "accelerance",
         raise ReaderError(f"{p.name}: not a UTF-8 text file (byte {exc.start}: "
                           f"{exc.reason})") from None
     rows: list[list[float]] = []
-    for lineno, raw in enumerate(text.splitlines(), start=1):
-        line = raw.strip()
-        if not line or line.startswith("#"):
-            continue
-        if ";" in line:
-            parts = [x.strip().replace(",", ".") for x in line.split(";")]
-        elif "," in line:
-            parts = [x.strip() for x in line.split(",")]
-        else:
-            parts = line.split()
+    for lineno, parts in table_lines(text):
         try:
             vals = [float(x) for x in parts[:3]]
             if len(vals) < 3:

@@ -271,17 +271,11 @@ def _read_deviation_file(path: Path, where: str, unit: str) -> tuple[float, ...]
     except OSError as exc:
         raise FaultError(f"{where}: {path.name} cannot be read ({exc.strerror or exc})") \
             from None
+    # on demand: the analysis.readers package loads xarray, which descriptions do not need
+    from analysis.readers.texttable import table_lines
+
     rows: list[list[float]] = []
-    for lineno, raw in enumerate(text.splitlines(), start=1):
-        line = raw.strip()
-        if not line or line.startswith("#"):
-            continue
-        if ";" in line:
-            parts = [p.strip().replace(",", ".") for p in line.split(";")]
-        elif "," in line:
-            parts = [p.strip() for p in line.split(",")]
-        else:
-            parts = line.split()
+    for lineno, parts in table_lines(text):
         try:
             rows.append([float(p) for p in parts if p])
         except ValueError:
