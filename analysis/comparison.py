@@ -10,9 +10,15 @@ compares them the way an NVH engineer overlays a test and a model:
   highest order (the lower of the two records' alias-free orders at the top common speed), and
   their frames are averaged (power) into one rpm grid over the speed range the two records
   share. The averaged order spectra are taken over that common range only.
+* **Channels.** The simulated record's channel is a virtual sensor or, for a run without one,
+  a force or transmission-error channel (:func:`simulated_channel_name`); each channel's
+  mean (a static load, an offset) is removed before the order analysis.
 * **Levels** in dB: *calibrated* (dB re 1 unit) when both channels carry the same physical unit,
-  otherwise (or on request) *normalised*: each record's strongest order line is 0 dB. The
-  result says which (:attr:`MeasuredSimulatedComparison.level_basis`).
+  otherwise (or on request) *normalised*: each record's strongest order line (its
+  interpolated peak level, at orders of at least twice the order resolution: near-DC content
+  is no line) is 0 dB, and the level differences compare the shapes of the spectra. The
+  result says which (:attr:`MeasuredSimulatedComparison.level_basis`, ``level_unit``) and
+  carries both channels' units; a note states a unit mismatch.
 * **Lines.** Peaks of the two order spectra (prominence and range in dB) are matched by order
   within a tolerance (the order resolution): *matched* with the order and level differences,
   *measured only*, *simulated only*. The rpm-order difference map is measured minus simulated.
@@ -49,6 +55,7 @@ __all__ = [
     "MeasuredSimulatedComparison",
     "PeakMatch",
     "compare_measurements",
+    "simulated_channel_name",
 ]
 
 LINE_TOLERANCE = 0.10
@@ -148,6 +155,9 @@ class MeasuredSimulatedComparison:
         Units of the levels' reference (``"1"`` when normalised).
     level_basis : str
         ``"calibrated: dB re 1 m s-2"`` or ``"normalised: ..."``.
+    measured_units, simulated_units : str
+        Units of the two channels (they differ for e.g. an accelerometer against a simulated
+        force; the levels are normalised then).
     rpm_range : (float, float)
         Common speed range [min-1].
     order : ndarray
@@ -194,6 +204,15 @@ class MeasuredSimulatedComparison:
     unseen_modes: tuple[tuple[str, float], ...] = ()
     match_tolerance: float = 0.0
     notes: tuple[str, ...] = field(default_factory=tuple)
+    measured_units: str = ""
+    simulated_units: str = ""
+
+    @property
+    def level_unit(self) -> str:
+        """The unit of every level: ``"dB re 1 m s-2"``, or ``"dB re the strongest order
+        line"`` when normalised."""
+        return f"dB re 1 {self.units}" if self.units != "1" else \
+            "dB re the strongest order line"
 
     @property
     def difference_db(self) -> np.ndarray:
@@ -233,10 +252,12 @@ class MeasuredSimulatedComparison:
                                       "maximum, or no frame in the bin)"}),
                 "measured_order_spectrum": ("order", self.measured_spectrum_db,
                                             {"units": unit, "long_name": "measured order "
-                                             "spectrum over the common speed range"}),
+                                             "spectrum over the common speed range "
+                                             f"({self.level_basis})"}),
                 "simulated_order_spectrum": ("order", self.simulated_spectrum_db,
                                              {"units": unit, "long_name": "simulated order "
-                                              "spectrum over the common speed range"}),
+                                              "spectrum over the common speed range "
+                                              f"({self.level_basis})"}),
                 "peak_status": ("peak", np.asarray([x.status for x in p], dtype=str),
                                 {"long_name": "matched, measured only or simulated only"}),
                 "peak_order_measured": ("peak", np.asarray([x.order_measured for x in p]),
@@ -272,8 +293,11 @@ class MeasuredSimulatedComparison:
                                               "reference speed (bin centre)"})},
             attrs={"Conventions": "CF-1.11", "title": f"{self.measured_name} against "
                    f"{self.simulated_name}", "level_basis": self.level_basis,
+                   "level_unit": self.level_unit,
                    "measured_channel": self.measured_channel,
                    "simulated_channel": self.simulated_channel,
+                   "measured_units": self.measured_units,
+                   "simulated_units": self.simulated_units,
                    "measured_reference": self.measured_reference,
                    "simulated_reference": self.simulated_reference,
                    "rpm_range": np.asarray(self.rpm_range, dtype=float),
@@ -289,9 +313,11 @@ class MeasuredSimulatedComparison:
         fig = Figure(figsize=figsize, layout="constrained", dpi=100)
         ax, ax2 = fig.subplots(2, 1, height_ratios=(1.0, 1.3))
         ax.plot(self.order, self.measured_spectrum_db, lw=0.8, color="C0",
-                label=f"measured ({self.measured_channel})")
+                label=f"measured ({self.measured_channel}"
+                      f"{', ' + self.measured_units if self.measured_units else ''})")
         ax.plot(self.order, self.simulated_spectrum_db, lw=0.8, color="C1",
-                label=f"simulated ({self.simulated_channel})")
+                label=f"simulated ({self.simulated_channel}"
+                      f"{', ' + self.simulated_units if self.simulated_units else ''})")
         styles = {"matched": ("o", "k"), "measured only": ("v", "C0"),
                   "simulated only": ("^", "C1")}
         for status, (mk, col) in styles.items():
@@ -304,7 +330,7 @@ class MeasuredSimulatedComparison:
                     label=f"{status} ({len(sel)})")
         ax.set_xlim(0, float(self.order[-1]))
         ax.set_xlabel("order of the reference shaft")
-        ax.set_ylabel(f"level [{'dB re 1 ' + self.units if self.units != '1' else 'dB'}]")
+        ax.set_ylabel(f"level [{self.level_unit}]")
         ax.set_title(f"order spectra over {self.rpm_range[0]:.0f}–{self.rpm_range[1]:.0f} "
                      f"min⁻¹ (RBW {self.order_resolution:.3g} orders; {self.level_basis})",
                      fontsize=8)
@@ -351,7 +377,9 @@ def _peaks(order: np.ndarray, level: np.ndarray, prominence_db: float, range_db:
         return np.zeros(0), np.zeros(0)
     lv = np.where(ok, level, np.nanmin(level[ok]))
     idx, _ = _scipy_peaks(lv, prominence=prominence_db)
-    idx = idx[(order[idx] >= min_order) & (lv[idx] >= lv[ok].max() - range_db)]
+    above = ok & (order >= min_order)
+    top = float(lv[above].max()) if above.any() else float(lv[ok].max())
+    idx = idx[(order[idx] >= min_order) & (lv[idx] >= top - range_db)]
     idx = idx[(idx > 0) & (idx < lv.size - 1)]
     a, b, c = lv[idx - 1], lv[idx], lv[idx + 1]
     den = a - 2 * b + c
@@ -418,6 +446,33 @@ def _line_features(m: Measurement, x: xr.DataArray, resolution_hz: float, fmax: 
     return np.asarray(feats.frequencies, dtype=float)
 
 
+def simulated_channel_name(simulated: Measurement, name: str | None = None,
+                           measured_channel: str | None = None) -> str:
+    """The simulated record's channel to compare: ``name``, else the measured channel's name
+    when the simulation has it, else its first vibration channel (a virtual sensor, else the
+    default force channel, see :func:`analysis.measurement.load_measurement`).
+
+    Raises
+    ------
+    ValueError
+        ``name`` is not a vibration channel of the simulated record (one line naming the
+        admissible channels), or the record has none.
+    """
+    vib = simulated.vibration_channels
+    if name is None:
+        if measured_channel is not None and measured_channel in vib:
+            return measured_channel
+        if not vib:
+            raise ValueError(f"the simulated record {simulated.name!r} has no vibration, force "
+                             f"or transmission-error channel; channels: "
+                             f"{list(simulated.signals.data_vars)}")
+        return vib[0]
+    if name not in vib:
+        raise ValueError(f"simulated_channel = {name!r} is not a channel of the simulated "
+                         f"record {simulated.name!r}; admissible: {', '.join(vib) or '(none)'}")
+    return name
+
+
 def compare_measurements(
     measured: Measurement,
     simulated: Measurement,
@@ -443,7 +498,9 @@ def compare_measurements(
         measure the same shaft.
     channel, simulated_channel : str, optional
         Channels compared (default: the measured one's first vibration channel; for the
-        simulation the channel of the same name, else its first).
+        simulation the channel of the same name, else its first: a virtual sensor, else a
+        force, see :func:`simulated_channel_name`). The channels' means (a static load, an
+        offset) are removed before the order analysis.
     natural_frequencies_hz : array_like, optional
         The model's natural frequencies [Hz] (> 0) for the line comparison (measured lines
         below 0.15 x the lowest of them, near-DC content, are left out).
@@ -458,7 +515,9 @@ def compare_measurements(
         Bins of the common rpm grid, 1..500 (fewer when the records have fewer frames).
     calibrated : bool, optional
         Compare absolute levels (dB re 1 unit). Default: when both channels carry the same
-        physical unit; False normalises each record to its strongest order line (0 dB).
+        physical unit; False normalises each record to its strongest order line (0 dB) at
+        orders of at least twice the order resolution (the near-DC content of a force,
+        e.g. its slowly varying static load, is no order line).
     prominence_db, peak_range_db : float
         Peaks of the order spectra: prominence, and range below the strongest [dB].
     map_resolution_hz : float
@@ -489,17 +548,21 @@ def compare_measurements(
         if not (isinstance(v, int | float) and math.isfinite(v) and lo_v <= v <= hi_v):
             raise ValueError(f"{nm} = {v!r} is not admissible: {lo_v:g}..{hi_v:g}")
     xm = measured.channel(channel)
-    if simulated_channel is None and str(xm.name) in simulated.vibration_channels:
-        simulated_channel = str(xm.name)
-    xs = simulated.channel(simulated_channel)
+    xs = simulated.channel(simulated_channel_name(simulated, simulated_channel, str(xm.name)))
     notes: list[str] = []
     um, us = str(xm.attrs.get("units", "1")), str(xs.attrs.get("units", "1"))
     physical = um == us and um.strip().lower() not in _UNCALIBRATED
     if calibrated is None:
         calibrated = physical
-        if not physical:
-            notes.append(f"the channels' units differ or are not physical ({um!r} against "
-                         f"{us!r}): levels are normalised")
+        if um != us:
+            notes.append(f"the channels measure different quantities (measured "
+                         f"{xm.name} in {um!r}, simulated {xs.name} in {us!r}): levels are "
+                         "normalised (each record's strongest order line at 0 dB), so the "
+                         "level differences compare the shapes of the spectra, not "
+                         "absolute levels")
+        elif not physical:
+            notes.append(f"the channels' unit {um!r} is not a physical one (uncalibrated): "
+                         "levels are normalised (each record's strongest order line at 0 dB)")
     elif calibrated and not physical:
         raise ValueError(f"calibrated comparison needs the same physical unit in both records; "
                          f"the measured channel is in {um!r}, the simulated in {us!r}")
@@ -535,8 +598,10 @@ def compare_measurements(
     spr = 2 * math.ceil(1.28 * mo)
     maps = []
     for m, x, what in ((measured, xm, "measured"), (simulated, xs, "simulated")):
+        v = np.asarray(x.values, dtype=float)
         try:
-            om = rpm_order_map(x.values, m.fs, **_reference_kw(m), window="hann", overlap=0.75,
+            om = rpm_order_map(v - v.mean(), m.fs, **_reference_kw(m), window="hann",
+                               overlap=0.75,
                                amplitude="power", resolution=order_resolution, max_order=mo,
                                samples_per_rev=spr)
         except ValueError as exc:
@@ -576,24 +641,33 @@ def compare_measurements(
     else:
         binned = [_binned(p, f, edges) for p, f in zip(powers, frames, strict=True)]
     spectra = [p[x].mean(axis=0) for p, x in zip(powers, inside, strict=True)]
+    enbw = float(maps[0].enbw_orders)
+    lines_from = order >= 2 * enbw  # the near-DC bins hold no order line
+    if not lines_from.any():
+        raise ValueError(f"the alias-free order range (up to {mo:.3g}) is too small for the "
+                         f"order resolution {order_resolution:g}")
+    raw_db = [_db(s) for s in spectra]
+    pk = [_peaks(order, s, prominence_db, peak_range_db, min_order=2 * enbw) for s in raw_db]
     if calibrated:
-        offsets = (0.0, 0.0)
+        offsets: tuple[float, ...] = (0.0, 0.0)
         basis = f"calibrated: dB re 1 {um}"
         units = um
-    else:
-        offsets = tuple(float(_db(s).max()) for s in spectra)
-        basis = "normalised: each record's strongest order line = 0 dB"
+    else:  # the strongest line's (interpolated) peak level, else the highest bin
+        offsets = tuple(float(lv.max()) if lv.size else float(s[lines_from].max())
+                        for (_, lv), s in zip(pk, raw_db, strict=True))
+        basis = (f"normalised: each record's strongest order line above order "
+                 f"{2 * enbw:.3g} = 0 dB")
         units = "1"
-    spec_db = [_db(s) - o for s, o in zip(spectra, offsets, strict=True)]
+    pk = [(o, lv - off) for (o, lv), off in zip(pk, offsets, strict=True)]
+    spec_db = [s - o for s, o in zip(raw_db, offsets, strict=True)]
     map_db = [_db(b) - o for b, o in zip(binned, offsets, strict=True)]
-    # cells where both records are more than peak_range_db below their maximum are background
-    # (noise against round-off): no difference is stated there
-    floor = [np.nanmax(d) - peak_range_db if np.isfinite(d).any() else np.inf for d in map_db]
+    # cells where both records are more than peak_range_db below their maximum (above the
+    # near-DC bins) are background (noise against round-off): no difference is stated there
+    floor = [np.nanmax(d[:, lines_from]) - peak_range_db
+             if np.isfinite(d[:, lines_from]).any() else np.inf for d in map_db]
     background = (map_db[0] < floor[0]) & (map_db[1] < floor[1])
     map_db = [np.where(background, np.nan, d) for d in map_db]
-    enbw = float(maps[0].enbw_orders)
     tol = enbw
-    pk = [_peaks(order, s, prominence_db, peak_range_db, min_order=2 * enbw) for s in spec_db]
     peaks = _match(pk[0][0], pk[0][1], pk[1][0], pk[1][1], tol, order, spec_db[0],
                    spec_db[1])
     # frequency-locked lines of the measurement against the model's modes
@@ -640,4 +714,4 @@ def compare_measurements(
         rpm=0.5 * (edges[1:] + edges[:-1]), measured_db=map_db[0], simulated_db=map_db[1],
         measured_spectrum_db=spec_db[0], simulated_spectrum_db=spec_db[1],
         peaks=tuple(peaks), lines=tuple(lines), unseen_modes=tuple(unseen),
-        match_tolerance=float(tol), notes=tuple(notes))
+        match_tolerance=float(tol), notes=tuple(notes), measured_units=um, simulated_units=us)

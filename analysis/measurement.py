@@ -20,6 +20,12 @@ Speed reference, first match wins:
    (:func:`analysis.inputs.find_reference`).
 
 When none is found a :class:`ValueError` names the options and lists the channels.
+
+A simulated run loaded with ``forces=True`` also offers its force and transmission-error
+channels (:data:`RUN_CHANNELS`): ``normal_force:MESH`` (left minus right flank [N]),
+``mesh_deflection:MESH`` (dynamic transmission error [m]) and ``bearing_force:BEARING`` [N];
+such a run needs no virtual sensor, and without a tacho its speed reference is the run's own
+input angle (``input_angle`` [rad]).
 """
 
 from __future__ import annotations
@@ -43,7 +49,7 @@ from analysis.readers.cdf3 import check_cdf3, is_cdf3
 from analysis.readers.integrity import require_memory
 from analysis.speed import SpeedReference, from_angle, from_rpm, from_tacho
 
-__all__ = ["MIN_SAMPLES", "Measurement", "load_measurement"]
+__all__ = ["MIN_SAMPLES", "RUN_CHANNELS", "Measurement", "load_measurement"]
 
 MIN_SAMPLES = 64
 """Fewest samples of a record that order analysis can use."""
@@ -56,6 +62,19 @@ MAX_RPM = 1e7
 
 _REFERENCE_NAMES = {"tacho": "tacho", "speed": "speed", "rpm": "speed"}
 _RUN_MARKER = "sensor_acceleration"
+_RUN_FORCE = "normal_force"
+_RUN_ANGLE = "input_angle"
+
+RUN_CHANNELS = {
+    "normal_force": ("mesh", "net normal tooth force of mesh {} (left minus right flank, "
+                     "along the left flank's line of action)"),
+    "mesh_deflection": ("mesh", "mesh deflection of {} along the line of action (dynamic "
+                        "transmission error)"),
+    "bearing_force": ("bearing", "bearing force {}"),
+}
+"""Force and transmission-error channels of a simulated run (``load_measurement(...,
+forces=True)``): run variable -> (its dimension, long name); a channel is named
+``VARIABLE:LABEL``, e.g. ``normal_force:ring-planet1`` or ``bearing_force:ring.x``."""
 
 
 @dataclass(frozen=True)
@@ -169,6 +188,10 @@ def _is_run(ds: xr.Dataset) -> bool:
     return _RUN_MARKER in ds.variables
 
 
+def _is_run_without_sensor(ds: xr.Dataset) -> bool:
+    return _RUN_MARKER not in ds.variables and _RUN_FORCE in ds.variables
+
+
 def _read_file(path: Path, options: dict | None) -> tuple[xr.Dataset, dict]:
     """The file's Dataset (common layout, or a gearvib run) and its provenance."""
     if not path.exists():
@@ -201,7 +224,7 @@ def _read_file(path: Path, options: dict | None) -> tuple[xr.Dataset, dict]:
 
 
 def _netcdf_run_bytes(path: Path) -> int | None:
-    """Declared bytes of a simulated run's netCDF file (``None``: not a run with sensors).
+    """Declared bytes of a simulated run's netCDF file (``None``: not a gearvib run).
 
     Only the header is read (netCDF4, after the netCDF-3 header walk): xarray would load the
     index coordinates while opening, whatever size a corrupt header claims. A run's declared
@@ -211,7 +234,7 @@ def _netcdf_run_bytes(path: Path) -> int | None:
         check_cdf3(path)
     try:
         with netCDF4.Dataset(path, "r") as nc:
-            if _RUN_MARKER not in nc.variables:
+            if _RUN_MARKER not in nc.variables and _RUN_FORCE not in nc.variables:
                 return None
             declared = sum(math.prod(int(n) for n in v.shape)
                            * max(getattr(v.dtype, "itemsize", 8), 1)
@@ -234,26 +257,40 @@ def _time_seconds(ds: xr.Dataset, where: str) -> np.ndarray:
     return t
 
 
-def _channels_of_run(ds: xr.Dataset, t: np.ndarray) -> tuple[xr.Dataset, dict]:
-    """Channels of a simulated run: one per virtual sensor, plus its tacho."""
-    acc = ds[_RUN_MARKER]
-    if "sensor" not in acc.dims or acc.dims[-1] != "time" or acc.ndim != 2:
-        raise ValueError(f"{_RUN_MARKER} has dims {acc.dims}; expected (sensor, time)")
-    names = ([str(s) for s in ds["sensor"].values] if "sensor" in ds.coords
-             else [f"sensor{i}" for i in range(acc.sizes["sensor"])])
+def _channels_of_run(ds: xr.Dataset, t: np.ndarray, forces: bool = False
+                     ) -> tuple[xr.Dataset, dict]:
+    """Channels of a simulated run: one per virtual sensor, its tacho and, with ``forces``,
+    its force and transmission-error channels (the default one first) and, without a tacho,
+    its input angle."""
     variables: dict[str, Any] = {}
-    for i, n in enumerate(names):
-        key = n if n not in _REFERENCE_NAMES and n not in variables else f"sensor_{n}"
-        attrs = {"units": str(acc.attrs.get("units", "m s-2")),
-                 "long_name": f"virtual accelerometer {n!r} (simulated housing acceleration)",
-                 "source_channel": f"{_RUN_MARKER}[sensor={n}]"}
-        if "sensor_angle" in ds.variables:
-            attrs["sensor_angle_deg"] = float(np.asarray(ds["sensor_angle"].values)[i])
-        variables[key] = ("time", np.asarray(acc.isel(sensor=i).values, dtype=float), attrs)
-    if "tacho" in ds.variables and ds["tacho"].dims == ("time",):
+    names: list[str] = []
+    if _RUN_MARKER in ds.variables:
+        acc = ds[_RUN_MARKER]
+        if "sensor" not in acc.dims or acc.dims[-1] != "time" or acc.ndim != 2:
+            raise ValueError(f"{_RUN_MARKER} has dims {acc.dims}; expected (sensor, time)")
+        names = ([str(s) for s in ds["sensor"].values] if "sensor" in ds.coords
+                 else [f"sensor{i}" for i in range(acc.sizes["sensor"])])
+        for i, n in enumerate(names):
+            key = n if n not in _REFERENCE_NAMES and n not in variables else f"sensor_{n}"
+            attrs = {"units": str(acc.attrs.get("units", "m s-2")),
+                     "long_name": f"virtual accelerometer {n!r} (simulated housing "
+                                  "acceleration)",
+                     "source_channel": f"{_RUN_MARKER}[sensor={n}]"}
+            if "sensor_angle" in ds.variables:
+                attrs["sensor_angle_deg"] = float(np.asarray(ds["sensor_angle"].values)[i])
+            variables[key] = ("time", np.asarray(acc.isel(sensor=i).values, dtype=float),
+                              attrs)
+    has_tacho = "tacho" in ds.variables and ds["tacho"].dims == ("time",)
+    if has_tacho:
         variables["tacho"] = ("time", np.asarray(ds["tacho"].values, dtype=float),
                               {k: v for k, v in ds["tacho"].attrs.items()
                                if isinstance(v, str | int | float | np.number)})
+    if forces:
+        variables.update(_force_channels(ds))
+        if not has_tacho and _RUN_ANGLE in ds.variables and ds[_RUN_ANGLE].dims == ("time",):
+            variables[_RUN_ANGLE] = ("time", np.asarray(ds[_RUN_ANGLE].values, dtype=float),
+                                     {"units": "rad", "long_name": "input angle "
+                                      f"({_input_member(ds)} shaft, drive side)"})
     signals = xr.Dataset(variables, coords={"time": ("time", t, {"units": "s",
                                                                   "long_name": "time",
                                                                   "standard_name": "time"})})
@@ -265,6 +302,48 @@ def _channels_of_run(ds: xr.Dataset, t: np.ndarray) -> tuple[xr.Dataset, dict]:
              "config_json": str(ds.attrs.get("config_json", "")),
              "sensors": names}
     return signals, extra
+
+
+def _input_member(ds: xr.Dataset) -> str:
+    """The run's input member from its stored description ("input" when not stored)."""
+    try:
+        cfg = json.loads(str(ds.attrs.get("config_json", "")) or "{}")
+        member = cfg["model"]["gearset"]["operation"]["input"]
+    except (ValueError, KeyError, TypeError):
+        return "input"
+    return member if isinstance(member, str) and member else "input"
+
+
+def _force_channels(ds: xr.Dataset) -> dict[str, Any]:
+    """The run's :data:`RUN_CHANNELS`, the default one first: the first ring-planet mesh force
+    (the ring carries the mesh forces into the housing; one mesh holds every mesh harmonic,
+    while the sum over the planets, and so a ring bearing force, loses those that the planet
+    phasing cancels), else the first mesh force."""
+    out: dict[str, Any] = {}
+    for var, (dim, long_name) in RUN_CHANNELS.items():
+        if var not in ds.variables or dim not in ds[var].dims or ds[var].dims[-1] != "time":
+            continue
+        da = ds[var]
+        if var == _RUN_FORCE:
+            if "flank" in da.dims and da.sizes["flank"] == 2:
+                da = da.isel(flank=0) - da.isel(flank=1)
+            elif "flank" in da.dims:
+                da = da.isel(flank=0)
+        if da.ndim != 2:
+            continue
+        labels = ([str(v) for v in ds[dim].values] if dim in ds.coords
+                  else [str(i) for i in range(da.sizes[dim])])
+        units = str(ds[var].attrs.get("units", "1"))
+        for i, lab in enumerate(labels):
+            out[f"{var}:{lab}"] = ("time", np.asarray(da.isel({dim: i}).values, dtype=float),
+                                   {"units": units, "long_name": long_name.format(lab),
+                                    "source_channel": f"{var}[{dim}={lab}]"})
+    mesh_forces = [k for k in out if k.startswith(f"{_RUN_FORCE}:")]
+    first = next((k for k in mesh_forces if "ring-" in k.split(":", 1)[1]),
+                 mesh_forces[0] if mesh_forces else None)
+    if first is None:
+        return out
+    return {first: out[first], **{k: v for k, v in out.items() if k != first}}
 
 
 def _channels_of_layout(ds: xr.Dataset, t: np.ndarray) -> xr.Dataset:
@@ -405,6 +484,7 @@ def load_measurement(
     angle: str | None = None,
     rpm: float | None = None,
     reader_options: dict | None = None,
+    forces: bool = False,
 ) -> Measurement:
     """Load a measurement (file or Dataset) with the speed of its reference shaft.
 
@@ -431,6 +511,12 @@ def load_measurement(
     reader_options : dict, optional
         Passed to the file's reader (e.g. ``{"fs": 25600}`` or ``{"time_column": "t"}`` for
         a CSV file, ``{"sets": [0, 1]}`` for UFF); a CSV file defaults to its ``time`` column.
+    forces : bool
+        For a simulated run: also its force and transmission-error channels
+        (:data:`RUN_CHANNELS`, after the virtual sensors); a run without a virtual sensor then
+        loads too (its first channel the first ring-planet mesh force, else the first mesh
+        force), its speed reference the tacho, else the run's input angle. Default False: a
+        run needs a virtual sensor.
 
     Returns
     -------
@@ -467,12 +553,12 @@ def load_measurement(
     else:
         raise TypeError(f"source must be a path or an xarray.Dataset, not {type(source).__name__}")
     t = _time_seconds(ds, where)
-    if not _is_run(ds) and "normal_force" in ds.variables:
+    if _is_run_without_sensor(ds) and not forces:
         raise ValueError(f"{where} is a simulated run without a virtual sensor: add a "
                          "[[sensor]] table to the gear set (docs/faults-sensors.md) and "
                          "simulate again")
-    if _is_run(ds):
-        signals, extra = _channels_of_run(ds, t)
+    if _is_run(ds) or _is_run_without_sensor(ds):
+        signals, extra = _channels_of_run(ds, t, forces=forces)
     else:
         signals = _channels_of_layout(ds, t)
         extra = {"kind": "file" if prov.get("reader") != "in-memory Dataset" else "dataset"}
@@ -491,6 +577,8 @@ def load_measurement(
             kind, name = "speed", speed
         elif angle is not None:
             kind, name = "angle", angle
+        elif extra.get("kind") == "simulation" and _RUN_ANGLE in signals.data_vars:
+            kind, name = "angle", _RUN_ANGLE  # a run without a tacho: its own input angle
         else:
             found = _by_name(signals) or _by_units(signals)
             if found is None:
@@ -509,6 +597,9 @@ def load_measurement(
             sref, reference = _speed_from_tacho(signals, name, pulses_per_rev, t)
         else:
             sref, reference = _speed_from_channel(signals, name, t, kind)
+            if name == _RUN_ANGLE and extra.get("kind") == "simulation":
+                reference = (f"the run's own {signals[name].attrs['long_name']} "
+                             f"{name!r} [rad] (the run has no tacho)")
         ref_channel = name
         speed_values = np.asarray(sref.rpm, dtype=float)
         if kind in ("tacho", "angle"):

@@ -374,12 +374,14 @@ def _cmd_diagnose(args: argparse.Namespace) -> int:
 def _cmd_compare(args: argparse.Namespace) -> int:
     from pathlib import Path
 
+    from analysis.comparison import simulated_channel_name
     from analysis.measurement import load_measurement
     from gearvib.outputs import check_output_folder, removed_if_left_empty
     from gearvib.report.measured_compare import (
         COMPARISON_FILES,
         build_comparison_report,
         compare_with_simulation,
+        load_simulated,
     )
 
     gearset = None
@@ -388,7 +390,8 @@ def _cmd_compare(args: argparse.Namespace) -> int:
 
         gearset = load_gearset(args.gearset)
     measured = load_measurement(args.measured, channel=args.channel, **_speed_options(args))
-    simulated = load_measurement(args.simulated)
+    simulated = load_simulated(args.simulated)
+    simulated_channel_name(simulated, args.simulated_channel, measured.channel().name)
     out = Path(args.output)
     _report_removed(check_output_folder(out, COMPARISON_FILES, overwrite=args.overwrite)[1])
     with removed_if_left_empty(out):
@@ -614,7 +617,8 @@ def _parser() -> argparse.ArgumentParser:
     g.set_defaults(func=_cmd_diagnose)
     cp = sub.add_parser("compare", help="a measurement against a simulated run (HTML, PDF, "
                         "netCDF)", description="Compare a measurement with a simulated run "
-                        "(its virtual sensor and tacho) on one reference shaft: order spectra "
+                        "(its virtual sensor, or a force / transmission-error channel; its "
+                        "tacho, else its input angle) on one reference shaft: order spectra "
                         "and rpm-order maps on common grids, matched / measured-only / "
                         "simulated-only order lines with order and level differences, the "
                         "measured natural-frequency lines against the model's modes and the "
@@ -622,15 +626,19 @@ def _parser() -> argparse.ArgumentParser:
                         "energy). Writes comparison.html, comparison.pdf and comparison.nc. "
                         "See docs/measurements.md.")
     cp.add_argument("measured", help="measurement file (any readable format)")
-    cp.add_argument("simulated", help="simulated run (.nc with a [[sensor]] and a tacho)")
+    cp.add_argument("simulated", help="simulated run (.nc; a virtual sensor and a tacho are "
+                    "optional)")
     cp.add_argument("-o", "--output", default="gearvib-compare", help="output folder "
                     "(default ./gearvib-compare)")
     cp.add_argument("-f", "--overwrite", action="store_true", help=_OVERWRITE_HELP)
     cp.add_argument("--gearset", metavar="CONFIG", help="the model (TOML file or preset; "
                     "default: the gear set stored in the simulated run)")
     _add_speed_options(cp)
-    cp.add_argument("--simulated-channel", metavar="CH", help="sensor of the simulated run "
-                    "(default: the measured channel's name, else the first sensor)")
+    cp.add_argument("--simulated-channel", metavar="CH", help="channel of the simulated run: "
+                    "a virtual sensor, normal_force:MESH (net tooth force [N]), "
+                    "mesh_deflection:MESH (DTE [m]) or bearing_force:BEARING [N] (default: the "
+                    "measured channel's name, else the first sensor, else the first "
+                    "ring-planet mesh force); levels are normalised when the units differ")
     cp.add_argument("--max-order", type=_limits(0.0, 1e5, strict=True), metavar="N",
                     help="highest order compared (default: the alias-free order of both)")
     cp.add_argument("--order-resolution", type=_limits(0.01, 10.0), default=0.25,

@@ -1,7 +1,8 @@
 """Measured against simulated, with the model: ``gearvib compare MEASURED SIMULATED.nc``.
 
 :func:`compare_with_simulation` loads both records (:func:`analysis.measurement.load_measurement`:
-the simulation's virtual sensor and tacho), compares them on common ground
+the simulation's virtual sensor, or a force / transmission-error channel of a run without one,
+and its tacho, else its input angle), compares them on common ground
 (:func:`analysis.comparison.compare_measurements`) and adds what needs the model:
 
 * the kinematic label of every order line (the gear set's catalogue, as in the report);
@@ -52,7 +53,7 @@ if TYPE_CHECKING:
 
 __all__ = ["COMPARISON_FILES", "ComparisonPaths", "ParameterShare", "SimulationComparison",
            "build_comparison_report", "compare_with_simulation", "comparison_sections",
-           "stiffness_shares"]
+           "load_simulated", "stiffness_shares"]
 
 COMPARISON_FILES = ("comparison.html", "comparison.pdf", "comparison.nc")
 """Files ``gearvib compare`` writes into its output folder."""
@@ -79,6 +80,22 @@ class ParameterShare:
     parameter: str
     share: float
     change: float
+
+
+def _channel_text(m: Measurement, name: str) -> str:
+    """``": net normal tooth force of ..."`` for a run's force channel, else ``""``."""
+    if name not in m.signals.data_vars:
+        return ""
+    src = str(m.signals[name].attrs.get("source_channel", ""))
+    return f": {m.signals[name].attrs.get('long_name', '')}" if src and not src.startswith(
+        "sensor_acceleration") else ""
+
+
+def load_simulated(simulated: str | os.PathLike | xr.Dataset) -> Measurement:
+    """A simulated run (or any record) as the simulated side of a comparison: its virtual
+    sensors, force and transmission-error channels (``load_measurement(..., forces=True)``),
+    the speed from its tacho, else its input angle."""
+    return load_measurement(simulated, forces=True)
 
 
 def _family(name: str) -> str:
@@ -152,16 +169,21 @@ class SimulationComparison:
         r = self.result
         return [
             ("measured", f"{self.measured.source.get('file') or r.measured_name}, channel "
-                         f"{r.measured_channel}"),
+                         f"{r.measured_channel} [{r.measured_units or '?'}]"),
             ("simulated", f"{self.simulated.source.get('file') or r.simulated_name}, channel "
-                          f"{r.simulated_channel}"),
+                          f"{r.simulated_channel} [{r.simulated_units or '?'}]"
+                          f"{_channel_text(self.simulated, r.simulated_channel)}"),
             ("measured speed reference", r.measured_reference),
             ("simulated speed reference", r.simulated_reference),
             ("common speed range", f"{r.rpm_range[0]:.0f}–{r.rpm_range[1]:.0f} min⁻¹ "
                                    f"({r.rpm.size} rpm bins)"),
             ("order grid", f"0–{r.order[-1]:.4g} orders of the reference shaft, RBW "
                            f"{r.order_resolution:.3g} orders (Hann), power averages"),
-            ("levels", r.level_basis),
+            ("levels", f"{r.level_basis} (unit of every level: {r.level_unit})"
+                       + ("" if r.measured_units == r.simulated_units else
+                          f"; the units differ ({r.measured_units} against "
+                          f"{r.simulated_units}): spectral shapes are compared, not absolute "
+                          "levels")),
             ("line matching", f"order tolerance ± {r.match_tolerance:.3g} + 0.2 % of the "
                               "order; peaks of at least 6 dB prominence within 30 dB of the "
                               "strongest"),
@@ -255,12 +277,16 @@ def compare_with_simulation(measured: Measurement | str | os.PathLike | xr.Datas
         The measurement (loaded with the ``speed`` keywords: ``tacho``, ``pulses_per_rev``,
         ``speed``, ``angle``, ``rpm``).
     simulated : Measurement, path or Dataset
-        A simulated run with a virtual sensor and a tacho (or any record with a speed
-        reference).
+        A simulated run (:func:`load_simulated`): its virtual sensor, or without one a force
+        or transmission-error channel; its speed from its tacho, else from its input angle
+        (or any record with a speed reference).
     gearset : path, preset name or GearSet, optional
         The model (default: the gear set stored in the simulated run).
     channel, simulated_channel : str, optional
-        Channels compared.
+        Channels compared; ``simulated_channel`` a virtual sensor or a force / DTE channel
+        (``normal_force:ring-planet1``, ``mesh_deflection:sun-planet1``,
+        ``bearing_force:ring.x``, ...; default the virtual sensor, else the first ring-planet
+        mesh force; see :func:`analysis.comparison.simulated_channel_name`).
     max_order, order_resolution, calibrated
         See :func:`analysis.comparison.compare_measurements`.
     reference : str, optional
@@ -273,7 +299,7 @@ def compare_with_simulation(measured: Measurement | str | os.PathLike | xr.Datas
     """
     m = measured if isinstance(measured, Measurement) else load_measurement(
         measured, channel=channel, **speed)
-    s = simulated if isinstance(simulated, Measurement) else load_measurement(simulated)
+    s = simulated if isinstance(simulated, Measurement) else load_simulated(simulated)
     notes: list[str] = []
     if gearset is None:
         gs, why = _model_from_run(s)
@@ -400,7 +426,8 @@ def build_comparison_report(comparison: SimulationComparison, out_dir: str | os.
     r = comparison.result
     sections = comparison_sections(comparison)
     title = title or f"Measured against simulated: {r.measured_name} and {r.simulated_name}"
-    subtitle = (f"Channels {r.measured_channel} / {r.simulated_channel}; {r.level_basis}; "
+    subtitle = (f"Channels {r.measured_channel} [{r.measured_units}] / {r.simulated_channel} "
+                f"[{r.simulated_units}]; {r.level_basis}; "
                 f"gear set {comparison.gearset_name or '(none)'}.")
     images = FigureImages()
     text = render_html(sections, title=title, subtitle=subtitle, images=images)

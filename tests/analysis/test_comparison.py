@@ -15,12 +15,14 @@ DUR = 4.0
 
 
 def record(orders: dict[float, float], units: str = "m s-2", n0: float = 600.0,
-           n1: float = 1800.0, line_hz: float | None = None, seed: int = 0):
+           n1: float = 1800.0, line_hz: float | None = None, seed: int = 0,
+           static: float = 0.0):
     """Run-up n0 -> n1 min-1 with order components {order: amplitude}, a 60-pulse tacho, a
-    frequency-locked component (a resonance excited by broadband noise) and a little noise."""
+    frequency-locked component (a resonance excited by broadband noise) and a little noise;
+    ``static`` adds a static load rising by 20 % over the run (as a simulated force)."""
     t = np.arange(int(FS * DUR)) / FS
     th = 2 * np.pi / 60 * (n0 * t + 0.5 * (n1 - n0) / DUR * t**2)
-    x = sum(a * np.sin(o * th) for o, a in orders.items())
+    x = sum(a * np.sin(o * th) for o, a in orders.items()) + static * (1 + 0.2 * t / DUR)
     rng = np.random.default_rng(seed)
     x = x + 1e-3 * rng.standard_normal(t.size)
     if line_hz is not None:
@@ -89,6 +91,54 @@ def test_normalised_levels_when_the_units_differ():
                                                       abs=0.3)
     with pytest.raises(ValueError, match="calibrated comparison needs the same physical unit"):
         compare_measurements(meas, sim, calibrated=True)
+
+
+def test_a_force_against_an_accelerometer_is_normalised_to_its_order_lines_not_its_load():
+    """A simulated force in N with a static load 100 x its order lines against an acceleration:
+    each record's strongest order line is 0 dB (the static load, near order 0, is no line), so
+    the 20th order stands at 20 log10(0.5) and 20 log10(0.25) -- analytic -- and the note
+    states the unit mismatch."""
+    meas = record({10: 1.0, 20: 0.5}, seed=11)
+    sim = record({10: 3.0, 20: 0.75}, units="N", seed=12, static=300.0)
+    c = compare_measurements(meas, sim, max_order=40)
+    assert c.level_basis.startswith("normalised: each record's strongest order line above "
+                                    "order")
+    assert c.units == "1" and c.level_unit == "dB re the strongest order line"
+    assert (c.measured_units, c.simulated_units) == ("m s-2", "N")
+    assert any("different quantities" in n and "'m s-2'" in n and "'N'" in n for n in c.notes)
+    m = {round(p.order): p for p in by_status(c, "matched")}
+    assert set(m) == {10, 20} and c.count("measured only") == c.count("simulated only") == 0
+    assert m[10].level_measured_db == pytest.approx(0.0, abs=1e-9)
+    assert m[10].level_simulated_db == pytest.approx(0.0, abs=1e-9)
+    assert m[20].level_measured_db == pytest.approx(20 * np.log10(0.5), abs=0.3)
+    assert m[20].level_simulated_db == pytest.approx(20 * np.log10(0.25), abs=0.3)
+    assert m[20].level_difference_db == pytest.approx(20 * np.log10(2.0), abs=0.3)
+    # no bin above the near-DC ones is above the strongest line (the static load removed)
+    lines = c.order >= 2 * c.match_tolerance
+    assert np.nanmax(c.simulated_spectrum_db[lines]) < 0.5
+    ds = c.to_dataset()
+    assert ds.attrs["level_basis"] == c.level_basis
+    assert ds.attrs["level_unit"] == "dB re the strongest order line"
+    assert (ds.attrs["measured_units"], ds.attrs["simulated_units"]) == ("m s-2", "N")
+    assert c.level_basis in ds["simulated_order_spectrum"].attrs["long_name"]
+    fig = c.plot()
+    assert fig.axes[0].get_ylabel() == "level [dB re the strongest order line]"
+    # calibrated levels are refused across units; the same record calibrated keeps its level
+    with pytest.raises(ValueError, match="calibrated comparison needs the same physical unit"):
+        compare_measurements(meas, sim, calibrated=True, max_order=40)
+    same = compare_measurements(sim, sim, max_order=40)
+    assert same.level_basis == "calibrated: dB re 1 N" and same.level_unit == "dB re 1 N"
+    top = max(p.level_measured_db for p in same.peaks)
+    assert top == pytest.approx(20 * np.log10(3.0 / np.sqrt(2)), abs=0.3)  # rms of 3 N
+
+
+def test_a_wrong_simulated_channel_names_the_admissible_ones():
+    a = record({10: 1.0}, seed=13)
+    with pytest.raises(ValueError, match=r"^simulated_channel = 'nope' is not a channel of the "
+                       r"simulated record '[^']*'; admissible: acc$"):
+        compare_measurements(a, a, simulated_channel="nope")
+    with pytest.raises(ValueError, match=r"admissible: acc$"):  # the tacho: no channel to compare
+        compare_measurements(a, a, simulated_channel="tacho")
 
 
 @pytest.mark.parametrize(("kwargs", "match"), [

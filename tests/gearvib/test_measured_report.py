@@ -7,6 +7,7 @@ the common layout (no gearvib markers), so it goes through the readers like a me
 
 from __future__ import annotations
 
+import json
 import shutil
 import subprocess
 from pathlib import Path
@@ -265,6 +266,101 @@ def test_compare_measured_with_the_simulation(measured_file, simulated_file, tmp
     err = capsys.readouterr().err
     assert code == 2 and "channel = 'nope' is not a channel" in err
     assert not (tmp_path / "w").exists()
+
+
+@pytest.fixture(scope="module")
+def force_run(tmp_path_factory) -> Path:
+    """The healthy model's run over the same speeds without any sensor (no tacho either)."""
+    from gearvib.config import load_config
+    from gearvib.io import write_netcdf as write_run
+
+    cfg, _ = load_config("paper-case1")
+    res = simulate(assemble(load_gearset("paper-case1")), SpeedRamp(300, 3600, 0.6,
+                                                                    input_torque=60.0),
+                   progress=False, config={"gearset": cfg})
+    return write_run(res.to_dataset(), tmp_path_factory.mktemp("sim") / "forces.nc")
+
+
+def test_a_run_without_sensor_loads_its_forces_and_its_own_speed(force_run):
+    import xarray as xr
+
+    with pytest.raises(ValueError, match="simulated run without a virtual sensor"):
+        load_measurement(force_run)  # the report and the diagnosis still need a sensor
+    m = load_measurement(force_run, forces=True)
+    assert m.vibration_channels[0] == "normal_force:ring-planet1"
+    assert {"mesh_deflection:sun-planet2", "normal_force:sun-planet3"} <= set(
+        m.vibration_channels)
+    assert "input_angle" not in m.vibration_channels
+    assert m.reference.startswith("the run's own input angle (sun shaft")
+    from analysis.cf import labels_from_cf
+
+    with xr.open_dataset(force_run) as raw:
+        run = labels_from_cf(raw.load())
+        f = run["normal_force"].sel(mesh="ring-planet1")
+        np.testing.assert_array_equal(m.channel().values, f.sel(flank="left").values
+                                      - f.sel(flank="right").values)
+        assert m.channel().attrs["units"] == "N"
+        assert m.channel("mesh_deflection:ring-planet1").attrs["units"] == "m"
+        # the speed from the stored angle agrees with the stored speed
+        rpm = run["input_speed"].values
+        mid = slice(rpm.size // 10, -rpm.size // 10)
+        np.testing.assert_allclose(m.speed_rpm.values[mid], rpm[mid], rtol=2e-3)
+
+
+def test_compare_against_the_forces_of_a_run_without_sensor(measured_file, force_run, tmp_path,
+                                                            capsys):
+    """The accelerometer of the measurement against the ring-planet mesh force of a run with
+    neither sensor nor tacho: the mesh harmonics match in order, the levels are normalised
+    (each record's strongest order line at 0 dB) and the unit mismatch is stated."""
+    import xarray as xr
+
+    out = tmp_path / "cmp"
+    assert main(["compare", str(measured_file), str(force_run), "-o", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "levels normalised: each record's strongest order line above order" in text
+    with xr.open_dataset(out / "comparison.nc") as ds:
+        assert ds.attrs["simulated_channel"] == "normal_force:ring-planet1"
+        assert ds.attrs["level_basis"].startswith("normalised")
+        assert ds.attrs["level_unit"] == "dB re the strongest order line"
+        assert (ds.attrs["measured_units"], ds.attrs["simulated_units"]) == ("m s-2", "N")
+        assert "the run's own input angle" in ds.attrs["simulated_reference"]
+        assert any("different quantities" in n for n in json.loads(ds.attrs["notes"]))
+        status = [str(x) for x in ds["peak_status"].values]
+        labels = [str(x) for x in ds["peak_label"].values]
+        dord = ds["peak_order_measured"].values - ds["peak_order_simulated"].values
+        tol = float(ds.attrs["match_tolerance"])
+        mesh = [i for i, lab in enumerate(labels)
+                if lab in ("f_mesh", *(f"{k} f_mesh" for k in range(2, 7)))]
+        assert len(mesh) >= 5 and all(status[i] == "matched" for i in mesh)
+        om = ds["peak_order_measured"].values[mesh]
+        assert np.all(np.abs(dord[mesh]) <= tol + 0.002 * om)
+        assert np.all(np.abs(dord[mesh][:2]) < 0.05)  # f_mesh, 2 f_mesh: within 0.05 orders
+        np.testing.assert_allclose(om / MESH_ORDER, np.round(om / MESH_ORDER), atol=0.01)
+        # each record's strongest line is its 0 dB
+        assert np.nanmax(ds["peak_level_simulated"].values) == pytest.approx(0.0, abs=1e-9)
+        assert np.nanmax(ds["peak_level_measured"].values) == pytest.approx(0.0, abs=1e-9)
+    html = (out / "comparison.html").read_text()
+    assert "the units differ (m s-2 against N)" in html
+    assert "normal_force:ring-planet1 [N]" in html
+    # the transmission error, by option; a wrong name: one line naming the admissible ones
+    assert main(["compare", str(measured_file), str(force_run), "-o", str(tmp_path / "dte"),
+                 "--simulated-channel", "mesh_deflection:ring-planet1"]) == 0
+    assert "matched" in capsys.readouterr().out
+    with xr.open_dataset(tmp_path / "dte" / "comparison.nc") as ds:
+        assert ds.attrs["simulated_units"] == "m"
+    code = main(["compare", str(measured_file), str(force_run), "--simulated-channel",
+                 "ring-planet1", "-o", str(tmp_path / "w")])
+    err = capsys.readouterr().err
+    assert code == 2 and len(err.strip().splitlines()) == 1
+    assert "simulated_channel = 'ring-planet1' is not a channel of the simulated record" in err
+    assert "admissible: normal_force:ring-planet1, " in err and "mesh_deflection:sun-planet1" \
+        in err
+    assert not (tmp_path / "w").exists()
+    from gearvib.report.measured_compare import compare_with_simulation
+
+    with pytest.raises(ValueError, match=r"admissible: normal_force:ring-planet1, .*"
+                       r"mesh_deflection:ring-planet3$"):
+        compare_with_simulation(measured_file, force_run, simulated_channel="tacho")
 
 
 @pytest.mark.parametrize("path", UFF_FILES, ids=[p.name for p in UFF_FILES])
