@@ -451,7 +451,7 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     executor = None
     if args.scheduler:
         try:
-            executor, client = dask_executor(args.scheduler)
+            executor, client = dask_executor(args.scheduler, timeout=args.connect_timeout)
         except ImportError as exc:
             raise CliError(str(exc)) from None
     try:
@@ -674,6 +674,9 @@ def _parser() -> argparse.ArgumentParser:
     w.add_argument("--scheduler", metavar="ADDRESS",
                    help="address of a Dask scheduler, e.g. tcp://10.0.0.5:8786 (needs "
                    "gearvib[dask]; the workers must see the output folder)")
+    w.add_argument("--connect-timeout", type=_limits(0.0, 3600.0, strict=True), default=10.0,
+                   metavar="S", help="seconds to reach the scheduler, 0 < S <= 3600 (default "
+                   "10; where nothing listens the sweep fails at once)")
     w.add_argument("--list", action="store_true", help="print the cases and exit")
     w.add_argument("--no-report", action="store_true", help="write sweep.nc only")
     w.add_argument("-q", "--quiet", action="store_true", help="no progress display")

@@ -9,7 +9,10 @@ one task per chunk of Floquet evaluations; :func:`executor_for` opens the execut
 * :func:`local_executor`: a :class:`~concurrent.futures.ProcessPoolExecutor` of worker
   processes on this machine (forked on Linux, spawned elsewhere): no server to start.
 * :func:`dask_executor`: ``dask.distributed.Client(address).get_executor()``, the
-  ``concurrent.futures`` face of a Dask cluster (``pip install "gearvib[dask]"``).
+  ``concurrent.futures`` face of a Dask cluster (``pip install "gearvib[dask]"``), after a
+  probe (:func:`probe_scheduler`: one TCP connection, then Dask's ``identity`` call) that
+  fails at once, in one line, where nothing listens or something other than a scheduler
+  answers, instead of Dask retrying for its 30 s connect timeout.
 
 One code path (:func:`gearvib.sweep.run_sweep`, :func:`analysis.instability.stability_chart`)
 serves all of them.
@@ -46,13 +49,16 @@ from concurrent.futures import Executor, Future, ProcessPoolExecutor
 from typing import Any
 
 __all__ = [
+    "CONNECT_TIMEOUT_S",
     "THREAD_VARIABLES",
     "SerialExecutor",
+    "check_connect_timeout",
     "dask_executor",
     "default_start_method",
     "default_workers",
     "executor_for",
     "local_executor",
+    "probe_scheduler",
     "stop_workers",
     "worker_environment",
 ]
@@ -64,8 +70,15 @@ THREAD_VARIABLES = ("NUMBA_NUM_THREADS", "OMP_NUM_THREADS", "OPENBLAS_NUM_THREAD
 MAX_WORKERS = 512
 """Largest admissible number of local workers."""
 
-CONNECT_TIMEOUT_S = 30.0
-"""How long :func:`dask_executor` tries to reach the scheduler [s]."""
+CONNECT_TIMEOUT_S = 10.0
+"""How long :func:`dask_executor` tries to reach the scheduler by default [s]: the TCP probe
+and then the Dask handshake each get this long (Dask's own default, 30 s, is what an address
+where nothing listens used to cost)."""
+
+MAX_CONNECT_TIMEOUT_S = 3600.0
+"""Largest admissible connect timeout [s]."""
+
+_PROBED = ("tcp", "tls", "ws", "wss")  # socket protocols: one TCP connection tells
 
 
 class SerialExecutor(Executor):
@@ -197,33 +210,143 @@ def stop_workers(executor: Executor) -> None:
         terminate_pool(executor)
 
 
-def dask_executor(address: str) -> tuple[Executor, Any]:
+def check_connect_timeout(timeout: Any) -> float:
+    """A connect timeout [s]: a number in (0, :data:`MAX_CONNECT_TIMEOUT_S`]."""
+    if isinstance(timeout, bool) or not isinstance(timeout, int | float) or not (
+            0 < timeout <= MAX_CONNECT_TIMEOUT_S):
+        raise ValueError(f"connect timeout = {timeout!r} is not admissible: a time in (0, "
+                         f"{MAX_CONNECT_TIMEOUT_S:g}] s")
+    return float(timeout)
+
+
+def probe_scheduler(address: str, timeout: float = CONNECT_TIMEOUT_S) -> None:
+    """Check that a Dask scheduler answers at ``address``, failing fast where nothing listens
+    (instead of Dask's retries until its timeout).
+
+    One TCP connection first (refused at once where nothing listens), then Dask's
+    ``identity`` call (the server must say it is a ``Scheduler``). Addresses of other
+    protocols (``inproc://``, ``ucx://``) are left to Dask.
+
+    Raises
+    ------
+    ValueError
+        The address cannot be parsed (no port, ...).
+    OSError
+        Nothing listens there (connection refused), the host is unknown, no answer within
+        ``timeout`` seconds, or the server there is no Dask scheduler; one line that names
+        the address.
+    """
+    import socket
+
+    from distributed.comm import parse_address, parse_host_port
+
+    timeout = check_connect_timeout(timeout)
+    try:
+        protocol, location = parse_address(address)
+        if protocol not in _PROBED:
+            return
+        host, port = parse_host_port(location)
+    except ValueError as exc:
+        raise ValueError(f"scheduler address {address!r} is not admissible: {exc} (give "
+                         "e.g. 'tcp://10.0.0.5:8786')") from None
+    where = f"cannot connect to the Dask scheduler at {address!r}"
+    try:
+        with socket.create_connection((host, int(port)), timeout=timeout):
+            pass
+    except ConnectionRefusedError:
+        raise OSError(f"{where}: nothing listens there (connection refused); start the "
+                      "scheduler (dask scheduler) or check the address") from None
+    except socket.gaierror as exc:
+        raise OSError(f"{where}: unknown host {host!r} ({exc.strerror})") from None
+    except TimeoutError:
+        raise OSError(f"{where}: no answer within {timeout:g} s (host down, or a firewall "
+                      "drops the connection); a longer connect timeout waits more") from None
+    except OSError as exc:
+        raise OSError(f"{where}: {exc.strerror or exc}") from None
+    _identify(address, timeout, where)
+
+
+def _identify(address: str, timeout: float, where: str) -> None:
+    """Ask the server at ``address`` who it is (Dask's ``identity`` call, in a thread of its
+    own: the caller may run an event loop): something that is no Dask scheduler (a web
+    server, a proxy) fails here in one line, not inside the client's start-up."""
+    import asyncio
+    from concurrent.futures import ThreadPoolExecutor
+
+    from distributed.comm import connect
+
+    async def ask() -> Any:
+        comm = await connect(address, timeout=timeout)
+        try:
+            await asyncio.wait_for(comm.write({"op": "identity", "reply": True}), timeout)
+            return await asyncio.wait_for(comm.read(), timeout)
+        finally:
+            comm.abort()
+
+    async def bounded() -> Any:  # the handshake inside connect() may wait for ever
+        return await asyncio.wait_for(ask(), 2 * timeout)
+
+    with ThreadPoolExecutor(1) as pool:
+        try:
+            info = pool.submit(asyncio.run, bounded()).result()
+        except TimeoutError:
+            raise OSError(f"{where}: something listens there but gives no Dask answer "
+                          f"(connect timeout {timeout:g} s; is it a Dask scheduler?)") from None
+        except Exception as exc:  # a reply that is not Dask's: any error of its decoding
+            text = " ".join(str(exc).split())[:160]
+            raise OSError(f"{where}: something listens there but does not answer as a Dask "
+                          f"scheduler ({type(exc).__name__}: {text})") from None
+    kind = info.get("type") if isinstance(info, dict) else None
+    if kind != "Scheduler":
+        raise OSError(f"{where}: the server there is a {kind or 'non-Dask server'!s}, not a "
+                      "Dask scheduler")
+
+
+def dask_executor(address: str, *, timeout: float = CONNECT_TIMEOUT_S) -> tuple[Executor, Any]:
     """``(executor, client)`` of the Dask scheduler at ``address`` (close the client after).
+
+    A TCP probe (:func:`probe_scheduler`) fails at once where nothing listens; then the Dask
+    client connects.
+
+    Parameters
+    ----------
+    address : str
+        ``tcp://host:port`` (or any address Dask takes).
+    timeout : float
+        Seconds the probe, and then the Dask handshake, may each take, in (0, 3600]
+        (default :data:`CONNECT_TIMEOUT_S`).
 
     Raises
     ------
     ImportError
         dask.distributed is not installed (the message names the extra to install).
+    ValueError
+        A malformed address or timeout.
     OSError
-        The scheduler cannot be reached.
+        The scheduler cannot be reached (one line: why, and the address).
     """
     if not isinstance(address, str) or not address:
         raise ValueError("scheduler address must be a string such as 'tcp://10.0.0.5:8786'")
+    timeout = check_connect_timeout(timeout)
     try:
         from distributed import Client
     except ImportError:
         raise ImportError("a Dask scheduler needs dask.distributed: pip install "
                           "\"gearvib[dask]\"") from None
+    probe_scheduler(address, timeout)
     try:
-        client = Client(address, timeout=CONNECT_TIMEOUT_S, set_as_default=False)
+        client = Client(address, timeout=timeout, set_as_default=False)
     except (OSError, TimeoutError) as exc:
-        raise OSError(f"cannot connect to the Dask scheduler at {address!r}: {exc}") from None
+        text = " ".join(str(exc).split())
+        raise OSError(f"cannot connect to the Dask scheduler at {address!r}: {text}") from None
     return client.get_executor(), client
 
 
 @contextlib.contextmanager
 def executor_for(workers: int | None = 1, scheduler: str | None = None,
-                 executor: Executor | None = None) -> Iterator[tuple[Executor, int]]:
+                 executor: Executor | None = None, *,
+                 connect_timeout: float = CONNECT_TIMEOUT_S
+                 ) -> Iterator[tuple[Executor, int]]:
     """The executor of a ``workers`` / ``scheduler`` / ``executor`` choice, closed afterwards.
 
     Parameters
@@ -236,6 +359,8 @@ def executor_for(workers: int | None = 1, scheduler: str | None = None,
         client is closed on exit.
     executor : concurrent.futures.Executor, optional
         Use this one as it is (not shut down here); ``workers`` and ``scheduler`` are ignored.
+    connect_timeout : float
+        Seconds to reach the scheduler (:func:`dask_executor`).
 
     Yields
     ------
@@ -248,7 +373,7 @@ def executor_for(workers: int | None = 1, scheduler: str | None = None,
         yield executor, n
         return
     if scheduler is not None:
-        dask_exec, client = dask_executor(scheduler)
+        dask_exec, client = dask_executor(scheduler, timeout=connect_timeout)
         try:
             yield dask_exec, max(1, sum(client.nthreads().values()))
         finally:
