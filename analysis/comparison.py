@@ -658,6 +658,11 @@ def compare_measurements(
         basis = (f"normalised: each record's strongest order line above order "
                  f"{2 * enbw:.3g} = 0 dB")
         units = "1"
+        for (_, lv), what in zip(pk, ("measured", "simulated"), strict=True):
+            if not lv.size:
+                notes.append(f"the {what} record has no order line above order "
+                             f"{2 * enbw:.3g} ({prominence_db:g} dB prominence): its 0 dB is "
+                             "its highest level there, not a line")
     pk = [(o, lv - off) for (o, lv), off in zip(pk, offsets, strict=True)]
     spec_db = [s - o for s, o in zip(raw_db, offsets, strict=True)]
     map_db = [_db(b) - o for b, o in zip(binned, offsets, strict=True)]

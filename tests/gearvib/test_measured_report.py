@@ -363,17 +363,28 @@ def test_compare_against_the_forces_of_a_run_without_sensor(measured_file, force
         compare_with_simulation(measured_file, force_run, simulated_channel="tacho")
 
 
+@pytest.mark.parametrize("run", ["simulated_file", "force_run"])
 @pytest.mark.parametrize("path", UFF_FILES, ids=[p.name for p in UFF_FILES])
-def test_real_uff_files_compare_or_a_clear_error(path, simulated_file, tmp_path, capsys):
-    code = main(["compare", str(path), str(simulated_file), "--rpm", "1500", "-o",
-                 str(tmp_path / "c")])
+def test_real_uff_files_compare_or_a_clear_error(path, run, request, tmp_path, capsys):
+    """Against the virtual sensor, and against the mesh force of a run without sensor."""
+    import xarray as xr
+
+    code = main(["compare", str(path), str(request.getfixturevalue(run)), "--rpm", "1500",
+                 "-o", str(tmp_path / "c")])
     captured = capsys.readouterr()
     if "not-all-columns" in path.name:
         assert code == 2 and "needs at least 64" in captured.err
+        assert len(captured.err.strip().splitlines()) == 1
         return
     assert code == 0, captured.err
     assert "compare:" in captured.out and "matched" in captured.out
-    assert (tmp_path / "c" / "comparison.nc").is_file()
+    with xr.open_dataset(tmp_path / "c" / "comparison.nc") as ds:
+        notes = json.loads(ds.attrs["notes"])
+        if ds.attrs["measured_units"] != ds.attrs["simulated_units"]:
+            assert ds.attrs["level_basis"].startswith("normalised")
+            assert any("different quantities" in n for n in notes)
+        if run == "force_run":
+            assert ds.attrs["simulated_units"] == "N"
 
 
 def test_measured_pdf_text_stays_inside_the_margins(with_gearset):
