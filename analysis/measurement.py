@@ -25,7 +25,8 @@ A simulated run loaded with ``forces=True`` also offers its force and transmissi
 channels (:data:`RUN_CHANNELS`): ``normal_force:MESH`` (left minus right flank [N]),
 ``mesh_deflection:MESH`` (dynamic transmission error [m]) and ``bearing_force:BEARING`` [N];
 such a run needs no virtual sensor, and without a tacho its speed reference is the run's own
-input angle (``input_angle`` [rad]).
+input angle (``input_angle`` [rad]), or with ``angle="rotation:MEMBER"`` the stored rotation of
+another member.
 """
 
 from __future__ import annotations
@@ -291,6 +292,12 @@ def _channels_of_run(ds: xr.Dataset, t: np.ndarray, forces: bool = False
             variables[_RUN_ANGLE] = ("time", np.asarray(ds[_RUN_ANGLE].values, dtype=float),
                                      {"units": "rad", "long_name": "input angle "
                                       f"({_input_member(ds)} shaft, drive side)"})
+            rot = ds["rotation"] if "rotation" in ds.variables else None
+            if rot is not None and rot.dims == ("member", "time") and "member" in ds.coords:
+                for i, member in enumerate(str(v) for v in ds["member"].values):
+                    variables[f"rotation:{member}"] = (
+                        "time", np.asarray(rot.isel(member=i).values, dtype=float),
+                        {"units": "rad", "long_name": f"rotation angle of the {member}"})
     signals = xr.Dataset(variables, coords={"time": ("time", t, {"units": "s",
                                                                   "long_name": "time",
                                                                   "standard_name": "time"})})
@@ -597,7 +604,8 @@ def load_measurement(
             sref, reference = _speed_from_tacho(signals, name, pulses_per_rev, t)
         else:
             sref, reference = _speed_from_channel(signals, name, t, kind)
-            if name == _RUN_ANGLE and extra.get("kind") == "simulation":
+            if extra.get("kind") == "simulation" and (name == _RUN_ANGLE
+                                                      or name.startswith("rotation:")):
                 reference = (f"the run's own {signals[name].attrs['long_name']} "
                              f"{name!r} [rad] (the run has no tacho)")
         ref_channel = name

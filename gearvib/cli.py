@@ -390,7 +390,7 @@ def _cmd_compare(args: argparse.Namespace) -> int:
 
         gearset = load_gearset(args.gearset)
     measured = load_measurement(args.measured, channel=args.channel, **_speed_options(args))
-    simulated = load_simulated(args.simulated)
+    simulated = load_simulated(args.simulated, reference=args.reference)
     simulated_channel_name(simulated, args.simulated_channel, measured.channel().name)
     out = Path(args.output)
     _report_removed(check_output_folder(out, COMPARISON_FILES, overwrite=args.overwrite)[1])

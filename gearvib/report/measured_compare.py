@@ -91,11 +91,26 @@ def _channel_text(m: Measurement, name: str) -> str:
         "sensor_acceleration") else ""
 
 
-def load_simulated(simulated: str | os.PathLike | xr.Dataset) -> Measurement:
+def load_simulated(simulated: str | os.PathLike | xr.Dataset,
+                   reference: str | None = None) -> Measurement:
     """A simulated run (or any record) as the simulated side of a comparison: its virtual
     sensors, force and transmission-error channels (``load_measurement(..., forces=True)``),
-    the speed from its tacho, else its input angle."""
-    return load_measurement(simulated, forces=True)
+    the speed from its tacho, else its input angle.
+
+    Parameters
+    ----------
+    simulated : path or Dataset
+        The run.
+    reference : str, optional
+        Member whose orders are compared: a run without a tacho is then referenced to that
+        member's stored rotation (``rotation:MEMBER``) instead of its input angle.
+    """
+    m = load_measurement(simulated, forces=True)
+    key = f"rotation:{reference}"
+    if reference is not None and m.source.get("reference_channel") == "input_angle" and \
+            key in m.signals.data_vars:
+        m = load_measurement(simulated, forces=True, angle=key)
+    return m
 
 
 def _family(name: str) -> str:
@@ -291,7 +306,8 @@ def compare_with_simulation(measured: Measurement | str | os.PathLike | xr.Datas
         See :func:`analysis.comparison.compare_measurements`.
     reference : str, optional
         Member whose speed both references measure: the shaft of the catalogue's orders
-        (default: the input member).
+        (default: the input member); a simulated run without a tacho is referenced to its
+        rotation (:func:`load_simulated`).
 
     Returns
     -------
@@ -299,7 +315,8 @@ def compare_with_simulation(measured: Measurement | str | os.PathLike | xr.Datas
     """
     m = measured if isinstance(measured, Measurement) else load_measurement(
         measured, channel=channel, **speed)
-    s = simulated if isinstance(simulated, Measurement) else load_simulated(simulated)
+    s = simulated if isinstance(simulated, Measurement) else load_simulated(simulated,
+                                                                            reference)
     notes: list[str] = []
     if gearset is None:
         gs, why = _model_from_run(s)

@@ -294,17 +294,27 @@ def test_a_run_without_sensor_loads_its_forces_and_its_own_speed(force_run):
     assert m.reference.startswith("the run's own input angle (sun shaft")
     from analysis.cf import labels_from_cf
 
-    with xr.open_dataset(force_run) as raw:
+    with xr.open_dataset(force_run) as raw:  # closed before the file is read again
         run = labels_from_cf(raw.load())
-        f = run["normal_force"].sel(mesh="ring-planet1")
-        np.testing.assert_array_equal(m.channel().values, f.sel(flank="left").values
-                                      - f.sel(flank="right").values)
-        assert m.channel().attrs["units"] == "N"
-        assert m.channel("mesh_deflection:ring-planet1").attrs["units"] == "m"
-        # the speed from the stored angle agrees with the stored speed
-        rpm = run["input_speed"].values
-        mid = slice(rpm.size // 10, -rpm.size // 10)
-        np.testing.assert_allclose(m.speed_rpm.values[mid], rpm[mid], rtol=2e-3)
+    f = run["normal_force"].sel(mesh="ring-planet1")
+    np.testing.assert_array_equal(m.channel().values, f.sel(flank="left").values
+                                  - f.sel(flank="right").values)
+    assert m.channel().attrs["units"] == "N"
+    assert m.channel("mesh_deflection:ring-planet1").attrs["units"] == "m"
+    # the speed from the stored angle agrees with the stored speed
+    rpm = run["input_speed"].values
+    mid = slice(rpm.size // 10, -rpm.size // 10)
+    np.testing.assert_allclose(m.speed_rpm.values[mid], rpm[mid], rtol=2e-3)
+    # referenced to another member: its stored rotation (the carrier turns at 0.22 x the sun;
+    # a planet turns backwards, its speed is positive all the same)
+    from gearvib.report.measured_compare import load_simulated
+
+    for member in ("carrier", "planet1"):
+        mc = load_simulated(force_run, reference=member)
+        assert mc.reference.startswith(f"the run's own rotation angle of the {member} ")
+        n = np.abs(run["speed"].sel(member=member).values)
+        np.testing.assert_allclose(mc.speed_rpm.values[mid], n[mid], rtol=5e-3)
+    assert load_simulated(force_run, reference="ring").reference == m.reference
 
 
 def test_compare_against_the_forces_of_a_run_without_sensor(measured_file, force_run, tmp_path,
