@@ -104,7 +104,7 @@ def test_a_dask_scheduler_is_reached_and_runs_the_tasks():
     import distributed
 
     with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=False,
-                                  dashboard_address=None) as cluster, \
+                                  dashboard_address=":0") as cluster, \
             executor_for(scheduler=cluster.scheduler_address, connect_timeout=5.0) as (ex, n):
         assert n == 1
         assert ex.submit(pow, 2, 10).result(timeout=30) == 1024
