@@ -61,7 +61,7 @@ from gearvib.report.case import (
     rise_table_rows,
 )
 from gearvib.report.document import FigureImages
-from gearvib.report.figures import Label, place_labels
+from gearvib.report.figures import Label, natural_frequency_lines, place_labels
 from gearvib.report.html import render_html
 from gearvib.report.pdf import write_pdf
 from gearvib.report.runner import check_output_dir
@@ -838,15 +838,7 @@ def sonogram_figure(mc: MeasuredCase, figsize: tuple[float, float] = (7.5, 6.2)
             else:
                 labels.append(Label(tag, (fmax, float(fmax / (k * f_ref))), ((3, -4), (3, 5)),
                                     {**style, "ha": "left", "va": "center"}))
-    named: list[tuple[float, str]] = []
-    for f, n in sorted(zip(mc.natural_frequencies_hz, mc.mode_names, strict=True)):
-        if f > fmax:
-            continue
-        ax.axvline(f, color="C1", lw=0.9, ls=":")
-        if named and abs(f - named[-1][0]) <= 1e-6 * f:
-            named[-1] = (named[-1][0], f"{named[-1][1]}={n}")
-        else:
-            named.append((float(f), n))
+    named = natural_frequency_lines(ax, mc.natural_frequencies_hz, mc.mode_names, fmax)
     for f, n in named:
         labels.append(Label(n, (f, lo), ((0, 3), (0, 14)),
                             {"color": "C1", "fontsize": 7, "ha": "center", "va": "bottom",

@@ -1,4 +1,4 @@
-"""The rise, crossing and region rows that the simulated and the measured reports share."""
+"""The table rows and map lines that the simulated and the measured reports share."""
 
 from __future__ import annotations
 
@@ -69,3 +69,14 @@ def test_region_row():
     row = region.table_row()
     assert row == ("900–1100", "1000", "500", "12.3", "2", "forced resonance: 2 f_mesh = f5 (2)")
     assert len(row) == len(REGION_HEADER)
+
+
+def test_natural_frequency_lines_merge_repeated_frequencies():
+    from gearvib.report.figures import natural_frequency_lines
+
+    drawn = []
+    ax = SimpleNamespace(axvline=lambda f, **style: drawn.append((f, style["ls"])))
+    named = natural_frequency_lines(ax, [300.0, 100.0, 100.00001, 5000.0], ["f3", "f1", "f2", "f9"],
+                                    fmax=1000.0)
+    assert named == [(100.0, "f1=f2"), (300.0, "f3")]
+    assert drawn == [(100.0, ":"), (100.00001, ":"), (300.0, ":")]
