@@ -70,6 +70,24 @@ def _default_table() -> np.ndarray:
     return kernel_table()
 
 
+@numba.njit(cache=True, inline="always")
+def _sum4(prod, n):  # pragma: no cover - compiled
+    # sum of prod[:n] (n a multiple of 4) as four partial sums over k = 4 m + q in increasing m,
+    # then (a0 + a1) + (a2 + a3): a fixed order with no serial chain of additions (inlined in
+    # the caller's loop by numba)
+    a0 = 0.0
+    a1 = 0.0
+    a2 = 0.0
+    a3 = 0.0
+    for kk in range(n // 4):
+        k = 4 * kk
+        a0 += prod[k]
+        a1 += prod[k + 1]
+        a2 += prod[k + 2]
+        a3 += prod[k + 3]
+    return (a0 + a1) + (a2 + a3)
+
+
 @numba.njit(cache=True, error_model="numpy")  # no zero-division checks (none can occur)
 def _interpolate(x, start, n_total, pos, table, out):  # pragma: no cover - compiled
     n_ch = x.shape[0]
@@ -98,62 +116,27 @@ def _interpolate(x, start, n_total, pos, table, out):  # pragma: no cover - comp
             seg = x[0, first - start : first - start + n_taps]
             for k in range(n_taps):
                 prod[k] = ((((c4[k] * u + c3[k]) * u + c2[k]) * u + c1[k]) * u + c0[k]) * seg[k]
-            a0 = 0.0
-            a1 = 0.0
-            a2 = 0.0
-            a3 = 0.0
-            for kk in range(n_taps // 4):
-                k = 4 * kk
-                a0 += prod[k]
-                a1 += prod[k + 1]
-                a2 += prod[k + 2]
-                a3 += prod[k + 3]
-            out[0, i] = (a0 + a1) + (a2 + a3)
+            out[0, i] = _sum4(prod, n_taps)
             continue
         for k in range(n_taps):  # Horner, degree 4 (the table's), vectorised over the taps
             w[k] = (((c4[k] * u + c3[k]) * u + c2[k]) * u + c1[k]) * u + c0[k]
-        if inside:
-            # products in one vectorised pass, then four partial sums in a fixed order
-            # (no serial chain of additions); n_taps is a multiple of 4
+        if inside:  # products in one vectorised pass, then the four partial sums
             o = first - start
             for c in range(n_ch):
                 seg = x[c, o : o + n_taps]
                 for k in range(n_taps):
                     prod[k] = w[k] * seg[k]
-                a0 = 0.0
-                a1 = 0.0
-                a2 = 0.0
-                a3 = 0.0
-                for kk in range(n_taps // 4):
-                    k = 4 * kk
-                    a0 += prod[k]
-                    a1 += prod[k + 1]
-                    a2 += prod[k + 2]
-                    a3 += prod[k + 3]
-                out[c, i] = (a0 + a1) + (a2 + a3)
+                out[c, i] = _sum4(prod, n_taps)
         else:  # near the ends of the record: samples beyond them equal the end samples
             for c in range(n_ch):
-                a0 = 0.0
-                a1 = 0.0
-                a2 = 0.0
-                a3 = 0.0
-                for kk in range(n_taps // 4):
-                    for q in range(4):
-                        j = first + 4 * kk + q
-                        if j < 0:
-                            j = 0
-                        elif j > n_total - 1:
-                            j = n_total - 1
-                        v = w[4 * kk + q] * x[c, j - start]
-                        if q == 0:
-                            a0 += v
-                        elif q == 1:
-                            a1 += v
-                        elif q == 2:
-                            a2 += v
-                        else:
-                            a3 += v
-                out[c, i] = (a0 + a1) + (a2 + a3)
+                for k in range(n_taps):
+                    j = first + k
+                    if j < 0:
+                        j = 0
+                    elif j > n_total - 1:
+                        j = n_total - 1
+                    prod[k] = w[k] * x[c, j - start]
+                out[c, i] = _sum4(prod, n_taps)
 
 
 def interpolate(

@@ -23,6 +23,8 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
+from gearvib.checks import TABLE, check_integer, check_number
+from gearvib.checks import short as _short
 from gearvib.faults.description import FaultError, faults_from_list
 from gearvib.geometry import Toothing
 from gearvib.paths import exists, is_file
@@ -176,35 +178,14 @@ def _require(table: dict, key: str, where: str) -> Any:
     return table[key]
 
 
-def _short(value: Any) -> str:
-    """``repr`` of a value, shortened for a one-line message."""
-    text = repr(value)
-    return text if len(text) <= 40 else text[:37] + "..."
-
-
 def _number(value: Any, where: str, *, low: float | None = None, high: float | None = None,
             strict: bool = False) -> float:
     """A finite number (a bool, a string or a number beyond the float range is refused).
 
     ``low``/``high``: admissible bounds (``strict``: ``> low``).
     """
-    if isinstance(value, bool) or not isinstance(value, int | float):
-        raise ConfigError(f"{where} must be a number, got {_short(value)}")
-    try:
-        v = float(value)
-    except OverflowError:
-        raise ConfigError(f"{where} = {_short(value)} is not admissible (admissible: a finite "
-                          "number)") from None
-    if math.isnan(v):
-        raise ConfigError(f"{where} is NaN; admissible: a finite number")
-    if not math.isfinite(v):
-        raise ConfigError(f"{where} = {v!r} is not admissible (admissible: a finite number)")
-    if low is not None and (v < low or (strict and v == low)):
-        rel = ">" if strict else ">="
-        raise ConfigError(f"{where} = {v!r} is not admissible (admissible: {rel} {low:g})")
-    if high is not None and v > high:
-        raise ConfigError(f"{where} = {v!r} is not admissible (admissible: <= {high:g})")
-    return v
+    return check_number(value, where, low=low, high=high, low_open=strict, error=ConfigError,
+                        wording=TABLE)
 
 
 def _finite(value: Any, where: str) -> float:
@@ -375,15 +356,7 @@ def _operation(cfg: dict) -> dict:
 def _integer(value: Any, where: str, *, low: int | None = None, high: int | None = None
              ) -> int:
     """An integer key (a float with a fraction, a bool or a string is refused)."""
-    if isinstance(value, bool) or not isinstance(value, int | float) or (
-            isinstance(value, float) and not value.is_integer()):
-        raise ConfigError(f"{where} must be an integer, got {_short(value)}")
-    v = int(value)
-    if low is not None and v < low:
-        raise ConfigError(f"{where} = {_short(v)} is not admissible (admissible: >= {low})")
-    if high is not None and v > high:
-        raise ConfigError(f"{where} = {_short(v)} is not admissible (admissible: <= {high})")
-    return v
+    return check_integer(value, where, low=low, high=high, error=ConfigError, wording=TABLE)
 
 
 def _tooth_number(value: Any, where: str) -> int:

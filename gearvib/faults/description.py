@@ -31,7 +31,6 @@ and an error names the key and the admissible values.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -39,6 +38,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from gearvib.checks import ITEM, check_integer, check_number
 from gearvib.paths import is_file
 
 __all__ = [
@@ -82,33 +82,14 @@ def _where(d: Mapping, index: int | None) -> str:
 
 def _number(value: Any, where: str, key: str, *, low: float | None = None,
             high: float | None = None, low_open: bool = False) -> float:
-    if isinstance(value, bool) or not isinstance(value, int | float | np.integer | np.floating):
-        raise FaultError(f"{where}: {key} must be a number, got {value!r}")
-    try:
-        v = float(value)
-    except OverflowError:  # an integer of hundreds of digits
-        raise FaultError(f"{where}: {key} = {str(value)[:20]}... ({len(str(value))} digits) "
-                         "is not admissible (admissible: a finite number)") from None
-    if not math.isfinite(v):
-        raise FaultError(f"{where}: {key} = {v!r} is not admissible (admissible: finite)")
-    bad = (low is not None and (v < low or (low_open and v == low))) or (
-        high is not None and v > high)
-    if bad:
-        lo = "" if low is None else f"{low:g} {'<' if low_open else '<='} "
-        hi = "" if high is None else f" <= {high:g}"
-        raise FaultError(f"{where}: {key} = {v!r} is not admissible (admissible: "
-                         f"{lo}{key}{hi})")
-    return v
+    return check_number(value, f"{where}: {key}", low=low, high=high, low_open=low_open,
+                        symbol=key, error=FaultError,
+                        types=(int, float, np.integer, np.floating), wording=ITEM)
 
 
 def _integer(value: Any, where: str, key: str, *, low: int = 0) -> int:
-    if isinstance(value, bool) or not isinstance(value, int | np.integer | float) or (
-            isinstance(value, float) and not value.is_integer()):
-        raise FaultError(f"{where}: {key} must be an integer, got {value!r}")
-    v = int(value)
-    if v < low:
-        raise FaultError(f"{where}: {key} = {v} is not admissible (admissible: >= {low})")
-    return v
+    return check_integer(value, f"{where}: {key}", low=low, error=FaultError,
+                         types=(int, float, np.integer), wording=ITEM)
 
 
 def _name(value: Any, where: str, key: str) -> str:

@@ -29,7 +29,7 @@ from __future__ import annotations
 import json
 import math
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -43,6 +43,7 @@ from analysis.instability import (
     PARAMETRIC,
     UNEXPLAINED,
     Candidates,
+    Crossing,
     PeakLabels,
     Resonances,
     detect_resonances,
@@ -75,6 +76,7 @@ __all__ = [
     "MARKER_BUDGET",
     "PAPER_SPEEDS_RPM",
     "PLANET_SIGNAL_GROWTH_DB",
+    "REGION_HEADER",
     "RISE_HEADER",
     "SPOT_RANGE_DB",
     "CaseAnalysis",
@@ -83,8 +85,10 @@ __all__ = [
     "ResonanceRegion",
     "SummedStiffness",
     "analyse_case",
+    "crossing_table_rows",
     "key_speed_rows",
     "resonance_regions",
+    "rise_table_rows",
     "run_description",
     "signed_force",
     "summed_stiffness",
@@ -95,7 +99,11 @@ PAPER_SPEEDS_RPM = (1500.0, 2600.0, 3100.0)
 """Sun speeds at which the paper reads resonances off Figure 11 (case 1) [min^-1]."""
 
 RISE_HEADER = ("speed", "f [Hz]", "on", "rise [dB]", "mechanism: cause", "chance", "evidence")
-"""Columns of the tables of classified rises."""
+"""Columns of the tables of classified rises (rows: :func:`rise_table_rows`)."""
+
+REGION_HEADER = ("speed [min⁻¹]", "peak speed", "f [Hz]", "rise [dB]", "rises",
+                 "mechanisms (rises)")
+"""Columns of the resonance-region tables (rows: :meth:`ResonanceRegion.table_row`)."""
 
 STABILITY_MODES = {
     "full": {"points": None, "floquet": CHART_ACCURACY, "xtol_rel": 1e-8},
@@ -268,6 +276,45 @@ class ResonanceRegion:
         if n_un:
             parts.append(f"{UNEXPLAINED}: {count(n_un, 'rise')}")
         return "; ".join(parts)
+
+    def table_row(self) -> tuple[str, ...]:
+        """The region as a row of a region table (:data:`REGION_HEADER`)."""
+        return (f"{self.rpm_low:.0f}–{self.rpm_high:.0f}", f"{self.rpm_peak:.0f}",
+                f"{self.frequency_hz:.0f}", f"{self.strength_db:.1f}", str(self.n_spots),
+                self.summary)
+
+
+def rise_table_rows(res: Resonances, on_order: Callable[[int], str]) -> list[tuple[str, ...]]:
+    """Rows of a table of classified rises (:data:`RISE_HEADER`), one a rise.
+
+    Parameters
+    ----------
+    res : Resonances
+        The classified rises.
+    on_order : callable
+        ``on_order(i)`` writes the "on" column of rise ``i`` when it lies on an order
+        (``res.order[i]`` not 0); a rise on a natural frequency reads ``f_i``, on a map spot
+        ``spot``.
+    """
+    feature = {"natural frequency": "f_i", "spot": "spot"}
+    rows = []
+    for i in range(len(res)):
+        on = on_order(i) if res.order[i] else feature.get(str(res.feature[i]), "–")
+        rows.append((f"{res.rpm[i]:.0f}", f"{res.frequency[i]:.0f}", on,
+                     f"{res.strength_db[i]:.1f}",
+                     str(res.mechanism[i]).split()[0]
+                     + (f": {res.cause[i]}" if res.cause[i] else ""),
+                     f"{100 * res.coincidence[i]:.0f} %", str(res.note[i])))
+    return rows
+
+
+def crossing_table_rows(crossings: Sequence[Crossing], label: Callable[[Crossing], str]
+                        ) -> list[tuple[str, ...]]:
+    """Rows of a table of predicted crossings: ``label(c)``, natural frequency, speed and what
+    was found there (a rise with its strength)."""
+    return [(label(c), f"{c.frequency_hz:.0f}", f"{c.rpm:.0f}",
+             c.status + (f" ({c.strength_db:.1f} dB)" if c.status == "rise" else ""))
+            for c in crossings]
 
 
 def resonance_regions(res: Resonances, *, rpm_gap: float) -> list[ResonanceRegion]:
@@ -517,25 +564,14 @@ class CaseAnalysis:
         r = self.planet_resonances if planet else self.resonances
         if r is None:
             return []
-        feature = {"natural frequency": "f_i", "spot": "spot"}
         groups = r.groups
         short = {g.name: g.short for g in self.groups}
-        rows = []
-        for i in range(len(r)):
-            on = (f"k={r.order[i]}" + (f" ({short.get(str(groups[i]), groups[i])})"
-                                       if groups[i] else "")
-                  if r.order[i] else feature.get(str(r.feature[i]), "–"))
-            rows.append((f"{r.rpm[i]:.0f}", f"{r.frequency[i]:.0f}", on,
-                         f"{r.strength_db[i]:.1f}",
-                         str(r.mechanism[i]).split()[0]
-                         + (f": {r.cause[i]}" if r.cause[i] else ""),
-                         f"{100 * r.coincidence[i]:.0f} %", str(r.note[i])))
-        return rows
+        return rise_table_rows(r, lambda i: f"k={r.order[i]}" + (
+            f" ({short.get(str(groups[i]), groups[i])})" if groups[i] else ""))
 
     def region_table_rows(self) -> list[tuple[str, ...]]:
         """Rows of the resonance-region table (the same summary the comparison shows)."""
-        return [(f"{r.rpm_low:.0f}–{r.rpm_high:.0f}", f"{r.rpm_peak:.0f}", f"{r.frequency_hz:.0f}",
-                 f"{r.strength_db:.1f}", str(r.n_spots), r.summary) for r in self.regions]
+        return [r.table_row() for r in self.regions]
 
     def peak_rows(self) -> list[tuple[str, ...]]:
         """Rows of the identified-peak table (at most two expressions per peak)."""
@@ -553,11 +589,9 @@ class CaseAnalysis:
     def crossing_rows(self) -> list[tuple[str, ...]]:
         """Predicted crossings of the mesh orders with the natural frequencies."""
         several = self.several_mesh_frequencies
-        return [(f"{c.harmonic} × f_mesh = {c.mode}" + (f" [{c.group}]" if several and c.group
-                                                        else ""),
-                 f"{c.frequency_hz:.0f}", f"{c.rpm:.0f}",
-                 c.status + (f" ({c.strength_db:.1f} dB)" if c.status == "rise" else ""))
-                for c in self.resonances.crossings]
+        return crossing_table_rows(self.resonances.crossings, lambda c: (
+            f"{c.harmonic} × f_mesh = {c.mode}" + (f" [{c.group}]" if several and c.group
+                                                   else "")))
 
     def growth_rows(self) -> list[tuple[str, ...]]:
         """Growth of every Floquet-unstable band during this run."""

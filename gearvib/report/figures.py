@@ -34,6 +34,7 @@ __all__ = [
     "identical_groups",
     "map_level_max",
     "mesh_stiffness_figure",
+    "natural_frequency_lines",
     "order_map_figure",
     "place_labels",
     "sonogram_figure",
@@ -344,6 +345,28 @@ def _marker_selection(ca: CaseAnalysis) -> tuple[np.ndarray, int]:
     return keep, len(r) - keep.size
 
 
+def natural_frequency_lines(ax: Any, frequencies: Any, names: Any, fmax: float
+                            ) -> list[tuple[float, str]]:
+    """Draw the natural frequencies up to ``fmax`` as dotted vertical lines on a map.
+
+    Returns
+    -------
+    list of (float, str)
+        The frequencies drawn and their names, increasing; a repeated frequency (within 1e-6)
+        is one line named ``f3=f4``.
+    """
+    named: list[tuple[float, str]] = []
+    for f, n in sorted(zip(frequencies, names, strict=True)):
+        if f > fmax:
+            continue
+        ax.axvline(f, color="C1", lw=0.9, ls=":")
+        if named and abs(f - named[-1][0]) <= 1e-6 * f:
+            named[-1] = (named[-1][0], f"{named[-1][1]}={n}")
+        else:
+            named.append((float(f), n))
+    return named
+
+
 def sonogram_figure(ca: CaseAnalysis, *, level_max: float | None = None,
                     figsize: tuple[float, float] = (7.5, 6.2)) -> Figure:
     """Rpm-frequency map of a tooth force with mesh orders and natural frequencies (Fig. 11).
@@ -388,15 +411,7 @@ def sonogram_figure(ca: CaseAnalysis, *, level_max: float | None = None,
                                     ((3, -4), (3, 5)), {**style, "ha": "left",
                                                         "va": "center"}))
     # natural frequencies: one dotted line each, names at the bottom (clusters together)
-    names: list[tuple[float, str]] = []
-    for f, n in sorted(zip(ca.natural_frequencies_hz, ca.mode_names, strict=True)):
-        if f > fmax:
-            continue
-        ax.axvline(f, color="C1", lw=0.9, ls=":")
-        if names and abs(f - names[-1][0]) <= 1e-6 * f:
-            names[-1] = (names[-1][0], names[-1][1] + "=" + n)
-        else:
-            names.append((float(f), n))
+    names = natural_frequency_lines(ax, ca.natural_frequencies_hz, ca.mode_names, fmax)
     for f, n in names:
         labels.append(Label(n, (f, lo), ((0, 3), (0, 15), (0, 27), (0, 39)),
                             {"color": "#ffb000", "fontsize": 7.5, "ha": "center",

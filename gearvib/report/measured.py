@@ -52,9 +52,16 @@ from gearvib.catalogue import gear_set_catalogue
 from gearvib.config import GearSet, load_gearset
 from gearvib.io import atomic_write
 from gearvib.modal import modal_analysis
-from gearvib.report.case import RISE_HEADER, ResonanceRegion, resonance_regions
+from gearvib.report.case import (
+    REGION_HEADER,
+    RISE_HEADER,
+    ResonanceRegion,
+    crossing_table_rows,
+    resonance_regions,
+    rise_table_rows,
+)
 from gearvib.report.document import FigureImages
-from gearvib.report.figures import Label, place_labels
+from gearvib.report.figures import Label, natural_frequency_lines, place_labels
 from gearvib.report.html import render_html
 from gearvib.report.pdf import write_pdf
 from gearvib.report.runner import check_output_dir
@@ -90,8 +97,6 @@ TITLES = {"measurement": "Measurement and speed reference",
           "resonances": "Resonances and their classification",
           "provenance": "Provenance"}
 
-REGION_HEADER = ("speed [min⁻¹]", "peak speed", "f [Hz]", "rise [dB]", "rises",
-                 "mechanisms (rises)")
 PEAK_HEADER = ("peak", "level [dB]", "best explanation", "deviation", "window", "chance")
 
 MIN_SPEED_RATIO = 1.3
@@ -302,38 +307,26 @@ class MeasuredCase:
         r = self.resonances
         if r is None:
             return []
-        feature = {"natural frequency": "f_i", "spot": "spot"}
         groups = r.groups
-        rows = []
-        for i in range(len(r)):
-            if r.order[i] and not self.has_gearset:
-                on = str(groups[i])
-            elif r.order[i]:
-                on = f"k={r.order[i]}" + (f" ({groups[i]})" if groups[i] and len(
-                    self.mesh_groups) > 1 else "")
-            else:
-                on = feature.get(str(r.feature[i]), "–")
-            rows.append((f"{r.rpm[i]:.0f}", f"{r.frequency[i]:.0f}", on,
-                         f"{r.strength_db[i]:.1f}",
-                         str(r.mechanism[i]).split()[0]
-                         + (f": {r.cause[i]}" if r.cause[i] else ""),
-                         f"{100 * r.coincidence[i]:.0f} %", str(r.note[i])))
-        return rows
+        several = len(self.mesh_groups) > 1
+
+        def on_order(i: int) -> str:
+            if not self.has_gearset:
+                return str(groups[i])
+            return f"k={r.order[i]}" + (f" ({groups[i]})" if groups[i] and several else "")
+
+        return rise_table_rows(r, on_order)
 
     def region_table_rows(self) -> list[tuple[str, ...]]:
         """Rows of the resonance-region table."""
-        return [(f"{r.rpm_low:.0f}–{r.rpm_high:.0f}", f"{r.rpm_peak:.0f}", f"{r.frequency_hz:.0f}",
-                 f"{r.strength_db:.1f}", str(r.n_spots), r.summary) for r in self.regions]
+        return [r.table_row() for r in self.regions]
 
     def crossing_rows(self) -> list[tuple[str, ...]]:
         """Predicted crossings of the mesh (or shaft) orders with the natural frequencies."""
         if self.resonances is None:
             return []
-        return [(f"{c.harmonic} × f_mesh = {c.mode}" if self.has_gearset else
-                 f"{c.group} = {c.mode}",
-                 f"{c.frequency_hz:.0f}", f"{c.rpm:.0f}",
-                 c.status + (f" ({c.strength_db:.1f} dB)" if c.status == "rise" else ""))
-                for c in self.resonances.crossings]
+        return crossing_table_rows(self.resonances.crossings, lambda c: (
+            f"{c.harmonic} × f_mesh = {c.mode}" if self.has_gearset else f"{c.group} = {c.mode}"))
 
     def to_dataset(self) -> xr.Dataset:
         """Spectrum, order spectrum and peak identification as one CF Dataset."""
@@ -845,15 +838,7 @@ def sonogram_figure(mc: MeasuredCase, figsize: tuple[float, float] = (7.5, 6.2)
             else:
                 labels.append(Label(tag, (fmax, float(fmax / (k * f_ref))), ((3, -4), (3, 5)),
                                     {**style, "ha": "left", "va": "center"}))
-    named: list[tuple[float, str]] = []
-    for f, n in sorted(zip(mc.natural_frequencies_hz, mc.mode_names, strict=True)):
-        if f > fmax:
-            continue
-        ax.axvline(f, color="C1", lw=0.9, ls=":")
-        if named and abs(f - named[-1][0]) <= 1e-6 * f:
-            named[-1] = (named[-1][0], f"{named[-1][1]}={n}")
-        else:
-            named.append((float(f), n))
+    named = natural_frequency_lines(ax, mc.natural_frequencies_hz, mc.mode_names, fmax)
     for f, n in named:
         labels.append(Label(n, (f, lo), ((0, 3), (0, 14)),
                             {"color": "C1", "fontsize": 7, "ha": "center", "va": "bottom",

@@ -18,6 +18,7 @@ from typing import Any
 from gearvib.report.case import (
     MARKER_BUDGET,
     PLANET_SIGNAL_GROWTH_DB,
+    REGION_HEADER,
     RISE_HEADER,
     SPOT_RANGE_DB,
     CaseAnalysis,
@@ -90,8 +91,6 @@ FLOQUET_HEADER = ("from [min⁻¹]", "to [min⁻¹]", "width [min⁻¹]", "f_mes
                   "candidate", "mechanism", "evidence")
 CANDIDATE_HEADER = ("speed [min⁻¹]", "f_mesh [Hz]", "kind", "n", "label", "allowed",
                     "Floquet region")
-REGION_HEADER = ("speed [min⁻¹]", "peak speed", "f [Hz]", "rise [dB]", "rises",
-                 "mechanisms (rises)")
 GROWTH_HEADER = ("band [min⁻¹]", "candidate", "time in band [ms]", "growth rate [1/s]",
                  "growth [dB]", "verdict")
 

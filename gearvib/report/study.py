@@ -35,6 +35,8 @@ from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
+from gearvib.checks import RECIPE, check_integer, check_number
+from gearvib.checks import short as _short
 from gearvib.config import ConfigError, check_keys, list_presets, load_config
 from gearvib.memory import require_memory
 from gearvib.simulation.settings import MAX_DURATION, MAX_SPEED_RPM, MAX_TORQUE, MIN_DURATION
@@ -88,36 +90,19 @@ STABILITY = ("full", "coarse", "off")
 at most 80 speeds with looser accuracy, or none."""
 
 
-def _short(value: Any) -> str:
-    text = repr(value)
-    return text if len(text) <= 40 else text[:37] + "..."
-
-
 def _number(value: Any, where: str, *, positive: bool = False, minimum: float | None = None,
             maximum: float | None = None) -> float:
-    if isinstance(value, bool) or not isinstance(value, int | float):
-        raise ConfigError(f"{where} must be a number, got {_short(value)}")
-    try:
-        v = float(value)
-    except OverflowError:
-        v = math.inf
-    if not math.isfinite(v):
-        raise ConfigError(f"{where} = {_short(value)}; admissible: a finite number")
-    if positive and not v > 0:
-        raise ConfigError(f"{where} = {value!r}; admissible: a number > 0")
-    if minimum is not None and v < minimum:
-        raise ConfigError(f"{where} = {value!r}; admissible: a number >= {minimum:g}")
-    if maximum is not None and v > maximum:
-        raise ConfigError(f"{where} = {value!r}; admissible: a number <= {maximum:g}")
+    """A finite number; ``positive`` (> 0) is checked before ``minimum``."""
+    v = check_number(value, where, low=0.0 if positive else minimum, low_open=positive,
+                     high=maximum, error=ConfigError, wording=RECIPE)
+    if positive and minimum is not None:
+        check_number(value, where, low=minimum, error=ConfigError, wording=RECIPE)
     return v
 
 
 def _integer(value: Any, where: str, minimum: int, maximum: int | None = None) -> int:
-    if isinstance(value, bool) or not isinstance(value, int) or value < minimum or (
-            maximum is not None and value > maximum):
-        top = f" and <= {maximum}" if maximum is not None else ""
-        raise ConfigError(f"{where} = {_short(value)}; admissible: an integer >= {minimum}{top}")
-    return int(value)
+    return check_integer(value, where, low=minimum, high=maximum, error=ConfigError,
+                         types=(int,), wording=RECIPE)
 
 
 @dataclass(frozen=True)

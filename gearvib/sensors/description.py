@@ -18,7 +18,6 @@ The transmission-path model and the window definitions: :mod:`gearvib.sensors.si
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -26,6 +25,7 @@ from typing import Any
 
 import numpy as np
 
+from gearvib.checks import ITEM, check_number
 from gearvib.paths import is_file
 
 __all__ = [
@@ -63,23 +63,9 @@ MAX_PULSES_PER_REV = 10_000
 
 def _num(value: Any, where: str, key: str, *, low: float | None = None,
          high: float | None = None, low_open: bool = False, high_open: bool = False) -> float:
-    if isinstance(value, bool) or not isinstance(value, int | float | np.integer | np.floating):
-        raise SensorError(f"{where}: {key} must be a number, got {value!r}")
-    try:
-        v = float(value)
-    except OverflowError:  # an integer of hundreds of digits
-        raise SensorError(f"{where}: {key} = {str(value)[:20]}... ({len(str(value))} digits) "
-                          "is not admissible (admissible: a finite number)") from None
-    if not math.isfinite(v):
-        raise SensorError(f"{where}: {key} = {v!r} is not admissible (admissible: finite)")
-    bad = (low is not None and (v < low or (low_open and v == low))) or (
-        high is not None and (v > high or (high_open and v == high)))
-    if bad:
-        lo = "" if low is None else f"{low:g} {'<' if low_open else '<='} "
-        hi = "" if high is None else f" {'<' if high_open else '<='} {high:g}"
-        raise SensorError(f"{where}: {key} = {v!r} is not admissible (admissible: "
-                          f"{lo}{key}{hi})")
-    return v
+    return check_number(value, f"{where}: {key}", low=low, high=high, low_open=low_open,
+                        high_open=high_open, symbol=key, error=SensorError,
+                        types=(int, float, np.integer, np.floating), wording=ITEM)
 
 
 def _name(value: Any, where: str, key: str) -> str:

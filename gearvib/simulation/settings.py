@@ -29,10 +29,11 @@ and the admissible range; command-line options override the keys of the same nam
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
 from typing import Any
 
+from gearvib.checks import RUN, check_number
+from gearvib.checks import short as _short
 from gearvib.config import ConfigError
 from gearvib.simulation.conditions import (
     Conditions,
@@ -74,28 +75,10 @@ MAX_DURATION = 1e7
 
 def _num(value: Any, key: str, *, low: float | None = None, strict: bool = False,
          high: float | None = None) -> float:
-    if isinstance(value, bool) or not isinstance(value, int | float):
-        raise ConfigError(f"[simulation].{key} must be a number, got {_short(value)}")
-    try:
-        v = float(value)
-    except OverflowError:
-        raise ConfigError(f"[simulation].{key} = {_short(value)} is not admissible "
-                          "(admissible: a finite number)") from None
-    if not math.isfinite(v):
-        raise ConfigError(f"[simulation].{key} = {v!r} is not admissible (admissible: finite)")
-    if low is not None and (v < low or (strict and v == low)):
-        bound = f"> {low:g}" if strict else f">= {low:g}"
-        raise ConfigError(f"[simulation].{key} = {v!r} is not admissible (admissible: {bound})")
-    if high is not None and abs(v) > high:
-        raise ConfigError(f"[simulation].{key} = {v!r} is not admissible (admissible: "
-                          f"|{key.split('.')[-1]}| <= {high:g})")
-    return v
-
-
-def _short(value: Any) -> str:
-    """``repr`` of a value, shortened for a one-line message."""
-    text = repr(value)
-    return text if len(text) <= 40 else text[:37] + "..."
+    """``[simulation].key`` as a finite number; ``high`` bounds its magnitude."""
+    return check_number(value, f"[simulation].{key}", low=low, low_open=strict, high=high,
+                        magnitude=True, symbol=key.split(".")[-1], error=ConfigError,
+                        wording=RUN)
 
 
 def _slip(value: Any) -> float:

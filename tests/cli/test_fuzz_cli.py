@@ -45,10 +45,8 @@ from hypothesis import strategies as st
 
 import gearvib.report as report_pkg
 from gearvib.cli import main
-from gearvib.config import gearset_from_dict
 from gearvib.io import read_run
 from gearvib.report.runner import check_output_dir
-from gearvib.report.study import check_report_size, resolve_run
 from tests.gearvib import fuzz_support as fz
 
 REPO = Path(__file__).resolve().parents[2]
@@ -136,12 +134,7 @@ def _fake_run_study(study, out_dir, *, progress=True, duration=None):
     if duration is not None:
         study = study.with_duration(duration)
     out = check_output_dir(out_dir)
-    for case in study.cases:
-        cfg, base = case.load()
-        gearset_from_dict(cfg, base=base)
-        run = resolve_run(study.run, cfg)
-        check_report_size(int(run["duration"] * run["fs_out"]) + 1, run["fs_out"],
-                          study.analysis, case.name)
+    fz.check_study_cases(study)
     paths = SimpleNamespace(html=out / "report.html", pdf=out / "report.pdf")
     return SimpleNamespace(report=paths, runs={})
 

@@ -12,7 +12,10 @@
   one-line message); ``failed`` -- :class:`~gearvib.simulate.SimulationError` (a real
   numerical blow-up or no static equilibrium, exit code 1); ``other`` -- anything else, which
   fails the test.
-* :func:`time_limit` turns a hang into an error (SIGALRM): a hang is "other" too.
+* :func:`time_limit` turns a hang into an error (SIGALRM): a hang is "other" too;
+  :func:`check_call` runs one example under it and checks the outcome.
+* :func:`check_study_cases`: what ``gearvib report`` checks of a study before its first
+  simulation.
 """
 
 from __future__ import annotations
@@ -24,11 +27,12 @@ import os
 import signal
 import sys
 import traceback
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import gearvib
-from gearvib.config import ConfigError
+from gearvib.config import ConfigError, gearset_from_dict
+from gearvib.report.study import Study, check_report_size, resolve_run
 from gearvib.simulation.errors import SimulationError
 
 ENV = os.environ.get("GEARVIB_FUZZ_EXAMPLES")
@@ -119,3 +123,25 @@ def check(test: str, exc: BaseException | None, context: object) -> None:
         assert exc is not None
         detail = "".join(traceback.format_exception(exc))
         raise AssertionError(f"undocumented error for {context!r}:\n{detail}")
+
+
+def check_call(test: str, fn: Callable[[], object], context: object, seconds: float) -> None:
+    """Run ``fn()`` with a time limit of ``seconds`` and :func:`check` its outcome."""
+    err: BaseException | None = None
+    try:
+        with time_limit(seconds):
+            fn()
+    except Exception as exc:
+        err = exc
+    check(test, err, context)
+
+
+def check_study_cases(study: Study) -> None:
+    """Every case's description, run settings and map size, as a study checks them before its
+    first simulation."""
+    for case in study.cases:
+        cfg, base = case.load()
+        gearset_from_dict(cfg, base=base)
+        run = resolve_run(study.run, cfg)
+        check_report_size(int(run["duration"] * run["fs_out"]) + 1, run["fs_out"],
+                          study.analysis, case.name)

@@ -17,12 +17,16 @@ from gearvib.structure import (
     Body,
     MeshSpec,
     Support,
-    ravigneaux,
     simple_planetary,
     two_stage,
-    wolfrom,
 )
-from tests.gearvib.lumped_sets import lumped_planetary
+from tests.gearvib.lumped_sets import (
+    WOLFROM_TEETH,
+    lumped_planetary,
+    nominal_bodies,
+    ravigneaux_set,
+    wolfrom_set,
+)
 
 
 def test_paper_case1_kinematics_and_mesh_frequency():
@@ -89,20 +93,9 @@ def test_rigid_bearing_is_the_limit_of_a_stiff_elastic_bearing():
         assert np.min(np.abs(soft.frequencies_hz - f) / f) < 1e-3
 
 
-def _bodies(*names):
-    return [Body(n, "central", 2.0, 1e-2, Support()) for n in names]
-
-
 def test_wolfrom_ratio_matches_willis():
-    zs, zr1, zr2, zp1, zp2 = 18, -72, -69, 27, 24
-    sun, r1, r2 = _bodies("sun", "ring1", "ring2")
-    car = Body("carrier", "carrier", 3.0, 2e-2, Support())
-    pl = Body("planet", "planet", 0.5, 2e-4, Support(), carrier="carrier")
-    spec = MeshSpec(ConstantStiffness(3e8))
-    gs = wolfrom(z_sun=zs, z_ring1=zr1, z_ring2=zr2, z_planet1=zp1, z_planet2=zp2,
-                 module=2e-3, module2=2e-3 * (zr1 + zp1) / (zr2 + zp2), sun=sun, ring1=r1,
-                 ring2=r2, carrier=car, planet=pl, sun_mesh=spec, ring_mesh=spec)
-    model = assemble(gs)
+    zs, zr1, zr2, zp1, zp2 = WOLFROM_TEETH
+    model = assemble(wolfrom_set())
     n_c = zs / (zs - zr1)
     expected = n_c * (1 - zp2 * zr1 / (zp1 * zr2))
     assert model.kinematic_ratios["ring2"] == pytest.approx(expected, rel=1e-9)
@@ -110,15 +103,7 @@ def test_wolfrom_ratio_matches_willis():
 
 
 def test_ravigneaux_assembles_with_planet_planet_meshes():
-    s1, s2, ring = _bodies("sun_small", "sun_large", "ring")
-    car = Body("carrier", "carrier", 3.0, 2e-2, Support())
-    ps = Body("short", "planet", 0.3, 1e-4, Support(), carrier="carrier")
-    pl = Body("long", "planet", 0.5, 2e-4, Support(), carrier="carrier")
-    spec = MeshSpec(ConstantStiffness(3e8))
-    gs = ravigneaux(z_sun_small=30, z_sun_large=36, z_ring=-84, z_planet_short=18,
-                    z_planet_long=24, module=2e-3, sun_small=s1, sun_large=s2, ring=ring,
-                    carrier=car, planet_short=ps, planet_long=pl, sun_mesh=spec,
-                    ring_mesh=spec, planet_mesh=spec)
+    gs = ravigneaux_set()
     model = assemble(gs)
     assert any(n.startswith("short1-long1") for n in model.mesh_names)
     # small sun in, large sun fixed, ring out: closed form of the Ravigneaux 2nd gear
@@ -138,7 +123,7 @@ def test_ravigneaux_assembles_with_planet_planet_meshes():
 
 def test_two_stage_ratio_is_the_product():
     def stage():
-        sun, ring = _bodies("sun", "ring")
+        sun, ring = nominal_bodies("sun", "ring")
         car = Body("carrier", "carrier", 3.0, 2e-2, Support())
         pl = Body("planet", "planet", 0.5, 2e-4, Support(), carrier="carrier")
         k = RectangularStiffness(2e8, 3e8, 1.6)
@@ -177,7 +162,7 @@ def test_time_varying_lumped_mesh_needs_tooth_numbers():
 
 
 def test_helical_meshes_add_axial_coordinates_and_couple_them():
-    sun, ring = _bodies("sun", "ring")
+    sun, ring = nominal_bodies("sun", "ring")
     car = Body("carrier", "carrier", 3.0, 2e-2, Support(radial=1e8, axial=1e8))
     pl = Body("planet", "planet", 0.5, 2e-4, Support(radial=1e8, tangential=1e8, axial=5e7),
               carrier="carrier")

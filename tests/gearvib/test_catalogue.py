@@ -17,15 +17,19 @@ from gearvib.assembly import assemble
 from gearvib.catalogue import gear_set_catalogue
 from gearvib.cli import main
 from gearvib.config import load_gearset
-from gearvib.stiffness import ConstantStiffness, RectangularStiffness
+from gearvib.stiffness import RectangularStiffness
 from gearvib.structure import (
     Body,
     MeshSpec,
     Support,
-    ravigneaux,
     simple_planetary,
     two_stage,
-    wolfrom,
+)
+from tests.gearvib.lumped_sets import (
+    WOLFROM_TEETH,
+    nominal_bodies,
+    ravigneaux_set,
+    wolfrom_set,
 )
 
 
@@ -39,12 +43,8 @@ def line(cat, family, harmonic=1, sideband=0, member=None):
     return int(idx[0])
 
 
-def _central(*names):
-    return [Body(n, "central", 2.0, 1e-2, Support()) for n in names]
-
-
 def _simple(zs=21, zr=-75, zp=27, n=4):
-    sun, ring = _central("sun", "ring")
+    sun, ring = nominal_bodies("sun", "ring")
     car = Body("carrier", "carrier", 3.0, 2e-2, Support())
     pl = Body("planet", "planet", 0.5, 2e-4, Support(), carrier="carrier")
     k = RectangularStiffness(2e8, 3e8, 1.6)
@@ -112,14 +112,8 @@ def test_four_planet_set_and_phasing_from_the_simulator_mesh_positions():
 
 
 def test_wolfrom_two_mesh_frequencies():
-    zs, zr1, zr2, zp1, zp2 = 18, -72, -69, 27, 24
-    sun, r1, r2 = _central("sun", "ring1", "ring2")
-    car = Body("carrier", "carrier", 3.0, 2e-2, Support())
-    pl = Body("planet", "planet", 0.5, 2e-4, Support(), carrier="carrier")
-    spec = MeshSpec(ConstantStiffness(3e8))
-    gs = wolfrom(z_sun=zs, z_ring1=zr1, z_ring2=zr2, z_planet1=zp1, z_planet2=zp2,
-                 module=2e-3, module2=2e-3 * (zr1 + zp1) / (zr2 + zp2), sun=sun, ring1=r1,
-                 ring2=r2, carrier=car, planet=pl, sun_mesh=spec, ring_mesh=spec)
+    zs, zr1, zr2, zp1, zp2 = WOLFROM_TEETH
+    gs = wolfrom_set()
     cat = gear_set_catalogue(gs, speed_rpm=600.0)
     # hand-worked: ring 1 fixed, sun = 1
     n_c = zs / (zs - zr1)                                  # 0.2
@@ -145,15 +139,7 @@ def test_wolfrom_two_mesh_frequencies():
 
 
 def test_ravigneaux_one_mesh_frequency_two_planet_groups():
-    s1, s2, ring = _central("sun_small", "sun_large", "ring")
-    car = Body("carrier", "carrier", 3.0, 2e-2, Support())
-    ps = Body("short", "planet", 0.3, 1e-4, Support(), carrier="carrier")
-    pl = Body("long", "planet", 0.5, 2e-4, Support(), carrier="carrier")
-    spec = MeshSpec(ConstantStiffness(3e8))
-    gs = ravigneaux(z_sun_small=30, z_sun_large=36, z_ring=-84, z_planet_short=18,
-                    z_planet_long=24, module=2e-3, sun_small=s1, sun_large=s2, ring=ring,
-                    carrier=car, planet_short=ps, planet_long=pl, sun_mesh=spec,
-                    ring_mesh=spec, planet_mesh=spec)
+    gs = ravigneaux_set()
     cat = gear_set_catalogue(gs, speed_rpm=1000.0)
     # large sun fixed, small sun in: z_s1 (1 - n_c) = z_s2 n_c (both equal the mesh rate,
     # through short and long planet), so n_c = 30/66 and every mesh has one frequency

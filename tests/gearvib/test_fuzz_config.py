@@ -34,7 +34,7 @@ from hypothesis import strategies as st
 from gearvib.assembly import assemble
 from gearvib.config import gearset_from_dict, list_presets, load_config
 from gearvib.modal import modal_analysis
-from gearvib.report.study import check_report_size, load_study, resolve_run
+from gearvib.report.study import load_study
 from gearvib.simulation.settings import conditions_from_settings, read_run_settings
 from tests.gearvib import fuzz_support as fz
 from tests.gearvib.test_literature_models import lin_parker
@@ -196,13 +196,7 @@ def test_every_preset_builds_unmutated():
                                                                  max_size=3))
 def test_mutated_descriptions_give_only_documented_errors(name, mutations):
     cfg = mutate(PRESETS[name], mutations)
-    err = None
-    try:
-        with fz.time_limit(30.0):
-            build(cfg)
-    except Exception as exc:
-        err = exc
-    fz.check("descriptions", err, (name, mutations))
+    fz.check_call("descriptions", lambda: build(cfg), (name, mutations), 30.0)
 
 
 @pytest.mark.parametrize("path, value, match", [
@@ -279,13 +273,7 @@ def to_toml(doc: dict) -> str:
 
 def check_study(path: Path) -> None:
     """What ``gearvib report STUDY.toml`` checks before its first simulation."""
-    study = load_study(path)
-    for case in study.cases:
-        cfg, base = case.load()
-        gearset_from_dict(cfg, base=base)
-        run = resolve_run(study.run, cfg)
-        check_report_size(int(run["duration"] * run["fs_out"]) + 1, run["fs_out"],
-                          study.analysis, case.name)
+    fz.check_study_cases(load_study(path))
 
 
 def test_every_recipe_passes_its_checks_unmutated(tmp_path):
@@ -304,13 +292,7 @@ def test_every_recipe_passes_its_checks_unmutated(tmp_path):
                                                                  max_size=3))
 def test_mutated_study_recipes_give_only_documented_errors(name, mutations):
     doc = mutate(RECIPES[name], mutations)
-    err = None
     with tempfile.TemporaryDirectory(prefix="gearvib-recipe-fuzz-") as d:
         p = Path(d) / "study.toml"
         p.write_text(to_toml(doc))
-        try:
-            with fz.time_limit(30.0):
-                check_study(p)
-        except Exception as exc:
-            err = exc
-    fz.check("study recipes", err, (name, mutations))
+        fz.check_call("study recipes", lambda: check_study(p), (name, mutations), 30.0)

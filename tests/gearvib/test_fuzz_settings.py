@@ -118,10 +118,4 @@ def test_run_settings_give_only_documented_errors(name, edits, cli):
             sim.pop(key, None)
         else:
             sim[key] = value
-    err = None
-    try:
-        with fz.time_limit(60.0):
-            run(name, sim, cli)
-    except Exception as exc:
-        err = exc
-    fz.check("run settings", err, (name, sim, cli))
+    fz.check_call("run settings", lambda: run(name, sim, cli), (name, sim, cli), 60.0)

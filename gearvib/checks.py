@@ -1,0 +1,192 @@
+"""Checks of the numbers in a description: type, finiteness and admissible range.
+
+Gear-set tables (:mod:`gearvib.config`), run settings (:mod:`gearvib.simulation.settings`),
+study recipes (:mod:`gearvib.report.study`) and the fault and sensor descriptions
+(:mod:`gearvib.faults.description`, :mod:`gearvib.sensors.description`) take numbers from TOML
+files and from Python. :func:`check_number` and :func:`check_integer` apply one set of rules to
+them: a bool or a string is not a number, an integer too large for a float is refused, so are NaN
+and infinities, and the bounds are checked. A refused value raises the caller's error class with
+a message that names the key, the value and what is admissible.
+
+The messages of those layers have different wordings, which their tests and their users rely
+on; a :class:`Wording` selects one (:data:`TABLE`, :data:`RUN`, :data:`RECIPE`, :data:`ITEM`).
+
+Examples
+--------
+>>> check_number(0.5, "[simulation].duration", low=1e-6, wording=RUN)
+0.5
+>>> check_number(-1, "[[fault]] #1 (crack): depth", low=0.0, high=1.0, symbol="depth",
+...              wording=ITEM)
+Traceback (most recent call last):
+...
+ValueError: [[fault]] #1 (crack): depth = -1.0 is not admissible (admissible: 0 <= depth <= 1)
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+__all__ = [
+    "ITEM",
+    "RECIPE",
+    "RUN",
+    "TABLE",
+    "Wording",
+    "check_integer",
+    "check_number",
+    "short",
+]
+
+
+def short(value: Any) -> str:
+    """``repr`` of a value, shortened to 40 characters for a one-line message."""
+    text = repr(value)
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
+@dataclass(frozen=True)
+class Wording:
+    """How a refused number is worded.
+
+    Attributes
+    ----------
+    finite : str
+        What a NaN or an infinity is told is admissible.
+    nan_named : bool
+        A NaN is refused as ``"<name> is NaN; admissible: <finite>"``.
+    interval : bool
+        A number's admissible range is written whole, around the quantity's ``symbol``
+        (``0 <= depth <= 1``), instead of by the one bound it violates (``>= 0``).
+    full : bool
+        Refused values are shown whole (``repr``; an integer too large for a float by its first
+        20 digits and its number of digits) instead of shortened to 40 characters.
+    terse : bool
+        ``"<name> = <value>; admissible: a number >= 0"`` instead of ``"<name> = <value> is not
+        admissible (admissible: >= 0)"``, with the value as given; an integer is then refused
+        with one message whatever is wrong.
+    """
+
+    finite: str = "a finite number"
+    nan_named: bool = False
+    interval: bool = False
+    full: bool = False
+    terse: bool = False
+
+    def shown(self, value: Any) -> str:
+        """The value as a message shows it."""
+        return repr(value) if self.full else short(value)
+
+    def refusal(self, name: str, shown: str, admissible: str) -> str:
+        """The message refusing ``name = shown``."""
+        if self.terse:
+            return f"{name} = {shown}; admissible: {admissible}"
+        return f"{name} = {shown} is not admissible (admissible: {admissible})"
+
+
+TABLE = Wording(nan_named=True)
+"""Gear-set tables (``[[body]]``, ``[[mesh]]``, ``[stages]`` ...): ``[mesh].phase is NaN``."""
+RUN = Wording(finite="finite")
+"""Run settings (``[simulation]``)."""
+RECIPE = Wording(terse=True)
+"""Study recipes (``[analysis]``, ``[run]``)."""
+ITEM = Wording(finite="finite", interval=True, full=True)
+"""``[[fault]]`` and ``[[sensor]]`` items."""
+
+
+def check_number(value: Any, name: str, *, low: float | None = None,
+                 high: float | None = None, low_open: bool = False, high_open: bool = False,
+                 magnitude: bool = False, symbol: str | None = None,
+                 error: type[Exception] = ValueError, types: tuple[type, ...] = (int, float),
+                 wording: Wording = TABLE) -> float:
+    """Return ``value`` as a finite float in the admissible range; raise ``error`` otherwise.
+
+    Parameters
+    ----------
+    value : Any
+        The value as given (a bool is never a number).
+    name : str
+        The key as the message names it (``"[simulation].duration"``).
+    low, high : float, optional
+        Admissible bounds, ``low <= value <= high``.
+    low_open, high_open : bool
+        The bound itself is not admissible (``low < value``, ``value < high``).
+    magnitude : bool
+        ``high`` bounds ``|value|`` and is written ``|symbol| <= high``.
+    symbol : str, optional
+        The quantity in a written range (``depth`` of ``0 <= depth <= 1``).
+    error : type
+        The exception class raised.
+    types : tuple of type
+        The admissible types (numpy scalars only where the caller lists them).
+    wording : Wording
+        How the message is worded.
+
+    Returns
+    -------
+    float
+    """
+    if isinstance(value, bool) or not isinstance(value, types):
+        raise error(f"{name} must be a number, got {wording.shown(value)}")
+    try:
+        v = float(value)
+    except OverflowError:  # an integer of hundreds of digits
+        text = str(value)
+        shown = f"{text[:20]}... ({len(text)} digits)" if wording.full else short(value)
+        raise error(wording.refusal(name, shown, "a finite number")) from None
+    if not math.isfinite(v):
+        if wording.nan_named and math.isnan(v):
+            raise error(f"{name} is NaN; admissible: {wording.finite}")
+        shown = short(value) if wording.terse else repr(v)
+        raise error(wording.refusal(name, shown, wording.finite))
+    too_low = low is not None and (v < low or (low_open and v == low))
+    size = abs(v) if magnitude else v
+    too_high = high is not None and (size > high or (high_open and size == high))
+    if not (too_low or too_high):
+        return v
+    lower = "<" if low_open else "<="
+    upper = "<" if high_open else "<="
+    if wording.interval:
+        lo = "" if low is None else f"{low:g} {lower} "
+        hi = "" if high is None else f" {upper} {high:g}"
+        quantity = f"|{symbol}|" if magnitude else symbol
+        admissible = f"{lo}{quantity}{hi}"
+    elif too_low:
+        admissible = f"{'>' if low_open else '>='} {low:g}"
+    else:
+        admissible = f"|{symbol}| {upper} {high:g}" if magnitude else f"{upper} {high:g}"
+    if wording.terse:
+        raise error(wording.refusal(name, repr(value), f"a number {admissible}"))
+    raise error(wording.refusal(name, repr(v), admissible))
+
+
+def check_integer(value: Any, name: str, *, low: int | None = None, high: int | None = None,
+                  error: type[Exception] = ValueError, types: tuple[type, ...] = (int, float),
+                  wording: Wording = TABLE) -> int:
+    """Return ``value`` as an int in ``low .. high``; raise ``error`` otherwise.
+
+    A float is an integer if it has no fraction (where ``types`` admits floats); the range is
+    written by the bound that is violated (``>= 0``). Parameters as :func:`check_number`.
+
+    Returns
+    -------
+    int
+    """
+    whole = not isinstance(value, bool) and isinstance(value, types) and not (
+        isinstance(value, float) and not value.is_integer())
+    if wording.terse:
+        if not whole or (low is not None and value < low) or (high is not None and value > high):
+            bounds = ([f">= {low}"] if low is not None else []) + (
+                [f"<= {high}"] if high is not None else [])
+            raise error(f"{name} = {short(value)}; admissible: an integer "
+                        f"{' and '.join(bounds)}".rstrip())
+        return int(value)
+    if not whole:
+        raise error(f"{name} must be an integer, got {wording.shown(value)}")
+    v = int(value)
+    if low is not None and v < low:
+        raise error(wording.refusal(name, wording.shown(v), f">= {low}"))
+    if high is not None and v > high:
+        raise error(wording.refusal(name, wording.shown(v), f"<= {high}"))
+    return v
