@@ -8,8 +8,8 @@ and the CPU seconds of each process (user + system) are given beside the wall ti
 processes on the cores the CPU seconds are the steadier figure.
 
 A breakdown of the simulate command follows, measured in one more process that performs the
-command's steps itself with timers in between (and hides the same unused modules as the
-console script, :func:`gearvib.cli.hide_unused_modules`):
+command's steps itself with timers in between (and prepares its process as the console script
+does, :func:`gearvib.cli.prepare_process`: unused modules hidden, one BLAS thread):
 
 * start-up: interpreter start to the first line of the script,
 * imports: the modules the command imports,
@@ -17,7 +17,7 @@ console script, :func:`gearvib.cli.hide_unused_modules`):
 * cache load: the first ``simulate`` minus a second identical one (numba loading its compiled
   kernels from the cache, and its typing registries),
 * simulate: the second ``simulate`` (the computation itself),
-* write: ``to_dataset`` and the atomic netCDF write.
+* write: ``to_plain_dataset`` and the atomic netCDF write (netCDF4, no xarray).
 
 ``--baseline DIR`` runs the same commands against another checkout (e.g. ``/work/main``,
 through ``PYTHONPATH``, its numba cache in a temporary folder) side by side, with ratios.
@@ -40,8 +40,8 @@ _BREAKDOWN = r"""
 import time
 t_start = time.perf_counter()
 import sys
-from gearvib.cli import hide_unused_modules
-hide_unused_modules(["simulate"])
+from gearvib.cli import prepare_process
+prepare_process(["simulate"])
 from gearvib.assembly import assemble
 from gearvib.config import gearset_from_dict, load_config
 from gearvib.io import write_netcdf
@@ -59,7 +59,7 @@ result = simulate(model, cond, **kw)
 t_first = time.perf_counter()
 result = simulate(model, cond, **kw)
 t_second = time.perf_counter()
-write_netcdf(result.to_dataset(), sys.argv[1])
+write_netcdf(result.to_plain_dataset(), sys.argv[1])
 t_write = time.perf_counter()
 print(t_imports - t_start, t_setup - t_imports, (t_first - t_setup) - (t_second - t_first),
       t_second - t_first, t_write - t_second)

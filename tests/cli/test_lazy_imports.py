@@ -159,3 +159,19 @@ def test_hide_unused_modules(argv, hidden):
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True, timeout=60).stdout
     assert set(ast.literal_eval(out)) == hidden
+
+
+@pytest.mark.parametrize("config_file", [False, True])
+def test_yaml_hidden_unless_numba_has_a_config_file_to_read(tmp_path, config_file):
+    if config_file:  # numba reads .numba_config.yaml of the working directory with yaml
+        (tmp_path / ".numba_config.yaml").write_text("debuginfo: 0\n")
+    code = (
+        "import sys\n"
+        "from gearvib.cli import prepare_process\n"
+        "prepare_process(['simulate', 'paper-case1'])\n"
+        "import numba\n"
+        "print(sys.modules.get('yaml', 0) is None)\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True, timeout=60, cwd=tmp_path).stdout
+    assert out.strip().splitlines()[-1] == str(not config_file)
