@@ -10,6 +10,11 @@ written and read in a worker thread that an interrupt abandons (:mod:`gearvib.in
 explains why: xarray's backend locks are not safe against an exception from a signal handler).
 String labels (mesh, flank, ... names) are written as CF label variables ``<dim>_label`` and
 restored by :func:`read_run`; ``time`` is read as float seconds (see :mod:`analysis.cf`).
+
+A :class:`~gearvib.cfdata.PlainDataset` (a run as NumPy arrays,
+:meth:`gearvib.simulate.RunUpResult.to_plain_dataset`) is written with netCDF4 directly,
+making the calls xarray's netCDF4 backend makes for the same Dataset, in the same order: the
+same file, byte for byte, without importing xarray and pandas (``gearvib simulate``).
 """
 
 from __future__ import annotations
