@@ -24,6 +24,10 @@ hidden, one BLAS thread):
 * simulate: the second ``simulate`` (the computation itself),
 * write: ``to_plain_dataset`` and the atomic netCDF write (netCDF4, no xarray).
 
+On Linux the simulate command runs once more per repeat in a process that reads its threads'
+``/proc/<tid>/schedstat``: the time they spent on a CPU and waiting for one; the wall time
+minus the waiting (plus the interpreter's start) estimates the wall time on an idle machine.
+
 ``--importtime`` adds ``python -X importtime`` of the simulate command: the import time of
 each top-level package (its modules' own times, the minimum over the runs).
 
@@ -78,6 +82,42 @@ print(t_imports - t_start, t_setup - t_imports, (t_first - t_setup) - (t_second 
 """
 _PHASES = ("imports", "set-up", "cache load", "simulate", "write")
 
+_SCHED = r"""
+import _thread, os, sys, threading, time
+t_start = time.perf_counter()
+done = []
+
+
+def sched():  # this thread's time on a CPU and waiting for one [ns] (Linux)
+    with open(f"/proc/self/task/{threading.get_native_id()}/schedstat") as f:
+        return [int(x) for x in f.read().split()[:2]]
+
+
+real_start = _thread.start_new_thread
+
+
+def start(fn, args, kwargs=None):  # the netCDF writer thread (gearvib.interrupts)
+    def counted(*a, **k):
+        try:
+            return fn(*a, **k)
+        finally:
+            done.append(sched())
+    return real_start(counted, args, kwargs or {})
+
+
+_thread.start_new_thread = start
+from gearvib.cli import main, prepare_process
+argv = ["simulate", "paper-case1", "-o", sys.argv[1], "--overwrite", "-q"]
+prepare_process(argv)
+code = main(argv)
+on, wait = sched()
+for o, w in done:
+    on, wait = on + o, wait + w
+print(time.perf_counter() - t_start, on / 1e9, wait / 1e9)
+sys.stdout.flush()
+os._exit(code)
+"""
+
 
 def _env(checkout: Path | None, cache: Path | None) -> dict[str, str]:
     env = dict(os.environ)
@@ -115,6 +155,19 @@ def _breakdown(env: dict[str, str], cwd: Path, repeat: int, clock: str) -> list[
         out = subprocess.run([sys.executable, str(script), str(cwd / "b.nc"), clock], env=env,
                              cwd=cwd, capture_output=True, text=True, check=True).stdout
         runs.append([float(x) for x in out.split()])
+    return [list(col) for col in zip(*runs, strict=True)]
+
+
+def _idle_estimate(env: dict[str, str], cwd: Path, repeat: int) -> list[list[float]]:
+    """(wall, on-CPU, waiting for a CPU) of the simulate command run in a process as the console
+    script runs it, from ``/proc/<tid>/schedstat`` of its threads (Linux)."""
+    script = cwd / "sched.py"
+    script.write_text(_SCHED)
+    runs = []
+    for _ in range(repeat):
+        out = subprocess.run([sys.executable, str(script), str(cwd / "s.nc")], env=env,
+                             cwd=cwd, capture_output=True, text=True, check=True).stdout
+        runs.append([float(x) for x in out.splitlines()[-1].split()])  # after "wrote ..."
     return [list(col) for col in zip(*runs, strict=True)]
 
 
@@ -186,6 +239,19 @@ def main() -> None:
             print(f"  {name:<12s} CPU {_summary(c)}  wall {_summary(w)}")
         print(f"  {'sum':<12s} CPU {sum(statistics.median(c) for c in cpu):6.3f}  wall "
               f"{sum(statistics.median(w) for w in wall):6.3f}  (+ interpreter start and exit)")
+        if os.path.exists("/proc/self/task"):
+            start_cpu = [_timed([py, "-c", "pass"], checkouts["this"], work)[1]
+                         for _ in range(args.repeat)]
+            wall, on, wait = _idle_estimate(checkouts["this"], work, args.repeat)
+            idle = [w - q + statistics.median(start_cpu) for w, q in zip(wall, wait, strict=True)]
+            print("\nthe simulate command on a loaded machine, its threads' time from "
+                  "/proc/<tid>/schedstat [s]:\n"
+                  f"  wall after the interpreter's start {_summary(wall)}\n"
+                  f"  on a CPU                           {_summary(on)}\n"
+                  f"  waiting for a CPU                  {_summary(wait)}\n"
+                  f"  estimate for an idle machine       {_summary(idle)}  (wall - waiting + "
+                  "the interpreter's start; waits of the main thread while the writer "
+                  "thread works overlap: a slight underestimate)")
         if args.importtime:
             print("\npython -X importtime of the simulate command: own import times of each "
                   "top-level package [s] (min over the runs)")
