@@ -6,7 +6,9 @@ The package is layered, and imports flow one way only::
     ->  kernels  ->  simulation/*  ->  simulate, io  ->  report, outputs, cli
 
 ``tempfiles`` and ``interrupts`` (temporary-file names, signals, abandonable I/O) import
-nothing of gearvib but each other and are used from ``io`` upwards.
+nothing of gearvib but each other and are used from ``io`` upwards; ``cfdata`` (CF variables as
+NumPy arrays, the content of a run's file without xarray) imports nothing of gearvib and is
+used from ``simulation`` upwards.
 
 The separate top-level package :mod:`analysis` (spectra, orders, instability) never imports
 :mod:`gearvib`.

@@ -26,7 +26,10 @@ from typing import NoReturn
 from gearvib import __version__
 from gearvib.interrupts import Interrupted, exit_now, pending_signal, signals_as_exceptions
 
-__all__ = ["hide_unused_modules", "main", "run"]
+__all__ = ["hide_unused_modules", "main", "prepare_process", "run"]
+
+SINGLE_THREAD_VARIABLES = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")
+"""Thread-pool sizes of the BLAS libraries that ``gearvib simulate`` sets to 1 (when unset)."""
 
 
 class CliError(Exception):
@@ -198,7 +201,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     result = simulate(model, cond, dt=run["dt"], fs_out=run["fs_out"],
                       gyroscopic=run["gyroscopic"], progress=None if not args.quiet else False,
                       config={"gearset": cfg, "run": run}, max_steps=args.max_steps)
-    path = write_netcdf(result.to_dataset(), out)
+    path = write_netcdf(result.to_plain_dataset(), out)  # without importing xarray
     print(f"wrote {path}")
     return 0
 
@@ -709,7 +712,7 @@ def run() -> None:
     """
     import logging
 
-    hide_unused_modules(sys.argv[1:])
+    prepare_process(sys.argv[1:])
     with signals_as_exceptions():
         try:
             code = _run_command(None)
@@ -723,6 +726,65 @@ def run() -> None:
                                                         if hasattr(signal, "SIGHUP") else [])})
         logging.shutdown()
         exit_now(code)
+
+
+def prepare_process(argv: Sequence[str]) -> None:
+    """Set up the console script's process for the command in ``argv``, before any import.
+
+    * :func:`hide_unused_modules`.
+    * ``simulate``: one BLAS thread (:data:`SINGLE_THREAD_VARIABLES` = 1 unless set; read when
+      NumPy loads its BLAS). Its matrices are small: more threads only spin on the other
+      cores (30 % of the command's CPU time on 2 cores), and the results are those of the
+      sweep workers and of a one-core machine, which run with one BLAS thread too (a
+      multi-threaded product can round differently).
+    * ``simulate``: ``yaml`` hidden (as by :func:`hide_unused_modules`) unless the working
+      directory holds a ``.numba_config.yaml``: numba imports it (0.015 s) only to read that
+      file.
+    * ``simulate``: :mod:`analysis.jit` (numba's cache folder, which :mod:`gearvib.kernels`
+      prepares) is loaded without the package :mod:`analysis`, whose import registers its
+      xarray accessor and so imports xarray and pandas (0.4 s) in a command that writes its
+      run with netCDF4 directly (:class:`gearvib.cfdata.PlainDataset`). The module is the
+      same file under its own name; a later ``import analysis`` works as usual.
+
+    Only the console script does this (its process ends with the command), never
+    :func:`main`, which may run inside a user's program.
+    """
+    hide_unused_modules(argv)
+    command = next((a for a in argv if not a.startswith("-")), None)
+    if command != "simulate":
+        return
+    import os
+
+    if "numpy" not in sys.modules:
+        for name in SINGLE_THREAD_VARIABLES:
+            os.environ.setdefault(name, "1")
+    if not os.path.exists(".numba_config.yaml"):  # numba's config file, read from the cwd
+        sys.modules.setdefault("yaml", None)  # type: ignore[arg-type]
+    _load_without_package("analysis.jit")
+
+
+def _load_without_package(name: str) -> None:
+    """Put the submodule ``name`` into ``sys.modules`` without importing its package."""
+    import importlib.util
+    import os
+
+    package, _, module = name.rpartition(".")
+    if package in sys.modules or name in sys.modules:
+        return
+    spec = importlib.util.find_spec(package)  # a top-level package: found, not imported
+    if spec is None or not spec.submodule_search_locations:
+        return
+    path = os.path.join(next(iter(spec.submodule_search_locations)), f"{module}.py")
+    sub = importlib.util.spec_from_file_location(name, path)
+    if sub is None or sub.loader is None or not os.path.isfile(path):
+        return
+    mod = importlib.util.module_from_spec(sub)
+    sys.modules[name] = mod
+    try:
+        sub.loader.exec_module(mod)
+    except BaseException:
+        del sys.modules[name]
+        raise
 
 
 def hide_unused_modules(argv: Sequence[str]) -> None:

@@ -10,6 +10,11 @@ written and read in a worker thread that an interrupt abandons (:mod:`gearvib.in
 explains why: xarray's backend locks are not safe against an exception from a signal handler).
 String labels (mesh, flank, ... names) are written as CF label variables ``<dim>_label`` and
 restored by :func:`read_run`; ``time`` is read as float seconds (see :mod:`analysis.cf`).
+
+A :class:`~gearvib.cfdata.PlainDataset` (a run as NumPy arrays,
+:meth:`gearvib.simulate.RunUpResult.to_plain_dataset`) is written with netCDF4 directly,
+making the calls xarray's netCDF4 backend makes for the same Dataset, in the same order: the
+same file, byte for byte, without importing xarray and pandas (``gearvib simulate``).
 """
 
 from __future__ import annotations
@@ -20,16 +25,18 @@ import math
 import os
 from collections.abc import Callable, Mapping
 from pathlib import Path
-from typing import TypeVar
+from typing import TYPE_CHECKING, TypeVar
 
 import netCDF4
 import numpy as np
-import xarray as xr
 
-from analysis.cf import labels_from_cf, labels_to_cf
 from gearvib import tempfiles
+from gearvib.cfdata import LABEL_SUFFIX, PlainDataset, PlainVariable
 from gearvib.interrupts import check_interrupted, run_abandonable
 from gearvib.memory import RunSizeError, format_bytes, require_memory
+
+if TYPE_CHECKING:
+    import xarray as xr
 
 __all__ = [
     "GearvibFileError",
@@ -76,36 +83,47 @@ def sanitize_attrs(attrs: Mapping) -> dict:
     return {str(k): _sanitize_value(v) for k, v in attrs.items()}
 
 
-def _encoding(ds: xr.Dataset) -> dict:
-    enc: dict[str, dict] = {}
-    for name, var in ds.variables.items():
-        e: dict = {}
-        kind = var.dtype.kind
-        if kind in "fc":
-            if name in ds.coords or not bool(np.isnan(var.values).any()):
-                e["_FillValue"] = None
-        elif kind in "iub":
+def _variable_encoding(dims: tuple, shape: tuple, kind: str, has_nan: Callable[[], bool],
+                       is_coord: bool) -> dict:
+    """netCDF4 encoding of one variable (see the module notes)."""
+    e: dict = {}
+    if kind in "fc":
+        if is_coord or not has_nan():
             e["_FillValue"] = None
-        if kind in "fiub" and var.ndim >= 1 and var.size > 0:
-            e["zlib"] = True
-            e["complevel"] = 4
-            e["shuffle"] = True
-            e["chunksizes"] = tuple(
-                min(n, _TIME_CHUNK) if d == "time" else (n if var.ndim == 1 else 1)
-                for d, n in zip(var.dims, var.shape, strict=True)
-            )
-        enc[str(name)] = e
-    return enc
+    elif kind in "iub":
+        e["_FillValue"] = None
+    if kind in "fiub" and len(shape) >= 1 and math.prod(shape) > 0:
+        e["zlib"] = True
+        e["complevel"] = 4
+        e["shuffle"] = True
+        e["chunksizes"] = tuple(
+            min(n, _TIME_CHUNK) if d == "time" else (n if len(shape) == 1 else 1)
+            for d, n in zip(dims, shape, strict=True)
+        )
+    return e
 
 
-def write_netcdf(ds: xr.Dataset, path: str | os.PathLike) -> Path:
+def _encoding(ds: xr.Dataset) -> dict:
+    return {
+        str(name): _variable_encoding(
+            var.dims, var.shape, var.dtype.kind,
+            lambda var=var: bool(np.isnan(var.values).any()), name in ds.coords)
+        for name, var in ds.variables.items()
+    }
+
+
+def write_netcdf(ds: xr.Dataset | PlainDataset, path: str | os.PathLike) -> Path:
     """Write a dataset to netCDF4 atomically.
 
     Parameters
     ----------
-    ds : xarray.Dataset
+    ds : xarray.Dataset or gearvib.cfdata.PlainDataset
         Dataset to write (e.g. :meth:`gearvib.simulate.RunUpResult.to_dataset`). Attributes of
         the dataset and its variables are sanitised (:func:`sanitize_attrs`) on a shallow copy.
+        A :class:`~gearvib.cfdata.PlainDataset` (:meth:`RunUpResult.to_plain_dataset
+        <gearvib.simulate.RunUpResult.to_plain_dataset>`) is written with netCDF4 directly,
+        without importing xarray, as the same file as its :meth:`~gearvib.cfdata.PlainDataset.
+        to_xarray` (its data must be float, integer or string arrays).
     path : path-like
         Destination; its directory must exist. An existing file is replaced only once the new
         one is complete.
@@ -121,6 +139,12 @@ def write_netcdf(ds: xr.Dataset, path: str | os.PathLike) -> Path:
     half-written is left on any error or interrupt, and an interrupt returns at once.
     """
     dest = Path(path)
+    if isinstance(ds, PlainDataset):
+        plain = _plain_file_content(ds)
+        atomic_write(dest, lambda tmp: _write_plain(plain, tmp), abandonable=True)
+        return dest
+    from analysis.cf import labels_to_cf
+
     out = labels_to_cf(ds.copy(deep=False))  # string labels: CF label variables, not coordinates
     out.attrs = sanitize_attrs(ds.attrs)
     for name in out.variables:
@@ -128,6 +152,91 @@ def write_netcdf(ds: xr.Dataset, path: str | os.PathLike) -> Path:
     atomic_write(dest, lambda tmp: out.to_netcdf(tmp, engine="netcdf4", format="NETCDF4",
                                                  encoding=_encoding(out)), abandonable=True)
     return dest
+
+
+def _plain_file_content(ds: PlainDataset) -> tuple[dict[str, PlainVariable], dict, set[str]]:
+    """Variables, global attributes and coordinate names as xarray's netCDF4 writer stores
+    ``ds.to_xarray()``.
+
+    String dimension coordinates become label variables at the end (as
+    :func:`analysis.cf.labels_to_cf`), attributes are sanitised, every data variable gets the
+    CF ``coordinates`` attribute naming the auxiliary coordinates that share its dimensions
+    (sorted, as xarray writes it), and auxiliary coordinates that no variable names go into a
+    global ``coordinates`` attribute.
+    """
+    variables = dict(ds.variables())
+    coord_names = list(ds.coords)
+    for name, var in ds.coords.items():
+        if var.dims == (name,) and var.data.dtype.kind in "USO":
+            label = f"{name}{LABEL_SUFFIX}"
+            if label in variables:
+                raise ValueError(f"label variable {label!r} of coordinate {name!r} exists already")
+            attrs = dict(var.attrs)
+            attrs.setdefault("long_name", f"{name} label")
+            del variables[name]
+            coord_names.remove(name)
+            variables[label] = PlainVariable((name,), np.asarray(var.data).astype(str), attrs)
+            coord_names.append(label)
+    for name, var in variables.items():
+        if var.data.dtype.kind not in "fiuU":
+            raise ValueError(f"variable {name!r}: dtype {var.data.dtype} is not written without "
+                             "xarray (admissible: float, integer, string)")
+    dims = {d for v in variables.values() for d in v.dims}
+    auxiliary = {c for c in coord_names if c not in dims}
+    written: set[str] = set()
+    out: dict[str, PlainVariable] = {}
+    for name, var in variables.items():
+        attrs = sanitize_attrs(var.attrs)
+        if name not in auxiliary and name not in var.dims and "coordinates" not in attrs:
+            mine = sorted(c for c in auxiliary if set(variables[c].dims) <= set(var.dims))
+            if mine:
+                attrs["coordinates"] = " ".join(mine)
+        if "coordinates" in attrs:
+            written.update(str(attrs["coordinates"]).split())
+        out[name] = PlainVariable(var.dims, var.data, attrs)
+    global_attrs = sanitize_attrs(ds.attrs)
+    unnamed = auxiliary - written
+    if unnamed and "coordinates" not in global_attrs:
+        global_attrs["coordinates"] = " ".join(sorted(unnamed))
+    return out, global_attrs, set(coord_names)
+
+
+def _write_plain(content: tuple[dict[str, PlainVariable], dict, set[str]], tmp: Path) -> None:
+    """Write the file content of :func:`_plain_file_content` with netCDF4: the calls, in their
+    order and with their arguments, of xarray's netCDF4 backend (global attributes, dimensions
+    in the order of first use, then each variable created, given its attributes and written)."""
+    variables, global_attrs, coords = content
+    with netCDF4.Dataset(tmp, mode="w", clobber=True, diskless=False, persist=False,
+                         format="NETCDF4") as nc:
+        for key, value in global_attrs.items():
+            arr = np.asarray(value)
+            if arr.dtype.kind in "US" and arr.size > 1:
+                nc.setncattr_string(key, value)
+            else:
+                nc.setncattr(key, value)
+        sizes: dict[str, int] = {}
+        for var in variables.values():
+            for d, n in zip(var.dims, var.data.shape, strict=True):
+                sizes.setdefault(d, int(n))
+        for d, n in sizes.items():
+            nc.createDimension(d, size=n)
+        for name, var in variables.items():
+            data = var.data
+            kind = data.dtype.kind
+            enc = _variable_encoding(var.dims, data.shape, kind,
+                                     lambda data=data: bool(np.isnan(data).any()),
+                                     name in coords)
+            fill = enc.get("_FillValue", np.nan if kind == "f" else None)
+            nc_var = nc.createVariable(
+                varname=name, datatype=str if kind == "U" else data.dtype, dimensions=var.dims,
+                zlib=False, complevel=enc.get("complevel", 4), shuffle=enc.get("shuffle", True),
+                fletcher32=False, contiguous=False, chunksizes=enc.get("chunksizes"),
+                endian="native", least_significant_digit=None, fill_value=fill,
+                **({"compression": "zlib"} if enc.get("zlib") else {}))
+            nc_var.setncatts(var.attrs)
+            nc_var.set_auto_maskandscale(False)
+            nc_var.set_auto_chartostring(False)
+            nc_var[...] = data
 
 
 def atomic_write(dest: str | os.PathLike, write: Callable[[Path], T], *,
@@ -245,6 +354,10 @@ def read_run(path: str | os.PathLike) -> xr.Dataset:
                 "than zlib can compress into it: its header is corrupt")
         require_memory(2 * declared, f"reading {p} ({format_bytes(declared)} declared)",
                        "the run is too large for this machine")
+        import xarray as xr
+
+        from analysis.cf import labels_from_cf
+
         with xr.open_dataset(p, engine="netcdf4", decode_times=False) as ds:
             return labels_from_cf(ds.load())  # float seconds; labels as coordinates again
 

@@ -6,18 +6,21 @@ import hashlib
 import json
 from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
-import xarray as xr
 
-from analysis.cf import time_attrs
 from gearvib import __version__
 from gearvib import kernels as kn
+from gearvib.cfdata import PlainDataset, PlainVariable, time_attrs
 from gearvib.model import AssembledModel
 from gearvib.simulation.conditions import RAD_S_PER_RPM, Conditions, DriveCoupling
 from gearvib.simulation.frequencies import elastic_frequencies, undamped_frequencies
 from gearvib.simulation.run_setup import RunSetup
 from gearvib.simulation.step import StepChoice
+
+if TYPE_CHECKING:
+    import xarray as xr
 
 __all__ = ["INTEGRATOR", "RunUpResult", "build_result", "model_sha256"]
 
@@ -188,11 +191,18 @@ class RunUpResult:
         (``units = "seconds since 1970-01-01T00:00:00Z"``, ``standard_name``, ``axis``; the
         epoch is a conventional origin, see :mod:`analysis.cf`).
         """
+        return self.to_plain_dataset().to_xarray()
+
+    def to_plain_dataset(self) -> PlainDataset:
+        """The content of :meth:`to_dataset` as NumPy arrays, without importing xarray.
+
+        :func:`gearvib.io.write_netcdf` writes it as the same file as the Dataset.
+        """
 
         def var(
             dims: tuple[str, ...], data: np.ndarray, units: str, long_name: str, quantity: str
-        ) -> xr.Variable:
-            return xr.Variable(
+        ) -> PlainVariable:
+            return PlainVariable(
                 dims,
                 np.ascontiguousarray(data),
                 {"units": units, "long_name": long_name, "gearvib_quantity": quantity},
@@ -200,30 +210,30 @@ class RunUpResult:
 
         t = ("time",)
         coords = {
-            "time": xr.Variable(
+            "time": PlainVariable(
                 t,
                 np.ascontiguousarray(self.time),
                 {**time_attrs("time since start of run"), "gearvib_quantity": "time"},
             ),
-            "mesh": xr.Variable(
+            "mesh": PlainVariable(
                 ("mesh",),
                 np.array(self.mesh_names, dtype=str),
                 {"long_name": "tooth contact (mesh)"},
             ),
-            "flank": xr.Variable(
+            "flank": PlainVariable(
                 ("flank",),
                 np.array(["left", "right"]),
                 {"long_name": "tooth flank (left: loaded when the central gear drives the planet)"},
             ),
-            "bearing": xr.Variable(
+            "bearing": PlainVariable(
                 ("bearing",),
                 np.array(self.bearing_names, dtype=str),
                 {"long_name": "elastic bearing direction"},
             ),
-            "member": xr.Variable(
+            "member": PlainVariable(
                 ("member",), np.array(self.members, dtype=str), {"long_name": "rotating member"}
             ),
-            "translation_dof": xr.Variable(
+            "translation_dof": PlainVariable(
                 ("translation_dof",),
                 np.array(self.translation_dofs, dtype=str),
                 {"long_name": "translational coordinate"},
@@ -312,7 +322,7 @@ class RunUpResult:
             ),
         }
         if self.sensor_acceleration is not None:
-            coords["sensor"] = xr.Variable(("sensor",), np.array(self.sensor_names, dtype=str),
+            coords["sensor"] = PlainVariable(("sensor",), np.array(self.sensor_names, dtype=str),
                                            {"long_name": "virtual sensor on the housing"})
             coords["sensor_angle"] = var(
                 ("sensor",), np.array([i["angle_deg"] for i in self.sensor_info], dtype=float),
@@ -353,7 +363,7 @@ class RunUpResult:
         if self.coupling is not None:
             attrs["drive_coupling_stiffness"] = float(self.coupling.stiffness)
             attrs["drive_coupling_damping"] = float(self.coupling.damping)
-        return xr.Dataset(data, coords=coords, attrs=attrs)
+        return PlainDataset(data, coords, attrs)
 
 
 def build_result(

@@ -75,12 +75,58 @@ def test_simulate_command_imports_nothing_it_does_not_need(tmp_path):
     mods = set(state["loaded"])
     assert (tmp_path / "r.nc").is_file()
     top = _top(mods)
-    for name in ("matplotlib", "reportlab", "pyfftw", "cffi"):
+    for name in ("matplotlib", "reportlab", "pyfftw", "cffi", "xarray", "pandas"):
         assert name not in top, f"`gearvib simulate` imports {name}"
+    assert "analysis" not in mods  # the package (its accessor imports xarray)
     for name in ("scipy.signal", "scipy.optimize", "scipy.fft", "analysis.maps"):
         assert name not in mods, f"`gearvib simulate` imports {name}"
     for name in ("dask", "distributed", "cffi"):  # hidden: sys.modules holds None for them
         assert name in state["hidden"] and name not in top
+    assert "analysis.jit" in mods  # numba's cache folder (gearvib.kernels), without the package
+
+
+@pytest.mark.parametrize(("argv", "env", "expected"), [
+    (["simulate", "paper-case1"], {}, "1"),
+    (["simulate", "paper-case1"], {"OPENBLAS_NUM_THREADS": "3"}, "3"),  # the user's choice
+    (["-q", "simulate"], {}, "1"),
+    (["sweep", "s.toml"], {}, None),  # its workers set their own
+    (["modes", "paper-case1"], {}, None),
+])
+def test_simulate_process_runs_one_blas_thread(argv, env, expected):
+    code = (
+        "import os, sys, json\n"
+        "from gearvib.cli import SINGLE_THREAD_VARIABLES, prepare_process\n"
+        f"prepare_process({argv!r})\n"
+        "import numpy\n"
+        "print(json.dumps([os.environ.get(v) for v in SINGLE_THREAD_VARIABLES]))\n"
+    )
+    base = {k: v for k, v in os.environ.items()
+            if k not in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")}
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         env={**base, **env}, check=True, timeout=60).stdout
+    values = json.loads(out.strip().splitlines()[-1])
+    assert values[0] == expected
+    if not env:
+        assert set(values) == {expected}
+
+
+def test_analysis_jit_loaded_alone_then_the_package_as_usual():
+    code = (
+        "import sys\n"
+        "from gearvib.cli import prepare_process\n"
+        "prepare_process(['simulate', 'paper-case1'])\n"
+        "assert 'analysis.jit' in sys.modules and 'analysis' not in sys.modules\n"
+        "import gearvib.kernels\n"
+        "assert 'analysis' not in sys.modules and 'xarray' not in sys.modules\n"
+        "import analysis, analysis.sinc\n"
+        "from analysis.jit import prepare_cache\n"
+        "assert prepare_cache is sys.modules['analysis.jit'].prepare_cache\n"
+        "assert 'xarray' in sys.modules\n"
+        "print('ok')\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True, timeout=120).stdout
+    assert out.strip().endswith("ok")
 
 
 def test_modes_command_imports_neither_xarray_nor_numba():
@@ -113,3 +159,19 @@ def test_hide_unused_modules(argv, hidden):
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True, timeout=60).stdout
     assert set(ast.literal_eval(out)) == hidden
+
+
+@pytest.mark.parametrize("config_file", [False, True])
+def test_yaml_hidden_unless_numba_has_a_config_file_to_read(tmp_path, config_file):
+    if config_file:  # numba reads .numba_config.yaml of the working directory with yaml
+        (tmp_path / ".numba_config.yaml").write_text("debuginfo: 0\n")
+    code = (
+        "import sys\n"
+        "from gearvib.cli import prepare_process\n"
+        "prepare_process(['simulate', 'paper-case1'])\n"
+        "import numba\n"
+        "print(sys.modules.get('yaml', 0) is None)\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True, timeout=60, cwd=tmp_path).stdout
+    assert out.strip().splitlines()[-1] == str(not config_file)
