@@ -38,7 +38,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-import netCDF4
 import numpy as np
 import xarray as xr
 
@@ -48,6 +47,7 @@ from analysis.inputs import ANGLE_UNITS, find_reference
 from analysis.readers import FORMATS, ReaderError, read
 from analysis.readers.cdf3 import check_cdf3, is_cdf3
 from analysis.readers.integrity import require_memory
+from analysis.readers.ncimage import file_image, load_image, open_image
 from analysis.speed import SpeedReference, from_angle, from_rpm, from_tacho
 
 __all__ = ["MIN_SAMPLES", "RUN_CHANNELS", "Measurement", "load_measurement"]
@@ -200,10 +200,11 @@ def _read_file(path: Path, options: dict | None) -> tuple[xr.Dataset, dict]:
     if path.is_dir():
         raise ValueError(f"measurement {str(path)!r} is a directory; give a file")
     ext = path.suffix.lower()
-    if ext in FORMATS["netcdf"][1] and _netcdf_run_bytes(path) is not None:
-        try:
-            with xr.open_dataset(path, decode_times=False, decode_timedelta=False) as probe:
-                ds = labels_from_cf(probe.load())
+    image = _netcdf_run_image(path) if ext in FORMATS["netcdf"][1] else None
+    if image is not None:
+        try:  # from the image, as every netCDF read here: see analysis.readers.ncimage
+            ds = labels_from_cf(load_image(path, image, decode_times=False,
+                                           decode_timedelta=False))
         except (OSError, ValueError, RuntimeError) as exc:
             raise ReaderError(f"{path}: not a readable netCDF file ({exc})") from None
         return ds, {"file": str(path), "format": "netcdf (gearvib run)",
@@ -224,17 +225,18 @@ def _read_file(path: Path, options: dict | None) -> tuple[xr.Dataset, dict]:
     return ds, {"file": str(path), "format": fmt, "reader": reader}
 
 
-def _netcdf_run_bytes(path: Path) -> int | None:
-    """Declared bytes of a simulated run's netCDF file (``None``: not a gearvib run).
+def _netcdf_run_image(path: Path) -> bytes | None:
+    """The bytes of a simulated run's netCDF file (``None``: not a gearvib run).
 
-    Only the header is read (netCDF4, after the netCDF-3 header walk): xarray would load the
+    Only the header is parsed (netCDF4, after the netCDF-3 header walk): xarray would load the
     index coordinates while opening, whatever size a corrupt header claims. A run's declared
     data must fit into memory (twice: the load and its copy).
     """
     if is_cdf3(path):
         check_cdf3(path)
     try:
-        with netCDF4.Dataset(path, "r") as nc:
+        image = file_image(path)
+        with open_image(path, image) as nc:
             if _RUN_MARKER not in nc.variables and _RUN_FORCE not in nc.variables:
                 return None
             declared = sum(math.prod(int(n) for n in v.shape)
@@ -243,7 +245,7 @@ def _netcdf_run_bytes(path: Path) -> int | None:
     except OSError as exc:
         raise ReaderError(f"{path}: not a readable netCDF file ({exc})") from None
     require_memory(2 * declared, path, f"the run's variables ({declared} bytes declared)")
-    return declared
+    return image
 
 
 def _time_seconds(ds: xr.Dataset, where: str) -> np.ndarray:

@@ -343,9 +343,15 @@ def read_run(path: str | os.PathLike) -> xr.Dataset:
         raise GearvibFileError(f"gearvib run file not found: {p}")
 
     def load() -> xr.Dataset:
-        # the declared sizes first, with netCDF4 directly: xarray would load the index
-        # coordinates (time) while opening, whatever size the header claims
-        with netCDF4.Dataset(p, "r") as nc:
+        from analysis.cf import labels_from_cf
+        from analysis.readers.ncimage import file_image, load_image, open_image
+
+        # read from an in-memory image of the file: a handle on the file itself would share
+        # the library's file object with any handle the caller holds (a crash, see
+        # analysis.readers.ncimage). The declared sizes first, with netCDF4 directly: xarray
+        # would load the index coordinates (time) while opening, whatever the header claims
+        image = file_image(p)
+        with open_image(p, image) as nc:
             declared = _declared_bytes(nc)
         size = p.stat().st_size
         if declared > _ZLIB_MAX_RATIO * size + 2**20:
@@ -354,12 +360,8 @@ def read_run(path: str | os.PathLike) -> xr.Dataset:
                 "than zlib can compress into it: its header is corrupt")
         require_memory(2 * declared, f"reading {p} ({format_bytes(declared)} declared)",
                        "the run is too large for this machine")
-        import xarray as xr
-
-        from analysis.cf import labels_from_cf
-
-        with xr.open_dataset(p, engine="netcdf4", decode_times=False) as ds:
-            return labels_from_cf(ds.load())  # float seconds; labels as coordinates again
+        # float seconds; labels as coordinates again
+        return labels_from_cf(load_image(p, image, decode_times=False))
 
     try:
         loaded = run_abandonable(load)  # see gearvib.interrupts: xarray's locks and Ctrl-C

@@ -13,8 +13,9 @@ import xarray as xr
 
 from analysis.cf import labels_from_cf
 from analysis.readers.cdf3 import check_cdf3, is_cdf3
-from analysis.readers.integrity import file_size, format_bytes, reading, require_memory
+from analysis.readers.integrity import format_bytes, reading, require_memory
 from analysis.readers.layout import ReaderError, clean_attrs, validate_dataset
+from analysis.readers.ncimage import file_image, load_image, open_image
 
 __all__ = ["read_netcdf", "write_netcdf"]
 
@@ -31,7 +32,7 @@ def _declared_bytes(nc: netCDF4.Dataset) -> int:
     return total
 
 
-def _check_sizes(p: Path) -> None:
+def _check_sizes(p: Path, image: bytes) -> None:
     """Refuse a header whose declared sizes the file cannot hold or memory cannot take.
 
     netCDF-3 headers are walked by :func:`~analysis.readers.cdf3.check_cdf3` before the C
@@ -40,10 +41,8 @@ def _check_sizes(p: Path) -> None:
     other compression filter cannot declare more than 1032 times its size; and the declared
     data must fit into memory.
     """
-    size = file_size(p)
-    if is_cdf3(p):
-        check_cdf3(p)
-    with reading(p, "netCDF"), netCDF4.Dataset(p, "r") as nc:
+    size = len(image)
+    with reading(p, "netCDF"), open_image(p, image) as nc:
         file_format = str(nc.file_format)
         declared = _declared_bytes(nc)
         other_filters = any(
@@ -86,12 +85,13 @@ def read_netcdf(path: str | os.PathLike[str]) -> xr.Dataset:
     p = Path(path)
     if not p.is_file():
         raise FileNotFoundError(f"netCDF file not found: {p}")
-    _check_sizes(p)
-    with (
-        reading(p, "netCDF"),
-        xr.open_dataset(p, engine="netcdf4", decode_times=False, decode_timedelta=False) as ds,
-    ):
-        ds = labels_from_cf(ds.load())
+    if is_cdf3(p):
+        check_cdf3(p)  # before the image is read: a netCDF-3 header may declare anything
+    with reading(p, "netCDF"):
+        image = file_image(p)
+    _check_sizes(p, image)
+    with reading(p, "netCDF"):  # an image: see analysis.readers.ncimage
+        ds = labels_from_cf(load_image(p, image, decode_times=False, decode_timedelta=False))
     ds.attrs.setdefault("source_file", str(p))
     return validate_dataset(ds, name=str(p))
 

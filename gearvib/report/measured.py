@@ -28,7 +28,6 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-import netCDF4
 import numpy as np
 import xarray as xr
 
@@ -45,6 +44,8 @@ from analysis.maps import RpmFrequencyMap, RpmOrderMap, rpm_frequency_map, rpm_o
 from analysis.measurement import Measurement, load_measurement
 from analysis.orders import OrderSpectrum, order_spectrum
 from analysis.plots import rpm_frequency_map_figure, rpm_order_map_figure
+from analysis.readers import ReaderError
+from analysis.readers.ncimage import open_image
 from analysis.runup import MapFeatures, map_features
 from analysis.spectrum import Peaks, Spectrum, find_peaks, spectrum, to_db
 from gearvib.assembly import assemble
@@ -1058,7 +1059,7 @@ def is_simulated_run(path: str | os.PathLike) -> bool:
     header cannot be read counts as a run, so that the run reader reports what is wrong.
     """
     try:
-        with netCDF4.Dataset(path, "r") as nc:
+        with open_image(path) as nc:  # not the file itself: see analysis.readers.ncimage
             return "normal_force" in nc.variables
-    except OSError:
+    except (OSError, ReaderError):
         return Path(path).is_file() and Path(path).suffix in (".nc", ".nc4")

@@ -27,6 +27,7 @@ import xarray as xr
 from threadpoolctl import threadpool_limits
 
 from analysis.fft import set_workers
+from analysis.readers.ncimage import open_image
 from gearvib.assembly import assemble
 from gearvib.config import ConfigError, gearset_from_dict
 from gearvib.io import read_run, write_netcdf
@@ -116,11 +117,11 @@ def finished_run(path: str | Path, sha256: str) -> xr.Dataset | None:
     if not is_file(p):
         return None
     try:
-        with xr.open_dataset(p, engine="netcdf4") as ds:
-            if ds.attrs.get("sweep_case_sha256") != sha256:
+        with open_image(p) as nc:  # not the file itself: see analysis.readers.ncimage
+            if getattr(nc, "sweep_case_sha256", None) != sha256:
                 return None
         return read_run(p)
-    except (OSError, ValueError, RuntimeError, KeyError):
+    except (OSError, ValueError, RuntimeError, KeyError):  # ReaderError is a ValueError
         return None
 
 
