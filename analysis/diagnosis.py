@@ -13,10 +13,13 @@ Method (``docs/diagnosis.md``)
    the spectrum by a function that varies slowly with frequency; the *prominence* of a line,
    its level above the local floor (running median over ``±width`` orders, at most
    ``dynamic_range`` dB below the local maximum), is blind to it: :func:`prominence_db`.
-3. **Difference.** ``D = P(measured) − P(baseline)`` [dB] per order bin: where the measurement
+3. **Noise floor.** A simulation is noise-free; before its prominence is taken it gets the
+   measurement's dynamic range (:func:`dynamic_range_db`, :func:`with_noise_floor`), so that
+   only lines the measurement could show above its noise count.
+4. **Difference.** ``D = P(measured) − P(baseline)`` [dB] per order bin: where the measurement
    has lines the healthy baseline lacks, or stronger ones. A candidate cause's *signature*
    is the same difference between a simulation with the fault and one without.
-4. **Score.** The cosine similarity of the positive parts of ``D`` (above a deadband of three
+5. **Score.** The cosine similarity of the positive parts of ``D`` (above a deadband of three
    robust standard deviations of ``D``, which removes the noise) and of the signature:
    :func:`signature_score`, in [0, 1], 1 when the measured rises are exactly the simulated
    ones up to a common factor in dB. Level scaling (calibration, severity) changes it
