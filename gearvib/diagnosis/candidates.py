@@ -1,11 +1,13 @@
 """Candidate causes of a diagnosis: the faults and errors simulated one by one.
 
 Every candidate is a ``[[fault]]`` table of the gear-set description
-(``docs/faults-sensors.md``) with a typical size; a candidate's *cause* is the fault ``kind``
-and its *member* the body it sits on. Planets that the gear set cannot tell apart (identical
-and equally spaced: a rotation of the carrier by the planet spacing maps one onto the next,
-so without a carrier phase reference their faults give the same spectra) are one candidate
-member ``planet``, simulated on ``planet1``.
+(``docs/faults-sensors.md``), two sizes per kind and member (a light and a heavy one; a broken
+tooth has one): which of a fault's lines reach above a measurement's noise depends on its size,
+and the diagnosis keeps the better-scoring of the two. A candidate's *cause* is the fault
+``kind`` and its *member* the body it sits on. Planets that the gear set cannot tell apart
+(identical and equally spaced: a rotation of the carrier by the planet spacing maps one onto
+the next, so without a carrier phase reference their faults give the same spectra) are one
+candidate member ``planet``, simulated on ``planet1``.
 """
 
 from __future__ import annotations
