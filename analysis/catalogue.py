@@ -60,6 +60,9 @@ FAMILIES = {
     "assembly_phase": "assembly-phase frequency f_mesh / gcd(z1, z2) (listed when gcd > 1)",
     "sideband": "m f_mesh + s f_c: carrier-order sidebands of mesh harmonic m (s in carrier "
                 "revolutions relative to the sensor; s = k N is m f_mesh + k f_pp)",
+    "eccentricity": "m f_mesh ± f_r: first sidebands of mesh harmonic m at the rotation of a "
+                    "gear of the mesh relative to the carrier and relative to the sensor "
+                    "(eccentricity, runout; the carrier's own ±f_c are sidebands s = ±1)",
     "bearing_ftf": "rolling bearing: cage frequency relative to the stationary (loaded) ring",
     "bearing_bpfo": "rolling bearing: ball pass frequency, outer race",
     "bearing_bpfi": "rolling bearing: ball pass frequency, inner race",
@@ -526,6 +529,9 @@ def kinematic_catalogue(
     * planet_pass: ``h N |n_carrier - n_sensor|``;
     * sun_fault / ring_fault: ``h N |n_gear - n_carrier|`` for external / internal gears;
     * planet_fault: ``h |n_planet - n_carrier|`` (= ``h f_mesh / |z_planet|``);
+    * eccentricity: ``m f_mesh ± |n_gear - n_carrier|`` and ``m f_mesh ± |n_gear - n_sensor|``
+      for every gear of a mesh (central gears and planet groups; rates equal to the carrier
+      sidebands ``± |Omega|`` or to each other listed once), sideband index ``±1``;
     * hunting_tooth: ``f_mesh g / (|z_gear| |z_planet|)``, assembly_phase ``f_mesh / g``,
       ``g = gcd(z_gear, z_planet)``;
     * sideband: ``|m h_s + q Omega|`` with the signed mesh rate ``h_s = z_gear (n_gear -
@@ -678,6 +684,29 @@ def kinematic_catalogue(
                             else f"{abs(s)} f_c")
                     head = "f_mesh" if mh == 1 else f"{mh} f_mesh"
                     out.add("sideband", mh, s, label, f"{head} {sign} {term}", rate, ph)
+        # eccentricity (runout) of a gear of the mesh: its rotation relative to the carrier
+        # modulates the mesh (m f_mesh ± |n_g - n_c|); the planet-pass window shifts that by
+        # the carrier speed, which gives its rotation relative to the sensor too
+        ecc_members: dict[str, float] = {}
+        for m in ms:
+            for g in (m.gear, m.planet):
+                ecc_members.setdefault(group_of.get(g, g), sp[g])
+        for gname, n_g in ecc_members.items():
+            rates: list[tuple[float, str]] = []
+            for r, txt in ((abs(n_g - sp[carrier]), f"|f_{gname} − f_{carrier}|"),
+                           (abs(n_g - sp[sensor]), f"f_{gname}" if sp[sensor] == 0.0
+                            else f"|f_{gname} − f_{sensor}|")):
+                if r > tiny and all(abs(r - q) > 1e-9 * scale for q, _ in rates) \
+                        and abs(r - abs(omega)) > 1e-9 * scale:
+                    rates.append((r, txt))
+            for mh in range(1, mesh_harmonics + 1):
+                head = "f_mesh" if mh == 1 else f"{mh} f_mesh"
+                for r, txt in rates:
+                    for sgn in (-1, 1):
+                        rate = mh * f_mesh + sgn * r
+                        if rate > tiny:
+                            out.add("eccentricity", mh, sgn, gname,
+                                    f"{head} {'+' if sgn > 0 else '−'} {txt}", rate)
         # hunting tooth and assembly phase of every distinct tooth pair in the group
         pairs = sorted({(abs(m.z_gear), abs(m.z_planet), _pair_label(
             group_of.get(m.gear, m.gear), group_of[m.planet])) for m in ms})

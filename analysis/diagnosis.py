@@ -13,10 +13,13 @@ Method (``docs/diagnosis.md``)
    the spectrum by a function that varies slowly with frequency; the *prominence* of a line,
    its level above the local floor (running median over ``±width`` orders, at most
    ``dynamic_range`` dB below the local maximum), is blind to it: :func:`prominence_db`.
-3. **Difference.** ``D = P(measured) − P(baseline)`` [dB] per order bin: where the measurement
+3. **Noise floor.** A simulation is noise-free; before its prominence is taken it gets the
+   measurement's dynamic range (:func:`dynamic_range_db`, :func:`with_noise_floor`), so that
+   only lines the measurement could show above its noise count.
+4. **Difference.** ``D = P(measured) − P(baseline)`` [dB] per order bin: where the measurement
    has lines the healthy baseline lacks, or stronger ones. A candidate cause's *signature*
    is the same difference between a simulation with the fault and one without.
-4. **Score.** The cosine similarity of the positive parts of ``D`` (above a deadband of three
+5. **Score.** The cosine similarity of the positive parts of ``D`` (above a deadband of three
    robust standard deviations of ``D``, which removes the noise) and of the signature:
    :func:`signature_score`, in [0, 1], 1 when the measured rises are exactly the simulated
    ones up to a common factor in dB. Level scaling (calibration, severity) changes it
@@ -48,6 +51,7 @@ __all__ = [
     "FamilyEvidence",
     "OrderProfile",
     "deadband_db",
+    "dynamic_range_db",
     "family_evidence",
     "family_lines",
     "near_modes",
@@ -56,6 +60,7 @@ __all__ = [
     "prominence_db",
     "rising_peaks",
     "signature_score",
+    "with_noise_floor",
 ]
 
 DEFAULT_THRESHOLD = 0.4
@@ -193,11 +198,55 @@ def prominence_db(profile: OrderProfile, *, width: float = 6.0,
     dynamic range as a measurement). A slowly varying transfer function cancels.
     """
     lv = profile.level_db
-    n = max(3, round(2 * width * profile.revolutions) | 1)
+    n = _window(width, profile.revolutions)
     med = ndimage.median_filter(lv, size=n, mode="nearest")
     top = ndimage.maximum_filter1d(lv, size=n, mode="nearest")
     floor = np.maximum(med, top - dynamic_range)
     return np.clip(lv - floor, 0.0, dynamic_range)
+
+
+def _window(width: float, revolutions: int) -> int:
+    return max(3, round(2 * width * revolutions) | 1)
+
+
+def dynamic_range_db(profile: OrderProfile, *, width: float = 6.0,
+                     percentile: float = 20.0) -> np.ndarray:
+    """Per bin: the running maximum of the level minus the noise floor [dB] (>= 0).
+
+    The noise floor is the running ``percentile`` of the level over ``±width`` orders: the
+    level between the lines (noise of the measuring chain, unmodelled vibration). The result
+    says how far below the strongest local line a measurement can see anything.
+    """
+    q = float(percentile)
+    if not 0.0 < q < 50.0:
+        raise ValueError(f"percentile = {percentile!r} is not admissible (admissible: 0 < "
+                         "percentile < 50)")
+    lv = profile.level_db
+    n = _window(width, profile.revolutions)
+    top = ndimage.maximum_filter1d(lv, size=n, mode="nearest")
+    floor = ndimage.percentile_filter(lv, q, size=n, mode="nearest")
+    return np.maximum(top - floor, 0.0)
+
+
+def with_noise_floor(profile: OrderProfile, dynamic_range: Any, *,
+                     width: float = 6.0) -> OrderProfile:
+    """The profile with a noise floor ``dynamic_range`` dB below its running maximum added.
+
+    Powers add: ``A_eff^2 = A^2 + (max_local(A) 10^(-DR/20))^2`` per bin, with the running
+    maximum over ``±width`` orders. Given the measurement's :func:`dynamic_range_db`, a
+    noise-free simulation shows only what the measurement could show: lines that would lie
+    under the measured noise floor do not count as rises (``docs/diagnosis.md``).
+    """
+    dr = np.broadcast_to(np.asarray(dynamic_range, float), profile.amplitude.shape)
+    if not np.all(np.isfinite(dr)) or np.any(dr < 0):
+        raise ValueError("dynamic_range must be finite and >= 0 dB in every bin")
+    lv = profile.level_db
+    top = ndimage.maximum_filter1d(lv, size=_window(width, profile.revolutions),
+                                   mode="nearest")
+    floor_amp = 10.0 ** ((top - dr) / 20.0)
+    amp = np.sqrt(profile.amplitude ** 2 + floor_amp ** 2)
+    return OrderProfile(profile.order, amp, profile.units, profile.revolutions,
+                        profile.segments, profile.speed_rpm, profile.name)
 
 
 def deadband_db(diff: np.ndarray, *, k: float = 3.0, minimum: float = 1.0) -> float:

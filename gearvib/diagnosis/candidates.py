@@ -1,11 +1,13 @@
 """Candidate causes of a diagnosis: the faults and errors simulated one by one.
 
 Every candidate is a ``[[fault]]`` table of the gear-set description
-(``docs/faults-sensors.md``) with a typical size; a candidate's *cause* is the fault ``kind``
-and its *member* the body it sits on. Planets that the gear set cannot tell apart (identical
-and equally spaced: a rotation of the carrier by the planet spacing maps one onto the next,
-so without a carrier phase reference their faults give the same spectra) are one candidate
-member ``planet``, simulated on ``planet1``.
+(``docs/faults-sensors.md``), two sizes per kind and member (a light and a heavy one; a broken
+tooth has one): which of a fault's lines reach above a measurement's noise depends on its size,
+and the diagnosis keeps the better-scoring of the two. A candidate's *cause* is the fault
+``kind`` and its *member* the body it sits on. Planets that the gear set cannot tell apart
+(identical and equally spaced: a rotation of the carrier by the planet spacing maps one onto
+the next, so without a carrier phase reference their faults give the same spectra) are one
+candidate member ``planet``, simulated on ``planet1``.
 """
 
 from __future__ import annotations
@@ -55,17 +57,33 @@ def planets_equivalent(cfg: dict) -> bool:
     return all(abs((a - angles[0]) - i * step) < 1e-6 for i, a in enumerate(angles))
 
 
-def _local(kind: str, member: str, target: str) -> Candidate:
+CRACK_SEVERITIES = (0.3, 0.7)
+"""Stiffness losses of the simulated tooth cracks (a light and a deep crack)."""
+
+PITTING_VARIANTS = ((0.4, 0.35, 0.65, 3e-6), (0.7, 0.2, 0.8, 10e-6))
+"""Simulated pitting: (stiffness loss, path start, path end, depth [m]) — early pitting
+about the pitch line and advanced spalling over most of the path."""
+
+ECCENTRICITIES = (8e-6, 20e-6)
+"""Simulated eccentricities [m]."""
+
+PIN_ERRORS = (10e-6, 30e-6)
+"""Simulated tangential pin position errors [m]."""
+
+
+def _local(kind: str, member: str, target: str) -> list[Candidate]:
     if kind == "crack":
-        return Candidate(kind, member, {"kind": "crack", "member": target, "tooth": 0,
-                                        "severity": 0.5}, f"crack {member} 50 %")
+        return [Candidate(kind, member, {"kind": "crack", "member": target, "tooth": 0,
+                                         "severity": s}, f"crack {member} {100 * s:.0f} %")
+                for s in CRACK_SEVERITIES]
     if kind == "pitting":
-        return Candidate(kind, member, {"kind": "pitting", "member": target, "tooth": 0,
-                                        "severity": 0.6, "path_start": 0.3, "path_end": 0.7,
-                                        "depth": 10e-6, "flank": "both"},
-                         f"pitting {member} 60 % 10 um")
-    return Candidate(kind, member, {"kind": "broken_tooth", "member": target, "tooth": 0},
-                     f"broken_tooth {member}")
+        return [Candidate(kind, member, {"kind": "pitting", "member": target, "tooth": 0,
+                                         "severity": s, "path_start": a, "path_end": b,
+                                         "depth": d, "flank": "both"},
+                          f"pitting {member} {100 * s:.0f} % {d * 1e6:.0f} um")
+                for s, a, b, d in PITTING_VARIANTS]
+    return [Candidate(kind, member, {"kind": "broken_tooth", "member": target, "tooth": 0},
+                      f"broken_tooth {member}")]
 
 
 def candidate_faults(cfg: dict, kinds: Sequence[str] = KINDS) -> list[Candidate]:
@@ -103,18 +121,18 @@ def candidate_faults(cfg: dict, kinds: Sequence[str] = KINDS) -> list[Candidate]
     out: list[Candidate] = []
     for kind in ("crack", "pitting", "broken_tooth"):
         if kind in kinds:
-            out += [_local(kind, "sun", "sun"), *(_local(kind, m, t) for m, t in planets),
-                    _local(kind, "ring", "ring")]
+            for m, t in [("sun", "sun"), *planets, ("ring", "ring")]:
+                out += _local(kind, m, t)
     if "eccentricity" in kinds:
         for m, t in [("sun", "sun"), *planets]:
-            out.append(Candidate("eccentricity", m, {"kind": "eccentricity", "member": t,
-                                                     "eccentricity": 20e-6, "phase_deg": 0.0},
-                                 f"eccentricity {m} 20 um"))
+            out += [Candidate("eccentricity", m, {"kind": "eccentricity", "member": t,
+                                                  "eccentricity": e, "phase_deg": 0.0},
+                              f"eccentricity {m} {e * 1e6:.0f} um") for e in ECCENTRICITIES]
     if "pin_error" in kinds:
         for m, t in planets:
-            out.append(Candidate("pin_error", m, {"kind": "pin_error", "member": t,
-                                                  "tangential": 30e-6, "radial": 0.0},
-                                 f"pin_error {m} 30 um"))
+            out += [Candidate("pin_error", m, {"kind": "pin_error", "member": t,
+                                               "tangential": e, "radial": 0.0},
+                              f"pin_error {m} {e * 1e6:.0f} um") for e in PIN_ERRORS]
     assert len({c.label for c in out}) == len(out)
     return out
 

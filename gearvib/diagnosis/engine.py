@@ -26,6 +26,7 @@ from analysis.diagnosis import (
     Diagnosis,
     OrderProfile,
     deadband_db,
+    dynamic_range_db,
     family_evidence,
     family_lines,
     near_modes,
@@ -34,6 +35,7 @@ from analysis.diagnosis import (
     prominence_db,
     rising_peaks,
     signature_score,
+    with_noise_floor,
 )
 from gearvib.config import ConfigError, gearset_from_dict
 from gearvib.diagnosis.candidates import KINDS, Candidate, candidate_faults, severity_text
@@ -329,11 +331,20 @@ def diagnose(measured: Record, config: str, *, baseline: Record | None = None,
     n = min(p.order.size for p in [meas, base_prof, *(q for ps in profiles for q in ps)])
     order = meas.order[:n]
 
+    def cut(p: OrderProfile) -> OrderProfile:
+        return OrderProfile(p.order[:n], p.amplitude[:n], p.units, p.revolutions, p.segments,
+                            p.speed_rpm, p.name)
+
     def prom(p: OrderProfile) -> np.ndarray:
-        return prominence_db(p)[:n]
+        return prominence_db(cut(p))
+
+    # the simulations get the measurement's dynamic range: what lies under its noise floor
+    # is not a rise it could show
+    meas_range = dynamic_range_db(cut(meas))
 
     def envelope(ps: list[OrderProfile]) -> np.ndarray:
-        return np.max([prom(p) for p in ps], axis=0)
+        return np.max([prominence_db(with_noise_floor(cut(p), meas_range)) for p in ps],
+                      axis=0)
 
     p_h = envelope(profiles[0])
     p_meas = prom(meas)
@@ -428,11 +439,6 @@ def diagnose(measured: Record, config: str, *, baseline: Record | None = None,
              "assumed_sensors_json": json.dumps(sensors),
              "baseline": "measured" if baseline is not None else "simulated healthy gear set",
              "candidates_json": json.dumps([c.fault for c in candidates])}
-    # profiles cut to the common bins
-    def cut(p: OrderProfile) -> OrderProfile:
-        return OrderProfile(p.order[:n], p.amplitude[:n], p.units, p.revolutions, p.segments,
-                            p.speed_rpm, p.name)
-
     d = Diagnosis(causes, float(threshold), order, cut(meas), cut(base_prof), d_meas, dead,
                   signatures, fam_ev, nxt, notes, "carrier", attrs)
     # timing: not part of the report or the Dataset (same input, same output)

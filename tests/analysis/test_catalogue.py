@@ -246,3 +246,28 @@ def test_bad_input_names_the_parameter():
         simple_planetary_catalogue(33, -114, 40, n_planets=3).select(families=["nope"])
     with pytest.raises(ValueError, match="speed_rpm"):
         simple_planetary_catalogue(33, -114, 40, n_planets=3).frequency_hz()
+
+
+def test_eccentricity_sidebands_of_paper_case1():
+    # z_s = 33, z_r = -114, z_p = 40, ring fixed: an eccentric sun or planet modulates the mesh
+    # at its rotation relative to the carrier, shifted by the carrier (the planets pass the
+    # sensor) to its rotation relative to the housing; the ring's (fixed) equals the carrier
+    # sideband s = ±1 and is not listed again
+    cat = simple_planetary_catalogue(33, -114, 40, n_planets=3, speed_rpm=1500.0)
+    f = cat.frequency_hz()
+    fs = 1500.0 / 60.0
+    fc = fs * 33 / 147
+    fm = 114 * fc
+    fp = fc - fm / 40  # planet speed (absolute, signed)
+    ecc = cat.family == "eccentricity"
+    want = sorted(m * fm + s * r for m in range(1, 8) for s in (-1, 1) for r in (fs, fs - fc))
+    assert np.allclose(sorted(f[ecc & (cat.member == "sun")]), want)
+    got_p = sorted(f[ecc & (cat.member == "planet")])
+    want_p = sorted(m * fm + s * r for m in range(1, 8) for s in (-1, 1)
+                    for r in (abs(fp), fm / 40))
+    assert np.allclose(got_p, want_p)
+    assert set(cat.member[ecc]) == {"sun", "planet"}
+    i = np.flatnonzero(ecc & (cat.member == "sun") & (cat.harmonic == 2)
+                       & (cat.sideband == 1))
+    assert sorted(cat.formula[i]) == ["2 f_mesh + f_sun", "2 f_mesh + |f_sun − f_carrier|"]
+    assert "eccentricity" in FAMILIES

@@ -10,11 +10,13 @@ from analysis.diagnosis import (
     Diagnosis,
     OrderProfile,
     deadband_db,
+    dynamic_range_db,
     family_evidence,
     family_lines,
     order_profile,
     prominence_db,
     signature_score,
+    with_noise_floor,
 )
 
 FS = 8192.0
@@ -133,3 +135,41 @@ def test_result_json_dataset_and_plot():
     assert ds["score"].attrs["units"] == "1"
     fig = d.plot()
     assert len(fig.axes) == 3
+
+
+def test_noise_floor_of_a_measurement_carried_over_to_a_noise_free_simulation():
+    # constant speed: lines at every integer order (amplitude 1) and a weak line at 20.5
+    # (30 dB down); the "measurement" adds white noise that buries the weak line
+    _t, rpm, ang = _ramp(duration=20.0, rpm0=900.0, rpm1=900.0)
+    clean = np.sum([np.sin(k * ang) for k in range(1, 41)], axis=0) + 0.03 * np.sin(20.5 * ang)
+    noise = 2.0 * np.random.default_rng(3).standard_normal(clean.size)
+    sim = order_profile(clean, FS, rpm, max_order=45, revolutions=16)
+    meas = order_profile(clean + noise, FS, rpm, max_order=45, revolutions=16)
+    only_noise = order_profile(noise, FS, rpm, max_order=45, revolutions=16)
+    dr = dynamic_range_db(meas)
+    # independent: line level minus the 20th percentile of the noise-only profile's level
+    i = np.argmin(abs(meas.order - 20.0))
+    line_db = float(np.max(sim.level_db[i - 2:i + 3]))
+    noise_db = float(np.percentile(only_noise.level_db, 20))
+    assert dr[i] == pytest.approx(line_db - noise_db, abs=1.5)
+    eff = with_noise_floor(sim, dr)
+    # powers add, the floor DR dB below the running maximum over +-6 orders (193 bins)
+    k = i + 5
+    top = np.max(sim.level_db[k - 96:k + 97])
+    assert eff.amplitude[k] ** 2 == pytest.approx(sim.amplitude[k] ** 2
+                                                  + 10 ** ((top - dr[k]) / 10), rel=1e-9)
+    # the floor level matches the measured one within 2 dB between the lines
+    between = (np.abs(meas.order - np.round(meas.order)) > 0.2) & (meas.order > 8) & (
+        meas.order < 37)
+    assert np.median(eff.level_db[between]) == pytest.approx(
+        np.median(meas.level_db[between]), abs=2.0)
+    # the weak line stands out of the noise-free simulation, not out of the measurement nor
+    # out of the simulation with the measurement's floor
+    j = np.argmin(abs(meas.order - 20.5))
+    assert prominence_db(sim)[j] > 8.0
+    assert prominence_db(meas)[j] < 3.0
+    assert prominence_db(eff)[j] < 3.0
+    with pytest.raises(ValueError, match="dynamic_range"):
+        with_noise_floor(sim, -1.0)
+    with pytest.raises(ValueError, match="percentile"):
+        dynamic_range_db(meas, percentile=60.0)

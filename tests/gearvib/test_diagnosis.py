@@ -58,19 +58,22 @@ def test_true_cause_ranks_first(results, name):
     d = results[name]
     fault, member = FAULTS[name]
     top = d.causes[0]
-    assert top.member == member, [(c.cause, c.member, round(c.score, 2)) for c in d.causes]
+    table = [(c.cause, c.member, round(c.score, 3)) for c in d.causes]
+    assert top.member == member, table
     assert top.score >= d.threshold
+    # clearly ahead of the causes on other members
+    other = max(c.score for c in d.causes if c.member != member and c.cause != "none")
+    assert top.score > other + 0.15, table
     if fault["kind"] in LOCAL:
-        # the member and the class (local tooth fault) rank first; which local kind leads is
-        # weak evidence (docs/diagnosis.md): the true kind is among the likely causes
-        assert top.cause in LOCAL
+        # the member and the class (local tooth fault) rank first; the true kind is likely and
+        # within 0.02 of the first: which local kind leads is not decided on these records
+        # (pitting-planet2 and broken-ring lose to a crack by 0.001 and 0.010; the benchmark's
+        # exact top-1 is higher, docs/diagnosis.md)
+        assert top.cause in LOCAL, table
         true = next(c for c in d.causes if c.cause == fault["kind"] and c.member == member)
-        assert true.score >= d.threshold
+        assert true.score >= d.threshold and top.score - true.score <= 0.02, table
     else:
-        assert top.cause == fault["kind"]
-        # and clearly ahead of the causes on other members
-        other = max(c.score for c in d.causes if c.member != member and c.cause != "none")
-        assert top.score > other + 0.15
+        assert top.cause == fault["kind"], table
 
 
 def test_healthy_gearbox_gives_no_cause_above_threshold(results):
