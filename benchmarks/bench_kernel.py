@@ -34,6 +34,7 @@ import time
 import numpy as np
 
 from gearvib import kernels as kn
+from gearvib import kernels_batch as kb
 from gearvib.assembly import assemble
 from gearvib.config import gearset_from_dict, load_config, load_gearset
 from gearvib.simulate import SpeedRamp, choose_step, prepare_run, static_equilibrium
@@ -203,14 +204,14 @@ def batched_vs_single(preset: str, cond, window: float, repeat: int) -> tuple[fl
     n_steps = round(window / dt)
     systems = [c.system for c in cases]
     y0 = np.array([c.y0 for c in cases])
-    rec, _, status, _ = kn.integrate_batch(systems, y0, dt, n_steps)
-    if status[0] != kn.STATUS_OK:
+    rec, _, status, _ = kb.integrate_batch(systems, y0, dt, n_steps)
+    if np.any(status[:, 0] != kn.STATUS_OK):
         raise SystemExit(f"batched run failed: status {status.tolist()}")
     for b, c in enumerate(cases):
         if rec[b].tobytes() != kn.integrate(c.system, c.y0, dt, n_steps)[0].tobytes():
             raise SystemExit(f"batched variant {b} differs from its single run")
     t_single = best(lambda: [kn.integrate(c.system, c.y0, dt, n_steps) for c in cases], repeat)
-    t_batch = best(lambda: kn.integrate_batch(systems, y0, dt, n_steps), repeat)
+    t_batch = best(lambda: kb.integrate_batch(systems, y0, dt, n_steps), repeat)
     return t_single, t_batch
 
 

@@ -1,5 +1,6 @@
 """The batched kernel: variants of one topology advanced together, each bit-identical to its
-single run (:func:`gearvib.kernels.integrate_batch` against :func:`gearvib.kernels.integrate`)."""
+single run (:func:`gearvib.kernels_batch.integrate_batch` against
+:func:`gearvib.kernels.integrate`)."""
 
 from __future__ import annotations
 
@@ -9,6 +10,7 @@ import numpy as np
 import pytest
 
 from gearvib import kernels as kn
+from gearvib import kernels_batch as kb
 from gearvib.assembly import assemble
 from gearvib.config import gearset_from_dict, load_config
 from gearvib.faults import Crack
@@ -43,8 +45,8 @@ def elastic_variants():
 
 
 def _assert_batch_equals_singles(systems, y0, dt, n_steps):
-    rec, changes, status, y_end = kn.integrate_batch(systems, np.array(y0), dt, n_steps)
-    assert status[0] == kn.STATUS_OK
+    rec, changes, status, y_end = kb.integrate_batch(systems, np.array(y0), dt, n_steps)
+    assert np.all(status[:, 0] == kn.STATUS_OK)
     for b, (system, y) in enumerate(zip(systems, y0, strict=True)):
         r, ch, st, y1 = kn.integrate(system, y, dt, n_steps)
         assert st[0] == kn.STATUS_OK
@@ -89,19 +91,19 @@ def test_topology_differences_are_named(elastic_variants):
     elastic = elastic_variants[0][0]
     rigid, _ = _start(_variant("paper-case1", 0.005))
     with pytest.raises(ValueError, match=r"variant 1 .*number of coordinates"):
-        kn.pack_batch([elastic, rigid])
+        kb.pack_batch([elastic, rigid])
     torque = prepare_run(_variant("paper-case1-elastic", 0.005),
                          TorqueDriven(60.0, load_inertia=0.1, duration=0.1, max_rpm=4000),
                          False).system
     with pytest.raises(ValueError, match=r"variant 1 .*drive mode"):
-        kn.pack_batch([elastic, torque])
+        kb.pack_batch([elastic, torque])
     other_ramp = prepare_run(_variant("paper-case1-elastic", 0.005),
                              SpeedRamp(0.0, 1000.0, 1.0, input_torque=60.0), False).system
     with pytest.raises(ValueError, match="speed table"):
-        kn.pack_batch([elastic, other_ramp])
+        kb.pack_batch([elastic, other_ramp])
     cracked = prepare_run(_variant("paper-case1-elastic", 0.005).with_faults(
         [Crack("sun", 3, severity=0.3)]), RAMP, False).system
     with pytest.raises(ValueError, match="variant 1 has local faults"):
-        kn.pack_batch([elastic, cracked])
+        kb.pack_batch([elastic, cracked])
     with pytest.raises(ValueError, match="at least one"):
-        kn.pack_batch([])
+        kb.pack_batch([])
