@@ -115,6 +115,7 @@ from gearvib.kernels import (
 from gearvib.lanes import (
     WIDTH,
     lanes_abs,
+    lanes_any,
     lanes_bcast,
     lanes_coef,
     lanes_floor,
@@ -380,6 +381,7 @@ def _split_times8(y, dt, ints, vals, uniform, mo, scr, splits, n_split, status):
     m_p = uniform[_B_PV]
     tol = 1e-9 * dt
     zero = lanes_splat(0.0)
+    one = lanes_splat(1.0)
     for b in range(WIDTH):
         n_split[b] = 0
     for m in range(_U(ints[H_NMESH])):
@@ -401,11 +403,18 @@ def _split_times8(y, dt, ints, vals, uniform, mo, scr, splits, n_split, status):
         for b in range(WIDTH):
             if status[b, 0] == STATUS_OK and scr[_R_SD, b] != 0.0:
                 k_most = max(k_most, int(scr[_R_NK, b]) + 1)
+        reach = 2.0 * sd * dt
         for k in range(k_most):
             bk = base + float(k)
             for q in range(b0, b1):
-                lanes_store(scr, _R_TAU * WIDTH,
-                            (bk + lanes_load(vals, (bv + q) * _UW) - s) / sd)
+                x = bk + lanes_load(vals, (bv + q) * _UW) - s
+                # lanes whose time x / sd can lie in (0, dt): of the sign of sd and within
+                # twice the step (a safe bound on the rounded quotient); no others divide
+                near = where_gt(sd, zero, where_gt(x, zero, where_le(x, reach, one, zero), zero),
+                                where_lt(x, zero, where_le(reach, x, one, zero), zero))
+                if not lanes_any(near):
+                    continue
+                lanes_store(scr, _R_TAU * WIDTH, x / sd)
                 for b in range(WIDTH):
                     if (status[b, 0] == STATUS_OK and scr[_R_SD, b] != 0.0
                             and k < int(scr[_R_NK, b]) + 1):

@@ -31,6 +31,7 @@ __all__ = [
     "WIDTH",
     "lanes8",
     "lanes_abs",
+    "lanes_any",
     "lanes_bcast",
     "lanes_coef",
     "lanes_floor",
@@ -466,3 +467,17 @@ def lanes_scatter(typingctx, arr, index, stride, value):
         return context.get_dummy_value()
 
     return types.void(arr, index, stride, value), codegen
+
+
+@intrinsic
+def lanes_any(typingctx, a):
+    """Whether any lane of ``a`` is non-zero (NaN counts as non-zero)."""
+    if a != lanes8:
+        return None
+
+    def codegen(context, builder, sig, args):
+        mask = builder.fcmp_unordered("!=", args[0], _ZERO)
+        bits = builder.bitcast(mask, ir.IntType(WIDTH))
+        return builder.icmp_unsigned("!=", bits, ir.Constant(ir.IntType(WIDTH), 0))
+
+    return types.boolean(a), codegen
