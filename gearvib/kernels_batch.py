@@ -292,18 +292,26 @@ def _rhs8(y, dy, mo, scr, ints, vals, uniform, rows, forces, tables, speed_tab, 
     mode = ints[H_IPAR + IP_MODE]
     k_in = _U(ints[H_IPAR + IP_INPUT])  # >= 0: every model has an input rotation
     if mode == DRIVE_SPEED:
-        phi = 0.0
-        w = 0.0
-        for b in range(WIDTH):
-            tb = scr[_R_T, b]
-            if b == 0 or tb != scr[_R_T, b - 1]:  # lanes at one time share the drive
-                phi, w = speed_at(speed_tab, tb)
-            scr[_R_PHI, b] = phi
-            scr[_R_W, b] = w
+        t0 = scr[_R_T, 0]
+        phi, w = speed_at(speed_tab, t0)
+        one_time = True
+        for b in range(1, WIDTH):
+            one_time = one_time and scr[_R_T, b] == t0
+        if one_time:  # the lanes at one time (the usual case) share the drive
+            phi_v = lanes_splat(phi)
+            w_v = lanes_splat(w)
+        else:
+            for b in range(WIDTH):
+                tb = scr[_R_T, b]
+                if b > 0 and tb != scr[_R_T, b - 1]:
+                    phi, w = speed_at(speed_tab, tb)
+                scr[_R_PHI, b] = phi
+                scr[_R_W, b] = w
+            phi_v = lanes_load(scr, _R_PHI * WIDTH)
+            w_v = lanes_load(scr, _R_W * WIDTH)
         torque = lanes_load(vals, (fpar + _U(FP_KC)) * _UW) * (
-            lanes_load(scr, _R_PHI * WIDTH) - lanes_load(y, k_in * _UW)) + lanes_load(
-            vals, (fpar + _U(FP_CC)) * _UW) * (lanes_load(scr, _R_W * WIDTH)
-                                               - lanes_load(y, (n + k_in) * _UW))
+            phi_v - lanes_load(y, k_in * _UW)) + lanes_load(
+            vals, (fpar + _U(FP_CC)) * _UW) * (w_v - lanes_load(y, (n + k_in) * _UW))
     elif mode in (DRIVE_TORQUE, DRIVE_MOTOR):
         for b in range(WIDTH):
             x = scr[_R_T, b] if mode == DRIVE_TORQUE else y[n + k_in, b]
