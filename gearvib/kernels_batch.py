@@ -165,9 +165,9 @@ _ROW_INPUT, _ROW_OUTPUT, _ROW_FIRST = range(3)
 _ROW_FIELDS = 3
 
 # rows of the lane scratch ``scr`` (shape (_N_SCR, WIDTH))
-(_R_T, _R_PHI, _R_W, _R_S, _R_KL, _R_KR, _R_T0, _R_H, _R_ON, _R_TA, _R_TB, _R_SD, _R_NK,
- _R_BASE, _R_TAU, _R_NF, _R_DEFL, _R_SPEED) = range(18)
-_N_SCR = 18
+(_R_T, _R_PHI, _R_W, _R_SD, _R_NK, _R_BASE, _R_TAU, _R_NF, _R_DEFL, _R_SPEED, _R_NS,
+ _R_LIVE) = range(12)
+_N_SCR = 12
 
 
 @njit(cache=True, inline="always")
@@ -426,7 +426,7 @@ def _split_times8(y, dt, ints, vals, uniform, mo, scr, splits, n_split, status):
                 for b in range(WIDTH):
                     if (status[b, 0] == STATUS_OK and scr[_R_SD, b] != 0.0
                             and k < int(scr[_R_NK, b]) + 1):
-                        n_split[b] = insert_split(splits[b], n_split[b], scr[_R_TAU, b], dt,
+                        n_split[b] = insert_split(splits[:, b], n_split[b], scr[_R_TAU, b], dt,
                                                   tol)
     most = 0
     for b in range(WIDTH):
@@ -499,16 +499,14 @@ def _record8(g, y, mo, scr, record, row, flank_state, contact_changes, count_unt
 
 
 @njit(cache=True, _nrt=False)
-def _rk4_step8(y, k1, k2, k3, k4, tmp, mo, scr, ints, vals, uniform, rows, forces, tables,
-               speed_tab, torque_tab):
-    """:func:`gearvib.kernels._rk4_step` of every lane from ``(scr[_R_T0], y)`` with the step
-    ``scr[_R_H]``; ``k1`` given; lanes with ``scr[_R_ON] == 0`` keep their state."""
+def _rk4_step8(t0, h, on, y, k1, k2, k3, k4, tmp, mo, scr, ints, vals, uniform, rows, forces,
+               tables, speed_tab, torque_tab):
+    """:func:`gearvib.kernels._rk4_step` of every lane from ``(t0, y)`` with the step ``h``
+    (lane vectors); ``k1`` given; lanes where ``on`` is 0 keep their state."""
     n2 = _U(2 * ints[H_N])
-    h = lanes_load(scr, _R_H * WIDTH)
     h2 = 0.5 * h
     h6 = h / 6.0
-    for b in range(WIDTH):
-        scr[_R_T, b] = scr[_R_T0, b] + 0.5 * scr[_R_H, b]
+    lanes_store(scr, _R_T * WIDTH, t0 + h2)
     for i in range(n2):
         r = i * _UW
         lanes_store(tmp, r, lanes_load(y, r) + h2 * lanes_load(k1, r))
@@ -517,13 +515,11 @@ def _rk4_step8(y, k1, k2, k3, k4, tmp, mo, scr, ints, vals, uniform, rows, force
         r = i * _UW
         lanes_store(tmp, r, lanes_load(y, r) + h2 * lanes_load(k2, r))
     _rhs8(tmp, k3, mo, scr, ints, vals, uniform, rows, forces, tables, speed_tab, torque_tab)
-    for b in range(WIDTH):
-        scr[_R_T, b] = scr[_R_T0, b] + scr[_R_H, b]
+    lanes_store(scr, _R_T * WIDTH, t0 + h)
     for i in range(n2):
         r = i * _UW
         lanes_store(tmp, r, lanes_load(y, r) + h * lanes_load(k3, r))
     _rhs8(tmp, k4, mo, scr, ints, vals, uniform, rows, forces, tables, speed_tab, torque_tab)
-    on = lanes_load(scr, _R_ON * WIDTH)
     for i in range(n2):
         r = i * _UW
         yi = lanes_load(y, r)
@@ -539,7 +535,7 @@ def batch_work(n_dof: int, n_mesh: int) -> tuple:
             np.empty((2 * n_mesh, WIDTH)),  # flank forces
             np.zeros((_N_SCR, WIDTH)),  # lane scratch
             np.empty((WIDTH, 2 * n_dof)),  # states of failed lanes
-            np.empty((WIDTH, work_shape(n_dof, n_mesh)[1])),  # sub-step times per lane
+            np.empty((work_shape(n_dof, n_mesh)[1], WIDTH)),  # sub-step times, lanes last
             np.zeros(WIDTH, dtype=np.int64))  # their counts
 
 
@@ -587,6 +583,9 @@ def integrate_chunk_batch(
     k3 = stages[2]
     k4 = stages[3]
     tmp = stages[4]
+    cap = splits.shape[0]
+    zero = lanes_splat(0.0)
+    dtv = lanes_splat(dt)
     n_live = 0
     for b in range(WIDTH):
         if status[b, 0] == STATUS_OK:
@@ -619,27 +618,26 @@ def integrate_chunk_batch(
         most = _split_times8(y, dt, ints, vals, uniform, mesh_out, scr, splits, n_split,
                              status)
         for b in range(WIDTH):
-            scr[_R_TA, b] = 0.0
+            scr[_R_NS, b] = n_split[b]
+            scr[_R_LIVE, b] = 1.0 if status[b, 0] == STATUS_OK else 0.0
+        n_sub = lanes_load(scr, _R_NS * WIDTH)
+        live = lanes_load(scr, _R_LIVE * WIDTH)
+        ta = zero
         for j in range(most + 1):
-            for b in range(WIDTH):
-                on = status[b, 0] == STATUS_OK and j <= n_split[b]
-                ta = scr[_R_TA, b]
-                tb = splits[b, j] if j < n_split[b] else dt
-                if not on:
-                    tb = ta
-                scr[_R_ON, b] = 1.0 if on else 0.0
-                scr[_R_TB, b] = tb
-                scr[_R_T, b] = t + ta
-                scr[_R_T0, b] = t + ta
-                scr[_R_H, b] = tb - ta
+            jv = lanes_splat(float(j))
+            tb = dtv
+            if j < cap:
+                tb = where_lt(jv, n_sub, lanes_load(splits, j * WIDTH), dtv)
+            on = where_le(jv, n_sub, live, zero)  # this sub-step is one of the lane's
+            tb = where_ne0(on, tb, ta)  # a waiting lane takes a zero step, masked
+            t0 = t + ta
             if j > 0:
+                lanes_store(scr, _R_T * WIDTH, t0)
                 _rhs8(y, k1, mesh_out, scr, ints, vals, uniform, rows, forces, tables,
-                      speed_tab,
-                      torque_tab)
-            _rk4_step8(y, k1, k2, k3, k4, tmp, mesh_out, scr, ints, vals, uniform, rows, forces,
-                       tables, speed_tab, torque_tab)
-            for b in range(WIDTH):
-                scr[_R_TA, b] = scr[_R_TB, b]
+                      speed_tab, torque_tab)
+            _rk4_step8(t0, tb - ta, on, y, k1, k2, k3, k4, tmp, mesh_out, scr, ints, vals,
+                       uniform, rows, forces, tables, speed_tab, torque_tab)
+            ta = tb
     for b in range(WIDTH):  # the failed lanes' states
         if status[b, 0] != STATUS_OK:
             for i in range(n2):
