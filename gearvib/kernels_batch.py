@@ -16,11 +16,12 @@ for variant ``b``, in the same order, with no fused multiply-add (see :mod:`gear
   does not have is stored as 0 and masked out of its sums (``lanes_madd_nz``), so each lane
   sums exactly its own terms in its own order;
 * branches of the contact law become selects of both computed sides;
-* what is per variant and not vectorised -- the stiffness-table lookup at each lane's mesh
-  position, the drive tables at each lane's time, the per-step record and checks and the
-  sub-step times at the stiffness jumps -- calls the single kernel's own compiled functions
-  (:func:`gearvib.kernels.interp_cell`, :func:`~gearvib.kernels.speed_at`,
-  :func:`~gearvib.kernels.record_sample`, :func:`~gearvib.kernels.split_times`) per lane.
+* the stiffness-table lookup (:func:`gearvib.lanes.lanes_table_pair`) repeats the single
+  kernel's cell arithmetic on lanes; the per-step record and checks (:func:`_record8`) and the
+  sub-step times at the stiffness jumps (:func:`_split_times8`) run on lanes where they compute
+  and per lane where they store or insert, through the single kernel's own helpers
+  (:func:`gearvib.kernels.insert_split`, :func:`~gearvib.kernels.speed_at`,
+  :func:`~gearvib.kernels.table_at`) in its order.
 
 Each variant keeps its own step splitting: a step whose stiffness jumps fall at different
 times in different variants is split per lane, and the lanes advance in lockstep through the
@@ -32,6 +33,11 @@ contact law is evaluated per mesh and per pair and is not written on lanes).
 
 A batch has :data:`WIDTH` lanes; fewer variants are padded with copies of the first one (a
 padded lane costs as much as a real one).
+
+The compiled code of this module embeds helpers of :mod:`gearvib.kernels` and
+:mod:`gearvib.lanes`; numba's cache does not notice changes in another file, so clear the
+cache (``__pycache__/*.nbi``) after editing those. The bit-identity tests would fail on a stale
+cache rather than pass silently.
 """
 
 from __future__ import annotations
@@ -173,7 +179,7 @@ _N_SCR = 12
 @njit(cache=True, inline="always")
 def _dot(acc, ints, p0, p1, col, vals, val, y, off, mode):
     """``acc + sum_p vals[val + p] * y[off + ints[col + p]]`` per lane, term by term in the
-    single kernel's order. ``mode`` (:data:`BatchSystem.modes`): 2 one value in every lane
+    single kernel's order. ``mode`` (:attr:`BatchSystem.uniform`): 2 one value in every lane
     (loaded once), 1 a value per lane and none zero, 0 stored zeros (masked out)."""
     if mode == 2:
         for p in range(p0, p1):
@@ -225,7 +231,7 @@ def _rhs8(y, dy, mo, scr, ints, vals, uniform, rows, forces, tables, speed_tab, 
     operation the single kernel's (module doc), in another loop order: the meshes' flank
     forces first, then every acceleration row in one pass (its stiffness and damping sum,
     gyroscopic term, input torque, load and the mesh forces in mesh order, as the single
-    kernel adds them to that row: ``rows``, :meth:`BatchSystem.rows`), so a row stays in a
+    kernel adds them to that row: ``rows``, :func:`row_terms`), so a row stays in a
     register instead of going through memory once per mesh.
     """
     n = _U(ints[H_N])
@@ -377,7 +383,7 @@ def _rhs8(y, dy, mo, scr, ints, vals, uniform, rows, forces, tables, speed_tab, 
 
 @njit(cache=True, _nrt=False)
 def _split_times8(y, dt, ints, vals, uniform, mo, scr, splits, n_split, status):
-    """:func:`gearvib.kernels.split_times` of every live lane (healthy meshes), the
+    """``gearvib.kernels._split_times`` of every live lane (healthy meshes), the
     extrapolation and the candidate times computed on lanes; each lane's candidates are
     inserted into its sorted list in the single kernel's order. Returns the largest count."""
     n = _U(ints[H_N])
@@ -437,7 +443,8 @@ def _split_times8(y, dt, ints, vals, uniform, mo, scr, splits, n_split, status):
 @njit(cache=True, _nrt=False)
 def _record8(g, y, mo, scr, record, row, flank_state, contact_changes, count_until, ints,
              vals, status):
-    """:func:`gearvib.kernels.record_sample` of every live lane at once: the same rows (each
+    """The per-step header of :func:`gearvib.kernels.integrate_chunk` (record the sample,
+    count contact changes, check it) for every live lane at once: the same rows (each
     vector stored lane by lane), the same contact-change counts and the same checks in the
     same priority (a non-finite state, then a deflection limit, then the speed limit). Sets
     the status of the lanes that fail and returns their number. Rows of lanes that failed
@@ -873,6 +880,8 @@ def integrate_batch(
     Returns
     -------
     record : ndarray, shape (n_variants, n_steps + 1, 2 n + 3 n_mesh)
+        Samples per variant (the rows after a failed variant's failed step are unspecified,
+        as the single run leaves them).
     contact_changes : ndarray of int64, shape (n_variants, n_mesh)
     status : ndarray of int64, shape (n_variants, 2)
         ``(STATUS_*, step)`` per variant.

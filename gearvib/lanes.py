@@ -301,7 +301,7 @@ def lanes_table_pair(typingctx, tables, base_left, base_right, n_table, table_wi
     table of the left flank starts at flat index ``base_left`` (sample ``i`` of lane ``b`` at
     ``base_left + i * WIDTH + b``, shared: ``base_left + i``), the right one at
     ``base_right``; ``n_table`` samples per cycle. Per lane the operations of
-    :func:`gearvib.kernels.interp_cell` and of the single kernel's
+    ``gearvib.kernels._interp_cell`` and of the single kernel's
     ``(1 - w) * T[i0] + w * T[i1]``. When every lane is in the same table cell (the
     variants of a sweep mostly are), the samples are two contiguous vector loads per table;
     otherwise they are read lane by lane. Returns ``(k_left, k_right)``.
