@@ -12,13 +12,20 @@ step), it prints side by side:
   divided by its number of right-hand-side evaluations, and a loop of right-hand sides alone
   over recorded states. The C output is checked to be bit-identical to the numba kernel's
   before any time is reported.
-* **batched against single throughput per core**: 8 variants of the gear set (mesh damping and
-  bearing stiffness varied) advanced by one call of
-  :func:`gearvib.kernels.integrate_chunk_batch`, against the 8 runs one after another; the
-  batch's rows are checked bit-identical to the single runs'.
+* **batched against single throughput per core**: 8 variants of the gear set advanced by one
+  call of :func:`gearvib.kernels_batch.integrate_chunk_batch`, against the 8 runs one after
+  another (:func:`gearvib.kernels.integrate_chunk`), both on systems packed beforehand (a
+  sweep packs once per run; packing 8 variants takes about 4 ms); rounds of single, batch
+  interleaved, the median ratio and its spread over the rounds. Two variant sets: the sun-mesh
+  damping ratio alone, and the damping with the planet bearing stiffness (then the stiffness
+  operator differs per lane, with stored zeros where the lanes' patterns differ). Also the
+  right-hand sides alone (single and batched loops over recorded states) and a batch of 8
+  copies of one variant (every lane takes the same sub-steps: no lane waits). Every batched
+  variant's rows are checked bit-identical to its single run's before any time is reported.
+  ``--batch-only`` skips the C comparison.
 
-Every time is the best of several repetitions of a fixed window (process CPU time; the machine
-is shared), numba compilation excluded.
+Every time is CPU time of a fixed window (the machine is shared), numba compilation excluded;
+the C comparison reports the best of several repetitions.
 """
 
 from __future__ import annotations
@@ -34,6 +41,7 @@ import time
 import numpy as np
 
 from gearvib import kernels as kn
+from gearvib import kernels_batch as kb
 from gearvib.assembly import assemble
 from gearvib.config import gearset_from_dict, load_config, load_gearset
 from gearvib.simulate import SpeedRamp, choose_step, prepare_run, static_equilibrium
@@ -180,47 +188,104 @@ def rhs_per_eval(case: Case, c, n_steps: int, repeat: int) -> dict:
 
 
 N_BATCH = 8
+#: Start of the batched comparison's window [s] (the run-up at about 1600 min^-1, as for C).
+T_BATCH = 0.4
+#: The batched variant sets: sun-mesh damping ratio x1 ... x2.75, with or without the planet
+#: bearing stiffness x1 ... x1.35 (elastic model only).
+VARIANT_SETS = ("damping", "damping+bearing")
 
 
-def batch_variants(preset: str) -> list:
-    """8 variants: sun-mesh damping ratio x1 ... x2.75, elastic: planet bearing stiffness."""
+def batch_variants(preset: str, which: str) -> list:
+    """The 8 variants of ``preset`` of a set of :data:`VARIANT_SETS`."""
     cfg, base = load_config(preset)
     out = []
     for k in range(N_BATCH):
         d = set_path(cfg, "meshes.sun.damping_ratio", 0.005 * (1 + 0.25 * k))
-        if "elastic" in preset:
+        if which == "damping+bearing":
             d = set_path(d, "bodies.planet.support.radial", 1.5e8 * (1 + 0.05 * k))
         out.append(assemble(gearset_from_dict(d, base=base)))
     return out
 
 
-def batched_vs_single(preset: str, cond, window: float, repeat: int) -> tuple[float, float]:
-    """CPU time of 8 single runs and of one batched call over the same window."""
-    cases = [Case(m, cond, 0.0) for m in batch_variants(preset)]
+def batched_vs_single(preset: str, which: str, cond, window: float, rounds: int) -> dict:
+    """Per-core throughput of one batched call against 8 single calls (packed beforehand)."""
+    cases = [Case(m, cond, T_BATCH) for m in batch_variants(preset, which)]
     dt = cases[0].dt
+    first = cases[0].first
     if any(c.dt != dt for c in cases):
         raise SystemExit("the variants' automatic steps differ")
     n_steps = round(window / dt)
-    systems = [c.system for c in cases]
-    y0 = np.array([c.y0 for c in cases])
-    rec, _, status, _ = kn.integrate_batch(systems, y0, dt, n_steps)
-    if status[0] != kn.STATUS_OK:
-        raise SystemExit(f"batched run failed: status {status.tolist()}")
+    n, nm = cases[0].n, cases[0].nm
+    t0 = time.process_time()
+    batch = kb.pack_batch([c.system for c in cases])
+    t_pack = time.process_time() - t0
+    same = kb.pack_batch([cases[0].system] * N_BATCH)
+
+    def run_batch(b, y0s):
+        y = np.ascontiguousarray(np.array(y0s).T)
+        rec = np.empty((kb.WIDTH, n_steps, kn.n_signals(n, nm)))
+        fs = np.full((kb.WIDTH, nm), -1, dtype=np.int64)
+        ch = np.zeros((kb.WIDTH, nm), dtype=np.int64)
+        st = np.zeros((kb.WIDTH, 2), dtype=np.int64)
+        kb.integrate_chunk_batch(y, first, n_steps, dt, b.astuple(), rec, 0, fs, ch,
+                                 first + n_steps, kb.batch_work(n, nm), st)
+        if np.any(st[:, 0] != kn.STATUS_OK):
+            raise SystemExit(f"batched run failed: status {st.tolist()}")
+        return rec
+
+    rec = run_batch(batch, [c.y0 for c in cases])
     for b, c in enumerate(cases):
-        if rec[b].tobytes() != kn.integrate(c.system, c.y0, dt, n_steps)[0].tobytes():
+        if rec[b].tobytes() != c.run_numba(c.y0.copy(), first, n_steps).tobytes():
             raise SystemExit(f"batched variant {b} differs from its single run")
-    t_single = best(lambda: [kn.integrate(c.system, c.y0, dt, n_steps) for c in cases], repeat)
-    t_batch = best(lambda: kn.integrate_batch(systems, y0, dt, n_steps), repeat)
-    return t_single, t_batch
+
+    def clock(fn) -> float:
+        t0 = time.process_time()
+        fn()
+        return time.process_time() - t0
+
+    single = lambda: [c.run_numba(c.y0.copy(), first, n_steps) for c in cases]  # noqa: E731
+    ratios, ratios_same = [], []
+    for _ in range(rounds):  # single, batch, single, batch of copies, interleaved
+        ratios.append(clock(single) / clock(lambda: run_batch(batch, [c.y0 for c in cases])))
+        ratios_same.append(clock(lambda: [cases[0].run_numba(cases[0].y0.copy(), first, n_steps)
+                                          for _ in range(N_BATCH)])
+                           / clock(lambda: run_batch(same, [cases[0].y0] * N_BATCH)))
+    # right-hand sides alone over the recorded states of variant 0
+    states = np.ascontiguousarray(rec[0][:, : 2 * n])
+    lanes = np.ascontiguousarray(np.repeat(states[:, :, None], kb.WIDTH, axis=2))
+    dy, mo = np.empty(2 * n), np.empty((nm, kn.MESH_OUT_COLUMNS))
+    dyb, mob = np.empty((2 * n, kb.WIDTH)), np.empty((nm, kb.BATCH_MESH_COLUMNS, kb.WIDTH))
+    n_eval = 20 * states.shape[0]
+    t0 = first * dt
+    kb.rhs_loop_batch(lanes, t0, dt, 10, batch.astuple(), dyb, mob)
+    rhs = []
+    for _ in range(rounds):
+        t_s = clock(lambda: kn.rhs_loop(states, t0, dt, n_eval, cases[0].packed, dy, mo))
+        t_b = clock(lambda: kb.rhs_loop_batch(lanes, t0, dt, n_eval // N_BATCH,
+                                              batch.astuple(), dyb, mob))
+        rhs.append((t_s / n_eval * 1e9, t_b / (n_eval // N_BATCH) * 1e9))
+    rhs = np.array(rhs)
+    return {"ratio": ratios, "same": ratios_same, "rhs_single": float(np.median(rhs[:, 0])),
+            "rhs_batch": float(np.median(rhs[:, 1])),
+            "rhs_ratio": [N_BATCH * a / b for a, b in rhs], "pack": t_pack}
+
+
+def _spread(x: list[float]) -> str:
+    return f"{np.median(x):5.2f} ({min(x):.2f}-{max(x):.2f})"
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="shorter windows, 3 repetitions")
+    parser.add_argument("--batch-only", action="store_true",
+                        help="only the batched-against-single comparison")
     args = parser.parse_args()
     repeat = 3 if args.quick else 7
     window = 0.02 if args.quick else 0.1
     cond = SpeedRamp(0.0, 4000.0, 1.0, input_torque=60.0)
+    if args.batch_only:
+        print_batched(cond, window, rounds=5 if args.quick else 11)
+        return
     with tempfile.TemporaryDirectory() as tmp:
         builds = [("O2", CFLAGS), ("native", CFLAGS_NATIVE)]
         libs = {name: build_c(tmp, flags, name) for name, flags in builds}
@@ -243,14 +308,25 @@ def main() -> None:
                       f"{r['rhs_numba']:16.1f} {r['rhs_c']:8.1f} "
                       f"{r['rhs_numba'] / r['rhs_c']:6.2f}")
             print("(records of the C loop and of the numba kernel bit-identical)")
-    print(f"\nbatched ({N_BATCH} variants: sun-mesh damping, planet bearing stiffness) against "
-          f"{N_BATCH} single runs, {window} s from t = 0 (CPU time, best of {repeat})")
-    print(f"{'model':22s} {'8 single [s]':>13s} {'batched [s]':>12s} {'throughput ratio':>17s}")
-    for preset in ("paper-case1", "paper-case1-elastic"):
-        t_s, t_b = batched_vs_single(preset, cond, window, repeat)
-        print(f"{preset:22s} {t_s:13.4f} {t_b:12.4f} {t_s / t_b:17.2f}")
-    print("(every batched variant bit-identical to its single run)")
+    print_batched(cond, window, rounds=5 if args.quick else 11)
 
+
+def print_batched(cond, window: float, rounds: int) -> None:
+    """The batched-against-single table."""
+    load = os.getloadavg()[0]
+    print(f"\nbatched kernel ({N_BATCH} variants in one call) against {N_BATCH} single runs, "
+          f"{window} s from t = {T_BATCH} s (~1600 min^-1): CPU time, median (min-max) of "
+          f"{rounds} interleaved rounds; load average {load:.1f}")
+    print(f"{'model':22s} {'variants':16s} {'throughput':>17s} {'same sub-steps':>17s} "
+          f"{'RHS alone':>17s} {'ns/RHS single':>14s} {'batch/lane':>11s}")
+    for preset, which in (("paper-case1", "damping"), ("paper-case1-elastic", "damping"),
+                          ("paper-case1-elastic", "damping+bearing")):
+        r = batched_vs_single(preset, which, cond, window, rounds)
+        print(f"{preset:22s} {which:16s} {_spread(r['ratio']):>17s} {_spread(r['same']):>17s} "
+              f"{_spread(r['rhs_ratio']):>17s} {r['rhs_single']:14.0f} "
+              f"{r['rhs_batch'] / N_BATCH:11.0f}")
+    print("(throughput: 8 single runs' time / the batch's; same sub-steps: 8 copies of one "
+          "variant, no lane waits; every batched variant bit-identical to its single run)")
 
 if __name__ == "__main__":
     main()

@@ -72,7 +72,6 @@ from analysis.jit import prepare_cache
 prepare_cache(__file__)  # a writable numba cache also in read-only installs (before @njit)
 
 __all__ = [
-    "BATCH_MESH_COLUMNS",
     "DRIVE_MOTOR",
     "DRIVE_NONE",
     "DRIVE_SPEED",
@@ -83,25 +82,23 @@ __all__ = [
     "STATUS_OK",
     "STATUS_SPEED",
     "KernelSystem",
-    "batch_work_shape",
     "csr",
     "evaluate_rhs",
     "fir_decimate",
     "flank_forces",
     "flank_forces_two_lines",
+    "insert_split",
     "integrate",
-    "integrate_batch",
     "integrate_chunk",
-    "integrate_chunk_batch",
     "jump_positions",
     "n_signals",
     "operators",
     "pack",
-    "pack_batch",
     "periodic_interp",
     "rhs_loop",
+    "speed_at",
     "speed_profile",
-    "topology_difference",
+    "table_at",
     "work_shape",
 ]
 
@@ -320,7 +317,8 @@ def csr(mat: np.ndarray, pattern: np.ndarray | None = None
     Entries keep the row-major order of the dense matrix, so the sums of the kernels are
     evaluated in a fixed order (deterministic results). ``pattern`` (boolean, the shape of
     ``mat``) stores these entries instead of the non-zeros (a batch's common pattern,
-    :func:`pack_batch`; entries outside ``mat``'s non-zeros are stored as 0).
+    :func:`gearvib.kernels_batch.pack_batch`; entries outside ``mat``'s non-zeros are stored
+    as 0).
     """
     a = np.asarray(mat, dtype=np.float64)
     rows, cols = np.nonzero(a if pattern is None else pattern)
@@ -390,7 +388,8 @@ def pack(system: KernelSystem, patterns: list[np.ndarray] | None = None,
     -----
     ``floats`` holds a copy of ``deflection_limit``: pack after setting it. ``patterns`` (one
     boolean array per operator of :func:`operators`) stores those entries instead of each
-    operator's non-zeros: the common pattern of a batch (:func:`pack_batch`).
+    operator's non-zeros: the common pattern of a batch
+    (:func:`gearvib.kernels_batch.pack_batch`).
     """
     n, n_mesh = system.n_dof, system.n_mesh
     ops = operators(system)
@@ -1312,428 +1311,6 @@ def fir_decimate(
                 out[o, c] += tap * buf[r, c]
 
 
-# ---------------------------------------------------------------------------------------------
-# Batched kernel: several parameter sets of one topology advanced together
-# ---------------------------------------------------------------------------------------------
-
-#: Rows of the per-variant scratch of the batched kernel.
-(_B_D, _B_DD, _B_DR, _B_DDR, _B_S, _B_FL, _B_FR, _B_ACC, _B_ACC2, _B_TQ, _B_T, _B_H,
- _B_TA, _B_TB, _B_ON, _B_NSPLIT, _B_T0) = range(17)
-BATCH_SCRATCH_ROWS = 17
-#: Columns of the batched ``mesh_out`` (``F_L, -F_R, k_eff, state, delta, s, delta_R``).
-BATCH_MESH_COLUMNS = 7
-
-
-def batch_work_shape(n_dof: int, n_mesh: int, n_batch: int) -> tuple[int, int, int]:
-    """Shape of the ``work`` buffer of :func:`integrate_chunk_batch`."""
-    return 6, max(2 * n_dof, 4 * n_mesh + 4), n_batch
-
-
-@njit(cache=True, _nrt=False)
-def _rhs_batch(tv, y, dy, mo, scr, ints, vals, tables, speed_tab, torque_tab):
-    """:func:`_rhs` of every variant ``b`` (last axis) at time ``tv[b]``, in one pass.
-
-    The same floating-point operations in the same order as :func:`_rhs` per variant (so each
-    column is bit-identical to a single run's); the sparse structure is decoded once for all
-    variants and the innermost loops run over the batch, so they vectorise (conditional
-    updates are written as selects). The variants share one sparsity pattern (the union of
-    theirs, :func:`pack_batch`); an entry a variant does not have is stored as 0 and skipped
-    (a stored entry of a single run is never 0), so each variant sums exactly its own terms.
-    ``scr`` holds per-variant scratch rows; ``mo`` has shape ``(n_mesh, BATCH_MESH_COLUMNS,
-    n_batch)``. Models with local faults or manufacturing errors are not batched.
-    """
-    nb = _U(y.shape[1])
-    n = _U(ints[H_N])
-    n_mesh = _U(ints[H_NMESH])
-    n_table = tables.shape[2]
-    lp = _U(ints[H_LP])
-    li = _U(ints[H_LI])
-    lv = _U(ints[H_LV])
-    a0 = _U(ints[H_ACC0])
-    for i in range(n):
-        for b in range(nb):
-            dy[i, b] = y[n + i, b]
-            dy[n + i, b] = vals[a0 + i, b]
-        for p in range(_U(ints[lp + i]), _U(ints[lp + i + _U1])):
-            j = _U(ints[li + p])
-            for b in range(nb):
-                v = vals[lv + p, b]
-                a = dy[n + i, b]
-                dy[n + i, b] = a + v * y[j, b] if v != 0.0 else a
-    fpar = _U(ints[H_FPAR])
-    carrier = ints[H_IPAR + IP_CARRIER]
-    if ints[H_IPAR + IP_GYRO] != 0 and carrier >= 0:
-        kc = n + _U(carrier)
-        cp = _U(ints[H_CP])
-        ci = _U(ints[H_CI])
-        cv = _U(ints[H_CV])
-        gp = _U(ints[H_GP])
-        gi = _U(ints[H_GI])
-        gv = _U(ints[H_GV])
-        for i in range(n):
-            for b in range(nb):
-                scr[_B_ACC, b] = 0.0
-                scr[_B_ACC2, b] = 0.0
-            for p in range(_U(ints[cp + i]), _U(ints[cp + i + _U1])):
-                j = _U(ints[ci + p])
-                for b in range(nb):
-                    v = vals[cv + p, b]
-                    a = scr[_B_ACC, b]
-                    scr[_B_ACC, b] = a + v * y[j, b] if v != 0.0 else a
-            for p in range(_U(ints[gp + i]), _U(ints[gp + i + _U1])):
-                j = n + _U(ints[gi + p])
-                for b in range(nb):
-                    v = vals[gv + p, b]
-                    a = scr[_B_ACC2, b]
-                    scr[_B_ACC2, b] = a + v * y[j, b] if v != 0.0 else a
-            for b in range(nb):
-                om = y[kc, b]
-                dy[n + i, b] += (om * om) * scr[_B_ACC, b] + om * scr[_B_ACC2, b]
-    mode = ints[H_IPAR + IP_MODE]
-    k_in = _U(ints[H_IPAR + IP_INPUT])
-    phi = 0.0
-    w = 0.0
-    for b in range(nb):
-        torque = 0.0
-        if mode == DRIVE_SPEED:
-            if b == 0 or tv[b] != tv[b - 1]:  # variants at the same time share the drive
-                phi, w = _speed_at(speed_tab, tv[b])
-            torque = vals[fpar + _U(FP_KC), b] * (phi - y[k_in, b]) + vals[
-                fpar + _U(FP_CC), b] * (w - y[n + k_in, b])
-        elif mode == DRIVE_TORQUE:
-            torque = _table_at(torque_tab, tv[b])
-        elif mode == DRIVE_MOTOR:
-            torque = _table_at(torque_tab, y[n + k_in, b])
-        scr[_B_TQ, b] = torque
-    ii = _U(ints[H_II])
-    iv = _U(ints[H_IV])
-    for p in range(_U(ints[H_NI])):
-        j = n + _U(ints[ii + p])
-        for b in range(nb):
-            v = vals[iv + p, b]
-            tq = scr[_B_TQ, b]
-            a = dy[j, b]
-            dy[j, b] = a + v * tq if (tq != 0.0 and v != 0.0) else a
-    k_out = ints[H_IPAR + IP_OUTPUT]
-    if k_out >= 0:
-        ko = n + _U(k_out)
-        for b in range(nb):
-            e = vals[fpar + _U(FP_OUTDIR), b]
-            wo = e * y[ko, b]
-            scr[_B_TQ, b] = -e * (
-                vals[fpar + _U(FP_T0), b] + vals[fpar + _U(FP_C1), b] * wo
-                + vals[fpar + _U(FP_C2), b] * wo * abs(wo)
-            )
-        oi = _U(ints[H_OI])
-        ov = _U(ints[H_OV])
-        for p in range(_U(ints[H_NO])):
-            j = n + _U(ints[oi + p])
-            for b in range(nb):
-                v = vals[ov + p, b]
-                a = dy[j, b]
-                dy[j, b] = a + v * scr[_B_TQ, b] if v != 0.0 else a
-    vp = _U(ints[H_VP])
-    vi = _U(ints[H_VI])
-    vv = _U(ints[H_VV])
-    fp = _U(ints[H_FP])
-    fi = _U(ints[H_FI])
-    fv = _U(ints[H_FV])
-    pp = _U(ints[H_PP])
-    pi = _U(ints[H_PI])
-    pv = _U(ints[H_PV])
-    s0 = _U(ints[H_S0])
-    bl = _U(ints[H_BL])
-    mc = _U(ints[H_MC])
-    rflag = _U(ints[H_RFLAG])
-    rvp = _U(ints[H_RVP])
-    rvi = _U(ints[H_RVI])
-    rvv = _U(ints[H_RVV])
-    rfp = _U(ints[H_RFP])
-    rfi = _U(ints[H_RFI])
-    rfv = _U(ints[H_RFV])
-    for m in range(n_mesh):
-        for b in range(nb):
-            scr[_B_D, b] = 0.0
-            scr[_B_DD, b] = 0.0
-            scr[_B_S, b] = vals[s0 + m, b]
-        for p in range(_U(ints[vp + m]), _U(ints[vp + m + _U1])):
-            j = _U(ints[vi + p])
-            for b in range(nb):
-                v = vals[vv + p, b]
-                a = scr[_B_D, b]
-                c = scr[_B_DD, b]
-                scr[_B_D, b] = a + v * y[j, b] if v != 0.0 else a
-                scr[_B_DD, b] = c + v * y[n + j, b] if v != 0.0 else c
-        two_lines = ints[rflag + m] != 0
-        if two_lines:
-            for b in range(nb):
-                scr[_B_DR, b] = 0.0
-                scr[_B_DDR, b] = 0.0
-            for p in range(_U(ints[rvp + m]), _U(ints[rvp + m + _U1])):
-                j = _U(ints[rvi + p])
-                for b in range(nb):
-                    v = vals[rvv + p, b]
-                    a = scr[_B_DR, b]
-                    c = scr[_B_DDR, b]
-                    scr[_B_DR, b] = a + v * y[j, b] if v != 0.0 else a
-                    scr[_B_DDR, b] = c + v * y[n + j, b] if v != 0.0 else c
-        else:
-            for b in range(nb):
-                scr[_B_DR, b] = scr[_B_D, b]
-                scr[_B_DDR, b] = scr[_B_DD, b]
-        for p in range(_U(ints[pp + m]), _U(ints[pp + m + _U1])):
-            j = _U(ints[pi + p])
-            for b in range(nb):
-                v = vals[pv + p, b]
-                a = scr[_B_S, b]
-                scr[_B_S, b] = a + v * y[j, b] if v != 0.0 else a
-        for b in range(nb):
-            s = scr[_B_S, b]
-            i0, i1, wt = _interp_cell(n_table, s)
-            kl = (1.0 - wt) * tables[0, m, _U(i0), b] + wt * tables[0, m, _U(i1), b]
-            kr = (1.0 - wt) * tables[1, m, _U(i0), b] + wt * tables[1, m, _U(i1), b]
-            d = scr[_B_D, b]
-            dr = scr[_B_DR, b]
-            fl, fr, ke, st = flank_forces_two_lines(d, scr[_B_DD, b], dr, scr[_B_DDR, b], kl,
-                                                    kr, vals[bl + m, b], vals[mc + m, b])
-            scr[_B_FL, b] = fl if two_lines else fl + fr  # one line: the summed force
-            scr[_B_FR, b] = fr
-            mo[m, 0, b] = fl
-            mo[m, 1, b] = -fr
-            mo[m, 2, b] = ke
-            mo[m, 3, b] = st
-            mo[m, 4, b] = d
-            mo[m, 5, b] = s
-            mo[m, 6, b] = dr
-        for p in range(_U(ints[fp + m]), _U(ints[fp + m + _U1])):
-            j = n + _U(ints[fi + p])
-            for b in range(nb):
-                v = vals[fv + p, b]
-                f = scr[_B_FL, b]
-                a = dy[j, b]
-                dy[j, b] = a - f * v if (f != 0.0 and v != 0.0) else a
-        if two_lines:
-            for p in range(_U(ints[rfp + m]), _U(ints[rfp + m + _U1])):
-                j = n + _U(ints[rfi + p])
-                for b in range(nb):
-                    v = vals[rfv + p, b]
-                    f = scr[_B_FR, b]
-                    a = dy[j, b]
-                    dy[j, b] = a - f * v if (f != 0.0 and v != 0.0) else a
-
-
-@njit(cache=True, _nrt=False)
-def _split_times_batch(y, dt, ints, vals, mo, splits, b):
-    """:func:`_split_times` of variant ``b`` (healthy meshes) into ``splits[:, b]``."""
-    n = _U(ints[H_N])
-    pp = _U(ints[H_PP])
-    pi = _U(ints[H_PI])
-    pv = _U(ints[H_PV])
-    bp = _U(ints[H_BP])
-    bv = _U(ints[H_BV])
-    tol = 1e-9 * dt
-    cap = splits.shape[0]
-    count = 0
-    for m in range(_U(ints[H_NMESH])):
-        b0 = _U(ints[bp + m])
-        b1 = _U(ints[bp + m + _U1])
-        if b1 == b0:
-            continue
-        s = mo[m, 5, b]
-        sd = 0.0
-        for p in range(_U(ints[pp + m]), _U(ints[pp + m + _U1])):
-            if vals[pv + p, b] != 0.0:
-                sd += vals[pv + p, b] * y[n + _U(ints[pi + p]), b]
-        s_end = s + sd * dt
-        lo = min(s, s_end)
-        hi = max(s, s_end)
-        if sd == 0.0:
-            continue
-        base = np.floor(lo)
-        for k in range(int(np.floor(hi) - base) + 1):
-            for q in range(b0, b1):
-                tau = (base + k + vals[bv + q, b] - s) / sd
-                # _insert_split on column b
-                if not (tol < tau < dt - tol):
-                    continue
-                jj = count
-                while jj > 0 and splits[jj - 1, b] > tau:
-                    jj -= 1
-                if (jj > 0 and tau - splits[jj - 1, b] <= tol) or (
-                        jj < count and splits[jj, b] - tau <= tol):
-                    continue
-                if count == cap:
-                    continue
-                for r in range(count, jj, -1):
-                    splits[r, b] = splits[r - 1, b]
-                splits[jj, b] = tau
-                count += 1
-    return count
-
-
-@njit(cache=True)
-def integrate_chunk_batch(
-    y: np.ndarray,
-    first_step: int,
-    n_steps: int,
-    dt: float,
-    ints: np.ndarray,
-    vals: np.ndarray,
-    tables: np.ndarray,
-    speed_tab: np.ndarray,
-    torque_tab: np.ndarray,
-    record: np.ndarray,
-    record_offset: int,
-    flank_state: np.ndarray,
-    contact_changes: np.ndarray,
-    count_until: int,
-    work: np.ndarray,
-    mesh_out: np.ndarray,
-    status: np.ndarray,
-) -> None:
-    """:func:`integrate_chunk` of several variants of one topology at once (batch last axis).
-
-    Every variant ``b`` takes exactly the steps, sub-steps and floating-point operations of
-    its single run, so its rows are bit-identical to :func:`integrate_chunk`'s; the variants
-    advance in lockstep (a variant whose step has fewer sub-steps than another's waits, its
-    state masked), and the right-hand sides of all variants are evaluated in one pass
-    (:func:`_rhs_batch`). Built by :func:`pack_batch`.
-
-    Parameters
-    ----------
-    y : ndarray, shape (2 n, n_batch)
-        States; updated in place.
-    first_step, n_steps, dt, record_offset, count_until
-        As in :func:`integrate_chunk`.
-    ints : ndarray of int64
-        The packed integer array shared by every variant.
-    vals : ndarray, shape (n_vals, n_batch)
-        The packed float arrays, one column per variant.
-    tables : ndarray, shape (2, n_mesh, n_table, n_batch)
-        Flank stiffness tables.
-    speed_tab, torque_tab : ndarray
-        Drive tables shared by every variant.
-    record : ndarray, shape (n_batch, rows, 2 n + 3 n_mesh)
-        Recorded rows per variant.
-    flank_state, contact_changes : ndarray of int64, shape (n_batch, n_mesh)
-        As in :func:`integrate_chunk`, per variant.
-    work : ndarray, shape :func:`batch_work_shape`
-        Stage buffers and scratch.
-    mesh_out : ndarray, shape (n_mesh, BATCH_MESH_COLUMNS, n_batch)
-        Scratch for the mesh quantities.
-    status : ndarray of int64, shape (3,)
-        ``(STATUS_*, global step, variant)``; ``STATUS_OK`` when every variant did every step.
-        The chunk stops at the first variant that fails (its single run would stop there).
-    """
-    nb = y.shape[1]
-    n = ints[H_N]
-    n_mesh = ints[H_NMESH]
-    lim = _U(ints[H_LIMIT])
-    spl = _U(ints[H_FPAR]) + _U(FP_SPEED_LIMIT)
-    k_in = ints[H_IPAR + IP_INPUT]
-    k1 = work[0]
-    k2 = work[1]
-    k3 = work[2]
-    k4 = work[3]
-    tmp = work[4]
-    splits = work[5]
-    scr = np.empty((BATCH_SCRATCH_ROWS, nb))  # once per chunk, C-contiguous rows
-    tv = scr[_B_T]
-    hv = scr[_B_H]
-    ta = scr[_B_TA]
-    tb = scr[_B_TB]
-    on = scr[_B_ON]
-    nsplit = scr[_B_NSPLIT]
-    n2 = 2 * n
-    status[0] = STATUS_OK
-    status[1] = first_step + n_steps
-    status[2] = -1
-    for step in range(n_steps):
-        g = first_step + step
-        t = g * dt
-        for b in range(nb):
-            tv[b] = t
-        _rhs_batch(tv, y, k1, mesh_out, scr, ints, vals, tables, speed_tab, torque_tab)
-        row = record_offset + step
-        for b in range(nb):
-            bad = STATUS_OK
-            for i in range(n2):
-                v = y[i, b]
-                record[b, row, i] = v
-                if not np.isfinite(v):
-                    bad = STATUS_NONFINITE
-            for m in range(n_mesh):
-                record[b, row, n2 + m] = mesh_out[m, 0, b]
-                record[b, row, n2 + n_mesh + m] = mesh_out[m, 1, b]
-                record[b, row, n2 + 2 * n_mesh + m] = mesh_out[m, 2, b]
-                st = int(mesh_out[m, 3, b])
-                if flank_state[b, m] >= 0 and st != flank_state[b, m] and g <= count_until:
-                    contact_changes[b, m] += 1
-                flank_state[b, m] = st
-                lm = vals[lim + _U(m), b]
-                if bad == STATUS_OK and not (abs(mesh_out[m, 4, b]) <= lm
-                                             and abs(mesh_out[m, 6, b]) <= lm):
-                    bad = STATUS_DEFLECTION
-            if bad == STATUS_OK and k_in >= 0 and not abs(y[n + k_in, b]) <= vals[spl, b]:
-                bad = STATUS_SPEED
-            if bad != STATUS_OK:
-                status[0] = bad
-                status[1] = g
-                status[2] = b
-                return
-        most = 0
-        for b in range(nb):
-            c = _split_times_batch(y, dt, ints, vals, mesh_out, splits, b)
-            nsplit[b] = c
-            ta[b] = 0.0
-            if c > most:
-                most = c
-        for j in range(most + 1):
-            for b in range(nb):
-                on[b] = 1.0 if j <= nsplit[b] else 0.0
-                tb[b] = splits[j, b] if j < nsplit[b] else dt
-                tv[b] = t + ta[b]
-                hv[b] = tb[b] - ta[b]
-            if j > 0:
-                _rhs_batch(tv, y, k1, mesh_out, scr, ints, vals, tables, speed_tab,
-                           torque_tab)
-            _rk4_step_batch(tv, hv, on, y, k1, k2, k3, k4, tmp, mesh_out, scr, ints, vals,
-                            tables, speed_tab, torque_tab)
-            for b in range(nb):
-                if on[b] != 0.0:
-                    ta[b] = tb[b]
-
-
-@njit(cache=True, _nrt=False)
-def _rk4_step_batch(tv, hv, on, y, k1, k2, k3, k4, tmp, mo, scr, ints, vals, tables,
-                    speed_tab, torque_tab):
-    """:func:`_rk4_step` of every variant from ``(tv[b], y[:, b])`` with step ``hv[b]``; only
-    variants with ``on[b] != 0`` are updated (``tv`` is overwritten)."""
-    n2 = _U(2 * ints[H_N])
-    nb = _U(y.shape[1])
-    for b in range(nb):
-        scr[_B_T0, b] = tv[b]
-        tv[b] = scr[_B_T0, b] + 0.5 * hv[b]
-    for i in range(n2):
-        for b in range(nb):
-            tmp[i, b] = y[i, b] + (0.5 * hv[b]) * k1[i, b]
-    _rhs_batch(tv, tmp, k2, mo, scr, ints, vals, tables, speed_tab, torque_tab)
-    for i in range(n2):
-        for b in range(nb):
-            tmp[i, b] = y[i, b] + (0.5 * hv[b]) * k2[i, b]
-    _rhs_batch(tv, tmp, k3, mo, scr, ints, vals, tables, speed_tab, torque_tab)
-    for b in range(nb):
-        tv[b] = scr[_B_T0, b] + hv[b]
-    for i in range(n2):
-        for b in range(nb):
-            tmp[i, b] = y[i, b] + hv[b] * k3[i, b]
-    _rhs_batch(tv, tmp, k4, mo, scr, ints, vals, tables, speed_tab, torque_tab)
-    for i in range(n2):
-        for b in range(nb):
-            if on[b] != 0.0:
-                y[i, b] += (hv[b] / 6.0) * (k1[i, b] + 2.0 * (k2[i, b] + k3[i, b]) + k4[i, b])
-
-
 def integrate(
     system: KernelSystem, y0: np.ndarray, dt: float, n_steps: int
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -1791,148 +1368,8 @@ def integrate(
     return record, changes, status, y
 
 
-_BLOCK_NAMES = {
-    "lp": "sparsity of the stiffness and damping operators",
-    "li": "sparsity of the stiffness and damping operators",
-    "cp": "sparsity of the centripetal operator", "ci": "sparsity of the centripetal operator",
-    "gp": "sparsity of the gyroscopic operator", "gi": "sparsity of the gyroscopic operator",
-    "ii": "coordinates the input torque acts on", "oi": "coordinates the load acts on",
-    "vp": "sparsity of the mesh vectors", "vi": "sparsity of the mesh vectors",
-    "fp": "sparsity of the mesh force vectors", "fi": "sparsity of the mesh force vectors",
-    "pp": "sparsity of the mesh-position vectors", "pi": "sparsity of the mesh-position vectors",
-    "bp": "number of stiffness jumps per mesh (shape of the stiffness tables)",
-    "rflag": "meshes with a distinct back-flank line of action",
-    "rvp": "sparsity of the back-flank vectors", "rvi": "sparsity of the back-flank vectors",
-    "rfp": "sparsity of the back-flank force vectors",
-    "rfi": "sparsity of the back-flank force vectors",
-    "frec": "local faults or manufacturing errors", "fint": "local faults or manufacturing errors",
-}
-
-
-def topology_difference(a: tuple, b: tuple) -> str | None:
-    """What differs between the topologies of two packed systems (:func:`pack`), or None.
-
-    Two systems can share a batch (:func:`pack_batch`) when their packed integer arrays (sizes,
-    drive, sparsity patterns, jump counts) and their drive tables are equal and the float
-    arrays and stiffness tables have the same shapes.
-    """
-    ia, ib = a[0], b[0]
-    if ia[H_N] != ib[H_N]:
-        return f"number of coordinates ({ia[H_N]} vs {ib[H_N]})"
-    if ia[H_NMESH] != ib[H_NMESH]:
-        return f"number of meshes ({ia[H_NMESH]} vs {ib[H_NMESH]})"
-    names = ("drive mode", "input coordinate", "output coordinate", "carrier coordinate",
-             "gyroscopic switch")
-    for k in range(N_IPAR):
-        if ia[H_IPAR + k] != ib[H_IPAR + k]:
-            return f"{names[k]} ({ia[H_IPAR + k]} vs {ib[H_IPAR + k]})"
-    for k, name in enumerate(_INT_BLOCKS):
-        h = H_LP + k
-        ea = ia[h + 1] if h + 1 < H_LP + len(_INT_BLOCKS) else ia.size
-        eb = ib[h + 1] if h + 1 < H_LP + len(_INT_BLOCKS) else ib.size
-        if not np.array_equal(ia[ia[h]:ea], ib[ib[h]:eb]):
-            return _BLOCK_NAMES[name]
-    if not np.array_equal(ia, ib) or a[1].shape != b[1].shape:
-        return "layout of the packed arrays"
-    if a[2].shape != b[2].shape:
-        return f"stiffness table length ({a[2].shape[2]} vs {b[2].shape[2]} samples per cycle)"
-    if a[3].shape != b[3].shape or not np.array_equal(a[3], b[3]):
-        return "speed table of the drive"
-    if a[4].shape != b[4].shape or not np.array_equal(a[4], b[4]):
-        return "torque table of the drive"
-    return None
-
-
-def pack_batch(systems: list) -> tuple:
-    """Pack systems of one topology for :func:`integrate_chunk_batch` (batch on the last axis).
-
-    Every sparse operator is stored with the union of the variants' patterns (an entry that is
-    exactly zero in one variant only, e.g. a rounding residue of a rotated bearing stiffness,
-    is stored as 0 there and skipped by the kernel), so the variants share one integer array.
-
-    Parameters
-    ----------
-    systems : list of KernelSystem
-        The variants: the same coordinates, meshes, drive and stiffness-jump counts
-        (:func:`topology_difference`), no local faults or manufacturing errors.
-
-    Returns
-    -------
-    ints, vals, tables, speed_table, torque_table
-        ``vals`` of shape ``(n_vals, n_batch)`` and ``tables`` of shape
-        ``(2, n_mesh, n_table, n_batch)``.
-
-    Raises
-    ------
-    ValueError
-        An empty list, a variant with faults, or variants whose topologies differ (the message
-        names the variant and what differs).
-    """
-    if not systems:
-        raise ValueError("pack_batch needs at least one system")
-    for k, s in enumerate(systems):
-        if not isinstance(s, KernelSystem):
-            raise TypeError(f"variant {k} is a {type(s).__name__}, not a KernelSystem")
-        if s.fault_records is not None and np.any(s.fault_records >= 0):
-            raise ValueError(f"variant {k} has local faults or manufacturing errors; such "
-                             "models are not batched (simulate them one by one)")
-        s0 = systems[0]
-        if k and (s.n_dof, s.n_mesh) != (s0.n_dof, s0.n_mesh):
-            raise ValueError(f"variant {k} does not share the topology of variant 0: its "
-                             f"number of coordinates / meshes ({s.n_dof} / {s.n_mesh}) differs "
-                             f"({s0.n_dof} / {s0.n_mesh})")
-        if k and s.left_tables.shape != s0.left_tables.shape:
-            raise ValueError(f"variant {k} does not share the topology of variant 0: its "
-                             f"stiffness table length ({s.left_tables.shape[1]} samples per "
-                             f"cycle) differs ({s0.left_tables.shape[1]})")
-    ops = [operators(s) for s in systems]
-    patterns = [np.logical_or.reduce([o[k] != 0.0 for o in ops]) for k in range(len(ops[0]))]
-    packed = [pack(s, patterns) for s in systems]
-    for k, p in enumerate(packed[1:], start=1):
-        if (why := topology_difference(packed[0], p)) is not None:
-            raise ValueError(f"variant {k} does not share the topology of variant 0: its "
-                             f"{why} differs")
-    vals = np.ascontiguousarray(np.stack([p[1] for p in packed], axis=-1))
-    tables = np.ascontiguousarray(np.stack([p[2] for p in packed], axis=-1))
-    return packed[0][0], vals, tables, packed[0][3], packed[0][4]
-
-
-def integrate_batch(
-    systems: list, y0: np.ndarray, dt: float, n_steps: int
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """:func:`integrate` of several variants of one topology in one batched kernel call.
-
-    Parameters
-    ----------
-    systems : list of KernelSystem
-        The variants (:func:`pack_batch`).
-    y0 : ndarray, shape (n_batch, 2 n)
-        Initial states.
-    dt, n_steps
-        As in :func:`integrate`.
-
-    Returns
-    -------
-    record : ndarray, shape (n_batch, n_steps + 1, 2 n + 3 n_mesh)
-    contact_changes : ndarray of int64, shape (n_batch, n_mesh)
-    status : ndarray of int64, shape (3,)
-        ``(STATUS_*, step, variant)``.
-    y : ndarray, shape (n_batch, 2 n)
-        States after the last step.
-    """
-    batch = pack_batch(systems)
-    nb = len(systems)
-    n = systems[0].n_dof
-    nm = systems[0].n_mesh
-    y = np.ascontiguousarray(np.asarray(y0, dtype=np.float64).T)
-    if y.shape != (2 * n, nb):
-        raise ValueError(f"y0 must have shape ({nb}, {2 * n})")
-    record = np.empty((nb, n_steps + 1, n_signals(n, nm)))
-    flank_state = np.full((nb, nm), -1, dtype=np.int64)
-    changes = np.zeros((nb, nm), dtype=np.int64)
-    work = np.empty(batch_work_shape(n, nm, nb))
-    mesh_out = np.empty((nm, BATCH_MESH_COLUMNS, nb))
-    status = np.zeros(3, dtype=np.int64)
-    integrate_chunk_batch(y, 0, n_steps + 1, float(dt), *batch, record, 0, flank_state,
-                          changes, n_steps, work, mesh_out, status)
-    return record, changes, status, np.ascontiguousarray(y.T)
+# The per-variant pieces :mod:`gearvib.kernels_batch` evaluates exactly as here (public names
+# of this module's compiled helpers).
+insert_split = _insert_split
+speed_at = _speed_at
+table_at = _table_at
