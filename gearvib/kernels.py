@@ -50,6 +50,18 @@ sub-steps that end exactly at the predicted crossings (:func:`integrate_chunk`).
 add their own jump positions, once per period of their faulty teeth (a sorted list searched by
 bisection). Samples stay on the fixed grid.
 
+Short sub-steps (runs with faults only). A fault makes identical, in-phase planets deflect
+differently, so their meshes reach the same stiffness jump at slightly different times and
+the sub-steps between these times can be far shorter than ``dt``. A sub-step of length
+``h <= h_E = c_E (omega dt)**2.5 / omega`` takes an explicit Euler step (its first stage is
+computed anyway), one of ``h <= h_M = c_M (omega dt)**(5/3) / omega`` the midpoint rule
+(:func:`short_step_header`; ``omega`` the highest natural frequency of the stiffest system).
+Their local error on a mode of that frequency, ``(omega h)**(p+1) / (p+1)!``, stays below
+:data:`SHORT_STEP_ERROR_FRACTION` of the RK4 step's ``(omega dt)**5 / 120``; both limits
+shrink faster than ``dt`` and the number of such sub-steps per unit time is set by the
+tooth-pair changes, not by ``dt``, so the scheme keeps the order of the RK4 steps. Runs
+without faults take RK4 on every sub-step, unchanged bit for bit.
+
 Layouts
 -------
 ``system`` is the tuple of a few flat arrays built by :func:`pack` (via
@@ -100,6 +112,7 @@ __all__ = [
     "pack_batch",
     "periodic_interp",
     "rhs_loop",
+    "short_step_header",
     "speed_profile",
     "topology_difference",
     "work_shape",
@@ -287,6 +300,24 @@ NEED_MARGIN = 0.1
 #: An eccentricity angle within this distance [rad] of its cached reference gets its cosine
 #: and sine from a Taylor series of the difference (exact to rounding).
 ECC_TAYLOR_RANGE = 0.05
+#: Local error of a short sub-step (Euler, midpoint) relative to that of a full RK4 step
+#: on the highest natural frequency (module docstring, "Short sub-steps").
+SHORT_STEP_ERROR_FRACTION = 0.1
+
+
+def short_step_header(omega_max: float) -> tuple[float, float, float]:
+    """``(omega, c_E, c_M)``: the header of the fault float block that sets the short
+    sub-steps of a run with faults (module docstring).
+
+    ``(omega h_E)**2 / 2 = rho (omega dt)**5 / 120`` and
+    ``(omega h_M)**3 / 6 = rho (omega dt)**5 / 120`` with ``rho`` =
+    :data:`SHORT_STEP_ERROR_FRACTION`; zeros (RK4 everywhere) when ``omega_max`` [rad/s] is
+    not positive and finite.
+    """
+    rho = SHORT_STEP_ERROR_FRACTION
+    if not (0.0 < omega_max < np.inf):
+        return 0.0, 0.0, 0.0
+    return float(omega_max), float(np.sqrt(rho / 60.0)), float((rho / 20.0) ** (1.0 / 3.0))
 
 
 def jump_positions(left: np.ndarray, right: np.ndarray) -> list[np.ndarray]:
@@ -1158,6 +1189,17 @@ def _rk4_step(t, h, y, k1, k2, k3, k4, tmp, mesh_out, ints, vals, tables, speed_
         y[i] += h6 * (k1[i] + 2.0 * (k2[i] + k3[i]) + k4[i])
 
 
+@njit(cache=True, _nrt=False)
+def _short_step_limits(vals, fv0, dt):
+    """Longest sub-steps ``h_E, h_M`` [s] taken by the explicit Euler and the midpoint rule
+    in a run with faults (header of the fault float block, :func:`short_step_header`)."""
+    om = vals[fv0]
+    if not om > 0.0:
+        return 0.0, 0.0
+    z = om * dt
+    return vals[fv0 + 1] * z**2.5 / om, vals[fv0 + 2] * z ** (5.0 / 3.0) / om
+
+
 @njit(cache=True)
 def integrate_chunk(
     y: np.ndarray,
@@ -1175,6 +1217,9 @@ def integrate_chunk(
     status: np.ndarray,
 ) -> None:
     """Advance ``y`` by ``n_steps`` classical RK4 steps, recording the state before every step.
+
+    Steps are split at the stiffness jumps; in a run with faults the short sub-steps take
+    Euler or midpoint steps (module docstring).
 
     Parameters
     ----------
@@ -1214,6 +1259,12 @@ def integrate_chunk(
     n2 = 2 * n
     status[0] = STATUS_OK
     status[1] = first_step + n_steps
+    h_euler = 0.0
+    h_mid = 0.0
+    for m in range(n_mesh):
+        if ints[ints[H_FREC] + m] >= 0:  # a run with faults: short sub-steps (see above)
+            h_euler, h_mid = _short_step_limits(vals, ints[H_FVAL], dt)
+            break
     for m in range(n_mesh):
         mesh_out[m, 7] = 1.0  # until the first step decides (the pair law is exact anywhere)
         mesh_out[m, 8] = np.nan  # no cached cycle range, no event-free interval
@@ -1256,10 +1307,22 @@ def integrate_chunk(
             t_b = splits[j] if j < n_split else dt
             if j > 0:
                 _rhs(t + t_a, y, k1, mesh_out, ints, vals, tables, speed_tab, torque_tab)
-            _rk4_step(
-                t + t_a, t_b - t_a, y, k1, k2, k3, k4, tmp, mesh_out,
-                ints, vals, tables, speed_tab, torque_tab,
-            )
+            h = t_b - t_a
+            if h <= h_euler:
+                for i in range(n2):
+                    y[i] += h * k1[i]
+            elif h <= h_mid:
+                for i in range(n2):
+                    tmp[i] = y[i] + 0.5 * h * k1[i]
+                _rhs(t + t_a + 0.5 * h, tmp, k2, mesh_out, ints, vals, tables, speed_tab,
+                     torque_tab)
+                for i in range(n2):
+                    y[i] += h * k2[i]
+            else:
+                _rk4_step(
+                    t + t_a, h, y, k1, k2, k3, k4, tmp, mesh_out,
+                    ints, vals, tables, speed_tab, torque_tab,
+                )
             t_a = t_b
 
 

@@ -293,17 +293,20 @@ class FaultLaw:
         return bool(self.meshes) or bool(np.any(self.f_const))
 
     # ---- kernel arrays -------------------------------------------------------------------
-    def pack(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def pack(self, short_steps: tuple[float, float, float] = (0.0, 0.0, 0.0),
+             ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``(records, ints, floats)`` for :func:`gearvib.kernels.pack`.
 
         ``records[m]`` is the start of mesh ``m``'s record in ``ints`` (-1: healthy); the
         offsets in a record are relative to the start of ``ints`` or ``floats`` (the kernel
-        adds the block bases).
+        adds the block bases). ``floats`` starts with ``short_steps``
+        (:func:`gearvib.kernels.short_step_header`: the highest natural frequency and the
+        coefficients of the short sub-steps; zeros: RK4 on every sub-step).
         """
         rec = np.full(self.n_mesh, -1, dtype=np.int64)
         ints: list[int] = []
-        vals: list[np.ndarray] = []
-        nv = 0
+        vals: list[np.ndarray] = [np.asarray(short_steps, dtype=np.float64)]
+        nv = 3
 
         def put(a) -> int:
             nonlocal nv
