@@ -282,7 +282,7 @@ N_HEADER = H_FVAL + 3
 # entries that are offsets point into the fault int block or (``*V``) the fault float block
 (F_NU, F_NSLOT, F_Z1, F_S1, F_T1, F_Z2, F_S2, F_T2, F_PAIRV, F_PROF1, F_SHIFT1V, F_PROF2,
  F_SHIFT2V, F_PROFV, F_NECC, F_ECCI, F_ECCV, F_CONSTV, F_NEV, F_EVV, F_ALWAYS, F_NPER, F_SHARED,
- F_EPSV, F_NEED, F_PERIOD, F_EXIT) = range(27)
+ F_EPSV, F_NEED, F_PERIOD, F_EXIT, F_NEEDRES) = range(28)
 
 #: A table segment whose stiffness changes by more than this fraction of the table's range
 #: within one table interval is a jump (e.g. the tooth-pair changes of a rectangular model).
@@ -294,9 +294,6 @@ MAX_JUMPS_PER_MESH = 32
 #: refuses as an index, so a slip cannot go unnoticed).
 _U = np.uint64
 _U1 = np.uint64(1)
-#: Margin [mesh cycles] around a step's extrapolated mesh positions within which a faulty
-#: pair in contact switches a faulty mesh to its pair law.
-NEED_MARGIN = 0.1
 #: An eccentricity angle within this distance [rad] of its cached reference gets its cosine
 #: and sine from a Taylor series of the difference (exact to rounding).
 ECC_TAYLOR_RANGE = 0.05
@@ -469,9 +466,10 @@ def pack(system: KernelSystem, patterns: list[np.ndarray] | None = None,
 MESH_OUT_COLUMNS = 18
 """Columns of the per-mesh scratch ``mesh_out``: ``F_L, -F_R, k_eff, state, delta, s,
 delta_R``; for a faulty mesh whether its pair law is needed during the current step (set
-before every step by :func:`_split_times`; 1 is always correct), the cycle range that flag was
-found for, an interval of mesh positions free of its long-period jump positions, and two
-reference angles of its eccentricities with their cosines and sines (columns 12-17)."""
+before every step by :func:`_split_times`; 1 is always correct), the range of need-table
+cells that flag was found for, an interval of mesh positions free of its long-period jump
+positions, and two reference angles of its eccentricities with their cosines and sines
+(columns 12-17)."""
 
 
 def n_signals(n_dof: int, n_mesh: int) -> int:
@@ -626,18 +624,17 @@ def _table_at(tab: np.ndarray, t: float) -> float:
 
 
 @njit(cache=True, _nrt=False)
-def _pairs_needed(ints, vals, rec, lo, hi):
-    """A faulty mesh needs its pair law somewhere in ``lo <= s <= hi``: it has deviations, or a
-    pair with a faulty tooth is in contact there, within :data:`NEED_MARGIN` (its table over
-    the period of the faulty teeth, read in floating point: no integer division)."""
+def _pairs_needed(ints, rec, c_lo, c_hi):
+    """A faulty mesh needs its pair law somewhere in the cells ``c_lo .. c_hi`` of its need
+    table (``F_NEEDRES`` cells per mesh cycle, over the period of the faulty teeth; a pair
+    with a faulty tooth in contact, margin included, :meth:`gearvib.faults.law.FaultedMesh.
+    need_table`), or always (deviations). Read in floating point: no integer division."""
     r = ints[H_FINT] + rec
     if ints[r + F_ALWAYS] != 0:
         return True
     period = ints[r + F_PERIOD]
     need = ints[H_FINT] + ints[r + F_NEED]
-    # a margin of a tenth of a cycle covers the difference between the extrapolated and the
-    # actual mesh positions of the stages (entries of faulty pairs end sub-steps exactly)
-    for c in range(int(np.floor(lo - NEED_MARGIN)), int(np.floor(hi + NEED_MARGIN)) + 1):
+    for c in range(int(c_lo), int(c_hi) + 1):
         x = float(c)
         k = int(x - period * np.floor(x / period))
         if k >= period:
@@ -1121,11 +1118,12 @@ def _split_times(y, dt, ints, vals, mesh_out, splits):
         s_end = s + sd * dt
         lo = min(s, s_end)
         hi = max(s, s_end)
-        if rec >= 0:  # the pair law of a faulty mesh during this step (cached per cycle)
-            flo = np.floor(lo - NEED_MARGIN)
-            fhi = np.floor(hi + NEED_MARGIN)
+        if rec >= 0:  # the pair law of a faulty mesh during this step (cached per cell)
+            res = ints[fi0 + rec + F_NEEDRES]
+            flo = np.floor(lo * res)
+            fhi = np.floor(hi * res)
             if not (mesh_out[m, 8] == flo and mesh_out[m, 9] == fhi):
-                mesh_out[m, 7] = 1.0 if _pairs_needed(ints, vals, rec, lo, hi) else 0.0
+                mesh_out[m, 7] = 1.0 if _pairs_needed(ints, rec, flo, fhi) else 0.0
                 mesh_out[m, 8] = flo
                 mesh_out[m, 9] = fhi
         if sd == 0.0:
