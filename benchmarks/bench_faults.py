@@ -8,15 +8,20 @@ healthy set), a pitting zone on a planet tooth, the eccentricity of the sun, pit
 every sun tooth and a planet pin error. Every variant runs interleaved with the others, each
 timed by the process CPU time (the machine is shared); each round's times are divided by the
 same round's healthy run and the median of these paired ratios is reported (with the best
-time), which is robust against the load of a shared machine.
+time), which is robust against the load of a shared machine; the quartiles and the extremes
+of the paired ratios and the load average before and after show how far to trust it. Where
+the load makes times too noisy, count work instead (instructions under callgrind, one
+OpenBLAS thread; docs/faults-sensors.md).
 
 Why some faults cost more than others:
 
 * a local tooth fault evaluates the pairs of the meshes of that gear one by one only while the
   faulty pair is in contact (a few of every ``z`` mesh cycles), elsewhere the healthy table;
 * a fault on one gear of ``paper-case1`` desynchronises its in-phase planets: their meshes then
-  reach the stiffness jumps at slightly different times and each gets its own RK4 sub-steps
-  (the 'severity 0' row has the pair law without this);
+  reach the stiffness jumps at slightly different times and each gets its own sub-steps, most
+  of them far shorter than the step, which take an Euler or midpoint step instead of RK4
+  (``gearvib.kernels``, "Short sub-steps"; the 'severity 0' row has the pair law without the
+  desynchronisation);
 * pitch errors (every tooth), the eccentricity and rigid pin errors touch every pair at every
   step (eccentricity and pin errors as a shifted table law).
 """

@@ -754,11 +754,6 @@ def _faulty_flanks(ints, vals, tables, m, rec, y, s, d, dd, dr, ddr, half, dampi
     if i0 >= nper:
         i0 = 0
         w = 0.0
-    # presence of the pair slots: the next pair (slot -1) ramps in over the last cell of the
-    # cycle, a pair ramps out over the cell that holds the contact ratio (as the table ramps)
-    psum = 0.0
-    for i in range(-1, nslot + 1):
-        psum += _presence(i, i0, w, nper, ce)
     # teeth of the next pair (counter floor(s) + 1; floating-point modulo: no integer
     # division); each older pair steps back by the sign
     k1 = 0
@@ -778,26 +773,25 @@ def _faulty_flanks(ints, vals, tables, m, rec, y, s, d, dd, dr, ddr, half, dampi
         elif k2 < 0:
             k2 += z2
     shared = ints[r + F_SHARED] != 0
-    share_l = 0.0
-    share_r = 0.0
-    if shared and psum > 0.0:
-        i1 = i0 + 1
-        if i1 == nper:
-            i1 = 0
-        share_l = ((1.0 - w) * tables[0, m, i0] + w * tables[0, m, i1]) / psum
-        share_r = ((1.0 - w) * tables[1, m, i0] + w * tables[1, m, i1]) / psum
     pv = fv0 + ints[r + F_PAIRV]
     prv = fv0 + ints[r + F_PROFV]
     h1 = fv0 + ints[r + F_SHIFT1V]
     h2 = fv0 + ints[r + F_SHIFT2V]
+    # one pass over the pair slots (the next pair, slot -1, ramps in over the last cell of the
+    # cycle, a pair ramps out over the cell that holds the contact ratio, as the table ramps).
+    # Shared pairs carry table / psum each: their sums are taken with a unit share and scaled
+    # once psum is known.
+    psum = 0.0
     f_el = 0.0
     f_er = 0.0
-    ke = 0.0
+    ke_l = 0.0
+    ke_r = 0.0
     on_l = False
     on_r = False
     for i in range(-1, nslot + 1):
         pres = _presence(i, i0, w, nper, ce)
         if pres > 0.0:
+            psum += pres
             # path position u = frac + i on the sampled grid; the entering pair (u < 0) takes
             # the values at u = 0
             idx = 0
@@ -806,8 +800,8 @@ def _faulty_flanks(ints, vals, tables, m, rec, y, s, d, dd, dr, ddr, half, dampi
                 idx = i0 + i * nper
                 wi = w
             if shared:
-                kl = share_l * pres
-                kr = share_r * pres
+                kl = pres
+                kr = pres
             else:
                 a = _U(pv + idx)  # offsets and counters >= 0: unsigned, no wraparound
                 c = _U(pv + nu + idx)
@@ -839,11 +833,11 @@ def _faulty_flanks(ints, vals, tables, m, rec, y, s, d, dd, dr, ddr, half, dampi
                     orr += (1.0 - wi) * vals[b3] + wi * vals[b3 + _U1]
             if kl > 0.0 and d + ol > half:
                 f_el += kl * (d + ol - half)
-                ke += kl
+                ke_l += kl
                 on_l = True
             if kr > 0.0 and dr + orr < -half:
                 f_er += kr * (dr + orr + half)
-                ke += kr
+                ke_r += kr
                 on_r = True
         # the next older pair
         k1 -= sg1
@@ -856,6 +850,22 @@ def _faulty_flanks(ints, vals, tables, m, rec, y, s, d, dd, dr, ddr, half, dampi
             k2 += z2
         elif k2 >= z2:
             k2 -= z2
+    if shared:
+        share_l = 0.0
+        share_r = 0.0
+        if psum > 0.0:
+            i1 = i0 + 1
+            if i1 == nper:
+                i1 = 0
+            share_l = ((1.0 - w) * tables[0, m, i0] + w * tables[0, m, i1]) / psum
+            share_r = ((1.0 - w) * tables[1, m, i0] + w * tables[1, m, i1]) / psum
+        on_l = on_l and share_l > 0.0
+        on_r = on_r and share_r > 0.0
+        f_el *= share_l
+        f_er *= share_r
+        ke_l *= share_l if on_l else 0.0
+        ke_r *= share_r if on_r else 0.0
+    ke = ke_l + ke_r
     fl = 0.0
     fr = 0.0
     st = 0
