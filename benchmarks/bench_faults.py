@@ -8,15 +8,20 @@ healthy set), a pitting zone on a planet tooth, the eccentricity of the sun, pit
 every sun tooth and a planet pin error. Every variant runs interleaved with the others, each
 timed by the process CPU time (the machine is shared); each round's times are divided by the
 same round's healthy run and the median of these paired ratios is reported (with the best
-time), which is robust against the load of a shared machine.
+time), which is robust against the load of a shared machine; the quartiles and the extremes
+of the paired ratios and the load average before and after show how far to trust it. Where
+the load makes times too noisy, count work instead (instructions under callgrind, one
+OpenBLAS thread; docs/faults-sensors.md).
 
 Why some faults cost more than others:
 
 * a local tooth fault evaluates the pairs of the meshes of that gear one by one only while the
   faulty pair is in contact (a few of every ``z`` mesh cycles), elsewhere the healthy table;
 * a fault on one gear of ``paper-case1`` desynchronises its in-phase planets: their meshes then
-  reach the stiffness jumps at slightly different times and each gets its own RK4 sub-steps
-  (the 'severity 0' row has the pair law without this);
+  reach the stiffness jumps at slightly different times and each gets its own sub-steps, most
+  of them far shorter than the step, which take an Euler or midpoint step instead of RK4
+  (``gearvib.kernels``, "Short sub-steps"; the 'severity 0' row has the pair law without the
+  desynchronisation);
 * pitch errors (every tooth), the eccentricity and rigid pin errors touch every pair at every
   step (eccentricity and pin errors as a shifted table law).
 """
@@ -24,6 +29,7 @@ Why some faults cost more than others:
 from __future__ import annotations
 
 import argparse
+import os
 import time
 
 import numpy as np
@@ -64,27 +70,39 @@ def variants(preset: str) -> list[tuple[str, object]]:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="3 repetitions, 0.25 s run-up")
+    parser.add_argument("--repeat", type=int, default=None, help=f"rounds (default {REPEAT})")
+    parser.add_argument("--preset", action="append", choices=("paper-case1", "paper-case2"),
+                        help="gear set (repeatable; default both)")
+    parser.add_argument("--only", action="append", metavar="TEXT",
+                        help="variants whose name contains TEXT (repeatable; the healthy run "
+                             "always runs)")
     args = parser.parse_args()
-    repeat = 3 if args.quick else REPEAT
+    repeat = args.repeat or (3 if args.quick else REPEAT)
     duration = 0.25 if args.quick else 1.0
     cond = SpeedRamp(0.0, 4000.0 * duration, duration, input_torque=60.0)
-    for preset in ("paper-case1", "paper-case2"):
-        runs = variants(preset)
+    for preset in args.preset or ("paper-case1", "paper-case2"):
+        runs = [(name, model) for name, model in variants(preset)
+                if name == "healthy" or not args.only or any(t in name for t in args.only)]
         for _, model in runs:  # compile, fill the caches
             simulate(model, cond, duration=0.02, progress=False)
         times: dict[str, list[float]] = {name: [] for name, _ in runs}
+        load0 = os.getloadavg()[0]
         for _ in range(repeat):
             for name, model in runs:
                 t0 = time.process_time()
                 simulate(model, cond, progress=False)
                 times[name].append(time.process_time() - t0)
+        load1 = os.getloadavg()[0]
         base = np.array(times["healthy"])
         print(f"\n{preset}: {duration:g} s run-up 0 -> {4000 * duration:g} min-1, CPU time, "
-              f"{repeat} interleaved rounds")
-        print(f"{'variant':42s} {'best [s]':>9s} {'ratio (median, min-max)':>24s}")
+              f"{repeat} interleaved rounds, load average {load0:.1f} -> {load1:.1f}")
+        print(f"{'variant':42s} {'best [s]':>9s} {'ratio: median':>14s} {'quartiles':>11s} "
+              f"{'min-max':>11s}")
         for name, t in times.items():
             r = np.array(t) / base
-            print(f"{name:42s} {min(t):9.3f} {np.median(r):9.3f} ({r.min():.2f}-{r.max():.2f})")
+            q1, q3 = np.percentile(r, [25, 75])
+            print(f"{name:42s} {min(t):9.3f} {np.median(r):14.3f} {q1:5.2f}-{q3:4.2f} "
+                  f"{r.min():5.2f}-{r.max():4.2f}")
 
 
 if __name__ == "__main__":

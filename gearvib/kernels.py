@@ -50,6 +50,18 @@ sub-steps that end exactly at the predicted crossings (:func:`integrate_chunk`).
 add their own jump positions, once per period of their faulty teeth (a sorted list searched by
 bisection). Samples stay on the fixed grid.
 
+Short sub-steps (runs with faults only). A fault makes identical, in-phase planets deflect
+differently, so their meshes reach the same stiffness jump at slightly different times and
+the sub-steps between these times can be far shorter than ``dt``. A sub-step of length
+``h <= h_E = c_E (omega dt)**2.5 / omega`` takes an explicit Euler step (its first stage is
+computed anyway), one of ``h <= h_M = c_M (omega dt)**(5/3) / omega`` the midpoint rule
+(:func:`short_step_header`; ``omega`` the highest natural frequency of the stiffest system).
+Their local error on a mode of that frequency, ``(omega h)**(p+1) / (p+1)!``, stays below
+:data:`SHORT_STEP_ERROR_FRACTION` of the RK4 step's ``(omega dt)**5 / 120``; both limits
+shrink faster than ``dt`` and the number of such sub-steps per unit time is set by the
+tooth-pair changes, not by ``dt``, so the scheme keeps the order of the RK4 steps. Runs
+without faults take RK4 on every sub-step, unchanged bit for bit.
+
 Layouts
 -------
 ``system`` is the tuple of a few flat arrays built by :func:`pack` (via
@@ -96,6 +108,7 @@ __all__ = [
     "pack",
     "periodic_interp",
     "rhs_loop",
+    "short_step_header",
     "speed_at",
     "speed_profile",
     "table_at",
@@ -266,7 +279,7 @@ N_HEADER = H_FVAL + 3
 # entries that are offsets point into the fault int block or (``*V``) the fault float block
 (F_NU, F_NSLOT, F_Z1, F_S1, F_T1, F_Z2, F_S2, F_T2, F_PAIRV, F_PROF1, F_SHIFT1V, F_PROF2,
  F_SHIFT2V, F_PROFV, F_NECC, F_ECCI, F_ECCV, F_CONSTV, F_NEV, F_EVV, F_ALWAYS, F_NPER, F_SHARED,
- F_EPSV, F_NEED, F_PERIOD, F_EXIT) = range(27)
+ F_EPSV, F_NEED, F_PERIOD, F_EXIT, F_NEEDRES) = range(28)
 
 #: A table segment whose stiffness changes by more than this fraction of the table's range
 #: within one table interval is a jump (e.g. the tooth-pair changes of a rectangular model).
@@ -278,12 +291,27 @@ MAX_JUMPS_PER_MESH = 32
 #: refuses as an index, so a slip cannot go unnoticed).
 _U = np.uint64
 _U1 = np.uint64(1)
-#: Margin [mesh cycles] around a step's extrapolated mesh positions within which a faulty
-#: pair in contact switches a faulty mesh to its pair law.
-NEED_MARGIN = 0.1
 #: An eccentricity angle within this distance [rad] of its cached reference gets its cosine
 #: and sine from a Taylor series of the difference (exact to rounding).
 ECC_TAYLOR_RANGE = 0.05
+#: Local error of a short sub-step (Euler, midpoint) relative to that of a full RK4 step
+#: on the highest natural frequency (module docstring, "Short sub-steps").
+SHORT_STEP_ERROR_FRACTION = 0.1
+
+
+def short_step_header(omega_max: float) -> tuple[float, float, float]:
+    """``(omega, c_E, c_M)``: the header of the fault float block that sets the short
+    sub-steps of a run with faults (module docstring).
+
+    ``(omega h_E)**2 / 2 = rho (omega dt)**5 / 120`` and
+    ``(omega h_M)**3 / 6 = rho (omega dt)**5 / 120`` with ``rho`` =
+    :data:`SHORT_STEP_ERROR_FRACTION`; zeros (RK4 everywhere) when ``omega_max`` [rad/s] is
+    not positive and finite.
+    """
+    rho = SHORT_STEP_ERROR_FRACTION
+    if not (0.0 < omega_max < np.inf):
+        return 0.0, 0.0, 0.0
+    return float(omega_max), float(np.sqrt(rho / 60.0)), float((rho / 20.0) ** (1.0 / 3.0))
 
 
 def jump_positions(left: np.ndarray, right: np.ndarray) -> list[np.ndarray]:
@@ -437,9 +465,10 @@ def pack(system: KernelSystem, patterns: list[np.ndarray] | None = None,
 MESH_OUT_COLUMNS = 18
 """Columns of the per-mesh scratch ``mesh_out``: ``F_L, -F_R, k_eff, state, delta, s,
 delta_R``; for a faulty mesh whether its pair law is needed during the current step (set
-before every step by :func:`_split_times`; 1 is always correct), the cycle range that flag was
-found for, an interval of mesh positions free of its long-period jump positions, and two
-reference angles of its eccentricities with their cosines and sines (columns 12-17)."""
+before every step by :func:`_split_times`; 1 is always correct), the range of need-table
+cells that flag was found for, an interval of mesh positions free of its long-period jump
+positions, and two reference angles of its eccentricities with their cosines and sines
+(columns 12-17)."""
 
 
 def n_signals(n_dof: int, n_mesh: int) -> int:
@@ -594,18 +623,17 @@ def _table_at(tab: np.ndarray, t: float) -> float:
 
 
 @njit(cache=True, _nrt=False)
-def _pairs_needed(ints, vals, rec, lo, hi):
-    """A faulty mesh needs its pair law somewhere in ``lo <= s <= hi``: it has deviations, or a
-    pair with a faulty tooth is in contact there, within :data:`NEED_MARGIN` (its table over
-    the period of the faulty teeth, read in floating point: no integer division)."""
+def _pairs_needed(ints, rec, c_lo, c_hi):
+    """A faulty mesh needs its pair law somewhere in the cells ``c_lo .. c_hi`` of its need
+    table (``F_NEEDRES`` cells per mesh cycle, over the period of the faulty teeth; a pair
+    with a faulty tooth in contact, margin included, :meth:`gearvib.faults.law.FaultedMesh.
+    need_table`), or always (deviations). Read in floating point: no integer division."""
     r = ints[H_FINT] + rec
     if ints[r + F_ALWAYS] != 0:
         return True
     period = ints[r + F_PERIOD]
     need = ints[H_FINT] + ints[r + F_NEED]
-    # a margin of a tenth of a cycle covers the difference between the extrapolated and the
-    # actual mesh positions of the stages (entries of faulty pairs end sub-steps exactly)
-    for c in range(int(np.floor(lo - NEED_MARGIN)), int(np.floor(hi + NEED_MARGIN)) + 1):
+    for c in range(int(c_lo), int(c_hi) + 1):
         x = float(c)
         k = int(x - period * np.floor(x / period))
         if k >= period:
@@ -725,11 +753,6 @@ def _faulty_flanks(ints, vals, tables, m, rec, y, s, d, dd, dr, ddr, half, dampi
     if i0 >= nper:
         i0 = 0
         w = 0.0
-    # presence of the pair slots: the next pair (slot -1) ramps in over the last cell of the
-    # cycle, a pair ramps out over the cell that holds the contact ratio (as the table ramps)
-    psum = 0.0
-    for i in range(-1, nslot + 1):
-        psum += _presence(i, i0, w, nper, ce)
     # teeth of the next pair (counter floor(s) + 1; floating-point modulo: no integer
     # division); each older pair steps back by the sign
     k1 = 0
@@ -749,26 +772,25 @@ def _faulty_flanks(ints, vals, tables, m, rec, y, s, d, dd, dr, ddr, half, dampi
         elif k2 < 0:
             k2 += z2
     shared = ints[r + F_SHARED] != 0
-    share_l = 0.0
-    share_r = 0.0
-    if shared and psum > 0.0:
-        i1 = i0 + 1
-        if i1 == nper:
-            i1 = 0
-        share_l = ((1.0 - w) * tables[0, m, i0] + w * tables[0, m, i1]) / psum
-        share_r = ((1.0 - w) * tables[1, m, i0] + w * tables[1, m, i1]) / psum
     pv = fv0 + ints[r + F_PAIRV]
     prv = fv0 + ints[r + F_PROFV]
     h1 = fv0 + ints[r + F_SHIFT1V]
     h2 = fv0 + ints[r + F_SHIFT2V]
+    # one pass over the pair slots (the next pair, slot -1, ramps in over the last cell of the
+    # cycle, a pair ramps out over the cell that holds the contact ratio, as the table ramps).
+    # Shared pairs carry table / psum each: their sums are taken with a unit share and scaled
+    # once psum is known.
+    psum = 0.0
     f_el = 0.0
     f_er = 0.0
-    ke = 0.0
+    ke_l = 0.0
+    ke_r = 0.0
     on_l = False
     on_r = False
     for i in range(-1, nslot + 1):
         pres = _presence(i, i0, w, nper, ce)
         if pres > 0.0:
+            psum += pres
             # path position u = frac + i on the sampled grid; the entering pair (u < 0) takes
             # the values at u = 0
             idx = 0
@@ -777,8 +799,8 @@ def _faulty_flanks(ints, vals, tables, m, rec, y, s, d, dd, dr, ddr, half, dampi
                 idx = i0 + i * nper
                 wi = w
             if shared:
-                kl = share_l * pres
-                kr = share_r * pres
+                kl = pres
+                kr = pres
             else:
                 a = _U(pv + idx)  # offsets and counters >= 0: unsigned, no wraparound
                 c = _U(pv + nu + idx)
@@ -810,11 +832,11 @@ def _faulty_flanks(ints, vals, tables, m, rec, y, s, d, dd, dr, ddr, half, dampi
                     orr += (1.0 - wi) * vals[b3] + wi * vals[b3 + _U1]
             if kl > 0.0 and d + ol > half:
                 f_el += kl * (d + ol - half)
-                ke += kl
+                ke_l += kl
                 on_l = True
             if kr > 0.0 and dr + orr < -half:
                 f_er += kr * (dr + orr + half)
-                ke += kr
+                ke_r += kr
                 on_r = True
         # the next older pair
         k1 -= sg1
@@ -827,6 +849,22 @@ def _faulty_flanks(ints, vals, tables, m, rec, y, s, d, dd, dr, ddr, half, dampi
             k2 += z2
         elif k2 >= z2:
             k2 -= z2
+    if shared:
+        share_l = 0.0
+        share_r = 0.0
+        if psum > 0.0:
+            i1 = i0 + 1
+            if i1 == nper:
+                i1 = 0
+            share_l = ((1.0 - w) * tables[0, m, i0] + w * tables[0, m, i1]) / psum
+            share_r = ((1.0 - w) * tables[1, m, i0] + w * tables[1, m, i1]) / psum
+        on_l = on_l and share_l > 0.0
+        on_r = on_r and share_r > 0.0
+        f_el *= share_l
+        f_er *= share_r
+        ke_l *= share_l if on_l else 0.0
+        ke_r *= share_r if on_r else 0.0
+    ke = ke_l + ke_r
     fl = 0.0
     fr = 0.0
     st = 0
@@ -1089,11 +1127,12 @@ def _split_times(y, dt, ints, vals, mesh_out, splits):
         s_end = s + sd * dt
         lo = min(s, s_end)
         hi = max(s, s_end)
-        if rec >= 0:  # the pair law of a faulty mesh during this step (cached per cycle)
-            flo = np.floor(lo - NEED_MARGIN)
-            fhi = np.floor(hi + NEED_MARGIN)
+        if rec >= 0:  # the pair law of a faulty mesh during this step (cached per cell)
+            res = ints[fi0 + rec + F_NEEDRES]
+            flo = np.floor(lo * res)
+            fhi = np.floor(hi * res)
             if not (mesh_out[m, 8] == flo and mesh_out[m, 9] == fhi):
-                mesh_out[m, 7] = 1.0 if _pairs_needed(ints, vals, rec, lo, hi) else 0.0
+                mesh_out[m, 7] = 1.0 if _pairs_needed(ints, rec, flo, fhi) else 0.0
                 mesh_out[m, 8] = flo
                 mesh_out[m, 9] = fhi
         if sd == 0.0:
@@ -1157,6 +1196,17 @@ def _rk4_step(t, h, y, k1, k2, k3, k4, tmp, mesh_out, ints, vals, tables, speed_
         y[i] += h6 * (k1[i] + 2.0 * (k2[i] + k3[i]) + k4[i])
 
 
+@njit(cache=True, _nrt=False)
+def _short_step_limits(vals, fv0, dt):
+    """Longest sub-steps ``h_E, h_M`` [s] taken by the explicit Euler and the midpoint rule
+    in a run with faults (header of the fault float block, :func:`short_step_header`)."""
+    om = vals[fv0]
+    if not om > 0.0:
+        return 0.0, 0.0
+    z = om * dt
+    return vals[fv0 + 1] * z**2.5 / om, vals[fv0 + 2] * z ** (5.0 / 3.0) / om
+
+
 @njit(cache=True)
 def integrate_chunk(
     y: np.ndarray,
@@ -1174,6 +1224,9 @@ def integrate_chunk(
     status: np.ndarray,
 ) -> None:
     """Advance ``y`` by ``n_steps`` classical RK4 steps, recording the state before every step.
+
+    Steps are split at the stiffness jumps; in a run with faults the short sub-steps take
+    Euler or midpoint steps (module docstring).
 
     Parameters
     ----------
@@ -1213,6 +1266,12 @@ def integrate_chunk(
     n2 = 2 * n
     status[0] = STATUS_OK
     status[1] = first_step + n_steps
+    h_euler = 0.0
+    h_mid = 0.0
+    for m in range(n_mesh):
+        if ints[ints[H_FREC] + m] >= 0:  # a run with faults: short sub-steps (see above)
+            h_euler, h_mid = _short_step_limits(vals, ints[H_FVAL], dt)
+            break
     for m in range(n_mesh):
         mesh_out[m, 7] = 1.0  # until the first step decides (the pair law is exact anywhere)
         mesh_out[m, 8] = np.nan  # no cached cycle range, no event-free interval
@@ -1255,10 +1314,22 @@ def integrate_chunk(
             t_b = splits[j] if j < n_split else dt
             if j > 0:
                 _rhs(t + t_a, y, k1, mesh_out, ints, vals, tables, speed_tab, torque_tab)
-            _rk4_step(
-                t + t_a, t_b - t_a, y, k1, k2, k3, k4, tmp, mesh_out,
-                ints, vals, tables, speed_tab, torque_tab,
-            )
+            h = t_b - t_a
+            if h <= h_euler:
+                for i in range(n2):
+                    y[i] += h * k1[i]
+            elif h <= h_mid:
+                for i in range(n2):
+                    tmp[i] = y[i] + 0.5 * h * k1[i]
+                _rhs(t + t_a + 0.5 * h, tmp, k2, mesh_out, ints, vals, tables, speed_tab,
+                     torque_tab)
+                for i in range(n2):
+                    y[i] += h * k2[i]
+            else:
+                _rk4_step(
+                    t + t_a, h, y, k1, k2, k3, k4, tmp, mesh_out,
+                    ints, vals, tables, speed_tab, torque_tab,
+                )
             t_a = t_b
 
 

@@ -58,6 +58,16 @@ JUMP_FRACTION = 0.05
 """A pair-curve segment whose change exceeds this fraction of the pair's range is a jump (as in
 :data:`gearvib.kernels.JUMP_FRACTION`)."""
 
+NEED_CELLS = 16
+"""The kernel decides whether a faulty mesh needs its pair law per step from a table with this
+many cells per mesh cycle (:meth:`FaultedMesh.need_table`)."""
+
+NEED_MARGIN = 0.01
+"""Margin [mesh cycles] around the contact of a faulty pair within which the pair law is used:
+it covers the difference between the linearly extrapolated mesh positions of a step and those
+of its stages (below 1e-5 cycles at the default step; the pairs sum to the table, so a wider
+margin changes results only by rounding)."""
+
 MAX_EVENTS_PER_MESH = 200_000
 """Largest number of long-period jump positions of one mesh (sizes are checked before
 allocating)."""
@@ -66,8 +76,8 @@ allocating)."""
 R_NU, R_NPAIR, R_Z1, R_S1, R_T1, R_Z2, R_S2, R_T2 = range(8)
 R_PAIR, R_PROF1, R_SHIFT1, R_PROF2, R_SHIFT2, R_PROFV = range(8, 14)
 R_NECC, R_ECCI, R_ECCV, R_CONST, R_NEV, R_EVV, R_ALWAYS, R_NPER, R_SHARED, R_EPS = range(14, 24)
-R_NEED, R_PERIOD, R_EXIT = 24, 25, 26
-N_RECORD = 27
+R_NEED, R_PERIOD, R_EXIT, R_NEEDRES = 24, 25, 26, 27
+N_RECORD = 28
 
 
 @dataclass
@@ -173,22 +183,25 @@ class FaultedMesh:
         return False
 
     def need_table(self) -> np.ndarray:
-        """``need[floor(s) mod L]``: a faulty pair is on the path (one of the pairs that
-        entered last), over the period ``L`` of the faulty teeth; a single 1 when the mesh has
-        deviations (the pair law always holds)."""
+        """``need[floor(NEED_CELLS s) mod (NEED_CELLS L)]``: a faulty pair is in contact
+        within :data:`NEED_MARGIN` of that cell (ramps included: pair ``j`` from
+        ``s = j - 1 / n_per`` to ``j + (exit_cell + 1) / n_per``), over the period ``L`` of the
+        faulty teeth; a single 1 when the mesh has deviations (the pair law always holds)."""
         if self.always:
             return np.ones(1, dtype=np.int64)
         period = 1
         for g in (0, 1):
             if self.z[g] > 0 and np.any(self.profile[g] >= 0):
                 period = math.lcm(period, self.z[g])
-        faulty = np.array([self.faulty_pair(j) for j in range(period)])
-        need = np.zeros(period, dtype=np.int64)
-        # the pairs on the path at floor(s) = k: k - i for u = frac + i up to the exit cell
-        # (the entering pair, present in the cycle's last cell, is caught by the kernel's
-        # margin around the step)
-        for i in range(self.exit_cell // self.n_per + 1):
-            need |= np.roll(faulty, i).astype(np.int64)
+        cells = NEED_CELLS * period
+        need = np.zeros(cells, dtype=np.int64)
+        first = -1.0 / self.n_per - NEED_MARGIN
+        last = (self.exit_cell + 1) / self.n_per + NEED_MARGIN
+        for j in range(period):
+            if self.faulty_pair(j):
+                c = np.arange(math.floor((j + first) * NEED_CELLS),
+                              math.floor((j + last) * NEED_CELLS) + 1)
+                need[c % cells] = 1
         return need
 
 
@@ -293,17 +306,20 @@ class FaultLaw:
         return bool(self.meshes) or bool(np.any(self.f_const))
 
     # ---- kernel arrays -------------------------------------------------------------------
-    def pack(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def pack(self, short_steps: tuple[float, float, float] = (0.0, 0.0, 0.0),
+             ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``(records, ints, floats)`` for :func:`gearvib.kernels.pack`.
 
         ``records[m]`` is the start of mesh ``m``'s record in ``ints`` (-1: healthy); the
         offsets in a record are relative to the start of ``ints`` or ``floats`` (the kernel
-        adds the block bases).
+        adds the block bases). ``floats`` starts with ``short_steps``
+        (:func:`gearvib.kernels.short_step_header`: the highest natural frequency and the
+        coefficients of the short sub-steps; zeros: RK4 on every sub-step).
         """
         rec = np.full(self.n_mesh, -1, dtype=np.int64)
         ints: list[int] = []
-        vals: list[np.ndarray] = []
-        nv = 0
+        vals: list[np.ndarray] = [np.asarray(short_steps, dtype=np.float64)]
+        nv = 3
 
         def put(a) -> int:
             nonlocal nv
@@ -331,6 +347,9 @@ class FaultLaw:
                                                               R_SHIFT2))):
                 if not teeth:  # mesh-wide deviations only: the kernel shifts the table law
                     continue
+                if fm.z[side] > 0 and not (np.any(fm.profile[side] >= 0)
+                                           or np.any(fm.shift[side])):
+                    continue  # a healthy gear: the kernel skips its tooth look-ups
                 r[zk] = fm.z[side]
                 r[sk] = fm.sign[side]
                 r[tk] = fm.tooth0[side]
@@ -352,6 +371,7 @@ class FaultLaw:
             r[R_ALWAYS] = int(fm.always)
             need = fm.need_table()
             r[R_PERIOD] = need.size
+            r[R_NEEDRES] = 1 if fm.always else NEED_CELLS
             r[R_NEED] = len(ints)
             ints.extend(int(v) for v in need)
             ints[base:base + N_RECORD] = r

@@ -50,11 +50,15 @@ __all__ = ["add_sensor_signals", "housing_response", "path_force", "tacho_signal
 
 def window_weight(window: str, width_deg: float, delta: np.ndarray) -> np.ndarray:
     """Transmission-path weight at angles ``delta`` [rad] between planet and sensor."""
-    d = np.abs(np.mod(np.asarray(delta, dtype=float) + np.pi, 2.0 * np.pi) - np.pi)  # 0..pi
+    delta = np.asarray(delta, dtype=float)
+    # |delta| wrapped to 0..pi (nearest multiple of 2 pi removed)
+    d = np.abs(delta - (2.0 * np.pi) * np.rint(delta * (0.5 / np.pi)))
     width = math.radians(width_deg)
     if window == "hann":
-        return np.where(d <= width, 0.5 * (1.0 + np.cos(np.pi * np.minimum(d / width, 1.0))),
-                        0.0)
+        w = np.zeros_like(d)
+        inside = d <= width
+        w[inside] = 0.5 * (1.0 + np.cos(d[inside] * (np.pi / width)))  # cos only where used
+        return w
     if window == "rectangular":
         return (d <= width).astype(float)
     if window == "exponential":

@@ -19,7 +19,11 @@ from gearvib.simulation.conditions import (
     SpeedTable,
     TorqueDriven,
 )
-from gearvib.simulation.frequencies import elastic_frequencies, undamped_frequencies
+from gearvib.simulation.frequencies import (
+    elastic_frequencies,
+    stiffest_matrix,
+    undamped_frequencies,
+)
 
 __all__ = [
     "COUPLING_FREQUENCY_FRACTION",
@@ -247,7 +251,14 @@ def prepare_run(
     fault_arrays: dict = {}
     f_const = np.zeros(n)
     if law:
-        rec, fints, fvals = law.pack()
+        # the scale of the short sub-steps: the highest natural frequency of the stiffest
+        # system, as the step choice computes it (gearvib.simulate)
+        k_max = stiffest_matrix(model, torque_sign)
+        if coupling is not None:
+            k_max = k_max.copy()
+            k_max[k_in, k_in] += coupling.stiffness
+        f_max = float(undamped_frequencies(mass, k_max).max(initial=0.0))
+        rec, fints, fvals = law.pack(kn.short_step_header(2.0 * math.pi * f_max))
         fault_arrays = {"fault_records": rec, "fault_ints": fints, "fault_vals": fvals,
                         "fault_jumps": law.cycle_jumps()}
         f_const = law.f_const.copy()

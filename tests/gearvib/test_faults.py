@@ -255,6 +255,51 @@ def test_rk4_keeps_its_order_through_the_faults(case1) -> None:
     assert blind[1] > 10 * pitting[1]  # measured 8.7e-4 vs 7.5e-6 at dt = 1e-5
 
 
+
+def test_short_sub_steps_stay_within_the_rk4_error(case1) -> None:
+    """Runs with faults integrate sub-steps far shorter than dt (in-phase planets that a fault
+    desynchronises) by Euler or the midpoint rule (gearvib.kernels, "Short sub-steps"): on a
+    run-up through the crack the result moves by a small part of the RK4 error, which stays
+    as it was; the limits are those of the documented error bounds."""
+    omega, c_e, c_m = kn.short_step_header(2 * math.pi * 2000.0)
+    rho = kn.SHORT_STEP_ERROR_FRACTION
+    z = omega * 1e-5
+    h_e, h_m = c_e * z**2.5 / omega, c_m * z ** (5 / 3) / omega
+    assert (omega * h_e) ** 2 / 2 == pytest.approx(rho * z**5 / 120, rel=1e-12)
+    assert (omega * h_m) ** 3 / 6 == pytest.approx(rho * z**5 / 120, rel=1e-12)
+    assert kn.short_step_header(0.0) == (0.0, 0.0, 0.0)
+    assert kn.short_step_header(math.inf) == (0.0, 0.0, 0.0)
+
+    faulty = case1.with_faults([Crack("sun", 3, severity=0.3)])
+    setup = prepare_run(faulty, SpeedRamp(0.0, 4000.0, 1.0, input_torque=60.0), False)
+    system = setup.system
+    assert system.fault_vals[0] > 0  # the header is set for a run with faults
+    q0, _ = static_equilibrium(
+        system, setup.mass, setup.rigid, setup.rigid * setup.omega0,
+        rigid_acceleration=setup.alpha0,
+        flank_law=lambda q, first: setup.faults.flank_law(faulty, q, system.backlash, first))
+    system.deflection_limit[:] = 1.0
+    y0 = np.concatenate([q0, setup.rigid * setup.omega0])
+    dt, t_end = 1e-5, 0.25
+
+    def run(refine: int, short: bool) -> np.ndarray:
+        sys_ = copy.deepcopy(system)
+        if not short:
+            sys_.fault_vals[:3] = 0.0
+        rec, _, status, _ = kn.integrate(sys_, y0, dt / refine, round(t_end * refine / dt))
+        assert status[0] == kn.STATUS_OK
+        return rec[::refine, :faulty.n_dof] @ faulty.mesh_vectors.T
+
+    ref = run(4, False)
+    scale = np.abs(ref).max()
+    plain = run(1, False)
+    short = run(1, True)
+    err_plain = np.abs(plain - ref).max() / scale
+    err_short = np.abs(short - ref).max() / scale
+    moved = np.abs(short - plain).max() / scale
+    assert 0.0 < moved < 0.2 * err_plain  # measured 5.0e-7 against 1.16e-5
+    assert err_short < 1.05 * err_plain  # measured 1.155e-5 (plain RK4 1.156e-5)
+
 # ---- bit-identical healthy runs, provenance -------------------------------------------------
 
 
