@@ -486,8 +486,8 @@ def simulate_batch(
         As :func:`simulate`; one for all variants or one per variant.
     errors : {"raise", "return"}
         A variant that blows up raises its :class:`SimulationError` (message prefixed with
-        the variant's index) or, with ``"return"``, takes its place in the returned list
-        (the other variants are unaffected).
+        the variant's index) or, with ``"return"``, its error (with the message of its single
+        run) takes its place in the returned list (the other variants are unaffected).
 
     Returns
     -------
@@ -543,10 +543,9 @@ def simulate_batch(
         for b, v in enumerate(group):
             k = first + b
             if failed[b] is not None:
-                exc = SimulationError(f"variant {k}: {failed[b]}")
                 if errors == "raise":
-                    raise exc
-                outcomes.append(exc)
+                    raise SimulationError(f"variant {k}: {failed[b]}")
+                outcomes.append(SimulationError(failed[b]))  # the single run's message
                 continue
             result = build_result(v.model, v.conditions, v.setup, v.step,
                                   decimation_filter(v.step.decimation), outs[b], changes[b],

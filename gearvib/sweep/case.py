@@ -17,6 +17,7 @@ hash) is simulated again and replaced.
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import multiprocessing
 import sys
 import time
@@ -33,13 +34,13 @@ from gearvib.config import ConfigError, gearset_from_dict
 from gearvib.io import read_run, write_netcdf
 from gearvib.model import AssembledModel
 from gearvib.paths import is_file
-from gearvib.simulate import Conditions, SimulationError, simulate
+from gearvib.simulate import Conditions, SimulationError, simulate, simulate_batch
 from gearvib.simulation.settings import conditions_from_settings
 from gearvib.sweep.description import SweepCase
 from gearvib.sweep.summary import SummarySettings, summarise_run
 
 __all__ = ["CaseOutcome", "CaseTask", "build_case", "conditions_for", "finished_run",
-           "run_case"]
+           "run_case", "run_case_group"]
 
 
 @dataclass(frozen=True)
@@ -180,6 +181,105 @@ def run_case(task: CaseTask) -> CaseOutcome:
         raise
 
 
+def run_case_group(tasks: list[CaseTask]) -> list[CaseOutcome]:
+    """:func:`run_case` of several cases, simulated together on the batched kernel.
+
+    The cases that are not finished yet go through :func:`gearvib.simulate.simulate_batch`
+    (up to 8 on SIMD lanes); their run files and summaries are those :func:`run_case` writes,
+    bit for bit. When the cases cannot share a batch (a different topology or time grid,
+    faults; :func:`~gearvib.simulate.simulate_batch` refuses) or one of them is invalid, every
+    case runs alone through :func:`run_case`'s own path, so the outcomes are the same either
+    way. A case that blows up in the batch fails with its single run's message.
+
+    Parameters
+    ----------
+    tasks : list of CaseTask
+        Cases with the same run settings (the caller groups them).
+
+    Returns
+    -------
+    list of CaseOutcome
+        In the order of ``tasks``.
+    """
+    global _interrupted
+    if _interrupted:
+        raise KeyboardInterrupt
+    _prepare_worker()
+    try:
+        with threadpool_limits(limits=1):
+            return _run_group(list(tasks))
+    except KeyboardInterrupt:
+        if multiprocessing.parent_process() is not None:
+            _interrupted = True
+        raise
+
+
+def _case_config(case: SweepCase) -> dict:
+    return {"gearset": case.description, "gearset_dir": case.base_dir, "run": case.run}
+
+
+def _run_group(tasks: list[CaseTask]) -> list[CaseOutcome]:
+    outcomes: dict[int, CaseOutcome] = {}
+    pending = []
+    for k, task in enumerate(tasks):
+        try:
+            model = build_case(task.case)
+            conditions = conditions_for(task.case.run, model)
+            finished = finished_run(task.run_path, task.case.sha256) is not None
+        except (ConfigError, SimulationError, ValueError):
+            finished = True  # fails (or is reused) in its own path, with its own message
+        if finished:
+            outcomes[k] = _run(task)
+        else:
+            pending.append((k, task, model, conditions))
+    results = None
+    if len(pending) > 1:
+        t0 = time.perf_counter()
+        run = pending[0][1].case.run
+        try:
+            results = simulate_batch(
+                [p[2] for p in pending], [p[3] for p in pending], dt=run.get("dt"),
+                fs_out=run.get("fs_out"), gyroscopic=bool(run.get("gyroscopic")),
+                config=[_case_config(p[1].case) for p in pending], errors="return")
+        except (ConfigError, SimulationError, ValueError):
+            results = None  # not batchable: every case alone
+        share = (time.perf_counter() - t0) / len(pending)
+    if results is None:
+        for k, task, _, _ in pending:
+            outcomes[k] = _run(task)
+    else:
+        for (k, task, model, conditions), res in zip(pending, results, strict=True):
+            t1 = time.perf_counter()
+            outcome = _finish(task, model, conditions, res)
+            outcomes[k] = dataclasses.replace(
+                outcome, wall_time=share + time.perf_counter() - t1)
+    return [outcomes[k] for k in range(len(tasks))]
+
+
+def _failed(case: SweepCase, exc: Exception, t0: float) -> CaseOutcome:
+    text = str(exc).strip().splitlines()
+    return CaseOutcome(case.index, "failed", text[0] if text else type(exc).__name__, None,
+                       time.perf_counter() - t0)
+
+
+def _finish(task: CaseTask, model: AssembledModel, conditions: Conditions, res) -> CaseOutcome:
+    """Write the run file of a batched case and summarise it (as :func:`_run` does)."""
+    t0 = time.perf_counter()
+    case = task.case
+    if isinstance(res, Exception):
+        return _failed(case, res, t0)
+    try:
+        ds = res.to_dataset()
+        ds.attrs["sweep_case_sha256"] = case.sha256
+        with _plain_file_locks():
+            write_netcdf(ds, task.run_path)
+        summary = summarise_run(ds, model, conditions, task.summary,
+                                gyroscopic=bool(case.run.get("gyroscopic")))
+    except (ConfigError, SimulationError, ValueError) as exc:
+        return _failed(case, exc, t0)
+    return CaseOutcome(case.index, "simulated", "", summary, time.perf_counter() - t0)
+
+
 def _run(task: CaseTask) -> CaseOutcome:
     t0 = time.perf_counter()
     case = task.case
@@ -192,8 +292,7 @@ def _run(task: CaseTask) -> CaseOutcome:
             status = "simulated"
             res = simulate(model, conditions, dt=case.run.get("dt"), fs_out=case.run.get("fs_out"),
                            gyroscopic=bool(case.run.get("gyroscopic")), progress=False,
-                           config={"gearset": case.description, "gearset_dir": case.base_dir,
-                                   "run": case.run})
+                           config=_case_config(case))
             ds = res.to_dataset()
             ds.attrs["sweep_case_sha256"] = case.sha256
             with _plain_file_locks():
@@ -201,7 +300,5 @@ def _run(task: CaseTask) -> CaseOutcome:
         summary = summarise_run(ds, model, conditions, task.summary,
                                 gyroscopic=bool(case.run.get("gyroscopic")))
     except (ConfigError, SimulationError, ValueError) as exc:
-        text = str(exc).strip().splitlines()
-        return CaseOutcome(case.index, "failed", text[0] if text else type(exc).__name__, None,
-                           time.perf_counter() - t0)
+        return _failed(case, exc, t0)
     return CaseOutcome(case.index, status, "", summary, time.perf_counter() - t0)

@@ -79,7 +79,7 @@ def test_a_blow_up_is_the_variants_own():
     conds = [balanced, runaway, balanced]
     out = simulate_batch([model] * 3, conds, errors="return")
     assert isinstance(out[1], SimulationError)
-    assert str(out[1]) == f"variant 1: {single.value}"  # same step, same cause
+    assert str(out[1]) == str(single.value)  # same step, same cause
     ref = simulate(model, balanced, progress=False).to_dataset()
     for k in (0, 2):
         xr.testing.assert_identical(out[k].to_dataset(), ref)
