@@ -4,8 +4,10 @@
 what to summarise) to a :class:`CaseOutcome` (the case's summary Dataset). It is a plain,
 picklable top-level function, so any :class:`concurrent.futures.Executor` can run it: the
 in-process :class:`~gearvib.execution.SerialExecutor`, a local process pool or a Dask
-cluster. A different runner with the same signature (e.g. a batched kernel that advances several
-cases at once) can be handed to :func:`gearvib.sweep.run_sweep` instead.
+cluster. A different runner with the same signature can be handed to
+:func:`gearvib.sweep.run_sweep` instead. :func:`run_case_group` runs several cases with the same
+run settings together on the batched kernel (:func:`gearvib.simulate.simulate_batch`), with the
+run files and summaries of :func:`run_case`, bit for bit.
 
 Resuming: a run file is *finished* when it opens as netCDF, was written by gearvib and carries
 the case's hash in its ``sweep_case_sha256`` attribute (:attr:`SweepCase.sha256`: the gear-set
