@@ -525,7 +525,11 @@ def simulate_batch(
             variants.append(_prepare_variant(model, cond, dt, fs_out, duration, gyroscopic,
                                              max_steps))
         except (ValueError, SimulationError) as exc:
-            raise type(exc)(f"variant {k}: {exc}") from exc
+            try:
+                named = type(exc)(f"variant {k}: {exc}")
+            except TypeError:  # an exception class with another signature: as it is
+                raise exc from None
+            raise named from exc
         if k and (why := _batch_difference(variants[0], variants[k])) is not None:
             raise ValueError(f"variant {k} cannot share a batch with variant 0: its {why}. "
                              f"Batchable differences: {BATCHABLE}")

@@ -121,9 +121,9 @@ def batch_units(tasks: list[CaseTask], workers: int, batch: bool | None
     gear sets may still differ in what the batched kernel cannot share; their batch then runs
     case by case: :func:`gearvib.sweep.case.run_case_group`). Each set of candidates is split
     evenly into batches of at most :data:`BATCH_WIDTH`; automatically (``batch=None``) into at
-    least ``workers`` batches when there are enough cases, and batches smaller than
-    :data:`MIN_AUTO_BATCH` run case by case. ``batch=False``: every case alone;
-    ``batch=True``: batches of up to 8 whatever their number.
+    least ``workers`` batches, and batches smaller than :data:`MIN_AUTO_BATCH` run case by case
+    (so 4 cases on 2 workers run as 4 single runs, two in parallel: a batch of 2 costs more).
+    ``batch=False``: every case alone; ``batch=True``: batches of 2 to 8 whatever their number.
     """
     if batch is False:
         return list(tasks)
@@ -136,8 +136,8 @@ def batch_units(tasks: list[CaseTask], workers: int, batch: bool | None
     for group in buckets.values():
         n = len(group)
         n_batches = math.ceil(n / BATCH_WIDTH)
-        if batch is None:
-            n_batches = max(n_batches, min(workers, n // MIN_AUTO_BATCH))
+        if batch is None:  # one batch per worker at least: else parallel single runs win
+            n_batches = max(n_batches, min(workers, n))
         size = math.ceil(n / max(n_batches, 1))
         for first in range(0, n, size):
             part = group[first : first + size]

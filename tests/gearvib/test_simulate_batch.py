@@ -11,6 +11,7 @@ import xarray as xr
 from gearvib.assembly import assemble
 from gearvib.config import gearset_from_dict, load_config
 from gearvib.faults import Crack
+from gearvib.sensors import HousingMode, HousingSensor
 from gearvib.simulate import (
     SimulationError,
     SpeedRamp,
@@ -50,6 +51,15 @@ def test_mesh_damping_variants_of_paper_case1(n_variants):
     _assert_same_as_single(models, results)
     # the variants really differ
     assert not np.array_equal(results[0].normal_force, results[-1].normal_force)
+
+
+def test_variants_with_a_virtual_sensor():
+    sensor = HousingSensor("top", 30.0, window="hann", width_deg=90.0,
+                           housing_modes=(HousingMode(3000.0, 0.05, 1.0),))
+    models = [_variant("paper-case1", z).with_sensors([sensor]) for z in (0.01, 0.03)]
+    results = simulate_batch(models, RAMP, duration=DURATION)
+    assert results[0].sensor_acceleration is not None
+    _assert_same_as_single(models, results)
 
 
 def test_bearing_stiffness_variants_of_paper_case1_elastic():

@@ -88,6 +88,10 @@ def test_batch_units():
     assert sizes == [4, 4]
     assert [len(u) if isinstance(u, list) else 1 for u in batch_units(tasks[:3], 1, None)] \
         == [1, 1, 1]
+    # 4 cases on 2 workers: single runs in parallel beat a batch of 4 on one worker
+    assert [len(u) if isinstance(u, list) else 1 for u in batch_units(tasks[:4], 2, None)] \
+        == [1, 1, 1, 1]
+    assert [len(u) for u in batch_units(tasks[:4], 1, None)] == [4]
     assert [len(u) for u in batch_units(tasks[:3], 1, True)] == [3]
     # other run settings: other candidates
     other = sweep_from_dict({**SPEC, "simulation": {**SPEC["simulation"], "duration": 0.01},
