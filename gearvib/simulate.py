@@ -91,6 +91,7 @@ __all__ = [
     "StaticToothForces",
     "StepChoice",
     "TorqueDriven",
+    "batch_groups",
     "check_run_size",
     "choose_step",
     "decimation_filter",
@@ -559,6 +560,58 @@ def simulate_batch(
             result.wall_time = per_variant
             outcomes.append(result)
     return outcomes
+
+
+def batch_groups(
+    models: Sequence[AssembledModel],
+    conditions: Conditions | Sequence[Conditions],
+    *,
+    dt: float | None = None,
+    fs_out: float | None = None,
+    duration: float | None = None,
+    gyroscopic: bool = False,
+    max_steps: int = DEFAULT_MAX_STEPS,
+) -> list[list[int]]:
+    """Partition variants into groups :func:`simulate_batch` accepts.
+
+    Greedy and in order: a variant joins the first group (of fewer than 8) whose first variant
+    it can share a batch with (same time grid, duration, drive and kernel topology), else it
+    starts a group. A variant that cannot be batched at all (faults, an invalid run) is a group
+    of its own. Arguments as :func:`simulate_batch`.
+
+    Returns
+    -------
+    list of list of int
+        Indices into ``models``; every index once.
+    """
+    models = list(models)
+    nv = len(models)
+    conds = list(conditions) if isinstance(conditions, list | tuple) else [conditions] * nv
+    if len(conds) != nv:
+        raise ValueError(f"conditions must be one value or one per model ({nv}), got "
+                         f"{len(conds)}")
+    groups: list[tuple[_Variant | None, list[int]]] = []
+    for k, (model, cond) in enumerate(zip(models, conds, strict=True)):
+        v = None
+        if isinstance(model, AssembledModel) and not model.faults:
+            try:
+                v = _prepare_variant(model, cond, dt, fs_out, duration, gyroscopic, max_steps)
+            except (ValueError, TypeError, SimulationError):
+                v = None
+        for first, members in groups:
+            if v is None or first is None or len(members) >= kb.WIDTH:
+                continue
+            if _batch_difference(first, v) is not None:
+                continue
+            try:
+                kb.pack_batch([first.setup.system, v.setup.system])
+            except ValueError:
+                continue
+            members.append(k)
+            break
+        else:
+            groups.append((v, [k]))
+    return [members for _, members in groups]
 
 
 def _run_batch(group: list[_Variant], batch, gyroscopic: bool) -> tuple[list, np.ndarray, list]:

@@ -36,7 +36,13 @@ from gearvib.config import ConfigError, gearset_from_dict
 from gearvib.io import read_run, write_netcdf
 from gearvib.model import AssembledModel
 from gearvib.paths import is_file
-from gearvib.simulate import Conditions, SimulationError, simulate, simulate_batch
+from gearvib.simulate import (
+    Conditions,
+    SimulationError,
+    batch_groups,
+    simulate,
+    simulate_batch,
+)
 from gearvib.simulation.settings import conditions_from_settings
 from gearvib.sweep.description import SweepCase
 from gearvib.sweep.summary import SummarySettings, summarise_run
@@ -191,7 +197,9 @@ def run_case_group(tasks: list[CaseTask]) -> list[CaseOutcome]:
     bit for bit. When the cases cannot share a batch (a different topology or time grid,
     faults; :func:`~gearvib.simulate.simulate_batch` refuses) or one of them is invalid, every
     case runs alone through :func:`run_case`'s own path, so the outcomes are the same either
-    way. A case that blows up in the batch fails with its single run's message.
+    way. Cases of one call that cannot all share a batch are split into those that can
+    (:func:`~gearvib.simulate.batch_groups`, e.g. by default time grid); a case that blows up in
+    the batch fails with its single run's message.
 
     Parameters
     ----------
@@ -234,23 +242,32 @@ def _run_group(tasks: list[CaseTask]) -> list[CaseOutcome]:
             outcomes[k] = _run(task)
         else:
             pending.append((k, task, model, conditions))
-    results = None
-    if len(pending) > 1:
-        t0 = time.perf_counter()
-        run = pending[0][1].case.run
-        try:
-            results = simulate_batch(
-                [p[2] for p in pending], [p[3] for p in pending], dt=run.get("dt"),
-                fs_out=run.get("fs_out"), gyroscopic=bool(run.get("gyroscopic")),
-                config=[_case_config(p[1].case) for p in pending], errors="return")
-        except (ConfigError, SimulationError, ValueError):
-            results = None  # not batchable: every case alone
-        share = (time.perf_counter() - t0) / len(pending)
-    if results is None:
-        for k, task, _, _ in pending:
-            outcomes[k] = _run(task)
-    else:
-        for (k, task, model, conditions), res in zip(pending, results, strict=True):
+    if not pending:
+        return [outcomes[k] for k in range(len(tasks))]
+    run = pending[0][1].case.run
+    kw = dict(dt=run.get("dt"), fs_out=run.get("fs_out"),
+              gyroscopic=bool(run.get("gyroscopic")))
+    try:  # the cases that can share a batch (e.g. the same default time grid)
+        parts = batch_groups([p[2] for p in pending], [p[3] for p in pending], **kw)
+    except (ConfigError, SimulationError, ValueError):
+        parts = [[j] for j in range(len(pending))]
+    for part in parts:
+        members = [pending[j] for j in part]
+        results = None
+        if len(members) > 1:
+            t0 = time.perf_counter()
+            try:
+                results = simulate_batch(
+                    [p[2] for p in members], [p[3] for p in members],
+                    config=[_case_config(p[1].case) for p in members], errors="return", **kw)
+            except (ConfigError, SimulationError, ValueError):
+                results = None  # not batchable after all: every case alone
+            share = (time.perf_counter() - t0) / len(members)
+        if results is None:
+            for k, task, _, _ in members:
+                outcomes[k] = _run(task)
+            continue
+        for (k, task, model, conditions), res in zip(members, results, strict=True):
             t1 = time.perf_counter()
             outcome = _finish(task, model, conditions, res)
             outcomes[k] = dataclasses.replace(

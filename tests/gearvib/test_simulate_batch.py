@@ -16,6 +16,7 @@ from gearvib.simulate import (
     SimulationError,
     SpeedRamp,
     TorqueDriven,
+    batch_groups,
     simulate,
     simulate_batch,
 )
@@ -115,3 +116,17 @@ def test_refusals_name_what_differs():
         simulate_batch([healthy], RAMP, errors="ignore")
     with pytest.raises(ValueError, match="conditions must be one value or one per model"):
         simulate_batch([healthy, healthy], [RAMP])
+
+
+def test_batch_groups():
+    """Variants split into what simulate_batch accepts: by default time grid, faults alone."""
+    soft = [_variant("paper-case1-elastic", 0.01, r) for r in (1.5e8, 1.65e8)]
+    stiff = _variant("paper-case1-elastic", 0.01, 1.5e9)
+    cracked = soft[0].with_faults([Crack(member="sun", tooth=0, severity=0.3)])
+    models = [soft[0], stiff, cracked, soft[1], stiff]
+    assert batch_groups(models, RAMP, duration=DURATION) == [[0, 3], [1, 4], [2]]
+    # with one explicit step the healthy variants share one batch
+    assert batch_groups(models, RAMP, duration=DURATION, dt=1 / (20_000.0 * 300)) == \
+        [[0, 1, 3, 4], [2]]
+    many = batch_groups([soft[0]] * 10, RAMP, duration=DURATION)
+    assert [len(g) for g in many] == [8, 2]

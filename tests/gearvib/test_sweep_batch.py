@@ -64,15 +64,16 @@ def test_batched_sweep_is_bit_identical_to_case_by_case(tmp_path, extra):
 
 def test_not_batchable_cases_run_one_by_one(tmp_path):
     """Cases that cannot share a batch (a 100x stiffer bearing moves the default time grid)
-    fall back to case-by-case runs with the same results."""
+    are batched by time grid (here two batches of two damping variants): same results."""
     spec = dict(SPEC, base="paper-case1-elastic", parameter=[
-        {"path": "bodies.planet.support.radial", "values": [1.5e8, 1.5e10]}])
+        {"path": "bodies.planet.support.radial", "values": [1.5e8, 1.5e10]},
+        {"path": "meshes.sun.damping_ratio", "values": [0.01, 0.02]}])
     sweep = sweep_from_dict(spec)
     single = run_sweep(sweep, tmp_path / "single", workers=1, progress=False, report=False,
                        batch=False)
     batched = run_sweep(sweep, tmp_path / "batched", workers=1, progress=False, report=False,
                         batch=True)
-    assert batched.simulated == single.simulated == (0, 1)
+    assert batched.simulated == single.simulated == (0, 1, 2, 3)
     _same_folders(tmp_path / "single", tmp_path / "batched")
 
 
