@@ -11,6 +11,14 @@ runs (this process and its workers) tell whether the 2 workers add work.
     python benchmarks/bench_sweep.py            # 64 runs of 1 s
     python benchmarks/bench_sweep.py --quick    # 16 runs of 0.25 s
     python benchmarks/bench_sweep.py --repeat 3 # alternate 3 times, best of each
+    python benchmarks/bench_sweep.py --batch    # batched vs case by case, 1 worker
+
+``--batch``: 16 damping variants of ``paper-case1`` (4 x 4 sun and ring damping ratios, 0.5 s
+run-ups) on 1 worker, case by case (``batch=False``) against two batches of 8 on the batched
+kernel (``batch=True``), alternated ``--repeat`` times; prints the median ratio and the spread,
+and checks that every run file and ``sweep.nc`` are identical bit for bit. Then the runs
+alone: 8 x ``simulate`` against one ``simulate_batch`` of 8 (paper-case1 and
+paper-case1-elastic).
 """
 
 from __future__ import annotations
@@ -47,26 +55,109 @@ def _load() -> str:
     return " ".join(f"{x:.2f}" for x in os.getloadavg())
 
 
+def _same_output(a: Path, b: Path) -> bool:
+    names = sorted(p.name for p in (a / "runs").glob("*.nc"))
+    return names == sorted(p.name for p in (b / "runs").glob("*.nc")) and all(
+        (a / "runs" / f).read_bytes() == (b / "runs" / f).read_bytes() for f in names) and (
+        (a / "sweep.nc").read_bytes() == (b / "sweep.nc").read_bytes())
+
+
+def _median(xs: list[float]) -> float:
+    xs = sorted(xs)
+    m = len(xs) // 2
+    return xs[m] if len(xs) % 2 else 0.5 * (xs[m - 1] + xs[m])
+
+
+def bench_simulate_batch(repeat: int, duration: float) -> None:
+    """simulate() of 8 damping variants one by one against one simulate_batch(), alternated
+    (the run alone: no run file, no summary)."""
+    from gearvib.assembly import assemble
+    from gearvib.config import gearset_from_dict, load_config
+    from gearvib.simulate import SpeedRamp, simulate, simulate_batch
+    from gearvib.sweep.keys import set_path
+
+    cond = SpeedRamp(0.0, 4000.0, duration, input_torque=60.0)
+    for preset in ("paper-case1", "paper-case1-elastic"):
+        cfg, base = load_config(preset)
+        models = [assemble(gearset_from_dict(set_path(cfg, "meshes.sun.damping_ratio",
+                                                      0.004 + 0.002 * k), base=base))
+                  for k in range(8)]
+        simulate_batch(models[:2], cond, duration=0.01, fs_out=25000.0)  # compile / load
+        simulate(models[0], cond, duration=0.01, fs_out=25000.0, progress=False)
+        ratios = []
+        for _ in range(repeat):
+            t0 = time.perf_counter()
+            for m in models:
+                simulate(m, cond, fs_out=25000.0, progress=False)
+            single = time.perf_counter() - t0
+            t0 = time.perf_counter()
+            simulate_batch(models, cond, fs_out=25000.0)
+            ratios.append(single / (time.perf_counter() - t0))
+        print(f"  simulate_batch of 8 vs 8 x simulate, {preset}, {duration:g} s run-ups: "
+              f"median {_median(ratios):.2f}x, range {min(ratios):.2f}-{max(ratios):.2f}x "
+              f"({repeat} pairs; load {_load()})")
+
+
+def bench_batch(repeat: int, duration: float) -> None:
+    """Batched against case-by-case sweep on 1 worker, alternated."""
+    sweep = _sweep(4, duration)
+    print(f"sweep: {sweep.n_cases} damping variants of paper-case1, {duration:g} s run-up each, "
+          f"1 worker; load average before: {_load()}")
+    with tempfile.TemporaryDirectory() as tmp:
+        warm = _sweep(2, 0.01)  # compile (or load) both kernels outside the timings
+        run_sweep(warm, Path(tmp) / "warm0", workers=1, progress=False, report=False,
+                  batch=False)
+        run_sweep(warm, Path(tmp) / "warm1", workers=1, progress=False, report=False,
+                  batch=True)
+        times: dict[bool, list[float]] = {False: [], True: []}
+        same = True
+        for rep in range(max(1, repeat)):
+            for batched in (False, True):
+                out = Path(tmp) / f"r{rep}b{int(batched)}"
+                t0 = time.perf_counter()
+                res = run_sweep(sweep, out, workers=1, progress=False, report=False,
+                                batch=batched)
+                wall = time.perf_counter() - t0
+                assert len(res.simulated) == sweep.n_cases and not res.failed
+                times[batched].append(wall)
+                print(f"  {'batched     ' if batched else 'case by case'}: {wall:7.2f} s wall "
+                      f"(load {_load()})")
+            same &= _same_output(Path(tmp) / f"r{rep}b0", Path(tmp) / f"r{rep}b1")
+    ratios = sorted(a / b for a, b in zip(times[False], times[True], strict=True))
+    med = _median(ratios)
+    print(f"speed-up batched / case by case (wall, pairs of consecutive runs): median "
+          f"{med:.2f}x, range {ratios[0]:.2f}-{ratios[-1]:.2f}x over {len(ratios)} pairs; "
+          f"run files and sweep.nc identical: {same}; load average after: {_load()}")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="16 runs of 0.25 s")
+    ap.add_argument("--batch", action="store_true",
+                    help="batched vs case-by-case sweep of 16 runs on 1 worker")
     ap.add_argument("--repeat", type=int, default=2,
                     help="alternate 1 and 2 workers this many times; the best of each counts")
     args = ap.parse_args()
+    if args.batch:
+        bench_batch(max(3, args.repeat), 0.25 if args.quick else 0.5)
+        bench_simulate_batch(max(3, args.repeat), 0.25 if args.quick else 0.5)
+        return
     n_side, duration = (4, 0.25) if args.quick else (8, 1.0)
     sweep = _sweep(n_side, duration)
     print(f"sweep: {sweep.n_cases} runs of paper-case1, {duration:g} s run-up each; "
           f"{os.cpu_count()} CPUs; load average before: {_load()}")
     with tempfile.TemporaryDirectory() as tmp:
         # compile (or load) the kernels once, outside the timings
-        run_sweep(_sweep(1, 0.01), Path(tmp) / "warm", workers=1, progress=False, report=False)
+        run_sweep(_sweep(1, 0.01), Path(tmp) / "warm", workers=1, progress=False, report=False,
+                  batch=False)
         times: dict[int, float] = {}
         cpu: dict[int, float] = {}
         for rep in range(max(1, args.repeat)):
             for workers in (1, 2):
                 out = Path(tmp) / f"r{rep}w{workers}"
                 t0, c0 = time.perf_counter(), _cpu()
-                res = run_sweep(sweep, out, workers=workers, progress=False, report=False)
+                res = run_sweep(sweep, out, workers=workers, progress=False, report=False,
+                                batch=False)
                 wall, used = time.perf_counter() - t0, _cpu() - c0
                 assert len(res.simulated) == sweep.n_cases and not res.failed
                 print(f"  {workers} worker{'s' if workers > 1 else ' '}: {wall:7.2f} s wall, "

@@ -35,12 +35,19 @@ A batch has :data:`WIDTH` lanes; fewer variants are padded with copies of the fi
 padded lane costs as much as a real one).
 
 The compiled code of this module embeds helpers of :mod:`gearvib.kernels` and
-:mod:`gearvib.lanes`; numba's cache does not notice changes in another file, so clear the
-cache (``__pycache__/*.nbi``) after editing those. The bit-identity tests would fail on a stale
-cache rather than pass silently.
+:mod:`gearvib.lanes`. numba's cache checks only the defining file's modification time and
+size, so it would load stale machine code after an edit of those files (an editable install).
+At import, :func:`clear_stale_cache` compares a SHA-256 of both files with the one stored next
+to this module's cache entries (``kernels_batch.deps-sha256`` in numba's cache folder for this
+module) and removes the entries when they differ; numba then compiles again.
 """
 
 from __future__ import annotations
+
+import contextlib
+import hashlib
+import os
+from pathlib import Path
 
 import numpy as np
 from numba import njit
@@ -965,3 +972,59 @@ def rhs_loop_batch(states: np.ndarray, t0: float, dt: float, n_eval: int, batch:
         if r == states.shape[0]:
             r = 0
     return check
+
+
+DEPENDENCIES = ("kernels.py", "lanes.py")
+"""Files (next to this module) whose code the compiled functions of this module embed."""
+
+
+def dependency_digest() -> str:
+    """SHA-256 of :data:`DEPENDENCIES` (their bytes, in order)."""
+    h = hashlib.sha256()
+    here = Path(__file__).resolve().parent
+    for name in DEPENDENCIES:
+        h.update(name.encode())
+        h.update((here / name).read_bytes())
+    return h.hexdigest()
+
+
+def clear_stale_cache(cache_dir: str | os.PathLike, stem: str, digest: str) -> bool:
+    """Remove the cached functions of module ``stem`` in ``cache_dir`` unless they were
+    compiled from dependencies with SHA-256 ``digest``; then record ``digest``.
+
+    numba keys its cache entries (``<stem>.<function>-<line>.pyXY.nbi`` and ``.nbc``) on the
+    defining file alone; the record ``<stem>.deps-sha256`` ties them to the files they embed.
+
+    Returns
+    -------
+    bool
+        True if the entries were removed (record missing or different).
+    """
+    folder = Path(cache_dir)
+    marker = folder / f"{stem}.deps-sha256"
+    try:
+        if marker.read_text().strip() == digest:
+            return False
+    except OSError:
+        pass
+    for p in [*folder.glob(f"{stem}.*.nbi"), *folder.glob(f"{stem}.*.nbc")]:
+        with contextlib.suppress(OSError):
+            p.unlink()
+    with contextlib.suppress(OSError):  # written atomically; an unwritable folder has no cache
+        tmp = folder / f".{marker.name}.{os.getpid()}.tmp"
+        tmp.write_text(digest + "\n")
+        os.replace(tmp, marker)
+    return True
+
+
+def _check_cache() -> None:
+    # numba's cache folder of this module (next to it, NUMBA_CACHE_DIR or the user cache):
+    # numba's FunctionCache knows it; it loads entries only at the first call, after this
+    try:
+        folder = integrate_chunk_batch._cache._cache_path
+    except AttributeError:  # pragma: no cover - another numba layout: no check
+        return
+    clear_stale_cache(folder, Path(__file__).stem, dependency_digest())
+
+
+_check_cache()

@@ -23,10 +23,12 @@ from __future__ import annotations
 import math
 import time as _time
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 
 import numpy as np
 
 from gearvib import kernels as kn
+from gearvib import kernels_batch as kb
 from gearvib.config import ConfigError
 from gearvib.model import AssembledModel
 from gearvib.sensors.signal import add_sensor_signals
@@ -68,6 +70,7 @@ from gearvib.simulation.step import (
 from gearvib.simulation.tooth_forces import StaticToothForces, static_tooth_forces
 
 __all__ = [
+    "BATCHABLE",
     "CHUNK_DURATION",
     "COUPLING_FREQUENCY_FRACTION",
     "DEFAULT_FS_OUT",
@@ -88,12 +91,14 @@ __all__ = [
     "StaticToothForces",
     "StepChoice",
     "TorqueDriven",
+    "batch_groups",
     "check_run_size",
     "choose_step",
     "decimation_filter",
     "default_coupling",
     "prepare_run",
     "simulate",
+    "simulate_batch",
     "static_equilibrium",
     "static_tooth_forces",
 ]
@@ -354,3 +359,334 @@ def simulate(
         result = add_sensor_signals(result, model)
         result.wall_time = _time.perf_counter() - wall0
     return result
+
+
+BATCHABLE = (
+    "values of the gear set that keep its topology: mesh damping, mesh and bearing stiffness, "
+    "bearing damping, masses and inertias, backlash, stiffness-table values, mesh phases, "
+    "load torque values"
+)
+"""What may differ between the variants of :func:`simulate_batch` (stated in its errors)."""
+
+
+@dataclass
+class _Variant:
+    """One variant of :func:`simulate_batch` prepared as :func:`simulate` prepares its run."""
+
+    model: AssembledModel
+    conditions: Conditions
+    setup: RunSetup
+    step: StepChoice
+    duration: float
+    acc0: float
+    y: np.ndarray
+
+
+def _prepare_variant(model, conditions, dt, fs_out, duration, gyroscopic, max_steps):
+    """The set-up of :func:`simulate` up to the initial state (the same operations)."""
+    check_model(model)
+    setup = prepare_run(model, conditions, gyroscopic)
+    system = setup.system
+    n, nm = model.n_dof, model.n_mesh
+    run_duration = setup.duration if duration is None else float(duration)
+    if run_duration is None or not (run_duration > 0 and math.isfinite(run_duration)):
+        raise ConfigError(f"duration = {run_duration!r} s is not admissible (admissible: > 0, "
+                          "finite; the conditions define none)")
+    if isinstance(max_steps, bool) or not isinstance(max_steps, int | np.integer) or not (
+            1 <= max_steps <= 10**15):
+        raise ConfigError(f"max_steps = {max_steps!r} is not admissible (admissible: an "
+                          "integer in 1..1e15)")
+    k_max = stiffest_matrix(model, setup.torque_sign)
+    if setup.drive == "speed":
+        k_max = k_max.copy()
+        k_max[system.ipar[kn.IP_INPUT], system.ipar[kn.IP_INPUT]] += setup.coupling.stiffness
+    f_nat = undamped_frequencies(setup.mass, k_max)
+    f_nat_max = float(f_nat.max()) if f_nat.size else 0.0
+    f_rpm = model.mesh_frequencies_per_rpm
+    f_mesh_max = float(np.nanmax(f_rpm, initial=0.0)) * setup.speed_max / RAD_S_PER_RPM
+    step = choose_step(f_nat_max, f_mesh_max, dt=dt, fs_out=fs_out,
+                       speed_max_rpm=setup.speed_max / RAD_S_PER_RPM)
+    nsig = kn.n_signals(n, nm)
+    check_run_size(step, run_duration, n_dof=n, n_mesh=nm, n_signals=nsig,
+                   n_stored=nsig + 2 * nm + len(model.bearing_names) + 4,
+                   max_steps=int(max_steps), speed_max_rpm=setup.speed_max / RAD_S_PER_RPM,
+                   dt_given=dt is not None, fs_out_given=fs_out is not None)
+    qd0 = setup.rigid * setup.omega0
+    if setup.faults is not None:
+        raise ValueError("the model has local tooth faults or manufacturing errors "
+                         "(model.faults): such variants are not batched, simulate() them one "
+                         "by one")
+    q0, acc0 = static_equilibrium(
+        system, setup.mass, setup.rigid, qd0, rigid_acceleration=setup.alpha0,
+        free_rigid=setup.free_rigid, mesh_names=model.mesh_names, flank_law=None)
+    delta0 = np.abs(system.mesh_vectors @ q0)
+    if system.mesh_back_vectors is not None:
+        delta0 = np.maximum(delta0, np.abs(system.mesh_back_vectors @ q0))
+    system.deflection_limit[:] = np.maximum(
+        1e3 * (delta0 + np.abs(system.backlash) / 2), 1e-3
+    )
+    return _Variant(model, conditions, setup, step, run_duration, acc0,
+                    np.concatenate([q0, qd0]))
+
+
+def _batch_difference(a: _Variant, b: _Variant) -> str | None:
+    """What keeps two prepared variants out of one batch (beyond the kernel topology)."""
+    sa, sb = a.step, b.step
+    if (sa.dt, sa.fs_out, sa.decimation) != (sb.dt, sb.fs_out, sb.decimation):
+        return (f"time grid (internal step dt = {sb.dt:.9g} s vs {sa.dt:.9g} s, fs_out = "
+                f"{sb.fs_out:.9g} Hz vs {sa.fs_out:.9g} Hz): the default step follows the "
+                "highest natural frequency, so give dt (and fs_out) explicitly")
+    if a.duration != b.duration:
+        return f"duration ({b.duration!r} s vs {a.duration!r} s)"
+    if a.setup.drive != b.setup.drive:
+        return f"drive ({b.setup.drive} vs {a.setup.drive})"
+    if a.model.n_dof != b.model.n_dof or a.model.n_mesh != b.model.n_mesh:
+        return (f"number of coordinates / meshes ({b.model.n_dof} / {b.model.n_mesh} vs "
+                f"{a.model.n_dof} / {a.model.n_mesh})")
+    return None
+
+
+def simulate_batch(
+    models: Sequence[AssembledModel],
+    conditions: Conditions | Sequence[Conditions],
+    *,
+    dt: float | None = None,
+    fs_out: float | None = None,
+    duration: float | None = None,
+    gyroscopic: bool = False,
+    config: Mapping | str | Sequence[Mapping | str | None] | None = None,
+    max_steps: int = DEFAULT_MAX_STEPS,
+    errors: str = "raise",
+) -> list[RunUpResult | SimulationError]:
+    """:func:`simulate` of several variants of one gear set, eight at a time on SIMD lanes.
+
+    The variants run through the batched kernel (:mod:`gearvib.kernels_batch`), up to
+    :data:`gearvib.kernels_batch.WIDTH` (8) at a time; each result is bit-identical to
+    :func:`simulate` of its variant (the same ``to_dataset()``, byte for byte), at about a
+    third of the time per variant for the paper's sets (``docs/performance-kernel.md``).
+
+    Batchable are variants of one topology on one time grid: they may differ in values of
+    the gear set (mesh damping, mesh and bearing stiffness, bearing damping, masses,
+    backlash, stiffness-table values) and of the load; they must share the coordinates, the
+    meshes and the sparsity patterns of the operators, the number of stiffness jumps per mesh
+    and table length, the drive mode and its speed / torque table, the duration and the
+    internal step and output rate. The default step follows the highest natural frequency, so
+    stiffness variants usually need an explicit ``dt`` (and ``fs_out``). Models with local
+    tooth faults or manufacturing errors are not batched (refused); virtual sensors are
+    supported (they are computed from the stored forces after the run).
+
+    Parameters
+    ----------
+    models : sequence of AssembledModel
+        The variants (at least one).
+    conditions : conditions or sequence of conditions
+        One for all variants or one per variant (as :func:`simulate`).
+    dt, fs_out, duration, gyroscopic, max_steps
+        As :func:`simulate`, the same for every variant.
+    config : mapping, str or sequence of them, optional
+        As :func:`simulate`; one for all variants or one per variant.
+    errors : {"raise", "return"}
+        A variant that blows up raises its :class:`SimulationError` (message prefixed with
+        the variant's index) or, with ``"return"``, its error (with the message of its single
+        run) takes its place in the returned list (the other variants are unaffected).
+
+    Returns
+    -------
+    list of RunUpResult (or SimulationError with ``errors="return"``)
+        One per variant, in order.
+
+    Raises
+    ------
+    ValueError
+        Variants that cannot share a batch (the message names the variant and what differs),
+        a variant with faults, or a bad argument; the errors of :func:`simulate` for an
+        inadmissible variant (prefixed with its index).
+    """
+    models = list(models) if not isinstance(models, AssembledModel) else [models]
+    if not models:
+        raise ValueError("simulate_batch needs at least one model (models is empty)")
+    if errors not in ("raise", "return"):
+        raise ValueError(f"errors = {errors!r} is not admissible (admissible: 'raise', "
+                         "'return')")
+    nv = len(models)
+    conds = list(conditions) if isinstance(conditions, list | tuple) else [conditions] * nv
+    configs = list(config) if isinstance(config, list | tuple) else [config] * nv
+    for name, seq in (("conditions", conds), ("config", configs)):
+        if len(seq) != nv:
+            raise ValueError(f"{name} must be one value or one per model ({nv}), got {len(seq)}")
+    variants = []
+    for k, (model, cond) in enumerate(zip(models, conds, strict=True)):
+        if not isinstance(model, AssembledModel):
+            raise TypeError(f"models[{k}] is a {type(model).__name__}, not an AssembledModel")
+        if model.faults:
+            raise ValueError(f"models[{k}] has local tooth faults or manufacturing errors "
+                             "(model.faults): such variants are not batched (their contact "
+                             "law is not written on SIMD lanes); simulate() them one by one")
+        try:
+            variants.append(_prepare_variant(model, cond, dt, fs_out, duration, gyroscopic,
+                                             max_steps))
+        except (ValueError, SimulationError) as exc:
+            try:
+                named = type(exc)(f"variant {k}: {exc}")
+            except TypeError:  # an exception class with another signature: as it is
+                raise exc from None
+            raise named from exc
+        if k and (why := _batch_difference(variants[0], variants[k])) is not None:
+            raise ValueError(f"variant {k} cannot share a batch with variant 0: its {why}. "
+                             f"Batchable differences: {BATCHABLE}")
+    outcomes: list = []
+    for first in range(0, nv, kb.WIDTH):
+        group = variants[first : first + kb.WIDTH]
+        try:
+            batch = kb.pack_batch([v.setup.system for v in group])
+        except ValueError as exc:
+            raise ValueError(f"{exc} (variants counted from {first}). Batchable differences: "
+                             f"{BATCHABLE}") from exc
+        t_group = _time.perf_counter()
+        outs, changes, failed = _run_batch(group, batch, gyroscopic)
+        per_variant = (_time.perf_counter() - t_group) / len(group)
+        for b, v in enumerate(group):
+            k = first + b
+            if failed[b] is not None:
+                if errors == "raise":
+                    raise SimulationError(f"variant {k}: {failed[b]}")
+                outcomes.append(SimulationError(failed[b]))  # the single run's message
+                continue
+            result = build_result(v.model, v.conditions, v.setup, v.step,
+                                  decimation_filter(v.step.decimation), outs[b], changes[b],
+                                  v.duration, gyroscopic, configs[k], None, per_variant)
+            if v.model.sensors:
+                result = add_sensor_signals(result, v.model)
+            result.wall_time = per_variant
+            outcomes.append(result)
+    return outcomes
+
+
+def batch_groups(
+    models: Sequence[AssembledModel],
+    conditions: Conditions | Sequence[Conditions],
+    *,
+    dt: float | None = None,
+    fs_out: float | None = None,
+    duration: float | None = None,
+    gyroscopic: bool = False,
+    max_steps: int = DEFAULT_MAX_STEPS,
+) -> list[list[int]]:
+    """Partition variants into groups :func:`simulate_batch` accepts.
+
+    Greedy and in order: a variant joins the first group (of fewer than 8) whose first variant
+    it can share a batch with (same time grid, duration, drive and kernel topology), else it
+    starts a group. A variant that cannot be batched at all (faults, an invalid run) is a group
+    of its own. Arguments as :func:`simulate_batch`.
+
+    Returns
+    -------
+    list of list of int
+        Indices into ``models``; every index once.
+    """
+    models = list(models)
+    nv = len(models)
+    conds = list(conditions) if isinstance(conditions, list | tuple) else [conditions] * nv
+    if len(conds) != nv:
+        raise ValueError(f"conditions must be one value or one per model ({nv}), got "
+                         f"{len(conds)}")
+    groups: list[tuple[_Variant | None, list[int]]] = []
+    for k, (model, cond) in enumerate(zip(models, conds, strict=True)):
+        v = None
+        if isinstance(model, AssembledModel) and not model.faults:
+            try:
+                v = _prepare_variant(model, cond, dt, fs_out, duration, gyroscopic, max_steps)
+            except (ValueError, TypeError, SimulationError):
+                v = None
+        for first, members in groups:
+            if v is None or first is None or len(members) >= kb.WIDTH:
+                continue
+            if _batch_difference(first, v) is not None:
+                continue
+            try:
+                kb.pack_batch([first.setup.system, v.setup.system])
+            except ValueError:
+                continue
+            members.append(k)
+            break
+        else:
+            groups.append((v, [k]))
+    return [members for _, members in groups]
+
+
+def _run_batch(group: list[_Variant], batch, gyroscopic: bool) -> tuple[list, np.ndarray, list]:
+    """The chunked loop of :func:`simulate` on the lanes of one batch."""
+    v0 = group[0]
+    step = v0.step
+    n, nm = v0.model.n_dof, v0.model.n_mesh
+    nsig = kn.n_signals(n, nm)
+    width = kb.WIDTH
+    nb = len(group)
+    taps = decimation_filter(step.decimation)
+    half = (taps.size - 1) // 2
+    dec = step.decimation
+    n_out = math.floor(v0.duration * step.fs_out + 1e-9) + 1
+    last_sample = (n_out - 1) * dec + half
+    chunk = max(round(CHUNK_DURATION / step.dt), 2 * half + dec + 1)
+    buf = np.empty((width, chunk + 2 * half + dec + 1, nsig))
+    outs = [np.empty((n_out, nsig)) for _ in range(nb)]
+    y = np.empty((2 * n, width))
+    for b in range(width):
+        y[:, b] = group[b if b < nb else 0].y
+    work = kb.batch_work(n, nm)
+    status = np.zeros((width, 2), dtype=np.int64)
+    flank_state = np.full((width, nm), -1, dtype=np.int64)
+    changes = np.zeros((width, nm), dtype=np.int64)
+    sys_tuple = batch.astuple()
+    failed: list = [None] * nb
+
+    def reference(v: _Variant, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        if v.setup.drive == "speed":
+            ang, spd = np.empty(times.size), np.empty(times.size)
+            kn.speed_profile(v.setup.system.speed_table, times, ang, spd)
+            return ang, spd
+        return v.setup.omega0 * times + 0.5 * v.acc0 * times**2, v.setup.omega0 + v.acc0 * times
+
+    b0, fill, next_out, g = -half, half, 0, 0
+    while g <= last_sample:
+        m = min(chunk, last_sample + 1 - g)
+        for off in range(0, m, MAX_KERNEL_STEPS):
+            kb.integrate_chunk_batch(y, g + off, min(MAX_KERNEL_STEPS, m - off), step.dt,
+                                     sys_tuple, buf, fill + off, flank_state, changes,
+                                     (n_out - 1) * dec, work, status)
+            if np.all(status[:nb, 0] != kn.STATUS_OK):
+                break
+        for b, v in enumerate(group):
+            if status[b, 0] != kn.STATUS_OK and failed[b] is None:
+                failed[b] = _blow_up_message(status[b, 1] * step.dt, int(status[b, 0]),
+                                             v.setup, step, gyroscopic)
+        if all(f is not None for f in failed):
+            break
+        times = (g + np.arange(m)) * step.dt
+        for b, v in enumerate(group):
+            ang, spd = reference(v, times)
+            buf[b, fill : fill + m, :n] -= ang[:, None] * v.setup.rigid
+            buf[b, fill : fill + m, n : 2 * n] -= spd[:, None] * v.setup.rigid
+            if g == 0:
+                buf[b, :half] = 2.0 * buf[b, half] - buf[b, 2 * half : half : -1]
+        fill += m
+        g += m
+        k_last = min(n_out - 1, (b0 + fill - 1 - half) // dec)
+        if k_last >= next_out:
+            for b in range(nb):
+                if failed[b] is None:
+                    kn.fir_decimate(buf[b], b0, taps, dec, next_out, k_last - next_out + 1,
+                                    outs[b], next_out)
+            next_out = k_last + 1
+        keep = next_out * dec - half - b0
+        if keep > 0:
+            buf[:, : fill - keep] = buf[:, keep:fill]
+            fill -= keep
+            b0 += keep
+    times = np.arange(n_out) * (dec * step.dt)
+    for b, v in enumerate(group):
+        if failed[b] is None:
+            ang, spd = reference(v, times)
+            outs[b][:, :n] += ang[:, None] * v.setup.rigid
+            outs[b][:, n : 2 * n] += spd[:, None] * v.setup.rigid
+    return outs, changes[:nb], failed

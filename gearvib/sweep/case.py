@@ -4,8 +4,10 @@
 what to summarise) to a :class:`CaseOutcome` (the case's summary Dataset). It is a plain,
 picklable top-level function, so any :class:`concurrent.futures.Executor` can run it: the
 in-process :class:`~gearvib.execution.SerialExecutor`, a local process pool or a Dask
-cluster. A different runner with the same signature (e.g. a batched kernel that advances several
-cases at once) can be handed to :func:`gearvib.sweep.run_sweep` instead.
+cluster. A different runner with the same signature can be handed to
+:func:`gearvib.sweep.run_sweep` instead. :func:`run_case_group` runs several cases with the same
+run settings together on the batched kernel (:func:`gearvib.simulate.simulate_batch`), with the
+run files and summaries of :func:`run_case`, bit for bit.
 
 Resuming: a run file is *finished* when it opens as netCDF, was written by gearvib and carries
 the case's hash in its ``sweep_case_sha256`` attribute (:attr:`SweepCase.sha256`: the gear-set
@@ -17,6 +19,7 @@ hash) is simulated again and replaced.
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import multiprocessing
 import sys
 import time
@@ -33,13 +36,19 @@ from gearvib.config import ConfigError, gearset_from_dict
 from gearvib.io import read_run, write_netcdf
 from gearvib.model import AssembledModel
 from gearvib.paths import is_file
-from gearvib.simulate import Conditions, SimulationError, simulate
+from gearvib.simulate import (
+    Conditions,
+    SimulationError,
+    batch_groups,
+    simulate,
+    simulate_batch,
+)
 from gearvib.simulation.settings import conditions_from_settings
 from gearvib.sweep.description import SweepCase
 from gearvib.sweep.summary import SummarySettings, summarise_run
 
 __all__ = ["CaseOutcome", "CaseTask", "build_case", "conditions_for", "finished_run",
-           "run_case"]
+           "run_case", "run_case_group"]
 
 
 @dataclass(frozen=True)
@@ -180,6 +189,116 @@ def run_case(task: CaseTask) -> CaseOutcome:
         raise
 
 
+def run_case_group(tasks: list[CaseTask]) -> list[CaseOutcome]:
+    """:func:`run_case` of several cases, simulated together on the batched kernel.
+
+    The cases that are not finished yet go through :func:`gearvib.simulate.simulate_batch`
+    (up to 8 on SIMD lanes); their run files and summaries are those :func:`run_case` writes,
+    bit for bit. When the cases cannot share a batch (a different topology or time grid,
+    faults; :func:`~gearvib.simulate.simulate_batch` refuses) or one of them is invalid, every
+    case runs alone through :func:`run_case`'s own path, so the outcomes are the same either
+    way. Cases of one call that cannot all share a batch are split into those that can
+    (:func:`~gearvib.simulate.batch_groups`, e.g. by default time grid); a case that blows up in
+    the batch fails with its single run's message.
+
+    Parameters
+    ----------
+    tasks : list of CaseTask
+        Cases with the same run settings (the caller groups them).
+
+    Returns
+    -------
+    list of CaseOutcome
+        In the order of ``tasks``.
+    """
+    global _interrupted
+    if _interrupted:
+        raise KeyboardInterrupt
+    _prepare_worker()
+    try:
+        with threadpool_limits(limits=1):
+            return _run_group(list(tasks))
+    except KeyboardInterrupt:
+        if multiprocessing.parent_process() is not None:
+            _interrupted = True
+        raise
+
+
+def _case_config(case: SweepCase) -> dict:
+    return {"gearset": case.description, "gearset_dir": case.base_dir, "run": case.run}
+
+
+def _run_group(tasks: list[CaseTask]) -> list[CaseOutcome]:
+    outcomes: dict[int, CaseOutcome] = {}
+    pending = []
+    for k, task in enumerate(tasks):
+        try:
+            model = build_case(task.case)
+            conditions = conditions_for(task.case.run, model)
+            finished = finished_run(task.run_path, task.case.sha256) is not None
+        except (ConfigError, SimulationError, ValueError):
+            finished = True  # fails (or is reused) in its own path, with its own message
+        if finished:
+            outcomes[k] = _run(task)
+        else:
+            pending.append((k, task, model, conditions))
+    if not pending:
+        return [outcomes[k] for k in range(len(tasks))]
+    run = pending[0][1].case.run
+    kw = dict(dt=run.get("dt"), fs_out=run.get("fs_out"),
+              gyroscopic=bool(run.get("gyroscopic")))
+    try:  # the cases that can share a batch (e.g. the same default time grid)
+        parts = batch_groups([p[2] for p in pending], [p[3] for p in pending], **kw)
+    except (ConfigError, SimulationError, ValueError):
+        parts = [[j] for j in range(len(pending))]
+    for part in parts:
+        members = [pending[j] for j in part]
+        results = None
+        if len(members) > 1:
+            t0 = time.perf_counter()
+            try:
+                results = simulate_batch(
+                    [p[2] for p in members], [p[3] for p in members],
+                    config=[_case_config(p[1].case) for p in members], errors="return", **kw)
+            except (ConfigError, SimulationError, ValueError):
+                results = None  # not batchable after all: every case alone
+            share = (time.perf_counter() - t0) / len(members)
+        if results is None:
+            for k, task, _, _ in members:
+                outcomes[k] = _run(task)
+            continue
+        for (k, task, model, conditions), res in zip(members, results, strict=True):
+            t1 = time.perf_counter()
+            outcome = _finish(task, model, conditions, res)
+            outcomes[k] = dataclasses.replace(
+                outcome, wall_time=share + time.perf_counter() - t1)
+    return [outcomes[k] for k in range(len(tasks))]
+
+
+def _failed(case: SweepCase, exc: Exception, t0: float) -> CaseOutcome:
+    text = str(exc).strip().splitlines()
+    return CaseOutcome(case.index, "failed", text[0] if text else type(exc).__name__, None,
+                       time.perf_counter() - t0)
+
+
+def _finish(task: CaseTask, model: AssembledModel, conditions: Conditions, res) -> CaseOutcome:
+    """Write the run file of a batched case and summarise it (as :func:`_run` does)."""
+    t0 = time.perf_counter()
+    case = task.case
+    if isinstance(res, Exception):
+        return _failed(case, res, t0)
+    try:
+        ds = res.to_dataset()
+        ds.attrs["sweep_case_sha256"] = case.sha256
+        with _plain_file_locks():
+            write_netcdf(ds, task.run_path)
+        summary = summarise_run(ds, model, conditions, task.summary,
+                                gyroscopic=bool(case.run.get("gyroscopic")))
+    except (ConfigError, SimulationError, ValueError) as exc:
+        return _failed(case, exc, t0)
+    return CaseOutcome(case.index, "simulated", "", summary, time.perf_counter() - t0)
+
+
 def _run(task: CaseTask) -> CaseOutcome:
     t0 = time.perf_counter()
     case = task.case
@@ -192,8 +311,7 @@ def _run(task: CaseTask) -> CaseOutcome:
             status = "simulated"
             res = simulate(model, conditions, dt=case.run.get("dt"), fs_out=case.run.get("fs_out"),
                            gyroscopic=bool(case.run.get("gyroscopic")), progress=False,
-                           config={"gearset": case.description, "gearset_dir": case.base_dir,
-                                   "run": case.run})
+                           config=_case_config(case))
             ds = res.to_dataset()
             ds.attrs["sweep_case_sha256"] = case.sha256
             with _plain_file_locks():
@@ -201,7 +319,5 @@ def _run(task: CaseTask) -> CaseOutcome:
         summary = summarise_run(ds, model, conditions, task.summary,
                                 gyroscopic=bool(case.run.get("gyroscopic")))
     except (ConfigError, SimulationError, ValueError) as exc:
-        text = str(exc).strip().splitlines()
-        return CaseOutcome(case.index, "failed", text[0] if text else type(exc).__name__, None,
-                           time.perf_counter() - t0)
+        return _failed(case, exc, t0)
     return CaseOutcome(case.index, status, "", summary, time.perf_counter() - t0)
