@@ -445,8 +445,8 @@ def diagnose(measured: Record, config: str, *, baseline: Record | None = None,
         key = (c.cause, c.member)
         if key not in best or s > best[key][0]:
             best[key] = (s, c)
-    kind_scores, mismatch = _local_kind_scores(best, candidates, profiles[1:], cut(meas),
-                                               fund, mesh)
+    kind_scores, mismatch = _local_kind_scores(
+        best, candidates, [[cut(p) for p in ps] for ps in profiles[1:]], cut(meas), fund, mesh)
     causes = []
     for (cause, mem), (s, c) in best.items():
         s = kind_scores.get((cause, mem), s)
