@@ -18,7 +18,7 @@ local tooth faults crack / pitting / broken tooth as one class), misses (``none`
 false alarms (a healthy gearbox with a cause above the threshold).
 
 *Wall time.* One diagnosis of a 10 s measurement (1500 min-1 constant, 10 kHz) with a fresh
-candidate folder on ``--workers`` (default 2) worker processes: simulation of the 21
+candidate folder on ``--workers`` (default 2) worker processes: simulation of the 24
 candidates and the healthy set, order tracking, scoring. The machine is shared: the time is
 the best of ``--repeat`` runs.
 """

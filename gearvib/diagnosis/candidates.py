@@ -60,7 +60,7 @@ def planets_equivalent(cfg: dict) -> bool:
 CRACK_SEVERITIES = (0.3, 0.7)
 """Stiffness losses of the simulated tooth cracks (a light and a deep crack)."""
 
-PITTING_VARIANTS = ((0.4, 0.35, 0.65, 3e-6), (0.7, 0.2, 0.8, 10e-6))
+PITTING_VARIANTS = ((0.4, 0.35, 0.65, 3e-6), (0.5, 0.15, 0.45, 5e-6), (0.7, 0.2, 0.8, 10e-6))
 """Simulated pitting: (stiffness loss, path start, path end, depth [m]) — early pitting
 about the pitch line and advanced spalling over most of the path."""
 

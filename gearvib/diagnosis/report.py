@@ -99,8 +99,10 @@ def _sections(d: Diagnosis, title_name: str) -> list[Section]:
                    f"{likely[0].score:.2f}).")
         members = {c.member for c in likely}
         if len(likely) > 1 and len(members) == 1:
+            gap = likely[0].score - likely[1].score
             verdict += (f" All likely causes are on {likely[0].member}: the member is clear, "
-                        "the kind less so (see What to measure next).")
+                        + ("the kind less so (see What to measure next)." if gap < 0.1 else
+                           f"and {likely[0].cause} leads {likely[1].cause} by {gap:.2f}."))
     else:
         best = next((c for c in d.causes if c.cause != "none"), None)
         verdict = ("Nothing stands out: no candidate explains the measured differences (best "

@@ -13,8 +13,10 @@ from analysis.diagnosis import (
     dynamic_range_db,
     family_evidence,
     family_lines,
+    impulse_mismatch_db,
     order_profile,
     prominence_db,
+    sideband_ratios,
     signature_score,
     with_noise_floor,
 )
@@ -173,3 +175,58 @@ def test_noise_floor_of_a_measurement_carried_over_to_a_noise_free_simulation():
         with_noise_floor(sim, -1.0)
     with pytest.raises(ValueError, match="percentile"):
         dynamic_range_db(meas, percentile=60.0)
+
+
+def _pulse_sidebands(duty, depth, mesh, fault, k_max, harmonic=1):
+    """Analytic sidebands of cos(m M θ) (1 + a p(θ)), p a rectangular pulse train of period
+    1/f and duty d: a d |sinc(k d)| over the mesh line 1 + a d."""
+    k = np.concatenate((np.arange(-k_max, 0), np.arange(1, k_max + 1)))
+    return depth * duty * np.abs(np.sinc(k * duty)) / (1 + depth * duty)
+
+
+def _pulse_signal(duty, depth, mesh=40.0, fault=2.5, gain=1.0):
+    _t, rpm, ang = _ramp(duration=12.0)
+    phase = np.mod(fault * ang / (2 * np.pi), 1.0)
+    return gain * np.cos(mesh * ang) * (1 + depth * (phase < duty)), rpm
+
+
+def test_sideband_ratios_against_the_fourier_series_of_a_pulse():
+    # a mesh line modulated by a rectangular pulse once per fault period: the sidebands over
+    # the mesh line are the pulse's Fourier coefficients, whatever the gain of the path
+    for duty, depth in ((0.1, 0.5), (0.35, 0.2)):
+        x, rpm = _pulse_signal(duty, depth, gain=37.0)
+        p = order_profile(x, FS, rpm, max_order=100, revolutions=16)
+        r, n = sideband_ratios(p, 2.5, 40.0, mesh_harmonics=1)
+        # exact: line M + k f of a real signal gets c_k and the image c_(k + 2M/f), with the
+        # pulse's coefficients c_n = d sinc(n d) exp(-i pi n d)
+        k = np.concatenate((np.arange(-8, 0), np.arange(1, 9)))
+
+        def c(n, duty=duty):
+            return duty * np.sinc(n * duty) * np.exp(-1j * np.pi * n * duty)
+
+        exact = depth * np.abs(c(k) + c(k + 32)) / np.abs(1 + depth * c(0) + depth * c(32))
+        assert r.shape == exact.shape == n.shape == (16,)
+        big = exact > 0.01 * exact.max()  # the sinc's zeros only show the window's leakage
+        np.testing.assert_allclose(r[big], exact[big], rtol=0.03)
+        assert np.all(n < 1e-3)  # no noise
+    with pytest.raises(ValueError, match="fundamental"):
+        sideband_ratios(p, 0.0, 40.0)
+    # a fault order above half the mesh order has no sidebands of its own
+    assert sideband_ratios(p, 30.0, 40.0)[0].size == 0
+
+
+def test_impulse_mismatch_tells_pulse_widths_apart_not_sizes():
+    narrow = _pulse_sidebands(0.1, 0.3, 40.0, 2.5, 8)
+    narrow_deep = _pulse_sidebands(0.1, 0.9, 40.0, 2.5, 8)  # same width, another size
+    wide = _pulse_sidebands(0.4, 0.3, 40.0, 2.5, 8)
+    quiet = np.full_like(narrow, 1e-6)
+    same = impulse_mismatch_db(narrow, quiet, [narrow_deep, 2 * narrow_deep])
+    other = impulse_mismatch_db(narrow, quiet, [wide, 2 * wide])
+    assert same < 0.1 < 3.0 < other
+    # where the noise buries every sideband there is nothing to tell apart
+    loud = np.full_like(narrow, 10.0)
+    assert impulse_mismatch_db(loud, loud, [narrow]) == pytest.approx(
+        impulse_mismatch_db(loud, loud, [wide]), abs=0.05)
+    assert np.isnan(impulse_mismatch_db(np.empty(0), np.empty(0), [np.empty(0)]))
+    with pytest.raises(ValueError, match="do not match"):
+        impulse_mismatch_db(narrow, quiet, [narrow[:-1]])

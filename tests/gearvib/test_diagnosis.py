@@ -64,16 +64,15 @@ def test_true_cause_ranks_first(results, name):
     # clearly ahead of the causes on other members
     other = max(c.score for c in d.causes if c.member != member and c.cause != "none")
     assert top.score > other + 0.15, table
+    # the exact kind first, for the local tooth faults too: the shape of the sideband pattern
+    # (the fault impulse) ranks crack, pitting and broken tooth of the member
+    # (docs/diagnosis.md); on these records the true kind leads the next local kind of its
+    # member by 0.15 (sun crack), 0.06 (broken ring tooth) and only 0.001 (planet pitting)
+    assert top.cause == fault["kind"], table
     if fault["kind"] in LOCAL:
-        # the member and the class (local tooth fault) rank first; the true kind is likely and
-        # within 0.02 of the first: which local kind leads is not decided on these records
-        # (pitting-planet2 and broken-ring lose to a crack by 0.001 and 0.010; the benchmark's
-        # exact top-1 is higher, docs/diagnosis.md)
-        assert top.cause in LOCAL, table
-        true = next(c for c in d.causes if c.cause == fault["kind"] and c.member == member)
-        assert true.score >= d.threshold and top.score - true.score <= 0.02, table
-    else:
-        assert top.cause == fault["kind"], table
+        nxt = max(c.score for c in d.causes if c.member == member and c.cause in LOCAL
+                  and c.cause != fault["kind"])
+        assert top.score > nxt, table
 
 
 def test_healthy_gearbox_gives_no_cause_above_threshold(results):
