@@ -704,17 +704,11 @@ def _presence(i, i0, w, nper, ce):
 
 
 @njit(cache=True, inline="always")
-def _faulty_flanks(ints, vals, tables, m, rec, y, s, d, dd, dr, ddr, half, damping,
-                   mesh_out):
-    """Contact law of a faulty mesh, tooth pair by tooth pair (:mod:`gearvib.faults.law`).
-
-    Returns ``(f_left, f_right, k_eff, state)`` like :func:`flank_forces_two_lines`.
-    """
+def _deviation_offsets(ints, vals, r, y, n, mesh_out, m):
+    """Mesh-wide deviations of faulty mesh ``m`` (record at ``ints[r]``): the offsets of the
+    left and right flank and their rates, from rigid pin errors and eccentricities."""
     fi0 = ints[H_FINT]
     fv0 = ints[H_FVAL]
-    n = ints[H_N]
-    r = fi0 + rec
-    # mesh-wide deviations: rigid pin errors and eccentricities
     cv = fv0 + ints[r + F_CONSTV]
     el = vals[cv]
     er = vals[cv + 1]
@@ -747,6 +741,21 @@ def _faulty_flanks(ints, vals, tables, m, rec, y, s, d, dd, dr, ddr, half, dampi
             er += ar * (ca * cr - sa * sr)
             edl -= al * (sa * cl + ca * sl) * rate
             edr -= ar * (sa * cr + ca * sr) * rate
+    return el, er, edl, edr
+
+
+@njit(cache=True, _nrt=False)
+def _faulty_flanks(ints, vals, tables, m, rec, y, s, d, dd, dr, ddr, half, damping,
+                   mesh_out):
+    """Contact law of a faulty mesh, tooth pair by tooth pair (:mod:`gearvib.faults.law`).
+
+    Returns ``(f_left, f_right, k_eff, state)`` like :func:`flank_forces_two_lines`.
+    """
+    fi0 = ints[H_FINT]
+    fv0 = ints[H_FVAL]
+    n = ints[H_N]
+    r = fi0 + rec
+    el, er, edl, edr = _deviation_offsets(ints, vals, r, y, n, mesh_out, m)
     z1 = ints[r + F_Z1]
     z2 = ints[r + F_Z2]
     if z1 <= 0 and z2 <= 0:  # the same offset on every pair: the table law, shifted
@@ -1018,10 +1027,21 @@ def _rhs(t, y, dy, mesh_out, ints, vals, tables, speed_tab, torque_tab):
         for p in range(_U(ints[pp + m]), _U(ints[pp + m + _U1])):
             s += vals[pv + p] * y[_U(ints[pi + p])]
         rec = ints[frec + m]
-        if rec >= 0 and mesh_out[m, 7] != 0.0:
+        if rec >= 0 and mesh_out[m, 7] != 0.0 and (ints[ints[H_FINT] + rec + F_Z1] > 0
+                                                   or ints[ints[H_FINT] + rec + F_Z2] > 0):
             # a mesh with faults, a faulty pair in contact (or deviations): pair by pair
             fl, fr, ke, st = _faulty_flanks(ints, vals, tables, m, rec, y, s, d, dd, dr, ddr,
                                             0.5 * vals[bl + m], vals[mc + m], mesh_out)
+        elif rec >= 0 and mesh_out[m, 7] != 0.0:
+            # mesh-wide deviations only (no tooth of its own): the table law, shifted (as
+            # _faulty_flanks, here without the call)
+            el, er, edl, edr = _deviation_offsets(ints, vals, ints[H_FINT] + rec, y,
+                                                  ints[H_N], mesh_out, m)
+            i0, i1, w = _interp_cell(n_table, s)
+            kl = (1.0 - w) * tables[0, m, _U(i0)] + w * tables[0, m, _U(i1)]
+            kr = (1.0 - w) * tables[1, m, _U(i0)] + w * tables[1, m, _U(i1)]
+            fl, fr, ke, st = flank_forces_two_lines(d + el, dd + edl, dr + er, ddr + edr, kl, kr,
+                                                    2.0 * (0.5 * vals[bl + m]), vals[mc + m])
         else:
             i0, i1, w = _interp_cell(n_table, s)
             kl = (1.0 - w) * tables[0, m, _U(i0)] + w * tables[0, m, _U(i1)]
