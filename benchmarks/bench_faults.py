@@ -24,8 +24,9 @@ Why some faults cost more than others:
   desynchronisation);
 * pitch errors (every tooth), the eccentricity and rigid pin errors touch every pair at every
   step (eccentricity and pin errors as a shifted table law): the faulty-mesh law runs in every
-  right-hand side of the gear's meshes (inlined; an eccentric gear's cosine and sine once per
-  right-hand side for all its meshes; pitch errors a loop over the pair slots).
+  right-hand side of the gear's meshes (the shifted table law inline, an eccentric gear's
+  cosine and sine once per right-hand side for all its meshes; pitch errors a loop over the
+  pair slots).
 """
 
 from __future__ import annotations
