@@ -23,7 +23,10 @@ Why some faults cost more than others:
   (``gearvib.kernels``, "Short sub-steps"; the 'severity 0' row has the pair law without the
   desynchronisation);
 * pitch errors (every tooth), the eccentricity and rigid pin errors touch every pair at every
-  step (eccentricity and pin errors as a shifted table law).
+  step (eccentricity and pin errors as a shifted table law): the faulty-mesh law runs in every
+  right-hand side of the gear's meshes (the shifted table law inline, an eccentric gear's
+  cosine and sine once per right-hand side for all its meshes; pitch errors a loop over the
+  pair slots).
 """
 
 from __future__ import annotations

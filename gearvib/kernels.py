@@ -462,13 +462,16 @@ def pack(system: KernelSystem, patterns: list[np.ndarray] | None = None,
     return ints, floats, tables, system.speed_table, system.torque_table
 
 
-MESH_OUT_COLUMNS = 18
+MESH_OUT_COLUMNS = 24
 """Columns of the per-mesh scratch ``mesh_out``: ``F_L, -F_R, k_eff, state, delta, s,
 delta_R``; for a faulty mesh whether its pair law is needed during the current step (set
 before every step by :func:`_split_times`; 1 is always correct), the range of need-table
 cells that flag was found for, an interval of mesh positions free of its long-period jump
 positions, and two reference angles of its eccentricities with their cosines and sines
-(columns 12-17)."""
+(columns 12-17). Row 0, columns 18-20: the eccentricity angle evaluated last in any mesh
+with its cosine and sine (the meshes of an eccentric gear share its angle: one evaluation
+per right-hand side). Columns 21-23: a mesh cycle ``floor(s)`` of a faulty mesh with the
+teeth of its next pair."""
 
 
 def n_signals(n_dof: int, n_mesh: int) -> int:
@@ -649,7 +652,22 @@ def _pairs_needed(ints, rec, c_lo, c_hi):
 def _cos_sin(ang, mesh_out, m, term):
     """``cos(ang), sin(ang)`` from a reference angle cached in ``mesh_out[m, 12:18]`` (two
     terms per mesh): degree-9 Taylor series of the small difference (< ECC_TAYLOR_RANGE rad,
-    truncation below 1e-18), else computed and cached as the new reference."""
+    truncation below 1e-18), else computed and cached as the new reference. The same angle
+    as the last one evaluated (``mesh_out[0, 18:21]``, e.g. the sun's in its next planet
+    mesh) takes the stored values."""
+    if ang == mesh_out[0, 18]:  # NaN (nothing stored) fails the test
+        return mesh_out[0, 19], mesh_out[0, 20]
+    ca, sa = _cos_sin_ref(ang, mesh_out, m, term)
+    mesh_out[0, 18] = ang
+    mesh_out[0, 19] = ca
+    mesh_out[0, 20] = sa
+    return ca, sa
+
+
+@njit(cache=True, inline="always")
+def _cos_sin_ref(ang, mesh_out, m, term):
+    """``cos(ang), sin(ang)`` from the reference of term ``term`` of mesh ``m``
+    (:func:`_cos_sin`)."""
     if term > 1:
         return np.cos(ang), np.sin(ang)
     c0 = 12 + 3 * term
@@ -685,18 +703,12 @@ def _presence(i, i0, w, nper, ce):
     return 0.0
 
 
-@njit(cache=True, _nrt=False)
-def _faulty_flanks(ints, vals, tables, m, rec, y, s, d, dd, dr, ddr, half, damping,
-                   mesh_out):
-    """Contact law of a faulty mesh, tooth pair by tooth pair (:mod:`gearvib.faults.law`).
-
-    Returns ``(f_left, f_right, k_eff, state)`` like :func:`flank_forces_two_lines`.
-    """
+@njit(cache=True, inline="always")
+def _deviation_offsets(ints, vals, r, y, n, mesh_out, m):
+    """Mesh-wide deviations of faulty mesh ``m`` (record at ``ints[r]``): the offsets of the
+    left and right flank and their rates, from rigid pin errors and eccentricities."""
     fi0 = ints[H_FINT]
     fv0 = ints[H_FVAL]
-    n = ints[H_N]
-    r = fi0 + rec
-    # mesh-wide deviations: rigid pin errors and eccentricities
     cv = fv0 + ints[r + F_CONSTV]
     el = vals[cv]
     er = vals[cv + 1]
@@ -729,6 +741,21 @@ def _faulty_flanks(ints, vals, tables, m, rec, y, s, d, dd, dr, ddr, half, dampi
             er += ar * (ca * cr - sa * sr)
             edl -= al * (sa * cl + ca * sl) * rate
             edr -= ar * (sa * cr + ca * sr) * rate
+    return el, er, edl, edr
+
+
+@njit(cache=True, _nrt=False)
+def _faulty_flanks(ints, vals, tables, m, rec, y, s, d, dd, dr, ddr, half, damping,
+                   mesh_out):
+    """Contact law of a faulty mesh, tooth pair by tooth pair (:mod:`gearvib.faults.law`).
+
+    Returns ``(f_left, f_right, k_eff, state)`` like :func:`flank_forces_two_lines`.
+    """
+    fi0 = ints[H_FINT]
+    fv0 = ints[H_FVAL]
+    n = ints[H_N]
+    r = fi0 + rec
+    el, er, edl, edr = _deviation_offsets(ints, vals, r, y, n, mesh_out, m)
     z1 = ints[r + F_Z1]
     z2 = ints[r + F_Z2]
     if z1 <= 0 and z2 <= 0:  # the same offset on every pair: the table law, shifted
@@ -755,22 +782,30 @@ def _faulty_flanks(ints, vals, tables, m, rec, y, s, d, dd, dr, ddr, half, dampi
         w = 0.0
     # teeth of the next pair (counter floor(s) + 1; floating-point modulo: no integer
     # division); each older pair steps back by the sign
-    k1 = 0
-    k2 = 0
-    if z1 > 0:
-        x = sg1 * (sf + 1.0) + ints[r + F_T1]
-        k1 = int(x - z1 * np.floor(x / z1))
-        if k1 >= z1:
-            k1 -= z1
-        elif k1 < 0:
-            k1 += z1
-    if z2 > 0:
-        x = sg2 * (sf + 1.0) + ints[r + F_T2]
-        k2 = int(x - z2 * np.floor(x / z2))
-        if k2 >= z2:
-            k2 -= z2
-        elif k2 < 0:
-            k2 += z2
+    # (kept in mesh_out[m, 21:24] for the mesh cycle floor(s): no division while it lasts)
+    if sf == mesh_out[m, 21]:  # NaN (nothing kept) fails the test
+        k1 = int(mesh_out[m, 22])
+        k2 = int(mesh_out[m, 23])
+    else:
+        k1 = 0
+        k2 = 0
+        if z1 > 0:
+            x = sg1 * (sf + 1.0) + ints[r + F_T1]
+            k1 = int(x - z1 * np.floor(x / z1))
+            if k1 >= z1:
+                k1 -= z1
+            elif k1 < 0:
+                k1 += z1
+        if z2 > 0:
+            x = sg2 * (sf + 1.0) + ints[r + F_T2]
+            k2 = int(x - z2 * np.floor(x / z2))
+            if k2 >= z2:
+                k2 -= z2
+            elif k2 < 0:
+                k2 += z2
+        mesh_out[m, 21] = sf
+        mesh_out[m, 22] = k1
+        mesh_out[m, 23] = k2
     shared = ints[r + F_SHARED] != 0
     pv = fv0 + ints[r + F_PAIRV]
     prv = fv0 + ints[r + F_PROFV]
@@ -992,10 +1027,21 @@ def _rhs(t, y, dy, mesh_out, ints, vals, tables, speed_tab, torque_tab):
         for p in range(_U(ints[pp + m]), _U(ints[pp + m + _U1])):
             s += vals[pv + p] * y[_U(ints[pi + p])]
         rec = ints[frec + m]
-        if rec >= 0 and mesh_out[m, 7] != 0.0:
+        if rec >= 0 and mesh_out[m, 7] != 0.0 and (ints[ints[H_FINT] + rec + F_Z1] > 0
+                                                   or ints[ints[H_FINT] + rec + F_Z2] > 0):
             # a mesh with faults, a faulty pair in contact (or deviations): pair by pair
             fl, fr, ke, st = _faulty_flanks(ints, vals, tables, m, rec, y, s, d, dd, dr, ddr,
                                             0.5 * vals[bl + m], vals[mc + m], mesh_out)
+        elif rec >= 0 and mesh_out[m, 7] != 0.0:
+            # mesh-wide deviations only (no tooth of its own): the table law, shifted (as
+            # _faulty_flanks, here without the call)
+            el, er, edl, edr = _deviation_offsets(ints, vals, ints[H_FINT] + rec, y,
+                                                  ints[H_N], mesh_out, m)
+            i0, i1, w = _interp_cell(n_table, s)
+            kl = (1.0 - w) * tables[0, m, _U(i0)] + w * tables[0, m, _U(i1)]
+            kr = (1.0 - w) * tables[1, m, _U(i0)] + w * tables[1, m, _U(i1)]
+            fl, fr, ke, st = flank_forces_two_lines(d + el, dd + edl, dr + er, ddr + edr, kl, kr,
+                                                    2.0 * (0.5 * vals[bl + m]), vals[mc + m])
         else:
             i0, i1, w = _interp_cell(n_table, s)
             kl = (1.0 - w) * tables[0, m, _U(i0)] + w * tables[0, m, _U(i1)]
@@ -1041,6 +1087,8 @@ def evaluate_rhs(t: float, y: np.ndarray, system: tuple) -> tuple[np.ndarray, np
     mesh_out[:, 7] = 1.0  # faulty meshes: the pair law (exact everywhere)
     mesh_out[:, 12] = np.nan  # no cached eccentricity angles
     mesh_out[:, 15] = np.nan
+    mesh_out[0, 18] = np.nan  # no shared eccentricity angle
+    mesh_out[:, 21] = np.nan  # no kept mesh cycle
     _rhs(t, y, dy, mesh_out, ints, vals, tables, speed_tab, torque_tab)
     return dy, mesh_out[:, :7].copy()
 
@@ -1280,6 +1328,8 @@ def integrate_chunk(
         mesh_out[m, 11] = np.nan
         mesh_out[m, 12] = np.nan
         mesh_out[m, 15] = np.nan
+        mesh_out[m, 18] = np.nan
+        mesh_out[m, 21] = np.nan
     for step in range(n_steps):
         g = first_step + step
         t = g * dt

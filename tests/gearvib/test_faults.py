@@ -121,6 +121,42 @@ def test_kernel_law_matches_the_reference_evaluation(preset) -> None:
     assert worst < 1e-9
 
 
+def test_kernel_caches_across_evaluations_give_the_fresh_law() -> None:
+    """The values a mesh keeps between right-hand sides (reference angles of its
+    eccentricities, the angle shared by the meshes of an eccentric gear, the teeth of its
+    next pair per mesh cycle) give the law of a fresh evaluation, along a path that rotates
+    forward and back across many mesh cycles in steps of different sizes."""
+    model = assemble(load_gearset("paper-case1"))
+    rng = np.random.default_rng(11)
+    faulty = model.with_faults([
+        Eccentricity("sun", 20e-6, 30.0),
+        Eccentricity("planet2", 15e-6),
+        PitchError("sun", cumulative=list(rng.normal(0, 3e-6, 33))),
+        PitchError("planet1", cumulative=list(rng.normal(0, 3e-6, 40))),
+    ])
+    setup = prepare_run(faulty, SpeedRamp(1000, 1000, 1.0, input_torque=60.0), False)
+    system = setup.system.astuple()
+    q0, _ = static_equilibrium(setup.system, setup.mass, setup.rigid,
+                               setup.rigid * setup.omega0)
+    angles = np.cumsum(np.concatenate([rng.uniform(0.0, 0.002, 150),
+                                       rng.uniform(-0.03, 0.01, 150),
+                                       rng.uniform(0.0, 0.2, 100)]))
+    n2 = 2 * q0.size
+    dy = np.empty(n2)
+    kept = np.full((faulty.n_mesh, kn.MESH_OUT_COLUMNS), np.nan)
+    kept[:, 7] = 1.0  # the pair law on (as integrate_chunk starts)
+    worst = 0.0
+    for a in angles:
+        q = q0 + setup.rigid * a + rng.normal(0, 2e-8, q0.size)
+        y = np.concatenate([q, setup.rigid * setup.omega0 + rng.normal(0, 1e-3, q0.size)])
+        kn.rhs_loop(y[None, :], 0.0, 1e-5, 1, system, dy, kept)
+        dy_fresh, fresh = kn.evaluate_rhs(0.0, y, system)
+        scale = np.abs(fresh[:, :3]).max() + 1.0
+        worst = max(worst, float(np.abs(kept[:, :3] - fresh[:, :3]).max() / scale),
+                    float(np.abs(dy - dy_fresh).max() / (np.abs(dy_fresh).max() + 1.0)))
+    assert worst < 1e-12
+
+
 @pytest.mark.parametrize("stiffness", [
     None,  # the preset's rectangular model: pairs share the table
     {"model": "pairs", "position": [0.0, 0.4, 0.8, 1.2, 1.6436041005447102],
