@@ -201,58 +201,15 @@ def simulate(
         static equilibrium.
     """
     wall0 = _time.perf_counter()
-    check_model(model)
-    setup = prepare_run(model, conditions, gyroscopic)
+    prepared = _prepare_variant(model, conditions, dt, fs_out, duration, gyroscopic, max_steps)
+    setup, step, run_duration = prepared.setup, prepared.step, prepared.duration
+    acc0, y = prepared.acc0, prepared.y
     system = setup.system
     n, nm = model.n_dof, model.n_mesh
-    run_duration = setup.duration if duration is None else float(duration)
-    if run_duration is None or not (run_duration > 0 and math.isfinite(run_duration)):
-        raise ConfigError(f"duration = {run_duration!r} s is not admissible (admissible: > 0, "
-                          "finite; the conditions define none)")
-    if isinstance(max_steps, bool) or not isinstance(max_steps, int | np.integer) or not (
-            1 <= max_steps <= 10**15):
-        raise ConfigError(f"max_steps = {max_steps!r} is not admissible (admissible: an "
-                          "integer in 1..1e15)")
-
-    k_max = stiffest_matrix(model, setup.torque_sign)
-    if setup.drive == "speed":
-        k_max = k_max.copy()
-        k_max[system.ipar[kn.IP_INPUT], system.ipar[kn.IP_INPUT]] += setup.coupling.stiffness
-    f_nat = undamped_frequencies(setup.mass, k_max)
-    f_nat_max = float(f_nat.max()) if f_nat.size else 0.0
-    f_rpm = model.mesh_frequencies_per_rpm
-    f_mesh_max = float(np.nanmax(f_rpm, initial=0.0)) * setup.speed_max / RAD_S_PER_RPM
-    step = choose_step(f_nat_max, f_mesh_max, dt=dt, fs_out=fs_out,
-                       speed_max_rpm=setup.speed_max / RAD_S_PER_RPM)
     nsig = kn.n_signals(n, nm)
-    check_run_size(step, run_duration, n_dof=n, n_mesh=nm, n_signals=nsig,
-                   n_stored=nsig + 2 * nm + len(model.bearing_names) + 4,
-                   max_steps=int(max_steps), speed_max_rpm=setup.speed_max / RAD_S_PER_RPM,
-                   dt_given=dt is not None, fs_out_given=fs_out is not None)
     taps = decimation_filter(step.decimation)
     half = (taps.size - 1) // 2
     dec = step.decimation
-
-    qd0 = setup.rigid * setup.omega0
-    law = setup.faults
-    q0, acc0 = static_equilibrium(
-        system,
-        setup.mass,
-        setup.rigid,
-        qd0,
-        rigid_acceleration=setup.alpha0,
-        free_rigid=setup.free_rigid,
-        mesh_names=model.mesh_names,
-        flank_law=None if law is None else (
-            lambda q, first: law.flank_law(model, q, system.backlash, first)),
-    )
-    delta0 = np.abs(system.mesh_vectors @ q0)
-    if system.mesh_back_vectors is not None:  # the static deflection of the loaded line
-        delta0 = np.maximum(delta0, np.abs(system.mesh_back_vectors @ q0))
-    system.deflection_limit[:] = np.maximum(
-        1e3 * (delta0 + np.abs(system.backlash) / 2), 1e-3
-    )
-    y = np.concatenate([q0, qd0])
 
     n_out = math.floor(run_duration * step.fs_out + 1e-9) + 1
     last_sample = (n_out - 1) * dec + half
@@ -383,7 +340,8 @@ class _Variant:
 
 
 def _prepare_variant(model, conditions, dt, fs_out, duration, gyroscopic, max_steps):
-    """The set-up of :func:`simulate` up to the initial state (the same operations)."""
+    """The set-up of a run up to its initial state: checks, step choice, run-size guard and
+    static equilibrium (:func:`simulate` and every variant of :func:`simulate_batch`)."""
     check_model(model)
     setup = prepare_run(model, conditions, gyroscopic)
     system = setup.system
@@ -412,15 +370,20 @@ def _prepare_variant(model, conditions, dt, fs_out, duration, gyroscopic, max_st
                    max_steps=int(max_steps), speed_max_rpm=setup.speed_max / RAD_S_PER_RPM,
                    dt_given=dt is not None, fs_out_given=fs_out is not None)
     qd0 = setup.rigid * setup.omega0
-    if setup.faults is not None:
-        raise ValueError("the model has local tooth faults or manufacturing errors "
-                         "(model.faults): such variants are not batched, simulate() them one "
-                         "by one")
+    law = setup.faults
     q0, acc0 = static_equilibrium(
-        system, setup.mass, setup.rigid, qd0, rigid_acceleration=setup.alpha0,
-        free_rigid=setup.free_rigid, mesh_names=model.mesh_names, flank_law=None)
+        system,
+        setup.mass,
+        setup.rigid,
+        qd0,
+        rigid_acceleration=setup.alpha0,
+        free_rigid=setup.free_rigid,
+        mesh_names=model.mesh_names,
+        flank_law=None if law is None else (
+            lambda q, first: law.flank_law(model, q, system.backlash, first)),
+    )
     delta0 = np.abs(system.mesh_vectors @ q0)
-    if system.mesh_back_vectors is not None:
+    if system.mesh_back_vectors is not None:  # the static deflection of the loaded line
         delta0 = np.maximum(delta0, np.abs(system.mesh_back_vectors @ q0))
     system.deflection_limit[:] = np.maximum(
         1e3 * (delta0 + np.abs(system.backlash) / 2), 1e-3
