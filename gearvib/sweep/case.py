@@ -288,15 +288,21 @@ def _finish(task: CaseTask, model: AssembledModel, conditions: Conditions, res) 
     if isinstance(res, Exception):
         return _failed(case, res, t0)
     try:
-        ds = res.to_dataset()
-        ds.attrs["sweep_case_sha256"] = case.sha256
-        with _plain_file_locks():
-            write_netcdf(ds, task.run_path)
+        ds = _write_run(task, res)
         summary = summarise_run(ds, model, conditions, task.summary,
                                 gyroscopic=bool(case.run.get("gyroscopic")))
     except (ConfigError, SimulationError, ValueError) as exc:
         return _failed(case, exc, t0)
     return CaseOutcome(case.index, "simulated", "", summary, time.perf_counter() - t0)
+
+
+def _write_run(task: CaseTask, res) -> xr.Dataset:
+    """The run file of a simulated case (its Dataset, marked with the case's hash)."""
+    ds = res.to_dataset()
+    ds.attrs["sweep_case_sha256"] = task.case.sha256
+    with _plain_file_locks():
+        write_netcdf(ds, task.run_path)
+    return ds
 
 
 def _run(task: CaseTask) -> CaseOutcome:
@@ -312,10 +318,7 @@ def _run(task: CaseTask) -> CaseOutcome:
             res = simulate(model, conditions, dt=case.run.get("dt"), fs_out=case.run.get("fs_out"),
                            gyroscopic=bool(case.run.get("gyroscopic")), progress=False,
                            config=_case_config(case))
-            ds = res.to_dataset()
-            ds.attrs["sweep_case_sha256"] = case.sha256
-            with _plain_file_locks():
-                write_netcdf(ds, task.run_path)
+            ds = _write_run(task, res)
         summary = summarise_run(ds, model, conditions, task.summary,
                                 gyroscopic=bool(case.run.get("gyroscopic")))
     except (ConfigError, SimulationError, ValueError) as exc:
