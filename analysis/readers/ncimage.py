@@ -92,12 +92,6 @@ def load_image(path: str | os.PathLike[str], image: bytes | None = None,
     """
     import xarray as xr
 
-    data = file_image(path) if image is None else image
-    nc = netCDF4.Dataset(str(path), mode="r", memory=data)
-    try:
-        store = xr.backends.NetCDF4DataStore(nc)
-        with xr.open_dataset(store, **open_kwargs) as ds:
-            return ds.load()
-    finally:
-        if nc.isopen():
-            nc.close()
+    with open_image(path, image) as nc, xr.open_dataset(
+            xr.backends.NetCDF4DataStore(nc), **open_kwargs) as ds:
+        return ds.load()
