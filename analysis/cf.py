@@ -37,6 +37,7 @@ __all__ = [
     "is_elapsed_seconds",
     "labels_from_cf",
     "labels_to_cf",
+    "processing_attrs",
     "time_attrs",
 ]
 
@@ -65,6 +66,26 @@ def time_attrs(long_name: str, reference: str | None = None) -> dict[str, str]:
         "units_metadata": "leap_seconds: none",
         "long_name": long_name,
     }
+
+
+def processing_attrs(reference: str = "", notes: Any = ()) -> dict[str, str]:
+    """Attributes that say how a result was obtained: the speed reference used
+    (``speed_reference``) and what was done beyond the request (CF ``comment``, the notes
+    joined by ``"; "``). Empty values give no attribute.
+
+    Parameters
+    ----------
+    reference : str
+        Name of the speed reference (tacho channel, shaft), or ``""``.
+    notes : sequence of str
+        Notes of the computation.
+    """
+    attrs: dict[str, str] = {}
+    if reference:
+        attrs["speed_reference"] = reference
+    if notes:
+        attrs["comment"] = "; ".join(notes)
+    return attrs
 
 
 def is_elapsed_seconds(units: Any) -> bool:

@@ -29,6 +29,7 @@ from typing import TYPE_CHECKING, Any, Literal, Self
 
 import numpy as np
 
+from analysis.cf import processing_attrs
 from analysis.checks import require_choice, require_finite
 from analysis.frames import frame_coords, frequency_plan, order_plan, stft_into
 from analysis.inputs import channel_coords, dataset_reference, dataset_variable, select_channel
@@ -151,10 +152,7 @@ class _MapBase:
             segment_length=int(self.segment_length),
             **self._attrs(),
         )
-        if self.reference:
-            ds.attrs["speed_reference"] = self.reference
-        if self.notes:
-            ds.attrs["comment"] = "; ".join(self.notes)
+        ds.attrs.update(processing_attrs(self.reference, self.notes))
         return ds
 
 
@@ -529,8 +527,7 @@ class OverallLevel:
             "resolution_hz": float(self.resolution_hz),
             "scale": self.scale,
         }
-        if self.reference:
-            attrs["speed_reference"] = self.reference
+        attrs.update(processing_attrs(self.reference))
         return xr.Dataset(
             {
                 "overall_level": (

@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
+from analysis.cf import processing_attrs
 from analysis.checks import require_block_size, require_choice, require_finite, time_or_rate
 from analysis.frames import (
     BLOCK_ELEMENTS,
@@ -150,10 +151,7 @@ class OrderSpectrum:
             "samples_per_rev": int(self.samples_per_rev),
             "max_order": float(self.max_order),
         }
-        if self.reference:
-            attrs["speed_reference"] = self.reference
-        if self.notes:
-            attrs["comment"] = "; ".join(self.notes)
+        attrs.update(processing_attrs(self.reference, self.notes))
         return xr.Dataset(
             {
                 "order_spectrum": (
@@ -454,10 +452,7 @@ class OrderCut:
             "samples_per_rev": int(self.samples_per_rev),
             "overlap": float(self.overlap),
         }
-        if self.reference:
-            attrs["speed_reference"] = self.reference
-        if self.notes:
-            attrs["comment"] = "; ".join(self.notes)
+        attrs.update(processing_attrs(self.reference, self.notes))
         return xr.Dataset(
             {
                 "level": (

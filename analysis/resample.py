@@ -47,6 +47,7 @@ import numpy as np
 import scipy.integrate
 import scipy.signal
 
+from analysis.cf import processing_attrs
 from analysis.checks import (
     BLOCK_SAMPLES,
     require_block_size,
@@ -176,10 +177,7 @@ class AngleSignal:
             "max_order": float(self.max_order),
             "oversampling": int(self.oversampling),
         }
-        if self.reference:
-            attrs["speed_reference"] = self.reference
-        if self.notes:
-            attrs["comment"] = "; ".join(self.notes)
+        attrs.update(processing_attrs(self.reference, self.notes))
         return xr.Dataset(
             {
                 self.name: (
