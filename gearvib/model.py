@@ -131,7 +131,7 @@ class MeshContacts:
         positions : ndarray, shape (..., n_contact)
             Mesh position of every contact's mesh [cycles] (``s[..., contacts.mesh]``).
         """
-        return _interpolate(self.tables, positions)
+        return interpolate_tables(self.tables, positions)
 
     def per_mesh(self, values: np.ndarray) -> np.ndarray:
         """Sum per-contact values (last axis) over the contacts of every mesh."""
@@ -142,8 +142,17 @@ class MeshContacts:
         return out
 
 
-def _interpolate(tables: np.ndarray, positions: np.ndarray) -> np.ndarray:
-    """Periodic linear interpolation of row ``m`` of ``tables`` at ``positions[..., m]``."""
+def interpolate_tables(tables: np.ndarray, positions: np.ndarray) -> np.ndarray:
+    """Periodic linear interpolation of row ``m`` of ``tables`` at ``positions[..., m]``.
+
+    Parameters
+    ----------
+    tables : numpy.ndarray
+        One periodic table per row, shape ``(n_rows, n_table)``, sampled at positions
+        ``0, 1/n_table, ...`` of its period.
+    positions : numpy.ndarray
+        Positions in periods, last axis one per row.
+    """
     n_table = tables.shape[1]
     s = np.asarray(positions, dtype=float)
     u = (s - np.floor(s)) * n_table
@@ -701,7 +710,7 @@ class AssembledModel:
             Stiffness [N/m], periodic linear interpolation.
         """
         tables = self.mesh_back_tables if back else self.mesh_stiffness_tables
-        return _interpolate(tables, positions)
+        return interpolate_tables(tables, positions)
 
 
 def _torque_sign(value: float) -> float:

@@ -59,7 +59,7 @@ from analysis.instability import (
 )
 from gearvib.execution import default_workers, executor_for
 from gearvib.modal import ModalResult, modal_analysis
-from gearvib.model import AssembledModel, MeshContacts, MeshFrequencyGroup
+from gearvib.model import AssembledModel, MeshContacts, MeshFrequencyGroup, interpolate_tables
 from gearvib.simulate import DriveCoupling, default_coupling
 
 __all__ = [
@@ -336,15 +336,7 @@ class PeriodicGearSystem:
 
         ``positions`` has one entry per contact (``s[..., contact_mesh]``).
         """
-        tables = self.tables
-        n_table = tables.shape[1]
-        s = np.asarray(positions, dtype=float)
-        u = (s - np.floor(s)) * n_table
-        i0 = np.floor(u).astype(np.int64) % n_table
-        i1 = (i0 + 1) % n_table
-        w = u - np.floor(u)
-        m = np.arange(tables.shape[0])
-        return (1.0 - w) * tables[m, i0] + w * tables[m, i1]
+        return interpolate_tables(self.tables, positions)
 
     def stiffness_at(self, t: float, mesh_frequency: float) -> np.ndarray:
         """``K(t)`` at constant reference mesh frequency [Hz]."""
