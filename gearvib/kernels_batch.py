@@ -34,6 +34,19 @@ contact law is evaluated per mesh and per pair and is not written on lanes).
 A batch has :data:`WIDTH` lanes; fewer variants are padded with copies of the first one (a
 padded lane costs as much as a real one).
 
+Specialised to the topology
+---------------------------
+:func:`integrate_chunk_batch` runs the batch in kernels specialised to its topology
+(:func:`kernels_for`): :mod:`gearvib.batch_codegen` writes the right-hand side as straight-line
+source (every sparse term with constant indices, the state vectors loaded once, the flank
+forces kept in registers), and the RK4 step and the integrator of this module are compiled
+again around it in a generated module. The module is written once, atomically, into numba's
+cache folder of this module (``specialised/batch_<sha256>.py``; the name hashes its text,
+which records the SHA-256 of the sources it embeds), and numba caches its compiled code like
+any other. The generic kernels (:data:`GENERIC`: :func:`integrate_lanes` with sparse loops)
+are used when ``GEARVIB_BATCH_KERNEL=generic`` or when no module can be written; both give
+the same bits.
+
 The compiled code of this module embeds helpers of :mod:`gearvib.kernels` and
 :mod:`gearvib.lanes`. numba's cache checks only the defining file's modification time and
 size, so it would load stale machine code after an edit of those files (an editable install).

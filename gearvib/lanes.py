@@ -327,6 +327,22 @@ def _gather(builder, data, offsets):
                              ir.Constant(mask_ty, [1] * WIDTH), _ZERO])
 
 
+def _has_permute(context) -> bool:
+    """Whether the target numba compiles for has AVX-512F (a variable lane permute)."""
+    features = getattr(context.codegen(), "_tm_features", "") or ""
+    return "+avx512f" in features.split(",")
+
+
+def _permute2(builder, low, high, index):
+    """Lane ``b`` of the result is element ``index[b]`` (0 ... 15) of the sixteen lanes of
+    ``low`` and ``high`` (``vpermi2pd`` / ``vpermt2pd``, AVX-512F)."""
+    vi64 = ir.VectorType(ir.IntType(64), WIDTH)
+    fn = cgutils.get_or_insert_function(
+        builder.module, ir.FunctionType(_VEC, [_VEC, vi64, _VEC]),
+        "llvm.x86.avx512.vpermi2var.pd.512")
+    return builder.call(fn, [low, index, high])
+
+
 @intrinsic
 def lanes_table_pair(typingctx, tables, base_left, base_right, n_table, table_width, s):
     """Periodic linear interpolation of two tables at each lane's position ``s`` [cycles].
@@ -339,7 +355,10 @@ def lanes_table_pair(typingctx, tables, base_left, base_right, n_table, table_wi
     ``gearvib.kernels._interp_cell`` and of the single kernel's
     ``(1 - w) * T[i0] + w * T[i1]``. When every lane is in the same table cell (the
     variants of a sweep mostly are), the samples are two contiguous vector loads per table;
-    otherwise two gathers per table. Returns ``(k_left, k_right)``.
+    with a shared table and every lane within 15 samples of the lowest (variants whose
+    static deflections differ), with AVX-512, two vector loads of 16 samples per table and a
+    permute per sample vector; otherwise two gathers per table. Returns ``(k_left,
+    k_right)``.
     """
     _check_array(tables)
     if not (all(isinstance(t, types.Integer) for t in (base_left, base_right, n_table,
@@ -396,15 +415,53 @@ def lanes_table_pair(typingctx, tables, base_left, base_right, n_table, table_wi
                             builder.store(builder.load(vptr, align=8), slot)
                         with shared:
                             builder.store(splat(builder.load(ptr), _VEC), slot)
-            with otherwise:  # lanes in different cells: one gather per sample vector
-                lanes_off = builder.mul(splat(lane_step, vi64),
-                                        ir.Constant(vi64, list(range(WIDTH))))
-                twv = splat(tw, vi64)
-                for slot, base, iv in zip(slots, (b_l, b_l, b_r, b_r), (i0, i1, i0, i1),
-                                          strict=True):
-                    off = builder.add(builder.add(splat(base, vi64), builder.mul(iv, twv)),
-                                      lanes_off)
-                    builder.store(_gather(builder, data, off), slot)
+            with otherwise:  # lanes in different cells
+                def gathers():  # one gather per sample vector
+                    lanes_off = builder.mul(splat(lane_step, vi64),
+                                            ir.Constant(vi64, list(range(WIDTH))))
+                    twv = splat(tw, vi64)
+                    for slot, base, iv in zip(slots, (b_l, b_l, b_r, b_r), (i0, i1, i0, i1),
+                                              strict=True):
+                        off = builder.add(builder.add(splat(base, vi64),
+                                                      builder.mul(iv, twv)), lanes_off)
+                        builder.store(_gather(builder, data, off), slot)
+
+                if not _has_permute(context):
+                    gathers()
+                else:
+                    # a shared table and the cells within fifteen samples: two loads of the
+                    # sixteen samples from the lowest cell per table, each lane's two
+                    # samples picked by a permute (instead of two gathers)
+                    reduce = {op: cgutils.get_or_insert_function(
+                        builder.module, ir.FunctionType(i64, [vi64]),
+                        f"llvm.vector.reduce.{op}.v{WIDTH}i64") for op in ("smin", "smax")}
+                    lo = builder.call(reduce["smin"], [i0])
+                    hi = builder.call(reduce["smax"], [i0])
+                    fits = builder.and_(
+                        builder.not_(per_lane),
+                        builder.and_(
+                            builder.icmp_signed("<=", builder.sub(hi, lo),
+                                                ir.Constant(i64, 2 * WIDTH - 2)),
+                            builder.icmp_signed("<", builder.add(lo, ir.Constant(
+                                i64, 2 * WIDTH - 1)), nt)))
+                    with builder.if_else(fits, likely=True) as (window, scattered):
+                        with window:
+                            rel0 = builder.sub(i0, splat(lo, vi64))
+                            rel1 = builder.add(rel0, ir.Constant(vi64, [1] * WIDTH))
+                            for (s0, s1), base in zip((slots[:2], slots[2:]), (b_l, b_r),
+                                                      strict=True):
+                                ptr = builder.gep(data, [builder.add(base, lo)],
+                                                  inbounds=True)
+                                win0 = builder.load(builder.bitcast(ptr, _VEC.as_pointer()),
+                                                    align=8)
+                                ptr = builder.gep(ptr, [ir.Constant(i64, WIDTH)],
+                                                  inbounds=True)
+                                win1 = builder.load(builder.bitcast(ptr, _VEC.as_pointer()),
+                                                    align=8)
+                                builder.store(_permute2(builder, win0, win1, rel0), s0)
+                                builder.store(_permute2(builder, win0, win1, rel1), s1)
+                        with scattered:
+                            gathers()
         t_l0, t_l1, t_r0, t_r1 = (builder.load(slot) for slot in slots)
         omw = builder.fsub(ir.Constant(_VEC, [1.0] * WIDTH), w)
         kl = builder.fadd(builder.fmul(omw, t_l0), builder.fmul(w, t_l1))
