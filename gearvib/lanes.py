@@ -197,92 +197,60 @@ def where_ne0(typingctx, a, x, y):
     return lanes8(a, x, y), codegen
 
 
-@intrinsic
-def where_gt(typingctx, a, b, x, y):
-    """Per lane ``x if a > b else y`` (false for NaN, as Python's ``>``)."""
-    if not all(t == lanes8 for t in (a, b, x, y)):
-        return None
+def _where(op: str, doc: str):
+    """A select on an ordered comparison: per lane ``x if a <op> b else y``."""
 
-    def codegen(context, builder, sig, args):
-        mask = builder.fcmp_ordered(">", args[0], args[1])
-        return builder.select(mask, args[2], args[3])
+    @intrinsic
+    def impl(typingctx, a, b, x, y):
+        if not all(t == lanes8 for t in (a, b, x, y)):
+            return None
 
-    return lanes8(a, b, x, y), codegen
+        def codegen(context, builder, sig, args):
+            mask = builder.fcmp_ordered(op, args[0], args[1])
+            return builder.select(mask, args[2], args[3])
 
+        return lanes8(a, b, x, y), codegen
 
-@intrinsic
-def where_lt(typingctx, a, b, x, y):
-    """Per lane ``x if a < b else y`` (false for NaN, as Python's ``<``)."""
-    if not all(t == lanes8 for t in (a, b, x, y)):
-        return None
-
-    def codegen(context, builder, sig, args):
-        mask = builder.fcmp_ordered("<", args[0], args[1])
-        return builder.select(mask, args[2], args[3])
-
-    return lanes8(a, b, x, y), codegen
+    impl.__doc__ = doc
+    return impl
 
 
-@intrinsic
-def lanes_madd(typingctx, acc, v, x):
-    """Per lane ``acc + v * x`` (a multiply, then an add: no fused multiply-add). One
-    intrinsic instead of two overloaded operators: generated code with hundreds of terms
-    compiles faster (numba inlines an overloaded operator at every use)."""
-    if not all(t == lanes8 for t in (acc, v, x)):
-        return None
-
-    def codegen(context, builder, sig, args):
-        return builder.fadd(args[0], builder.fmul(args[1], args[2]))
-
-    return lanes8(acc, v, x), codegen
+where_gt = _where(">", "Per lane ``x if a > b else y`` (false for NaN, as Python's ``>``).")
+where_lt = _where("<", "Per lane ``x if a < b else y`` (false for NaN, as Python's ``<``).")
+where_le = _where("<=", "Per lane ``x if a <= b else y`` (false for NaN, as Python's ``<=``).")
 
 
-@intrinsic
-def lanes_madd_nz(typingctx, acc, v, x):
-    """Per lane ``acc + v * x if v != 0 else acc`` (a stored zero of the batch's common
-    sparsity pattern adds nothing, not even a signed zero)."""
-    if not all(t == lanes8 for t in (acc, v, x)):
-        return None
+def _fused(op: str, nonzero: tuple[int, ...], doc: str):
+    """Per lane ``acc <op> a * b`` (a multiply, then ``fadd`` or ``fsub``: no fused
+    multiply-add), kept only where every argument of ``nonzero`` (1: ``a``, 2: ``b``) is
+    non-zero (NaN counts as non-zero), else ``acc``."""
 
-    def codegen(context, builder, sig, args):
-        acc_, v_, x_ = args
-        s = builder.fadd(acc_, builder.fmul(v_, x_))
-        mask = builder.fcmp_unordered("!=", v_, _ZERO)
-        return builder.select(mask, s, acc_)
+    @intrinsic
+    def impl(typingctx, acc, a, b):
+        if not all(t == lanes8 for t in (acc, a, b)):
+            return None
 
-    return lanes8(acc, v, x), codegen
+        def codegen(context, builder, sig, args):
+            out = getattr(builder, op)(args[0], builder.fmul(args[1], args[2]))
+            mask = None
+            for k in nonzero:
+                ne = builder.fcmp_unordered("!=", args[k], _ZERO)
+                mask = ne if mask is None else builder.and_(mask, ne)
+            return out if mask is None else builder.select(mask, out, args[0])
 
+        return lanes8(acc, a, b), codegen
 
-@intrinsic
-def lanes_madd_nz2(typingctx, acc, v, x):
-    """Per lane ``acc + v * x if (v != 0 and x != 0) else acc``."""
-    if not all(t == lanes8 for t in (acc, v, x)):
-        return None
-
-    def codegen(context, builder, sig, args):
-        acc_, v_, x_ = args
-        s = builder.fadd(acc_, builder.fmul(v_, x_))
-        mask = builder.and_(builder.fcmp_unordered("!=", v_, _ZERO),
-                            builder.fcmp_unordered("!=", x_, _ZERO))
-        return builder.select(mask, s, acc_)
-
-    return lanes8(acc, v, x), codegen
+    impl.__doc__ = doc
+    return impl
 
 
-@intrinsic
-def lanes_msub_nz(typingctx, acc, f, v):
-    """Per lane ``acc - f * v if (f != 0 and v != 0) else acc``."""
-    if not all(t == lanes8 for t in (acc, f, v)):
-        return None
-
-    def codegen(context, builder, sig, args):
-        acc_, f_, v_ = args
-        s = builder.fsub(acc_, builder.fmul(f_, v_))
-        mask = builder.and_(builder.fcmp_unordered("!=", f_, _ZERO),
-                            builder.fcmp_unordered("!=", v_, _ZERO))
-        return builder.select(mask, s, acc_)
-
-    return lanes8(acc, f, v), codegen
+lanes_madd = _fused("fadd", (), """Per lane ``acc + v * x``. One intrinsic instead of two
+overloaded operators: generated code with hundreds of terms compiles faster (numba inlines an
+overloaded operator at every use).""")
+lanes_madd_nz = _fused("fadd", (1,), """Per lane ``acc + v * x if v != 0 else acc`` (a stored zero
+of the batch's common sparsity pattern adds nothing, not even a signed zero).""")
+lanes_madd_nz2 = _fused("fadd", (1, 2), "Per lane ``acc + v * x if (v != 0 and x != 0) else acc``.")
+lanes_msub_nz = _fused("fsub", (1, 2), "Per lane ``acc - f * v if (f != 0 and v != 0) else acc``.")
 
 
 def _unary_intrinsic(name):
@@ -521,19 +489,6 @@ def lanes_coef(typingctx, arr, index, uniform):
         return builder.load(slot)
 
     return lanes8(arr, index, uniform), codegen
-
-
-@intrinsic
-def where_le(typingctx, a, b, x, y):
-    """Per lane ``x if a <= b else y`` (false for NaN, as Python's ``<=``)."""
-    if not all(t == lanes8 for t in (a, b, x, y)):
-        return None
-
-    def codegen(context, builder, sig, args):
-        mask = builder.fcmp_ordered("<=", args[0], args[1])
-        return builder.select(mask, args[2], args[3])
-
-    return lanes8(a, b, x, y), codegen
 
 
 @intrinsic
