@@ -22,7 +22,11 @@ step), it prints side by side:
   right-hand sides alone (single and batched loops over recorded states) and a batch of 8
   copies of one variant (every lane takes the same sub-steps: no lane waits). Every batched
   variant's rows are checked bit-identical to its single run's before any time is reported.
+  The batch runs the kernel specialised to the topology (generated right-hand side); the
+  generic kernel (sparse loops, :data:`gearvib.kernels_batch.GENERIC`) is timed alongside.
   ``--batch-only`` skips the C comparison.
+* ``--compile``: the first call of the batched kernel in fresh processes with an empty numba
+  cache, generic and specialised (the compile time a first sweep pays), and with that cache.
 
 Every time is CPU time of a fixed window (the machine is shared), numba compilation excluded;
 the C comparison reports the best of several repetitions.
@@ -221,21 +225,25 @@ def batched_vs_single(preset: str, which: str, cond, window: float, rounds: int)
     t_pack = time.process_time() - t0
     same = kb.pack_batch([cases[0].system] * N_BATCH)
 
-    def run_batch(b, y0s):
+    def run_batch(b, y0s, kernel=kb.integrate_chunk_batch):
         y = np.ascontiguousarray(np.array(y0s).T)
         rec = np.empty((kb.WIDTH, n_steps, kn.n_signals(n, nm)))
         fs = np.full((kb.WIDTH, nm), -1, dtype=np.int64)
         ch = np.zeros((kb.WIDTH, nm), dtype=np.int64)
         st = np.zeros((kb.WIDTH, 2), dtype=np.int64)
-        kb.integrate_chunk_batch(y, first, n_steps, dt, b.astuple(), rec, 0, fs, ch,
-                                 first + n_steps, kb.batch_work(n, nm), st)
+        kernel(y, first, n_steps, dt, b.astuple(), rec, 0, fs, ch, first + n_steps,
+               kb.batch_work(n, nm), st)
         if np.any(st[:, 0] != kn.STATUS_OK):
             raise SystemExit(f"batched run failed: status {st.tolist()}")
         return rec
 
+    if kb.kernels_for(batch.astuple()).source is None:
+        raise SystemExit("the batch runs the generic kernel (no specialised module)")
     rec = run_batch(batch, [c.y0 for c in cases])
+    rec_generic = run_batch(batch, [c.y0 for c in cases], kb.GENERIC.integrate)
     for b, c in enumerate(cases):
-        if rec[b].tobytes() != c.run_numba(c.y0.copy(), first, n_steps).tobytes():
+        single = c.run_numba(c.y0.copy(), first, n_steps).tobytes()
+        if rec[b].tobytes() != single or rec_generic[b].tobytes() != single:
             raise SystemExit(f"batched variant {b} differs from its single run")
 
     def clock(fn) -> float:
@@ -244,9 +252,12 @@ def batched_vs_single(preset: str, which: str, cond, window: float, rounds: int)
         return time.process_time() - t0
 
     single = lambda: [c.run_numba(c.y0.copy(), first, n_steps) for c in cases]  # noqa: E731
-    ratios, ratios_same = [], []
-    for _ in range(rounds):  # single, batch, single, batch of copies, interleaved
-        ratios.append(clock(single) / clock(lambda: run_batch(batch, [c.y0 for c in cases])))
+    ratios, ratios_same, ratios_generic = [], [], []
+    for _ in range(rounds):  # single, batch, generic batch, single, batch of copies
+        t_single = clock(single)
+        ratios.append(t_single / clock(lambda: run_batch(batch, [c.y0 for c in cases])))
+        ratios_generic.append(t_single / clock(lambda: run_batch(
+            batch, [c.y0 for c in cases], kb.GENERIC.integrate)))
         ratios_same.append(clock(lambda: [cases[0].run_numba(cases[0].y0.copy(), first, n_steps)
                                           for _ in range(N_BATCH)])
                            / clock(lambda: run_batch(same, [cases[0].y0] * N_BATCH)))
@@ -265,7 +276,8 @@ def batched_vs_single(preset: str, which: str, cond, window: float, rounds: int)
                                               batch.astuple(), dyb, mob))
         rhs.append((t_s / n_eval * 1e9, t_b / (n_eval // N_BATCH) * 1e9))
     rhs = np.array(rhs)
-    return {"ratio": ratios, "same": ratios_same, "rhs_single": float(np.median(rhs[:, 0])),
+    return {"ratio": ratios, "same": ratios_same, "generic": ratios_generic,
+            "rhs_single": float(np.median(rhs[:, 0])),
             "rhs_batch": float(np.median(rhs[:, 1])),
             "rhs_ratio": [N_BATCH * a / b for a, b in rhs], "pack": t_pack}
 
@@ -279,7 +291,12 @@ def main() -> None:
     parser.add_argument("--quick", action="store_true", help="shorter windows, 3 repetitions")
     parser.add_argument("--batch-only", action="store_true",
                         help="only the batched-against-single comparison")
+    parser.add_argument("--compile", action="store_true",
+                        help="only the compile time of the batched kernels (cold cache)")
     args = parser.parse_args()
+    if args.compile:
+        print_compile_times()
+        return
     repeat = 3 if args.quick else 7
     window = 0.02 if args.quick else 0.1
     cond = SpeedRamp(0.0, 4000.0, 1.0, input_torque=60.0)
@@ -317,16 +334,63 @@ def print_batched(cond, window: float, rounds: int) -> None:
     print(f"\nbatched kernel ({N_BATCH} variants in one call) against {N_BATCH} single runs, "
           f"{window} s from t = {T_BATCH} s (~1600 min^-1): CPU time, median (min-max) of "
           f"{rounds} interleaved rounds; load average {load:.1f}")
-    print(f"{'model':22s} {'variants':16s} {'throughput':>17s} {'same sub-steps':>17s} "
-          f"{'RHS alone':>17s} {'ns/RHS single':>14s} {'batch/lane':>11s}")
+    print(f"{'model':22s} {'variants':16s} {'throughput':>17s} {'generic kernel':>17s} "
+          f"{'same sub-steps':>17s} {'RHS alone':>17s} {'ns/RHS single':>14s} "
+          f"{'batch/lane':>11s}")
     for preset, which in (("paper-case1", "damping"), ("paper-case1-elastic", "damping"),
                           ("paper-case1-elastic", "damping+bearing")):
         r = batched_vs_single(preset, which, cond, window, rounds)
-        print(f"{preset:22s} {which:16s} {_spread(r['ratio']):>17s} {_spread(r['same']):>17s} "
+        print(f"{preset:22s} {which:16s} {_spread(r['ratio']):>17s} "
+              f"{_spread(r['generic']):>17s} {_spread(r['same']):>17s} "
               f"{_spread(r['rhs_ratio']):>17s} {r['rhs_single']:14.0f} "
               f"{r['rhs_batch'] / N_BATCH:11.0f}")
-    print("(throughput: 8 single runs' time / the batch's; same sub-steps: 8 copies of one "
-          "variant, no lane waits; every batched variant bit-identical to its single run)")
+    print("(throughput: 8 single runs' time / the batch's, kernel specialised to the "
+          "topology; generic kernel: the same with the generic sparse loops; same sub-steps: "
+          "8 copies of one variant, no lane waits; every batched variant of both kernels "
+          "bit-identical to its single run)")
+    print(f"load average at the end {os.getloadavg()[0]:.1f}")
+
+
+_FIRST_CALL = """
+import sys, time
+import numpy as np
+from gearvib import kernels as kn, kernels_batch as kb
+from gearvib.assembly import assemble
+from gearvib.config import gearset_from_dict, load_config
+from gearvib.simulate import SpeedRamp, prepare_run
+from gearvib.sweep.keys import set_path
+cfg, base = load_config(sys.argv[1])
+systems = []
+for k in range(8):
+    d = set_path(cfg, "meshes.sun.damping_ratio", 0.005 * (1 + 0.25 * k))
+    systems.append(prepare_run(assemble(gearset_from_dict(d, base=base)),
+                               SpeedRamp(0.0, 4000.0, 1.0, input_torque=60.0), False).system)
+batch = kb.pack_batch(systems)
+n, nm = batch.n_dof, batch.n_mesh
+rec = np.empty((kb.WIDTH, 3, kn.n_signals(n, nm)))
+t0 = time.perf_counter()
+kb.integrate_chunk_batch(np.zeros((2 * n, kb.WIDTH)), 0, 2, 1e-6, batch.astuple(), rec, 0,
+                         np.full((kb.WIDTH, nm), -1), np.zeros((kb.WIDTH, nm), dtype=np.int64),
+                         2, kb.batch_work(n, nm), np.zeros((kb.WIDTH, 2), dtype=np.int64))
+print(time.perf_counter() - t0)
+"""
+
+
+def print_compile_times() -> None:
+    """First call of the batched kernel in fresh processes with an empty numba cache (its
+    own ``NUMBA_CACHE_DIR``; the single kernel's functions it calls are compiled too), then
+    in a second process with that cache, generic and specialised kernel."""
+    import sys
+    print(f"\nfirst call of integrate_chunk_batch, wall time [s] (load average "
+          f"{os.getloadavg()[0]:.1f}): empty numba cache / cache of the previous process")
+    for preset in ("paper-case1", "paper-case1-elastic"):
+        for kernel in ("generic", "specialised"):
+            with tempfile.TemporaryDirectory() as cache:
+                env = {**os.environ, "NUMBA_CACHE_DIR": cache, kb.KERNEL_ENV: kernel}
+                times = [float(subprocess.run([sys.executable, "-c", _FIRST_CALL, preset],
+                                              env=env, capture_output=True, text=True,
+                                              check=True).stdout) for _ in range(2)]
+            print(f"{preset:22s} {kernel:12s} {times[0]:6.2f} / {times[1]:5.2f}")
 
 if __name__ == "__main__":
     main()

@@ -34,6 +34,19 @@ contact law is evaluated per mesh and per pair and is not written on lanes).
 A batch has :data:`WIDTH` lanes; fewer variants are padded with copies of the first one (a
 padded lane costs as much as a real one).
 
+Specialised to the topology
+---------------------------
+:func:`integrate_chunk_batch` runs the batch in kernels specialised to its topology
+(:func:`kernels_for`): :mod:`gearvib.batch_codegen` writes the right-hand side as straight-line
+source (every sparse term with constant indices, the state vectors loaded once, the flank
+forces kept in registers), and the RK4 step and the integrator of this module are compiled
+again around it in a generated module. The module is written once, atomically, into numba's
+cache folder of this module (``specialised/batch_<sha256>.py``; the name hashes its text,
+which records the SHA-256 of the sources it embeds), and numba caches its compiled code like
+any other. The generic kernels (:data:`GENERIC`: :func:`integrate_lanes` with sparse loops)
+are used when ``GEARVIB_BATCH_KERNEL=generic`` or when no module can be written; both give
+the same bits.
+
 The compiled code of this module embeds helpers of :mod:`gearvib.kernels` and
 :mod:`gearvib.lanes`. numba's cache checks only the defining file's modification time and
 size, so it would load stale machine code after an edit of those files (an editable install).
@@ -46,13 +59,22 @@ from __future__ import annotations
 
 import contextlib
 import hashlib
+import importlib.util
+import inspect
 import os
+import secrets
+import shutil
+import sys
+import warnings
+from collections.abc import Callable
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
 
 from analysis.jit import prepare_cache
+from gearvib.batch_codegen import RowTerms, rhs_source
 from gearvib.kernels import (
     DRIVE_MOTOR,
     DRIVE_SPEED,
@@ -133,6 +155,7 @@ from gearvib.lanes import (
     lanes_coef,
     lanes_floor,
     lanes_load,
+    lanes_madd,
     lanes_madd_nz,
     lanes_madd_nz2,
     lanes_msub_nz,
@@ -150,15 +173,27 @@ prepare_cache(__file__)
 
 __all__ = [
     "BATCH_MESH_COLUMNS",
+    "GENERIC",
+    "KERNEL_ENV",
     "WIDTH",
     "BatchSystem",
+    "KernelSet",
     "batch_work",
+    "decode_rows",
+    "evaluate_lanes",
     "evaluate_rhs_batch",
     "integrate_batch",
     "integrate_chunk_batch",
+    "integrate_lanes",
+    "kernel_namespace",
+    "kernels_for",
     "pack_batch",
     "rhs_loop_batch",
+    "rhs_loop_lanes",
+    "specialised_folder",
+    "specialised_source",
     "topology_difference",
+    "write_once",
 ]
 
 #: Columns of the batched ``mesh_out``: ``F_L, -F_R, k_eff, state, delta, s, delta_R``.
@@ -172,6 +207,7 @@ _UW = np.uint64(WIDTH)
 # (``BatchSystem.uniform``)
 _B_LV, _B_CV, _B_GV, _B_VV, _B_FV, _B_PV, _B_RVV, _B_RFV = range(8)
 _UNIFORM_BLOCKS = (H_LV, H_CV, H_GV, H_VV, H_FV, H_PV, H_RVV, H_RFV)
+_UNIFORM_NAMES = ("lv", "cv", "gv", "vv", "fv", "pv", "rvv", "rfv")
 
 # fields per row of BatchSystem.rows (row_terms)
 _ROW_INPUT, _ROW_OUTPUT, _ROW_FIRST = range(3)
@@ -190,12 +226,12 @@ def _dot(acc, ints, p0, p1, col, vals, val, y, off, mode):
     (loaded once), 1 a value per lane and none zero, 0 stored zeros (masked out)."""
     if mode == 2:
         for p in range(p0, p1):
-            acc = acc + lanes_bcast(vals, (val + p) * _UW) * lanes_load(
-                y, (off + _U(ints[col + p])) * _UW)
+            acc = lanes_madd(acc, lanes_bcast(vals, (val + p) * _UW),
+                             lanes_load(y, (off + _U(ints[col + p])) * _UW))
     elif mode == 1:
         for p in range(p0, p1):
-            acc = acc + lanes_load(vals, (val + p) * _UW) * lanes_load(
-                y, (off + _U(ints[col + p])) * _UW)
+            acc = lanes_madd(acc, lanes_load(vals, (val + p) * _UW),
+                             lanes_load(y, (off + _U(ints[col + p])) * _UW))
     else:
         for p in range(p0, p1):
             acc = lanes_madd_nz(acc, lanes_load(vals, (val + p) * _UW),
@@ -212,14 +248,14 @@ def _dot2(ints, p0, p1, col, vals, val, y, n, mode):
         for p in range(p0, p1):
             j = _U(ints[col + p])
             v = lanes_bcast(vals, (val + p) * _UW)
-            a = a + v * lanes_load(y, j * _UW)
-            b = b + v * lanes_load(y, (n + j) * _UW)
+            a = lanes_madd(a, v, lanes_load(y, j * _UW))
+            b = lanes_madd(b, v, lanes_load(y, (n + j) * _UW))
     elif mode == 1:
         for p in range(p0, p1):
             j = _U(ints[col + p])
             v = lanes_load(vals, (val + p) * _UW)
-            a = a + v * lanes_load(y, j * _UW)
-            b = b + v * lanes_load(y, (n + j) * _UW)
+            a = lanes_madd(a, v, lanes_load(y, j * _UW))
+            b = lanes_madd(b, v, lanes_load(y, (n + j) * _UW))
     else:
         for p in range(p0, p1):
             j = _U(ints[col + p])
@@ -229,79 +265,47 @@ def _dot2(ints, p0, p1, col, vals, val, y, n, mode):
     return a, b
 
 
-@njit(cache=True, _nrt=False)
-def _rhs8(y, dy, mo, scr, ints, vals, uniform, rows, forces, tables, speed_tab, torque_tab):
-    """The right-hand side of :func:`gearvib.kernels._rhs` for eight variants at once.
-
-    ``y, dy``: shape ``(2 n, WIDTH)``; ``mo``: ``(n_mesh, BATCH_MESH_COLUMNS, WIDTH)``; the
-    lanes' times in ``scr[_R_T]``; ``forces``: scratch ``(2 n_mesh, WIDTH)``. Operation by
-    operation the single kernel's (module doc), in another loop order: the meshes' flank
-    forces first, then every acceleration row in one pass (its stiffness and damping sum,
-    gyroscopic term, input torque, load and the mesh forces in mesh order, as the single
-    kernel adds them to that row: ``rows``, :func:`row_terms`), so a row stays in a
-    register instead of going through memory once per mesh.
-    """
-    n = _U(ints[H_N])
+@njit(cache=True, inline="always")
+def _mesh8(m, d, dd, dr, ddr, s, mo, vals, ints, tables):
+    """Stiffness and contact law of mesh ``m`` on lanes (:func:`gearvib.kernels.
+    flank_forces_two_lines`, branches as selects) from its deflections ``d, dd`` (left line),
+    ``dr, ddr`` (back line) and position ``s``; stores the mesh quantities in ``mo[m]`` and
+    returns ``(F_L, F_R)``."""
     n_mesh = _U(ints[H_NMESH])
     n_table = tables.shape[2]
-    zero = lanes_splat(0.0)
-    fpar = _U(ints[H_FPAR])
-    # the meshes: deflections, positions, stiffness, flank forces
-    vp = _U(ints[H_VP])
-    vi = _U(ints[H_VI])
-    vv = _U(ints[H_VV])
-    pp = _U(ints[H_PP])
-    pi = _U(ints[H_PI])
-    pv = _U(ints[H_PV])
-    s0 = _U(ints[H_S0])
-    bl = _U(ints[H_BL])
-    mc = _U(ints[H_MC])
-    rflag = _U(ints[H_RFLAG])
-    rvp = _U(ints[H_RVP])
-    rvi = _U(ints[H_RVI])
-    rvv = _U(ints[H_RVV])
-    one = lanes_splat(1.0)
-    m_v = uniform[_B_VV]
-    m_rv = uniform[_B_RVV]
-    m_p = uniform[_B_PV]
     tw = _U(tables.shape[3])  # WIDTH: a table per lane; 1: one table every lane shares
     tstride = _U(n_table) * tw  # flat distance of two tables
-    for m in range(n_mesh):
-        d, dd = _dot2(ints, _U(ints[vp + m]), _U(ints[vp + m + _U1]), vi, vals, vv, y, n, m_v)
-        two_lines = ints[rflag + m] != 0
-        dr = d
-        ddr = dd
-        if two_lines:  # the back flank's own line of action
-            dr, ddr = _dot2(ints, _U(ints[rvp + m]), _U(ints[rvp + m + _U1]), rvi, vals, rvv,
-                            y, n, m_rv)
-        s = _dot(lanes_load(vals, (s0 + m) * _UW), ints, _U(ints[pp + m]),
-                 _U(ints[pp + m + _U1]), pi, vals, pv, y, _U(0), m_p)
-        kl, kr = lanes_table_pair(tables, m * tstride, (n_mesh + m) * tstride, n_table, tw,
-                                  s)
-        # contact law (gearvib.kernels.flank_forces_two_lines), branches as selects
-        half = 0.5 * lanes_load(vals, (bl + m) * _UW)
-        damping = lanes_load(vals, (mc + m) * _UW)
-        fl = kl * (d - half) + damping * dd
-        fl = where_gt(d, half, where_lt(fl, zero, zero, fl), zero)
-        ke = where_gt(d, half, zero + kl, zero)
-        st = where_gt(d, half, zero + one, zero)
-        nhalf = -half
-        fr = kr * (dr + half) + damping * ddr
-        fr = where_lt(dr, nhalf, where_gt(fr, zero, zero, fr), zero)
-        ke = where_lt(dr, nhalf, ke + kr, ke)
-        st = where_lt(dr, nhalf, st + 2.0, st)
-        # one line of action: the summed force (slot 2 m), else F_L and F_R
-        lanes_store(forces, _U(2) * m * _UW, fl if two_lines else fl + fr)
-        lanes_store(forces, (_U(2) * m + _U1) * _UW, fr)
-        r = m * _U(BATCH_MESH_COLUMNS) * _UW
-        lanes_store(mo, r, fl)
-        lanes_store(mo, r + _UW, -fr)
-        lanes_store(mo, r + _U(2) * _UW, ke)
-        lanes_store(mo, r + _U(3) * _UW, st)
-        lanes_store(mo, r + _U(4) * _UW, d)
-        lanes_store(mo, r + _U(5) * _UW, s)
-        lanes_store(mo, r + _U(6) * _UW, dr)
-    # drive torque and load
+    zero = lanes_splat(0.0)
+    one = lanes_splat(1.0)
+    kl, kr = lanes_table_pair(tables, m * tstride, (n_mesh + m) * tstride, n_table, tw, s)
+    half = 0.5 * lanes_load(vals, (_U(ints[H_BL]) + m) * _UW)
+    damping = lanes_load(vals, (_U(ints[H_MC]) + m) * _UW)
+    fl = kl * (d - half) + damping * dd
+    fl = where_gt(d, half, where_lt(fl, zero, zero, fl), zero)
+    ke = where_gt(d, half, zero + kl, zero)
+    st = where_gt(d, half, zero + one, zero)
+    nhalf = -half
+    fr = kr * (dr + half) + damping * ddr
+    fr = where_lt(dr, nhalf, where_gt(fr, zero, zero, fr), zero)
+    ke = where_lt(dr, nhalf, ke + kr, ke)
+    st = where_lt(dr, nhalf, st + 2.0, st)
+    r = m * _U(BATCH_MESH_COLUMNS) * _UW
+    lanes_store(mo, r, fl)
+    lanes_store(mo, r + _UW, -fr)
+    lanes_store(mo, r + _U(2) * _UW, ke)
+    lanes_store(mo, r + _U(3) * _UW, st)
+    lanes_store(mo, r + _U(4) * _UW, d)
+    lanes_store(mo, r + _U(5) * _UW, s)
+    lanes_store(mo, r + _U(6) * _UW, dr)
+    return fl, fr
+
+
+@njit(cache=True, inline="always")
+def _torque8(y, scr, ints, vals, speed_tab, torque_tab):
+    """The input torque of every lane at its time ``scr[_R_T]`` (drive modes of
+    :func:`gearvib.kernels._rhs`)."""
+    n = _U(ints[H_N])
+    fpar = _U(ints[H_FPAR])
     mode = ints[H_IPAR + IP_MODE]
     k_in = _U(ints[H_IPAR + IP_INPUT])  # >= 0: every model has an input rotation
     if mode == DRIVE_SPEED:
@@ -331,7 +335,16 @@ def _rhs8(y, dy, mo, scr, ints, vals, uniform, rows, forces, tables, speed_tab, 
             scr[_R_PHI, b] = table_at(torque_tab, x)
         torque = lanes_load(scr, _R_PHI * WIDTH)
     else:
-        torque = zero
+        torque = lanes_splat(0.0)
+    return torque
+
+
+@njit(cache=True, inline="always")
+def _load8(y, ints, vals):
+    """The load torque of every lane (:func:`gearvib.kernels._rhs`)."""
+    n = _U(ints[H_N])
+    fpar = _U(ints[H_FPAR])
+    zero = lanes_splat(0.0)
     k_out = ints[H_IPAR + IP_OUTPUT]
     load = zero
     if k_out >= 0:
@@ -342,6 +355,55 @@ def _rhs8(y, dy, mo, scr, ints, vals, uniform, rows, forces, tables, speed_tab, 
             + lanes_load(vals, (fpar + _U(FP_C1)) * _UW) * wo
             + lanes_load(vals, (fpar + _U(FP_C2)) * _UW) * wo * lanes_abs(wo)
         )
+    return load
+
+
+@njit(cache=True, _nrt=False)
+def _rhs8(y, dy, mo, scr, ints, vals, uniform, rows, forces, tables, speed_tab, torque_tab):
+    """The right-hand side of :func:`gearvib.kernels._rhs` for eight variants at once.
+
+    ``y, dy``: shape ``(2 n, WIDTH)``; ``mo``: ``(n_mesh, BATCH_MESH_COLUMNS, WIDTH)``; the
+    lanes' times in ``scr[_R_T]``; ``forces``: scratch ``(2 n_mesh, WIDTH)``. Operation by
+    operation the single kernel's (module doc), in another loop order: the meshes' flank
+    forces first, then every acceleration row in one pass (its stiffness and damping sum,
+    gyroscopic term, input torque, load and the mesh forces in mesh order, as the single
+    kernel adds them to that row: ``rows``, :func:`row_terms`), so a row stays in a
+    register instead of going through memory once per mesh.
+    """
+    n = _U(ints[H_N])
+    n_mesh = _U(ints[H_NMESH])
+    zero = lanes_splat(0.0)
+    # the meshes: deflections, positions, stiffness, flank forces
+    vp = _U(ints[H_VP])
+    vi = _U(ints[H_VI])
+    vv = _U(ints[H_VV])
+    pp = _U(ints[H_PP])
+    pi = _U(ints[H_PI])
+    pv = _U(ints[H_PV])
+    s0 = _U(ints[H_S0])
+    rflag = _U(ints[H_RFLAG])
+    rvp = _U(ints[H_RVP])
+    rvi = _U(ints[H_RVI])
+    rvv = _U(ints[H_RVV])
+    m_v = uniform[_B_VV]
+    m_rv = uniform[_B_RVV]
+    m_p = uniform[_B_PV]
+    for m in range(n_mesh):
+        d, dd = _dot2(ints, _U(ints[vp + m]), _U(ints[vp + m + _U1]), vi, vals, vv, y, n, m_v)
+        two_lines = ints[rflag + m] != 0
+        dr = d
+        ddr = dd
+        if two_lines:  # the back flank's own line of action
+            dr, ddr = _dot2(ints, _U(ints[rvp + m]), _U(ints[rvp + m + _U1]), rvi, vals, rvv,
+                            y, n, m_rv)
+        s = _dot(lanes_load(vals, (s0 + m) * _UW), ints, _U(ints[pp + m]),
+                 _U(ints[pp + m + _U1]), pi, vals, pv, y, _U(0), m_p)
+        fl, fr = _mesh8(m, d, dd, dr, ddr, s, mo, vals, ints, tables)
+        # one line of action: the summed force (slot 2 m), else F_L and F_R
+        lanes_store(forces, _U(2) * m * _UW, fl if two_lines else fl + fr)
+        lanes_store(forces, (_U(2) * m + _U1) * _UW, fr)
+    torque = _torque8(y, scr, ints, vals, speed_tab, torque_tab)
+    load = _load8(y, ints, vals)
     # the rows: qdot, then qddot term by term in the single kernel's order
     lp = _U(ints[H_LP])
     li = _U(ints[H_LI])
@@ -554,7 +616,7 @@ def batch_work(n_dof: int, n_mesh: int) -> tuple:
 
 
 @njit(cache=True, _nrt=False)
-def integrate_chunk_batch(
+def integrate_lanes(
     y: np.ndarray,
     first_step: int,
     n_steps: int,
@@ -568,7 +630,8 @@ def integrate_chunk_batch(
     work: tuple,
     status: np.ndarray,
 ) -> None:
-    """:func:`gearvib.kernels.integrate_chunk` of the :data:`WIDTH` lanes of a batch.
+    """:func:`gearvib.kernels.integrate_chunk` of the :data:`WIDTH` lanes of a batch
+    (:func:`integrate_chunk_batch`, generic or in a module specialised to the topology).
 
     Parameters
     ----------
@@ -925,7 +988,7 @@ def integrate_batch(
 
 
 @njit(cache=True)
-def _evaluate8(t, y, batch):
+def evaluate_lanes(t, y, batch):
     ints, vals, uniform, rows, tables, speed_tab, torque_tab = batch
     dy = np.empty_like(y)
     mo = np.empty((ints[H_NMESH], BATCH_MESH_COLUMNS, WIDTH))
@@ -946,12 +1009,11 @@ def evaluate_rhs_batch(t: np.ndarray, y: np.ndarray, batch: BatchSystem,
     y = np.ascontiguousarray(y, dtype=np.float64)
     if y.shape != (2 * batch.n_dof, WIDTH):
         raise ValueError(f"y must have shape ({2 * batch.n_dof}, {WIDTH}), got {y.shape}")
-    return _evaluate8(t, y, batch.astuple())
+    return kernels_for(batch.astuple()).evaluate(t, y, batch.astuple())
 
 
 @njit(cache=True)
-def rhs_loop_batch(states: np.ndarray, t0: float, dt: float, n_eval: int, batch: tuple,
-                   dy: np.ndarray, mesh_out: np.ndarray) -> float:
+def rhs_loop_lanes(states, t0, dt, n_eval, batch, dy, mesh_out):
     """``n_eval`` batched right-hand sides at ``states[r]`` (shape (rows, 2 n, WIDTH),
     cycled), every lane at time ``t0 + r dt``: the batched counterpart of
     :func:`gearvib.kernels.rhs_loop` for benchmarks; returns a check value."""
@@ -974,15 +1036,180 @@ def rhs_loop_batch(states: np.ndarray, t0: float, dt: float, n_eval: int, batch:
     return check
 
 
+# --- kernels specialised to a topology ----------------------------------------------------
+
+#: Environment variable: ``generic`` runs every batch through the generic kernel (for
+#: comparisons); anything else (default) specialises the kernel to each batch's topology.
+KERNEL_ENV = "GEARVIB_BATCH_KERNEL"
+
+
+class KernelSet(NamedTuple):
+    """The compiled batched kernels of one topology (or the generic ones)."""
+
+    integrate: Callable
+    """:func:`integrate_lanes` (arguments of :func:`integrate_chunk_batch`)."""
+    rhs_loop: Callable
+    """:func:`rhs_loop_lanes`."""
+    evaluate: Callable
+    """:func:`evaluate_lanes`."""
+    source: Path | None
+    """The generated module, or None for the generic kernels."""
+
+
+GENERIC = KernelSet(integrate_lanes, rhs_loop_lanes, evaluate_lanes, None)
+"""The generic kernels (any topology; sparse loops)."""
+
+#: Functions a specialised module compiles again with its own right-hand side, from their
+#: source here (in this order: each calls only names defined before it or in this module).
+_SPECIALISED_COPIES = (_rk4_step8, integrate_lanes, rhs_loop_lanes, evaluate_lanes)
+_KERNELS: dict[bytes, KernelSet] = {}
+
+
+def kernel_namespace() -> dict:
+    """The names of this module, for a generated module (:func:`specialised_source`)."""
+    return {k: v for k, v in globals().items() if not k.startswith("__")}
+
+
+def decode_rows(rows: np.ndarray, n: int) -> RowTerms:
+    """:func:`row_terms` as lists (the input of :func:`gearvib.batch_codegen.rhs_source`)."""
+    head = np.asarray(rows[: (n + 1) * _ROW_FIELDS]).reshape(n + 1, _ROW_FIELDS)
+    forces = [[(int(e) >> 32, int(e) & 0xFFFFFFFF)
+               for e in rows[head[i, _ROW_FIRST]: head[i + 1, _ROW_FIRST]]] for i in range(n)]
+    return RowTerms([int(x) for x in head[:n, _ROW_INPUT]],
+                    [int(x) for x in head[:n, _ROW_OUTPUT]], forces)
+
+
+def specialised_source(batch: tuple) -> str:
+    """Python source of a module with the batched kernels of ``batch``'s topology.
+
+    Its right-hand side is :func:`gearvib.batch_codegen.rhs_source` of the batch's packed
+    integers and operator modes; :func:`integrate_lanes`, :func:`rhs_loop_lanes`,
+    :func:`evaluate_lanes` and the RK4 step are this module's source, compiled there with
+    that right-hand side. The header records the SHA-256 of the files whose code it embeds.
+    """
+    ints, uniform, rows = batch[0], batch[2], batch[3]
+    modes = {name: int(uniform[k]) for k, name in enumerate(_UNIFORM_NAMES)}
+    rhs = rhs_source(ints, modes, decode_rows(rows, int(ints[H_N])))
+    copies = "\n\n".join(inspect.getsource(f.py_func) for f in _SPECIALISED_COPIES)
+    return (f'"""Batched kernels of one gear-set topology, generated by gearvib.kernels_batch '
+            f'(do not edit).\n\nsha256 of {", ".join(SPECIALISED_DEPENDENCIES)}: '
+            f'{dependency_digest(SPECIALISED_DEPENDENCIES)}\n"""\n\n'
+            "from gearvib.kernels_batch import kernel_namespace\n\n"
+            "globals().update(kernel_namespace())\n\n\n"
+            f"{rhs}\n\n{copies}")
+
+
+def specialised_folder() -> Path:
+    """Where generated modules are written: ``specialised`` in numba's cache folder of this
+    module (next to it, under ``NUMBA_CACHE_DIR`` or in the user's cache, whichever numba
+    and :func:`analysis.jit.prepare_cache` chose as writable)."""
+    return Path(integrate_lanes._cache._cache_path) / "specialised"
+
+
+def write_once(path: Path, text: str) -> None:
+    """Create ``path`` with ``text`` atomically unless it holds ``text`` already.
+
+    The text goes to a temporary file first, which is then hard-linked to ``path`` (fails
+    when another process was first: its file is complete and kept) or, where hard links are
+    not available, renamed over it. A file with other content (a torn write of an older
+    version) is replaced. Sweep workers that generate the same module concurrently thus
+    never see a partial file, and an existing file keeps its modification time (numba's
+    cache index of it stays valid).
+    """
+    with contextlib.suppress(OSError):
+        if path.read_text() == text:
+            return
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.parent / f".{path.name}.{os.getpid()}.{secrets.token_hex(4)}.tmp"
+    tmp.write_text(text)
+    try:
+        try:
+            os.link(tmp, path)
+        except FileExistsError:
+            if path.read_text() != text:
+                os.replace(tmp, path)
+        except OSError:  # no hard links here
+            os.replace(tmp, path)
+    finally:
+        with contextlib.suppress(OSError):
+            tmp.unlink()
+
+
+def _load_specialised(batch: tuple) -> KernelSet:
+    try:
+        text = specialised_source(batch)
+        digest = hashlib.sha256(text.encode()).hexdigest()[:32]
+        path = specialised_folder() / f"batch_{digest}.py"
+        write_once(path, text)
+        name = f"gearvib_batch_{digest}"
+        spec = importlib.util.spec_from_file_location(name, path)
+        module = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(module)
+    except (OSError, ImportError, AttributeError) as exc:  # unwritable, no sources: generic
+        warnings.warn(f"gearvib: the batched kernel runs generic (no module specialised to "
+                      f"the topology: {exc})", RuntimeWarning, stacklevel=3)
+        return GENERIC
+    sys.modules[name] = module
+    return KernelSet(module.integrate_lanes, module.rhs_loop_lanes, module.evaluate_lanes,
+                     path)
+
+
+def kernels_for(batch: tuple) -> KernelSet:
+    """The kernels for a packed batch (:meth:`BatchSystem.astuple`): specialised to its
+    topology and operator modes (generated, written and compiled once, then loaded from
+    numba's cache; one module per topology and process), or :data:`GENERIC` when
+    :data:`KERNEL_ENV` is ``generic`` or no module can be written."""
+    if os.environ.get(KERNEL_ENV, "").strip().lower() == "generic":
+        return GENERIC
+    key = batch[0].tobytes() + batch[2].tobytes()
+    kernels = _KERNELS.get(key)
+    if kernels is None:
+        kernels = _KERNELS[key] = _load_specialised(batch)
+    return kernels
+
+
+def integrate_chunk_batch(
+    y: np.ndarray,
+    first_step: int,
+    n_steps: int,
+    dt: float,
+    batch: tuple,
+    record: np.ndarray,
+    record_offset: int,
+    flank_state: np.ndarray,
+    contact_changes: np.ndarray,
+    count_until: int,
+    work: tuple,
+    status: np.ndarray,
+) -> None:
+    """:func:`gearvib.kernels.integrate_chunk` of the :data:`WIDTH` lanes of a batch, in the
+    kernel specialised to its topology (:func:`kernels_for`; arguments of
+    :func:`integrate_lanes`)."""
+    kernels_for(batch).integrate(y, first_step, n_steps, dt, batch, record, record_offset,
+                                 flank_state, contact_changes, count_until, work, status)
+
+
+def rhs_loop_batch(states: np.ndarray, t0: float, dt: float, n_eval: int, batch: tuple,
+                   dy: np.ndarray, mesh_out: np.ndarray) -> float:
+    """``n_eval`` batched right-hand sides at ``states[r]`` (shape (rows, 2 n, WIDTH),
+    cycled), every lane at time ``t0 + r dt``: the batched counterpart of
+    :func:`gearvib.kernels.rhs_loop` for benchmarks, in the kernel of :func:`kernels_for`;
+    returns a check value."""
+    return kernels_for(batch).rhs_loop(states, t0, dt, n_eval, batch, dy, mesh_out)
+
+
 DEPENDENCIES = ("kernels.py", "lanes.py")
 """Files (next to this module) whose code the compiled functions of this module embed."""
+SPECIALISED_DEPENDENCIES = ("kernels.py", "lanes.py", "kernels_batch.py", "batch_codegen.py")
+"""Files whose code a specialised module embeds (its name hashes its text, which records
+their SHA-256)."""
 
 
-def dependency_digest() -> str:
-    """SHA-256 of :data:`DEPENDENCIES` (their bytes, in order)."""
+def dependency_digest(names: tuple[str, ...] = DEPENDENCIES) -> str:
+    """SHA-256 of the files ``names`` next to this module (their bytes, in order)."""
     h = hashlib.sha256()
     here = Path(__file__).resolve().parent
-    for name in DEPENDENCIES:
+    for name in names:
         h.update(name.encode())
         h.update((here / name).read_bytes())
     return h.hexdigest()
@@ -1021,10 +1248,12 @@ def _check_cache() -> None:
     # numba's cache folder of this module (next to it, NUMBA_CACHE_DIR or the user cache):
     # numba's FunctionCache knows it; it loads entries only at the first call, after this
     try:
-        folder = integrate_chunk_batch._cache._cache_path
+        folder = integrate_lanes._cache._cache_path
     except AttributeError:  # pragma: no cover - another numba layout: no check
         return
-    clear_stale_cache(folder, Path(__file__).stem, dependency_digest())
+    if clear_stale_cache(folder, Path(__file__).stem, dependency_digest()):
+        # modules generated from other sources (never loaded again: their names hash them)
+        shutil.rmtree(Path(folder) / "specialised", ignore_errors=True)
 
 
 _check_cache()

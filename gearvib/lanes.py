@@ -36,6 +36,7 @@ __all__ = [
     "lanes_coef",
     "lanes_floor",
     "lanes_load",
+    "lanes_madd",
     "lanes_madd_nz",
     "lanes_madd_nz2",
     "lanes_msub_nz",
@@ -196,78 +197,60 @@ def where_ne0(typingctx, a, x, y):
     return lanes8(a, x, y), codegen
 
 
-@intrinsic
-def where_gt(typingctx, a, b, x, y):
-    """Per lane ``x if a > b else y`` (false for NaN, as Python's ``>``)."""
-    if not all(t == lanes8 for t in (a, b, x, y)):
-        return None
+def _where(op: str, doc: str):
+    """A select on an ordered comparison: per lane ``x if a <op> b else y``."""
 
-    def codegen(context, builder, sig, args):
-        mask = builder.fcmp_ordered(">", args[0], args[1])
-        return builder.select(mask, args[2], args[3])
+    @intrinsic
+    def impl(typingctx, a, b, x, y):
+        if not all(t == lanes8 for t in (a, b, x, y)):
+            return None
 
-    return lanes8(a, b, x, y), codegen
+        def codegen(context, builder, sig, args):
+            mask = builder.fcmp_ordered(op, args[0], args[1])
+            return builder.select(mask, args[2], args[3])
 
+        return lanes8(a, b, x, y), codegen
 
-@intrinsic
-def where_lt(typingctx, a, b, x, y):
-    """Per lane ``x if a < b else y`` (false for NaN, as Python's ``<``)."""
-    if not all(t == lanes8 for t in (a, b, x, y)):
-        return None
-
-    def codegen(context, builder, sig, args):
-        mask = builder.fcmp_ordered("<", args[0], args[1])
-        return builder.select(mask, args[2], args[3])
-
-    return lanes8(a, b, x, y), codegen
+    impl.__doc__ = doc
+    return impl
 
 
-@intrinsic
-def lanes_madd_nz(typingctx, acc, v, x):
-    """Per lane ``acc + v * x if v != 0 else acc`` (a stored zero of the batch's common
-    sparsity pattern adds nothing, not even a signed zero)."""
-    if not all(t == lanes8 for t in (acc, v, x)):
-        return None
-
-    def codegen(context, builder, sig, args):
-        acc_, v_, x_ = args
-        s = builder.fadd(acc_, builder.fmul(v_, x_))
-        mask = builder.fcmp_unordered("!=", v_, _ZERO)
-        return builder.select(mask, s, acc_)
-
-    return lanes8(acc, v, x), codegen
+where_gt = _where(">", "Per lane ``x if a > b else y`` (false for NaN, as Python's ``>``).")
+where_lt = _where("<", "Per lane ``x if a < b else y`` (false for NaN, as Python's ``<``).")
+where_le = _where("<=", "Per lane ``x if a <= b else y`` (false for NaN, as Python's ``<=``).")
 
 
-@intrinsic
-def lanes_madd_nz2(typingctx, acc, v, x):
-    """Per lane ``acc + v * x if (v != 0 and x != 0) else acc``."""
-    if not all(t == lanes8 for t in (acc, v, x)):
-        return None
+def _fused(op: str, nonzero: tuple[int, ...], doc: str):
+    """Per lane ``acc <op> a * b`` (a multiply, then ``fadd`` or ``fsub``: no fused
+    multiply-add), kept only where every argument of ``nonzero`` (1: ``a``, 2: ``b``) is
+    non-zero (NaN counts as non-zero), else ``acc``."""
 
-    def codegen(context, builder, sig, args):
-        acc_, v_, x_ = args
-        s = builder.fadd(acc_, builder.fmul(v_, x_))
-        mask = builder.and_(builder.fcmp_unordered("!=", v_, _ZERO),
-                            builder.fcmp_unordered("!=", x_, _ZERO))
-        return builder.select(mask, s, acc_)
+    @intrinsic
+    def impl(typingctx, acc, a, b):
+        if not all(t == lanes8 for t in (acc, a, b)):
+            return None
 
-    return lanes8(acc, v, x), codegen
+        def codegen(context, builder, sig, args):
+            out = getattr(builder, op)(args[0], builder.fmul(args[1], args[2]))
+            mask = None
+            for k in nonzero:
+                ne = builder.fcmp_unordered("!=", args[k], _ZERO)
+                mask = ne if mask is None else builder.and_(mask, ne)
+            return out if mask is None else builder.select(mask, out, args[0])
+
+        return lanes8(acc, a, b), codegen
+
+    impl.__doc__ = doc
+    return impl
 
 
-@intrinsic
-def lanes_msub_nz(typingctx, acc, f, v):
-    """Per lane ``acc - f * v if (f != 0 and v != 0) else acc``."""
-    if not all(t == lanes8 for t in (acc, f, v)):
-        return None
-
-    def codegen(context, builder, sig, args):
-        acc_, f_, v_ = args
-        s = builder.fsub(acc_, builder.fmul(f_, v_))
-        mask = builder.and_(builder.fcmp_unordered("!=", f_, _ZERO),
-                            builder.fcmp_unordered("!=", v_, _ZERO))
-        return builder.select(mask, s, acc_)
-
-    return lanes8(acc, f, v), codegen
+lanes_madd = _fused("fadd", (), """Per lane ``acc + v * x``. One intrinsic instead of two
+overloaded operators: generated code with hundreds of terms compiles faster (numba inlines an
+overloaded operator at every use).""")
+lanes_madd_nz = _fused("fadd", (1,), """Per lane ``acc + v * x if v != 0 else acc`` (a stored zero
+of the batch's common sparsity pattern adds nothing, not even a signed zero).""")
+lanes_madd_nz2 = _fused("fadd", (1, 2), "Per lane ``acc + v * x if (v != 0 and x != 0) else acc``.")
+lanes_msub_nz = _fused("fsub", (1, 2), "Per lane ``acc - f * v if (f != 0 and v != 0) else acc``.")
 
 
 def _unary_intrinsic(name):
@@ -292,6 +275,42 @@ lanes_floor = _unary_intrinsic("floor")
 lanes_floor.__doc__ = "Per lane ``floor(a)``."
 
 
+def _gather(builder, data, offsets):
+    """The doubles at ``data[offsets[b]]`` of every lane: LLVM's masked gather with every
+    lane on (``vgatherqpd`` with AVX-512 or AVX2, scalar loads elsewhere)."""
+    i64 = ir.IntType(64)
+    vi64 = ir.VectorType(i64, WIDTH)
+    base = builder.ptrtoint(data, i64)
+    base = builder.insert_element(ir.Constant(vi64, ir.Undefined), base,
+                                  ir.Constant(ir.IntType(32), 0))
+    base = builder.shuffle_vector(base, base, ir.Constant(ir.VectorType(ir.IntType(32), WIDTH),
+                                                          [0] * WIDTH))
+    addr = builder.add(base, builder.mul(offsets, ir.Constant(vi64, [8] * WIDTH)))
+    pty = ir.VectorType(ir.PointerType(ir.DoubleType()), WIDTH)
+    mask_ty = ir.VectorType(ir.IntType(1), WIDTH)
+    fn = cgutils.get_or_insert_function(
+        builder.module, ir.FunctionType(_VEC, [pty, ir.IntType(32), mask_ty, _VEC]),
+        f"llvm.masked.gather.v{WIDTH}f64.v{WIDTH}p0")
+    return builder.call(fn, [builder.inttoptr(addr, pty), ir.Constant(ir.IntType(32), 8),
+                             ir.Constant(mask_ty, [1] * WIDTH), _ZERO])
+
+
+def _has_permute(context) -> bool:
+    """Whether the target numba compiles for has AVX-512F (a variable lane permute)."""
+    features = getattr(context.codegen(), "_tm_features", "") or ""
+    return "+avx512f" in features.split(",")
+
+
+def _permute2(builder, low, high, index):
+    """Lane ``b`` of the result is element ``index[b]`` (0 ... 15) of the sixteen lanes of
+    ``low`` and ``high`` (``vpermi2pd`` / ``vpermt2pd``, AVX-512F)."""
+    vi64 = ir.VectorType(ir.IntType(64), WIDTH)
+    fn = cgutils.get_or_insert_function(
+        builder.module, ir.FunctionType(_VEC, [_VEC, vi64, _VEC]),
+        "llvm.x86.avx512.vpermi2var.pd.512")
+    return builder.call(fn, [low, index, high])
+
+
 @intrinsic
 def lanes_table_pair(typingctx, tables, base_left, base_right, n_table, table_width, s):
     """Periodic linear interpolation of two tables at each lane's position ``s`` [cycles].
@@ -304,7 +323,10 @@ def lanes_table_pair(typingctx, tables, base_left, base_right, n_table, table_wi
     ``gearvib.kernels._interp_cell`` and of the single kernel's
     ``(1 - w) * T[i0] + w * T[i1]``. When every lane is in the same table cell (the
     variants of a sweep mostly are), the samples are two contiguous vector loads per table;
-    otherwise they are read lane by lane. Returns ``(k_left, k_right)``.
+    with a shared table and every lane within 15 samples of the lowest (variants whose
+    static deflections differ), with AVX-512, two vector loads of 16 samples per table and a
+    permute per sample vector; otherwise two gathers per table. Returns ``(k_left,
+    k_right)``.
     """
     _check_array(tables)
     if not (all(isinstance(t, types.Integer) for t in (base_left, base_right, n_table,
@@ -361,18 +383,53 @@ def lanes_table_pair(typingctx, tables, base_left, base_right, n_table, table_wi
                             builder.store(builder.load(vptr, align=8), slot)
                         with shared:
                             builder.store(splat(builder.load(ptr), _VEC), slot)
-            with otherwise:
-                for slot, base, iv in zip(slots, (b_l, b_l, b_r, b_r), (i0, i1, i0, i1),
-                                          strict=True):
-                    vec = ir.Constant(_VEC, ir.Undefined)
-                    for b in range(WIDTH):
-                        lane = ir.Constant(i32, b)
-                        off = builder.add(builder.add(base, builder.mul(
-                            builder.extract_element(iv, lane), tw)),
-                            builder.mul(lane_step, ir.Constant(i64, b)))
-                        val = builder.load(builder.gep(data, [off], inbounds=True))
-                        vec = builder.insert_element(vec, val, lane)
-                    builder.store(vec, slot)
+            with otherwise:  # lanes in different cells
+                def gathers():  # one gather per sample vector
+                    lanes_off = builder.mul(splat(lane_step, vi64),
+                                            ir.Constant(vi64, list(range(WIDTH))))
+                    twv = splat(tw, vi64)
+                    for slot, base, iv in zip(slots, (b_l, b_l, b_r, b_r), (i0, i1, i0, i1),
+                                              strict=True):
+                        off = builder.add(builder.add(splat(base, vi64),
+                                                      builder.mul(iv, twv)), lanes_off)
+                        builder.store(_gather(builder, data, off), slot)
+
+                if not _has_permute(context):
+                    gathers()
+                else:
+                    # a shared table and the cells within fifteen samples: two loads of the
+                    # sixteen samples from the lowest cell per table, each lane's two
+                    # samples picked by a permute (instead of two gathers)
+                    reduce = {op: cgutils.get_or_insert_function(
+                        builder.module, ir.FunctionType(i64, [vi64]),
+                        f"llvm.vector.reduce.{op}.v{WIDTH}i64") for op in ("smin", "smax")}
+                    lo = builder.call(reduce["smin"], [i0])
+                    hi = builder.call(reduce["smax"], [i0])
+                    fits = builder.and_(
+                        builder.not_(per_lane),
+                        builder.and_(
+                            builder.icmp_signed("<=", builder.sub(hi, lo),
+                                                ir.Constant(i64, 2 * WIDTH - 2)),
+                            builder.icmp_signed("<", builder.add(lo, ir.Constant(
+                                i64, 2 * WIDTH - 1)), nt)))
+                    with builder.if_else(fits, likely=True) as (window, scattered):
+                        with window:
+                            rel0 = builder.sub(i0, splat(lo, vi64))
+                            rel1 = builder.add(rel0, ir.Constant(vi64, [1] * WIDTH))
+                            for (s0, s1), base in zip((slots[:2], slots[2:]), (b_l, b_r),
+                                                      strict=True):
+                                ptr = builder.gep(data, [builder.add(base, lo)],
+                                                  inbounds=True)
+                                win0 = builder.load(builder.bitcast(ptr, _VEC.as_pointer()),
+                                                    align=8)
+                                ptr = builder.gep(ptr, [ir.Constant(i64, WIDTH)],
+                                                  inbounds=True)
+                                win1 = builder.load(builder.bitcast(ptr, _VEC.as_pointer()),
+                                                    align=8)
+                                builder.store(_permute2(builder, win0, win1, rel0), s0)
+                                builder.store(_permute2(builder, win0, win1, rel1), s1)
+                        with scattered:
+                            gathers()
         t_l0, t_l1, t_r0, t_r1 = (builder.load(slot) for slot in slots)
         omw = builder.fsub(ir.Constant(_VEC, [1.0] * WIDTH), w)
         kl = builder.fadd(builder.fmul(omw, t_l0), builder.fmul(w, t_l1))
@@ -432,19 +489,6 @@ def lanes_coef(typingctx, arr, index, uniform):
         return builder.load(slot)
 
     return lanes8(arr, index, uniform), codegen
-
-
-@intrinsic
-def where_le(typingctx, a, b, x, y):
-    """Per lane ``x if a <= b else y`` (false for NaN, as Python's ``<=``)."""
-    if not all(t == lanes8 for t in (a, b, x, y)):
-        return None
-
-    def codegen(context, builder, sig, args):
-        mask = builder.fcmp_ordered("<=", args[0], args[1])
-        return builder.select(mask, args[2], args[3])
-
-    return lanes8(a, b, x, y), codegen
 
 
 @intrinsic

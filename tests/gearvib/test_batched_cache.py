@@ -1,5 +1,6 @@
 """The batched kernel's numba cache is tied to the files its compiled code embeds
-(gearvib/kernels.py, gearvib/lanes.py): an edit there removes the stale entries at import."""
+(gearvib/kernels.py, gearvib/lanes.py): an edit there removes the stale entries and the
+modules generated from them (specialised kernels) at import."""
 
 from __future__ import annotations
 
@@ -39,7 +40,7 @@ def test_import_removes_entries_of_other_dependencies(tmp_path):
     edited kernels.py or lanes.py) makes the import remove the module's entries."""
     env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path)}
     code = ("import gearvib.kernels_batch as kb; "
-            "print(kb.integrate_chunk_batch._cache._cache_path)")
+            "print(kb.integrate_lanes._cache._cache_path)")
     run = [sys.executable, "-c", code]
     folder = Path(subprocess.run(run, env=env, capture_output=True, text=True,
                                  check=True).stdout.strip())
@@ -47,9 +48,12 @@ def test_import_removes_entries_of_other_dependencies(tmp_path):
     assert marker.read_text().strip() == kb.dependency_digest()
     stale = folder / "kernels_batch._rhs8-1.py311.nbi"
     stale.write_bytes(b"stale")
+    generated = folder / "specialised" / "batch_0.py"  # a module generated from them
+    generated.parent.mkdir()
+    generated.write_text("")
     subprocess.run(run, env=env, capture_output=True, check=True)
-    assert stale.exists()  # same dependencies: kept
+    assert stale.exists() and generated.exists()  # same dependencies: kept
     marker.write_text("0" * 64 + "\n")  # compiled from other sources
     subprocess.run(run, env=env, capture_output=True, check=True)
-    assert not stale.exists()
+    assert not stale.exists() and not generated.exists()
     assert marker.read_text().strip() == kb.dependency_digest()
