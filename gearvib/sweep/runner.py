@@ -55,9 +55,11 @@ __all__ = ["BATCH_WIDTH", "MIN_AUTO_BATCH", "SweepResult", "batch_units", "run_f
 
 BATCH_WIDTH = 8
 """Cases per batch (the SIMD lanes of :mod:`gearvib.kernels_batch`)."""
-MIN_AUTO_BATCH = 4
-"""Smallest batch formed automatically: a batch costs about 2.6 single runs whatever its size
-(8 lanes at 3.1x the throughput; padded lanes cost as much as real ones)."""
+MIN_AUTO_BATCH = 3
+"""Smallest batch formed automatically. A batch of k variants (``simulate_batch``, 0.5 s
+run-ups of ``paper-case1`` / ``paper-case1-elastic``, CPU time, medians of 5) costs about
+1.8 / 1.6 single runs for k = 2, 2.3 / 2.2 for k = 3, 2.5 / 2.4 for k = 4 and 4.2 / 3.6 for
+k = 8: a batch of 2 gains only x1.1-1.2 (within the spread), one of 3 x1.3-1.4."""
 
 log = logging.getLogger("gearvib.sweep")
 
@@ -122,7 +124,8 @@ def batch_units(tasks: list[CaseTask], workers: int, batch: bool | None
     case by case: :func:`gearvib.sweep.case.run_case_group`). Each set of candidates is split
     evenly into batches of at most :data:`BATCH_WIDTH`; automatically (``batch=None``) into at
     least ``workers`` batches, and batches smaller than :data:`MIN_AUTO_BATCH` run case by case
-    (so 4 cases on 2 workers run as 4 single runs, two in parallel: a batch of 2 costs more).
+    (so 4 cases on 2 workers run as 4 single runs, two in parallel, and 6 cases as two batches
+    of 3).
     ``batch=False``: every case alone; ``batch=True``: batches of 2 to 8 whatever their number.
     """
     if batch is False:

@@ -84,11 +84,13 @@ def test_batch_units():
     sizes = [len(u) if isinstance(u, list) else 1 for u in batch_units(tasks, 1, None)]
     assert sizes == [6, 6, 6]  # 3 batches of at most 8, evenly
     assert all(not isinstance(u, list) for u in batch_units(tasks, 1, False))
-    # automatic: at least one batch per worker while batches keep >= 4 cases
+    # automatic: at least one batch per worker while batches keep >= MIN_AUTO_BATCH (3) cases
     sizes = [len(u) if isinstance(u, list) else 1 for u in batch_units(tasks[:8], 2, None)]
     assert sizes == [4, 4]
-    assert [len(u) if isinstance(u, list) else 1 for u in batch_units(tasks[:3], 1, None)] \
-        == [1, 1, 1]
+    assert [len(u) for u in batch_units(tasks[:6], 2, None)] == [3, 3]
+    assert [len(u) for u in batch_units(tasks[:3], 1, None)] == [3]
+    assert [len(u) if isinstance(u, list) else 1 for u in batch_units(tasks[:2], 1, None)] \
+        == [1, 1]
     # 4 cases on 2 workers: single runs in parallel beat a batch of 4 on one worker
     assert [len(u) if isinstance(u, list) else 1 for u in batch_units(tasks[:4], 2, None)] \
         == [1, 1, 1, 1]
