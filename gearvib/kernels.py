@@ -1251,12 +1251,12 @@ def evaluate_rhs(t: float, y: np.ndarray, system: tuple) -> tuple[np.ndarray, np
     ints, vals, tables, speed_tab, torque_tab = system
     dy = np.empty(2 * ints[H_N])
     mesh_out = np.zeros((ints[H_NMESH], MESH_OUT_COLUMNS))
-    mesh_out[:, 7] = 1.0  # faulty meshes: the pair law (exact everywhere)
+    mesh_out[:, 7] = 1.0  # faulty meshes: their own law (exact everywhere)
     mesh_out[:, 12] = np.nan  # no cached eccentricity angles
     mesh_out[:, 15] = np.nan
     mesh_out[0, 18] = np.nan  # no shared eccentricity angle
     mesh_out[:, 21] = np.nan  # no kept mesh cycle
-    mesh_out[:, 24] = np.nan
+    mesh_out[:, 24] = np.nan  # no kept offsets of a mesh cycle
     _rhs(t, y, dy, mesh_out, ints, vals, tables, speed_tab, torque_tab)
     return dy, mesh_out[:, :7].copy()
 
@@ -1489,7 +1489,7 @@ def integrate_chunk(
             h_euler, h_mid = _short_step_limits(vals, ints[H_FVAL], dt)
             break
     for m in range(n_mesh):
-        mesh_out[m, 7] = 1.0  # until the first step decides (the pair law is exact anywhere)
+        mesh_out[m, 7] = 1.0  # until the first step decides (their own law is exact anywhere)
         mesh_out[m, 8] = np.nan  # no cached cycle range, no event-free interval
         mesh_out[m, 9] = np.nan
         mesh_out[m, 10] = np.nan
