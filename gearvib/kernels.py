@@ -282,7 +282,7 @@ N_HEADER = H_FVAL + 3
 # entries that are offsets point into the fault int block or (``*V``) the fault float block
 (F_NU, F_NSLOT, F_Z1, F_S1, F_T1, F_Z2, F_S2, F_T2, F_PAIRV, F_PROF1, F_SHIFT1V, F_PROF2,
  F_SHIFT2V, F_PROFV, F_NECC, F_ECCI, F_ECCV, F_CONSTV, F_NEV, F_EVV, F_ALWAYS, F_NPER, F_SHARED,
- F_EPSV, F_NEED, F_PERIOD, F_EXIT, F_NEEDRES, F_OFFSETS, F_RAMPOUT) = range(30)
+ F_EPSV, F_NEED, F_PERIOD, F_EXIT, F_NEEDRES, F_LAW, F_RAMPOUT, F_MESHWIDE) = range(31)
 
 #: A table segment whose stiffness changes by more than this fraction of the table's range
 #: within one table interval is a jump (e.g. the tooth-pair changes of a rectangular model).
@@ -1055,18 +1055,25 @@ def _faulty_meshes(y, dy, mesh_out, ints, vals, tables):
             s += vals[pv + p] * y[_U(ints[pi + p])]
         r = fi0 + _U(rec)
         half = 0.5 * vals[bl + m]
-        el, er, edl, edr = _deviation_offsets(ints, vals, r, y, n, mesh_out, m)
-        pairs = ints[r + _U(F_Z1)] > 0 or ints[r + _U(F_Z2)] > 0  # teeth of its own
+        el = 0.0
+        er = 0.0
+        edl = 0.0
+        edr = 0.0
+        if ints[r + _U(F_MESHWIDE)] != 0:
+            el, er, edl, edr = _deviation_offsets(ints, vals, r, y, n, mesh_out, m)
+        law = ints[r + _U(F_LAW)]  # gearvib.faults.law.LAW_*
+        pairs = law == 2
         i0, i1, w = _interp_cell(n_table, s)
         kl = (1.0 - w) * tables[0, m, _U(i0)] + w * tables[0, m, _U(i1)]
         kr = (1.0 - w) * tables[1, m, _U(i0)] + w * tables[1, m, _U(i1)]
-        if pairs and ints[r + _U(F_OFFSETS)] != 0:  # pitch offsets only
+        if law == 1:  # pitch offsets only: the mean-offset law where it holds
             mean, holds = _mean_offset(ints, vals, r, s, i0, d, dr, el, er, kl, kr, half,
                                        mesh_out, m)
             if holds:
-                pairs = False
                 el += mean
                 er += mean
+            else:
+                pairs = True
         if pairs:  # tooth pair by tooth pair
             fl, fr, ke, st = _faulty_flanks(ints, vals, tables, m, r, s, d, dd, dr, ddr, el,
                                             er, edl, edr, half, vals[mc + m], mesh_out)

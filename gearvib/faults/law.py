@@ -81,10 +81,18 @@ R_NU, R_NPAIR, R_Z1, R_S1, R_T1, R_Z2, R_S2, R_T2 = range(8)
 R_PAIR, R_PROF1, R_SHIFT1, R_PROF2, R_SHIFT2, R_PROFV = range(8, 14)
 R_NECC, R_ECCI, R_ECCV, R_CONST, R_NEV, R_EVV, R_ALWAYS, R_NPER, R_SHARED, R_EPS = range(14, 24)
 R_NEED, R_PERIOD, R_EXIT, R_NEEDRES = 24, 25, 26, 27
-# R_OFFSETS: 1 when the kernel may take the mean-offset law (:meth:`FaultedMesh.offsets_only`);
-# R_RAMPOUT: the cell of the cycle in which a pair ramps out, ``exit_cell mod n_per``
-R_OFFSETS, R_RAMPOUT = 28, 29
-N_RECORD = 30
+# R_LAW: the law the kernel evaluates while the mesh needs its own (LAW_*); R_RAMPOUT: the cell
+# of the cycle in which a pair ramps out, ``exit_cell mod n_per``; R_MESHWIDE: 1 when the mesh
+# has mesh-wide deviations (eccentricities, rigid pin errors)
+R_LAW, R_RAMPOUT, R_MESHWIDE = 28, 29, 30
+N_RECORD = 31
+LAW_SHIFTED = 0
+"""R_LAW: no tooth of its own, mesh-wide deviations only: the table law, shifted."""
+LAW_MEAN_OFFSET = 1
+"""R_LAW: pitch offsets alone (:attr:`FaultedMesh.offsets_only`): the mean-offset law where
+it holds, else the pair law."""
+LAW_PAIRS = 2
+"""R_LAW: tooth pair by tooth pair."""
 
 
 @dataclass
@@ -367,7 +375,9 @@ class FaultLaw:
             r[R_NPAIR] = fm.n_slots
             r[R_EXIT] = fm.exit_cell
             r[R_RAMPOUT] = fm.exit_cell % fm.n_per
-            r[R_OFFSETS] = int(fm.offsets_only)
+            r[R_LAW] = (LAW_MEAN_OFFSET if fm.offsets_only else LAW_PAIRS if fm.has_teeth
+                        else LAW_SHIFTED)
+            r[R_MESHWIDE] = int(bool(fm.ecc) or fm.const_left != 0.0 or fm.const_right != 0.0)
             r[R_SHARED] = int(fm.shared)
             r[R_EPS] = put([fm.eps])
             r[R_PAIR] = put(np.concatenate([fm.pair_left, fm.pair_right]))

@@ -164,8 +164,8 @@ def test_mean_offset_law_gives_the_pair_law(preset) -> None:
     of the pairs in contact, kept once per mesh cycle, where every pair of a flank is loaded
     or none is. Along a path across many mesh cycles (forward and back, the kernel's caches
     kept between evaluations) and with deflections from the loaded equilibrium to contact
-    loss and back-flank contact, it gives the pair law's forces (the law forced by clearing
-    the records' flag) to rounding; pitch offsets on both gears of a mesh, an eccentricity
+    loss and back-flank contact, it gives the pair law's forces (the law forced through the
+    records' law code) to rounding; pitch offsets on both gears of a mesh, an eccentricity
     and a rigid pin error add up. It is taken outside the ramp cells (its cycle is kept, and
     in double contact its sums differ from the pair law's in the last bits), and the pair
     law where pairs are partly in contact."""
@@ -184,7 +184,8 @@ def test_mean_offset_law_gives_the_pair_law(preset) -> None:
     fast = setup.system
     pairs = copy.deepcopy(fast)
     for r in pairs.fault_records[under]:
-        pairs.fault_ints[r + fault_law.R_OFFSETS] = 0
+        assert pairs.fault_ints[r + fault_law.R_LAW] == fault_law.LAW_MEAN_OFFSET
+        pairs.fault_ints[r + fault_law.R_LAW] = fault_law.LAW_PAIRS
     fast_t, pairs_t = fast.astuple(), pairs.astuple()
     q0, _ = static_equilibrium(fast, setup.mass, setup.rigid, setup.rigid * setup.omega0)
     angles = np.cumsum(np.concatenate([rng.uniform(0.0, 0.003, 300),
