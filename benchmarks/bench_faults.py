@@ -23,10 +23,11 @@ Why some faults cost more than others:
   (``gearvib.kernels``, "Short sub-steps"; the 'severity 0' row has the pair law without the
   desynchronisation);
 * pitch errors (every tooth), the eccentricity and rigid pin errors touch every pair at every
-  step (eccentricity and pin errors as a shifted table law): the faulty-mesh law runs in every
-  right-hand side of the gear's meshes (the shifted table law inline, an eccentric gear's
-  cosine and sine once per right-hand side for all its meshes; pitch errors a loop over the
-  pair slots).
+  step: the faulty-mesh law runs in every right-hand side of the gear's meshes, in one pass
+  after the healthy meshes, as the table law with shifted deflections (an eccentric gear's
+  cosine and sine once per right-hand side for all its meshes; pitch errors by the mean offset
+  of the pairs in contact, kept per mesh cycle; the pair loop only where pairs are partly in
+  contact or ramp in and out).
 """
 
 from __future__ import annotations

@@ -22,8 +22,11 @@ A mesh whose back line equals its left line (every mesh of a model with rigid in
 bearings) takes the one-line path: ``delta_R = delta`` and the force ``(F_L + F_R) v_m``, the
 same floating-point operations as before back lines existed, so such runs are unchanged bit for
 bit. A mesh with local tooth faults or manufacturing errors (:mod:`gearvib.faults.law`) is
-evaluated tooth pair by tooth pair (:func:`_faulty_flanks`) while a faulty pair is in contact
-or the mesh has deviations; its force acts along the same vectors. Healthy meshes never enter
+evaluated by its own law while a faulty pair is in contact or the mesh has deviations, in a
+second pass after the other meshes (:func:`_faulty_meshes`): the table law with shifted
+deflections for mesh-wide deviations and for pitch offsets alone where every pair of a flank
+is loaded or none is (:func:`_mean_offset`), else tooth pair by tooth pair
+(:func:`_faulty_flanks`); its force acts along the same vectors. Healthy meshes never enter
 that path, so runs without faults are unchanged bit for bit.
 
 Drive (``ipar[IP_MODE]``):
@@ -279,7 +282,7 @@ N_HEADER = H_FVAL + 3
 # entries that are offsets point into the fault int block or (``*V``) the fault float block
 (F_NU, F_NSLOT, F_Z1, F_S1, F_T1, F_Z2, F_S2, F_T2, F_PAIRV, F_PROF1, F_SHIFT1V, F_PROF2,
  F_SHIFT2V, F_PROFV, F_NECC, F_ECCI, F_ECCV, F_CONSTV, F_NEV, F_EVV, F_ALWAYS, F_NPER, F_SHARED,
- F_EPSV, F_NEED, F_PERIOD, F_EXIT, F_NEEDRES) = range(28)
+ F_EPSV, F_NEED, F_PERIOD, F_EXIT, F_NEEDRES, F_LAW, F_RAMPOUT, F_MESHWIDE) = range(31)
 
 #: A table segment whose stiffness changes by more than this fraction of the table's range
 #: within one table interval is a jump (e.g. the tooth-pair changes of a rectangular model).
@@ -462,7 +465,7 @@ def pack(system: KernelSystem, patterns: list[np.ndarray] | None = None,
     return ints, floats, tables, system.speed_table, system.torque_table
 
 
-MESH_OUT_COLUMNS = 24
+MESH_OUT_COLUMNS = 31
 """Columns of the per-mesh scratch ``mesh_out``: ``F_L, -F_R, k_eff, state, delta, s,
 delta_R``; for a faulty mesh whether its pair law is needed during the current step (set
 before every step by :func:`_split_times`; 1 is always correct), the range of need-table
@@ -471,7 +474,9 @@ positions, and two reference angles of its eccentricities with their cosines and
 (columns 12-17). Row 0, columns 18-20: the eccentricity angle evaluated last in any mesh
 with its cosine and sine (the meshes of an eccentric gear share its angle: one evaluation
 per right-hand side). Columns 21-23: a mesh cycle ``floor(s)`` of a faulty mesh with the
-teeth of its next pair."""
+teeth of its next pair. Columns 24-30 (a mesh under the mean-offset law, :func:`_offset_cycle`):
+the mesh cycle they were kept for, then ``(mean, lowest, highest)`` of the offsets of the
+pairs in contact before the leaving pair's ramp cell and the same after it."""
 
 
 def n_signals(n_dof: int, n_mesh: int) -> int:
@@ -670,21 +675,21 @@ def _cos_sin_ref(ang, mesh_out, m, term):
     (:func:`_cos_sin`)."""
     if term > 1:
         return np.cos(ang), np.sin(ang)
-    c0 = 12 + 3 * term
+    c0 = _U(12 + 3 * term)
     dlt = ang - mesh_out[m, c0]
     if abs(dlt) < ECC_TAYLOR_RANGE:  # NaN (no reference yet) fails the test
         d2 = dlt * dlt
         cd = 1.0 - d2 * (0.5 - d2 * (1.0 / 24.0 - d2 * (1.0 / 720.0 - d2 / 40320.0)))
         sd = dlt * (1.0 - d2 * (1.0 / 6.0 - d2 * (1.0 / 120.0 - d2 * (1.0 / 5040.0
                                                                         - d2 / 362880.0))))
-        cr = mesh_out[m, c0 + 1]
-        sr = mesh_out[m, c0 + 2]
+        cr = mesh_out[m, c0 + _U1]
+        sr = mesh_out[m, c0 + _U(2)]
         return cr * cd - sr * sd, sr * cd + cr * sd
     ca = np.cos(ang)
     sa = np.sin(ang)
     mesh_out[m, c0] = ang
-    mesh_out[m, c0 + 1] = ca
-    mesh_out[m, c0 + 2] = sa
+    mesh_out[m, c0 + _U1] = ca
+    mesh_out[m, c0 + _U(2)] = sa
     return ca, sa
 
 
@@ -706,37 +711,40 @@ def _presence(i, i0, w, nper, ce):
 @njit(cache=True, inline="always")
 def _deviation_offsets(ints, vals, r, y, n, mesh_out, m):
     """Mesh-wide deviations of faulty mesh ``m`` (record at ``ints[r]``): the offsets of the
-    left and right flank and their rates, from rigid pin errors and eccentricities."""
-    fi0 = ints[H_FINT]
-    fv0 = ints[H_FVAL]
-    cv = fv0 + ints[r + F_CONSTV]
+    left and right flank and their rates, from rigid pin errors and eccentricities.
+
+    ``r``, ``n`` (coordinates) and ``m`` unsigned (:data:`_U`): no wraparound code.
+    """
+    fv0 = _U(ints[H_FVAL])
+    cv = fv0 + _U(ints[r + _U(F_CONSTV)])
     el = vals[cv]
-    er = vals[cv + 1]
+    er = vals[cv + _U1]
     edl = 0.0
     edr = 0.0
-    n_ecc = ints[r + F_NECC]
+    n_ecc = ints[r + _U(F_NECC)]
     if n_ecc > 0:
-        ei = fi0 + ints[r + F_ECCI]
-        ev = fv0 + ints[r + F_ECCV]
+        ei = _U(ints[H_FINT]) + _U(ints[r + _U(F_ECCI)])
+        ev = fv0 + _U(ints[r + _U(F_ECCV)])
         for e in range(n_ecc):
-            dg = ints[ei + 2 * e]
-            dc = ints[ei + 2 * e + 1]
+            dg = ints[ei + _U(2 * e)]
+            dc = ints[ei + _U(2 * e + 1)]
             ang = 0.0
             rate = 0.0
             if dg >= 0:
-                ang += y[dg]
-                rate += y[n + dg]
+                ang += y[_U(dg)]
+                rate += y[n + _U(dg)]
             if dc >= 0:
-                ang -= y[dc]
-                rate -= y[n + dc]
+                ang -= y[_U(dc)]
+                rate -= y[n + _U(dc)]
             ca, sa = _cos_sin(ang, mesh_out, m, e)
             # amp cos(ang + phase) with cos(phase), sin(phase) stored: one cos, sin per angle
-            al = vals[ev + 6 * e]
-            cl = vals[ev + 6 * e + 1]
-            sl = vals[ev + 6 * e + 2]
-            ar = vals[ev + 6 * e + 3]
-            cr = vals[ev + 6 * e + 4]
-            sr = vals[ev + 6 * e + 5]
+            b = ev + _U(6 * e)
+            al = vals[b]
+            cl = vals[b + _U1]
+            sl = vals[b + _U(2)]
+            ar = vals[b + _U(3)]
+            cr = vals[b + _U(4)]
+            sr = vals[b + _U(5)]
             el += al * (ca * cl - sa * sl)
             er += ar * (ca * cr - sa * sr)
             edl -= al * (sa * cl + ca * sl) * rate
@@ -744,26 +752,109 @@ def _deviation_offsets(ints, vals, r, y, n, mesh_out, m):
     return el, er, edl, edr
 
 
+@njit(cache=True, inline="always")
+def _tooth_index(x, z):
+    """``x mod z`` for a whole ``x`` and ``z > 0``, in floating point (no integer division)."""
+    k = int(x - z * np.floor(x / z))
+    if k >= z:
+        k -= z
+    elif k < 0:
+        k += z
+    return k
+
+
 @njit(cache=True, _nrt=False)
-def _faulty_flanks(ints, vals, tables, m, rec, y, s, d, dd, dr, ddr, half, damping,
-                   mesh_out):
+def _offset_cycle(ints, vals, r, sf, mesh_out, m):
+    """Keep the pair offsets of mesh cycle ``sf`` of a mesh under the mean-offset law.
+
+    The law (:attr:`gearvib.faults.law.FaultedMesh.offsets_only`): pair slot ``i`` (pair
+    counter ``sf - i``) carries the sum ``o_i`` of its two teeth's pitch offsets, constant
+    over the cycle. Outside the two ramp cells the pairs in contact are the slots ``0 .. a``
+    before the leaving pair's ramp cell (``i0 < c = exit_cell mod n_per``) and ``0 .. a - 1``
+    after it (``a = exit_cell // n_per >= 1``). ``mesh_out[m, 24:31]`` receives ``sf`` and
+    the mean, lowest and highest ``o_i`` of either zone (the mean clamped into its range, so
+    the contact tests of :func:`_mean_offset` bound it). Called once per mesh cycle.
+    """
+    fv0 = ints[H_FVAL]
+    z1 = ints[r + F_Z1]
+    z2 = ints[r + F_Z2]
+    sg1 = ints[r + F_S1]
+    sg2 = ints[r + F_S2]
+    h1 = fv0 + ints[r + F_SHIFT1V]
+    h2 = fv0 + ints[r + F_SHIFT2V]
+    a = ints[r + F_EXIT] // ints[r + F_NPER]
+    k1 = _tooth_index(sg1 * sf + ints[r + F_T1], z1) if z1 > 0 else 0
+    k2 = _tooth_index(sg2 * sf + ints[r + F_T2], z2) if z2 > 0 else 0
+    total = 0.0
+    lo = np.inf
+    hi = -np.inf
+    for i in range(a + 1):
+        if i == a:  # slots 0 .. a - 1: the zone after the leaving pair's ramp
+            mean = min(max(total / a, lo), hi)
+            mesh_out[m, 28] = mean
+            mesh_out[m, 29] = lo
+            mesh_out[m, 30] = hi
+        o = 0.0
+        if z1 > 0:
+            o += vals[h1 + k1]
+            k1 -= sg1
+            if k1 < 0:
+                k1 += z1
+            elif k1 >= z1:
+                k1 -= z1
+        if z2 > 0:
+            o += vals[h2 + k2]
+            k2 -= sg2
+            if k2 < 0:
+                k2 += z2
+            elif k2 >= z2:
+                k2 -= z2
+        total += o
+        lo = min(lo, o)
+        hi = max(hi, o)
+    mesh_out[m, 24] = sf
+    mesh_out[m, 25] = min(max(total / (a + 1), lo), hi)
+    mesh_out[m, 26] = lo
+    mesh_out[m, 27] = hi
+
+
+@njit(cache=True, inline="always")
+def _mean_offset(ints, vals, r, s, i0, d, dr, el, er, kl, kr, half, mesh_out, m):
+    """``(o_mean, holds)``: the mean pitch offset of the pairs in contact on a mesh under the
+    mean-offset law, and whether that law holds here.
+
+    It holds outside the two ramp cells of the cycle while on each flank every pair in
+    contact is loaded (with a positive table stiffness) or none is; then the pair law equals
+    the table law with the deflection offsets ``el + o_mean``, ``er + o_mean``. Otherwise the
+    caller takes the pair law.
+    """
+    c = ints[r + _U(F_RAMPOUT)]
+    if i0 == c or i0 == ints[r + _U(F_NPER)] - 1:
+        return 0.0, False
+    sf = np.floor(s)
+    if sf != mesh_out[m, 24]:  # NaN (nothing kept) fails the test
+        _offset_cycle(ints, vals, r, sf, mesh_out, m)
+    col = _U(25) if i0 < c else _U(28)
+    lo = mesh_out[m, col + _U1]
+    hi = mesh_out[m, col + _U(2)]
+    left = (d + (el + lo) > half and kl > 0.0) or d + (el + hi) <= half
+    right = (dr + (er + hi) < -half and kr > 0.0) or dr + (er + lo) >= -half
+    return mesh_out[m, col], left and right
+
+
+@njit(cache=True, _nrt=False)
+def _faulty_flanks(ints, vals, tables, m, r, s, d, dd, dr, ddr, el, er, edl, edr, half,
+                   damping, mesh_out):
     """Contact law of a faulty mesh, tooth pair by tooth pair (:mod:`gearvib.faults.law`).
 
-    Returns ``(f_left, f_right, k_eff, state)`` like :func:`flank_forces_two_lines`.
+    ``r``: the mesh's record in ``ints``; ``el, er, edl, edr``: its mesh-wide deflection
+    offsets and their rates (:func:`_deviation_offsets`). Returns ``(f_left, f_right, k_eff,
+    state)`` like :func:`flank_forces_two_lines`.
     """
     fi0 = ints[H_FINT]
     fv0 = ints[H_FVAL]
-    n = ints[H_N]
-    r = fi0 + rec
-    el, er, edl, edr = _deviation_offsets(ints, vals, r, y, n, mesh_out, m)
     z1 = ints[r + F_Z1]
     z2 = ints[r + F_Z2]
-    if z1 <= 0 and z2 <= 0:  # the same offset on every pair: the table law, shifted
-        i0t, i1t, wt = _interp_cell(tables.shape[2], s)
-        kl = (1.0 - wt) * tables[0, m, i0t] + wt * tables[0, m, i1t]
-        kr = (1.0 - wt) * tables[1, m, i0t] + wt * tables[1, m, i1t]
-        return flank_forces_two_lines(d + el, dd + edl, dr + er, ddr + edr, kl, kr, 2.0 * half,
-                                      damping)
     nu = ints[r + F_NU]
     nper = ints[r + F_NPER]
     nslot = ints[r + F_NSLOT]
@@ -790,19 +881,9 @@ def _faulty_flanks(ints, vals, tables, m, rec, y, s, d, dd, dr, ddr, half, dampi
         k1 = 0
         k2 = 0
         if z1 > 0:
-            x = sg1 * (sf + 1.0) + ints[r + F_T1]
-            k1 = int(x - z1 * np.floor(x / z1))
-            if k1 >= z1:
-                k1 -= z1
-            elif k1 < 0:
-                k1 += z1
+            k1 = _tooth_index(sg1 * (sf + 1.0) + ints[r + F_T1], z1)
         if z2 > 0:
-            x = sg2 * (sf + 1.0) + ints[r + F_T2]
-            k2 = int(x - z2 * np.floor(x / z2))
-            if k2 >= z2:
-                k2 -= z2
-            elif k2 < 0:
-                k2 += z2
+            k2 = _tooth_index(sg2 * (sf + 1.0) + ints[r + F_T2], z2)
         mesh_out[m, 21] = sf
         mesh_out[m, 22] = k1
         mesh_out[m, 23] = k2
@@ -917,6 +998,110 @@ def _faulty_flanks(ints, vals, tables, m, rec, y, s, d, dd, dr, ddr, half, dampi
 
 
 @njit(cache=True, _nrt=False)
+def _faulty_meshes(y, dy, mesh_out, ints, vals, tables):
+    """The meshes with faults under their own law (``mesh_out[m, 7]`` set): forces added to
+    ``dy`` and ``mesh_out[m, :7]`` written as in :func:`_rhs`.
+
+    One pass after the healthy meshes (one call per right-hand side, and no fault code in
+    the loop of the healthy meshes). Mesh-wide deviations (eccentricity, rigid pin errors)
+    shift the table law; pitch offsets alone take the mean-offset law where it holds
+    (:func:`_mean_offset`), everything else the pair law (:func:`_faulty_flanks`).
+    """
+    n = _U(ints[H_N])
+    n_table = tables.shape[2]
+    vp = _U(ints[H_VP])
+    vi = _U(ints[H_VI])
+    vv = _U(ints[H_VV])
+    fp = _U(ints[H_FP])
+    fi = _U(ints[H_FI])
+    fv = _U(ints[H_FV])
+    pp = _U(ints[H_PP])
+    pi = _U(ints[H_PI])
+    pv = _U(ints[H_PV])
+    s0 = _U(ints[H_S0])
+    bl = _U(ints[H_BL])
+    mc = _U(ints[H_MC])
+    rflag = _U(ints[H_RFLAG])
+    rvp = _U(ints[H_RVP])
+    rvi = _U(ints[H_RVI])
+    rvv = _U(ints[H_RVV])
+    rfp = _U(ints[H_RFP])
+    rfi = _U(ints[H_RFI])
+    rfv = _U(ints[H_RFV])
+    frec = _U(ints[H_FREC])
+    fi0 = _U(ints[H_FINT])
+    for m in range(_U(ints[H_NMESH])):
+        rec = ints[frec + m]
+        if rec < 0 or mesh_out[m, 7] == 0.0:
+            continue
+        d = 0.0
+        dd = 0.0
+        for p in range(_U(ints[vp + m]), _U(ints[vp + m + _U1])):
+            j = _U(ints[vi + p])
+            d += vals[vv + p] * y[j]
+            dd += vals[vv + p] * y[n + j]
+        two_lines = ints[rflag + m] != 0
+        dr = d
+        ddr = dd
+        if two_lines:  # the back flank's own line of action
+            dr = 0.0
+            ddr = 0.0
+            for p in range(_U(ints[rvp + m]), _U(ints[rvp + m + _U1])):
+                j = _U(ints[rvi + p])
+                dr += vals[rvv + p] * y[j]
+                ddr += vals[rvv + p] * y[n + j]
+        s = vals[s0 + m]
+        for p in range(_U(ints[pp + m]), _U(ints[pp + m + _U1])):
+            s += vals[pv + p] * y[_U(ints[pi + p])]
+        r = fi0 + _U(rec)
+        half = 0.5 * vals[bl + m]
+        el = 0.0
+        er = 0.0
+        edl = 0.0
+        edr = 0.0
+        if ints[r + _U(F_MESHWIDE)] != 0:
+            el, er, edl, edr = _deviation_offsets(ints, vals, r, y, n, mesh_out, m)
+        law = ints[r + _U(F_LAW)]  # gearvib.faults.law.LAW_*
+        pairs = law == 2
+        i0, i1, w = _interp_cell(n_table, s)
+        kl = (1.0 - w) * tables[0, m, _U(i0)] + w * tables[0, m, _U(i1)]
+        kr = (1.0 - w) * tables[1, m, _U(i0)] + w * tables[1, m, _U(i1)]
+        if law == 1:  # pitch offsets only: the mean-offset law where it holds
+            mean, holds = _mean_offset(ints, vals, r, s, i0, d, dr, el, er, kl, kr, half,
+                                       mesh_out, m)
+            if holds:
+                el += mean
+                er += mean
+            else:
+                pairs = True
+        if pairs:  # tooth pair by tooth pair
+            fl, fr, ke, st = _faulty_flanks(ints, vals, tables, m, r, s, d, dd, dr, ddr, el,
+                                            er, edl, edr, half, vals[mc + m], mesh_out)
+        else:  # the same offset on every pair in contact: the table law, shifted
+            fl, fr, ke, st = flank_forces_two_lines(d + el, dd + edl, dr + er, ddr + edr, kl,
+                                                    kr, 2.0 * half, vals[mc + m])
+        if two_lines:
+            if fl != 0.0:
+                for p in range(_U(ints[fp + m]), _U(ints[fp + m + _U1])):
+                    dy[n + _U(ints[fi + p])] -= fl * vals[fv + p]
+            if fr != 0.0:
+                for p in range(_U(ints[rfp + m]), _U(ints[rfp + m + _U1])):
+                    dy[n + _U(ints[rfi + p])] -= fr * vals[rfv + p]
+        else:
+            f = fl + fr
+            if f != 0.0:
+                for p in range(_U(ints[fp + m]), _U(ints[fp + m + _U1])):
+                    dy[n + _U(ints[fi + p])] -= f * vals[fv + p]
+        mesh_out[m, 0] = fl
+        mesh_out[m, 1] = -fr
+        mesh_out[m, 2] = ke
+        mesh_out[m, 3] = st
+        mesh_out[m, 4] = d
+        mesh_out[m, 5] = s
+        mesh_out[m, 6] = dr
+
+
+@njit(cache=True, _nrt=False)
 def _rhs(t, y, dy, mesh_out, ints, vals, tables, speed_tab, torque_tab):
     """Right-hand side ``dy = f(t, y)``; ``mesh_out[m] = (F_L, -F_R, k_eff, state, delta, s,
     delta_R)``.
@@ -1006,7 +1191,11 @@ def _rhs(t, y, dy, mesh_out, ints, vals, tables, speed_tab, torque_tab):
     rfi = _U(ints[H_RFI])
     rfv = _U(ints[H_RFV])
     frec = _U(ints[H_FREC])
+    faulty = False
     for m in range(n_mesh):
+        if ints[frec + m] >= 0 and mesh_out[m, 7] != 0.0:
+            faulty = True  # a mesh with faults under its own law: the pass below
+            continue
         d = 0.0
         dd = 0.0
         for p in range(_U(ints[vp + m]), _U(ints[vp + m + _U1])):
@@ -1026,28 +1215,11 @@ def _rhs(t, y, dy, mesh_out, ints, vals, tables, speed_tab, torque_tab):
         s = vals[s0 + m]
         for p in range(_U(ints[pp + m]), _U(ints[pp + m + _U1])):
             s += vals[pv + p] * y[_U(ints[pi + p])]
-        rec = ints[frec + m]
-        if rec >= 0 and mesh_out[m, 7] != 0.0 and (ints[ints[H_FINT] + rec + F_Z1] > 0
-                                                   or ints[ints[H_FINT] + rec + F_Z2] > 0):
-            # a mesh with faults, a faulty pair in contact (or deviations): pair by pair
-            fl, fr, ke, st = _faulty_flanks(ints, vals, tables, m, rec, y, s, d, dd, dr, ddr,
-                                            0.5 * vals[bl + m], vals[mc + m], mesh_out)
-        elif rec >= 0 and mesh_out[m, 7] != 0.0:
-            # mesh-wide deviations only (no tooth of its own): the table law, shifted (as
-            # _faulty_flanks, here without the call)
-            el, er, edl, edr = _deviation_offsets(ints, vals, ints[H_FINT] + rec, y,
-                                                  ints[H_N], mesh_out, m)
-            i0, i1, w = _interp_cell(n_table, s)
-            kl = (1.0 - w) * tables[0, m, _U(i0)] + w * tables[0, m, _U(i1)]
-            kr = (1.0 - w) * tables[1, m, _U(i0)] + w * tables[1, m, _U(i1)]
-            fl, fr, ke, st = flank_forces_two_lines(d + el, dd + edl, dr + er, ddr + edr, kl, kr,
-                                                    2.0 * (0.5 * vals[bl + m]), vals[mc + m])
-        else:
-            i0, i1, w = _interp_cell(n_table, s)
-            kl = (1.0 - w) * tables[0, m, _U(i0)] + w * tables[0, m, _U(i1)]
-            kr = (1.0 - w) * tables[1, m, _U(i0)] + w * tables[1, m, _U(i1)]
-            fl, fr, ke, st = flank_forces_two_lines(d, dd, dr, ddr, kl, kr, vals[bl + m],
-                                                    vals[mc + m])
+        i0, i1, w = _interp_cell(n_table, s)
+        kl = (1.0 - w) * tables[0, m, _U(i0)] + w * tables[0, m, _U(i1)]
+        kr = (1.0 - w) * tables[1, m, _U(i0)] + w * tables[1, m, _U(i1)]
+        fl, fr, ke, st = flank_forces_two_lines(d, dd, dr, ddr, kl, kr, vals[bl + m],
+                                                vals[mc + m])
         if two_lines:
             if fl != 0.0:
                 for p in range(_U(ints[fp + m]), _U(ints[fp + m + _U1])):
@@ -1067,6 +1239,8 @@ def _rhs(t, y, dy, mesh_out, ints, vals, tables, speed_tab, torque_tab):
         mesh_out[m, 4] = d
         mesh_out[m, 5] = s
         mesh_out[m, 6] = dr
+    if faulty:
+        _faulty_meshes(y, dy, mesh_out, ints, vals, tables)
 
 
 @njit(cache=True)
@@ -1084,11 +1258,12 @@ def evaluate_rhs(t: float, y: np.ndarray, system: tuple) -> tuple[np.ndarray, np
     ints, vals, tables, speed_tab, torque_tab = system
     dy = np.empty(2 * ints[H_N])
     mesh_out = np.zeros((ints[H_NMESH], MESH_OUT_COLUMNS))
-    mesh_out[:, 7] = 1.0  # faulty meshes: the pair law (exact everywhere)
+    mesh_out[:, 7] = 1.0  # faulty meshes: their own law (exact everywhere)
     mesh_out[:, 12] = np.nan  # no cached eccentricity angles
     mesh_out[:, 15] = np.nan
     mesh_out[0, 18] = np.nan  # no shared eccentricity angle
     mesh_out[:, 21] = np.nan  # no kept mesh cycle
+    mesh_out[:, 24] = np.nan  # no kept offsets of a mesh cycle
     _rhs(t, y, dy, mesh_out, ints, vals, tables, speed_tab, torque_tab)
     return dy, mesh_out[:, :7].copy()
 
@@ -1321,7 +1496,7 @@ def integrate_chunk(
             h_euler, h_mid = _short_step_limits(vals, ints[H_FVAL], dt)
             break
     for m in range(n_mesh):
-        mesh_out[m, 7] = 1.0  # until the first step decides (the pair law is exact anywhere)
+        mesh_out[m, 7] = 1.0  # until the first step decides (their own law is exact anywhere)
         mesh_out[m, 8] = np.nan  # no cached cycle range, no event-free interval
         mesh_out[m, 9] = np.nan
         mesh_out[m, 10] = np.nan
@@ -1330,6 +1505,7 @@ def integrate_chunk(
         mesh_out[m, 15] = np.nan
         mesh_out[m, 18] = np.nan
         mesh_out[m, 21] = np.nan
+        mesh_out[m, 24] = np.nan
     for step in range(n_steps):
         g = first_step + step
         t = g * dt

@@ -24,7 +24,11 @@ each pair):
 
 The kernel follows this law for a faulty mesh only while a pair with a faulty tooth is in
 contact (and always when the mesh has deviations); elsewhere it uses the table, which the pairs
-sum to. :class:`FaultLaw` builds the arrays, evaluates the law in Python (:meth:`forces`, the
+sum to. Two cases reduce exactly to the table law with shifted deflections: deviations that
+are the same for every pair (eccentricity, rigid pin errors), and pitch errors alone on a mesh
+whose pairs share the table (:attr:`FaultedMesh.offsets_only`: the mean offset of the pairs in
+contact, kept per mesh cycle, while on each flank every pair is loaded or none is).
+:class:`FaultLaw` builds the arrays, evaluates the law in Python (:meth:`forces`, the
 reference for the kernel) and gives the static equilibrium its effective stiffness and gaps
 (:meth:`flank_law`).
 
@@ -77,7 +81,18 @@ R_NU, R_NPAIR, R_Z1, R_S1, R_T1, R_Z2, R_S2, R_T2 = range(8)
 R_PAIR, R_PROF1, R_SHIFT1, R_PROF2, R_SHIFT2, R_PROFV = range(8, 14)
 R_NECC, R_ECCI, R_ECCV, R_CONST, R_NEV, R_EVV, R_ALWAYS, R_NPER, R_SHARED, R_EPS = range(14, 24)
 R_NEED, R_PERIOD, R_EXIT, R_NEEDRES = 24, 25, 26, 27
-N_RECORD = 28
+# R_LAW: the law the kernel evaluates while the mesh needs its own (LAW_*); R_RAMPOUT: the cell
+# of the cycle in which a pair ramps out, ``exit_cell mod n_per``; R_MESHWIDE: 1 when the mesh
+# has mesh-wide deviations (eccentricities, rigid pin errors)
+R_LAW, R_RAMPOUT, R_MESHWIDE = 28, 29, 30
+N_RECORD = 31
+LAW_SHIFTED = 0
+"""R_LAW: no tooth of its own, mesh-wide deviations only: the table law, shifted."""
+LAW_MEAN_OFFSET = 1
+"""R_LAW: pitch offsets alone (:attr:`FaultedMesh.offsets_only`): the mean-offset law where
+it holds, else the pair law."""
+LAW_PAIRS = 2
+"""R_LAW: tooth pair by tooth pair."""
 
 
 @dataclass
@@ -167,6 +182,27 @@ class FaultedMesh:
         if iu < self.exit_cell:
             return 1.0
         return 1.0 - w if iu == self.exit_cell else 0.0
+
+    @property
+    def offsets_only(self) -> bool:
+        """The mean-offset law applies: healthy pairs share the table, no tooth has a fault
+        profile and some tooth has a pitch deviation, and at least one pair stays on the path
+        over a whole cycle (``exit_cell >= n_per``).
+
+        Then a pair differs from the healthy one by its deflection offset only (the sum of its
+        two teeth's pitch offsets ``o_i``, plus the mesh-wide ones), and while every pair
+        present is in contact on a flank (or none is) the pair law sums to the table law
+        with the presence-weighted mean offset: with ``k_i = p_i k(s) / P``, ``P = sum p_i``,
+        ``sum_i k_i (delta + o_i - j/2) = k(s) (delta + o_mean - j/2)``,
+        ``o_mean = sum p_i o_i / P``. Outside the two ramp cells of a cycle (the entering
+        pair's and the leaving pair's) the presences are 0 or 1 and constant, so the kernel
+        keeps ``o_mean`` and the extreme offsets of the two contact zones once per mesh cycle
+        (:func:`gearvib.kernels._offset_cycle`) and evaluates the shifted table law; in the
+        ramp cells, or when the pairs of a flank are partly in contact, it takes the pair law.
+        """
+        no_profiles = all(not np.any(p >= 0) for p in self.profile)
+        return (self.shared and no_profiles and self.has_teeth
+                and self.exit_cell >= self.n_per)
 
     @property
     def has_teeth(self) -> bool:
@@ -338,6 +374,10 @@ class FaultLaw:
             r[R_NPER] = fm.n_per
             r[R_NPAIR] = fm.n_slots
             r[R_EXIT] = fm.exit_cell
+            r[R_RAMPOUT] = fm.exit_cell % fm.n_per
+            r[R_LAW] = (LAW_MEAN_OFFSET if fm.offsets_only else LAW_PAIRS if fm.has_teeth
+                        else LAW_SHIFTED)
+            r[R_MESHWIDE] = int(bool(fm.ecc) or fm.const_left != 0.0 or fm.const_right != 0.0)
             r[R_SHARED] = int(fm.shared)
             r[R_EPS] = put([fm.eps])
             r[R_PAIR] = put(np.concatenate([fm.pair_left, fm.pair_right]))
