@@ -998,6 +998,139 @@ def _faulty_flanks(ints, vals, tables, m, r, s, d, dd, dr, ddr, el, er, edl, edr
 
 
 @njit(cache=True, _nrt=False)
+def _stiffness_flanks(ints, vals, tables, m, r, s, d, dd, dr, ddr, half, damping, mesh_out):
+    """Contact law of a faulty mesh whose tooth faults change the stiffness only
+    (:attr:`gearvib.faults.law.FaultedMesh.stiffness_only`): the table law with the summed
+    stiffness of the pairs present.
+
+    ``d, dd, dr, ddr`` include the mesh-wide offsets. Every pair meets the same deflection, so
+    the pair law's sums become one product per flank: the same stiffness sums as
+    :func:`_faulty_flanks` (bit for bit), the force equal to rounding. Returns ``(f_left,
+    f_right, k_eff, state)`` like :func:`flank_forces_two_lines`.
+    """
+    fi0 = ints[H_FINT]
+    fv0 = ints[H_FVAL]
+    z1 = ints[r + F_Z1]
+    z2 = ints[r + F_Z2]
+    nu = ints[r + F_NU]
+    nper = ints[r + F_NPER]
+    nslot = ints[r + F_NSLOT]
+    ce = ints[r + F_EXIT]
+    sg1 = ints[r + F_S1]
+    sg2 = ints[r + F_S2]
+    p1 = fi0 + ints[r + F_PROF1]
+    p2 = fi0 + ints[r + F_PROF2]
+    sf = np.floor(s)
+    frac = s - sf
+    x0 = frac * nper
+    i0 = int(x0)
+    w = x0 - i0
+    if i0 >= nper:
+        i0 = 0
+        w = 0.0
+    if sf == mesh_out[m, 21]:  # the teeth of the next pair, kept per mesh cycle
+        k1 = int(mesh_out[m, 22])
+        k2 = int(mesh_out[m, 23])
+    else:
+        k1 = 0
+        k2 = 0
+        if z1 > 0:
+            k1 = _tooth_index(sg1 * (sf + 1.0) + ints[r + F_T1], z1)
+        if z2 > 0:
+            k2 = _tooth_index(sg2 * (sf + 1.0) + ints[r + F_T2], z2)
+        mesh_out[m, 21] = sf
+        mesh_out[m, 22] = k1
+        mesh_out[m, 23] = k2
+    shared = ints[r + F_SHARED] != 0
+    pv = fv0 + ints[r + F_PAIRV]
+    prv = fv0 + ints[r + F_PROFV]
+    psum = 0.0
+    ke_l = 0.0
+    ke_r = 0.0
+    for i in range(-1, nslot + 1):
+        pres = _presence(i, i0, w, nper, ce)
+        if pres > 0.0:
+            psum += pres
+            idx = 0
+            wi = 0.0
+            if i >= 0:
+                idx = i0 + i * nper
+                wi = w
+            if shared:
+                kl = pres
+                kr = pres
+            else:
+                a = _U(pv + idx)
+                c = _U(pv + nu + idx)
+                kl = ((1.0 - wi) * vals[a] + wi * vals[a + _U1]) * pres
+                kr = ((1.0 - wi) * vals[c] + wi * vals[c + _U1]) * pres
+            if z1 > 0:
+                prof = ints[_U(p1 + k1)]
+                if prof >= 0:
+                    b0 = _U(prv + prof * 4 * nu + idx)
+                    b1 = _U(prv + prof * 4 * nu + nu + idx)
+                    kl *= (1.0 - wi) * vals[b0] + wi * vals[b0 + _U1]
+                    kr *= (1.0 - wi) * vals[b1] + wi * vals[b1 + _U1]
+            if z2 > 0:
+                prof = ints[_U(p2 + k2)]
+                if prof >= 0:
+                    b0 = _U(prv + prof * 4 * nu + idx)
+                    b1 = _U(prv + prof * 4 * nu + nu + idx)
+                    kl *= (1.0 - wi) * vals[b0] + wi * vals[b0 + _U1]
+                    kr *= (1.0 - wi) * vals[b1] + wi * vals[b1 + _U1]
+            if kl > 0.0:
+                ke_l += kl
+            if kr > 0.0:
+                ke_r += kr
+        k1 -= sg1  # the next older pair
+        if k1 < 0:
+            k1 += z1
+        elif k1 >= z1:
+            k1 -= z1
+        k2 -= sg2
+        if k2 < 0:
+            k2 += z2
+        elif k2 >= z2:
+            k2 -= z2
+    on_l = ke_l > 0.0 and d > half
+    on_r = ke_r > 0.0 and dr < -half
+    f_el = ke_l * (d - half)
+    f_er = ke_r * (dr + half)
+    if shared:
+        share_l = 0.0
+        share_r = 0.0
+        if psum > 0.0:
+            i1 = i0 + 1
+            if i1 == nper:
+                i1 = 0
+            share_l = ((1.0 - w) * tables[0, m, i0] + w * tables[0, m, i1]) / psum
+            share_r = ((1.0 - w) * tables[1, m, i0] + w * tables[1, m, i1]) / psum
+        on_l = on_l and share_l > 0.0
+        on_r = on_r and share_r > 0.0
+        f_el *= share_l
+        f_er *= share_r
+        ke_l *= share_l
+        ke_r *= share_r
+    ke = 0.0
+    fl = 0.0
+    fr = 0.0
+    st = 0
+    if on_l:
+        fl = f_el + damping * dd
+        if fl < 0.0:
+            fl = 0.0
+        ke += ke_l
+        st += 1
+    if on_r:
+        fr = f_er + damping * ddr
+        if fr > 0.0:
+            fr = 0.0
+        ke += ke_r
+        st += 2
+    return fl, fr, ke, st
+
+
+@njit(cache=True, _nrt=False)
 def _faulty_meshes(y, dy, mesh_out, ints, vals, tables):
     """The meshes with faults under their own law (``mesh_out[m, 7]`` set): forces added to
     ``dy`` and ``mesh_out[m, :7]`` written as in :func:`_rhs`.
@@ -1062,24 +1195,33 @@ def _faulty_meshes(y, dy, mesh_out, ints, vals, tables):
         if ints[r + _U(F_MESHWIDE)] != 0:
             el, er, edl, edr = _deviation_offsets(ints, vals, r, y, n, mesh_out, m)
         law = ints[r + _U(F_LAW)]  # gearvib.faults.law.LAW_*
-        pairs = law == 2
-        i0, i1, w = _interp_cell(n_table, s)
-        kl = (1.0 - w) * tables[0, m, _U(i0)] + w * tables[0, m, _U(i1)]
-        kr = (1.0 - w) * tables[1, m, _U(i0)] + w * tables[1, m, _U(i1)]
-        if law == 1:  # pitch offsets only: the mean-offset law where it holds
-            mean, holds = _mean_offset(ints, vals, r, s, i0, d, dr, el, er, kl, kr, half,
-                                       mesh_out, m)
-            if holds:
-                el += mean
-                er += mean
-            else:
-                pairs = True
-        if pairs:  # tooth pair by tooth pair
-            fl, fr, ke, st = _faulty_flanks(ints, vals, tables, m, r, s, d, dd, dr, ddr, el,
-                                            er, edl, edr, half, vals[mc + m], mesh_out)
-        else:  # the same offset on every pair in contact: the table law, shifted
-            fl, fr, ke, st = flank_forces_two_lines(d + el, dd + edl, dr + er, ddr + edr, kl,
-                                                    kr, 2.0 * half, vals[mc + m])
+        if law == 3:  # stiffness-only tooth faults: the table law with the pairs' stiffness
+            fl, fr, ke, st = _stiffness_flanks(ints, vals, tables, m, r, s, d + el, dd + edl,
+                                               dr + er, ddr + edr, half, vals[mc + m],
+                                               mesh_out)
+        else:
+            pairs = law == 2
+            kl = 0.0
+            kr = 0.0
+            if not pairs:
+                i0, i1, w = _interp_cell(n_table, s)
+                kl = (1.0 - w) * tables[0, m, _U(i0)] + w * tables[0, m, _U(i1)]
+                kr = (1.0 - w) * tables[1, m, _U(i0)] + w * tables[1, m, _U(i1)]
+                if law == 1:  # pitch offsets only: the mean-offset law where it holds
+                    mean, holds = _mean_offset(ints, vals, r, s, i0, d, dr, el, er, kl, kr,
+                                               half, mesh_out, m)
+                    if holds:
+                        el += mean
+                        er += mean
+                    else:
+                        pairs = True
+            if pairs:  # tooth pair by tooth pair
+                fl, fr, ke, st = _faulty_flanks(ints, vals, tables, m, r, s, d, dd, dr, ddr,
+                                                el, er, edl, edr, half, vals[mc + m],
+                                                mesh_out)
+            else:  # the same offset on every pair in contact: the table law, shifted
+                fl, fr, ke, st = flank_forces_two_lines(d + el, dd + edl, dr + er, ddr + edr,
+                                                        kl, kr, 2.0 * half, vals[mc + m])
         if two_lines:
             if fl != 0.0:
                 for p in range(_U(ints[fp + m]), _U(ints[fp + m + _U1])):
