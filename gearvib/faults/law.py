@@ -416,7 +416,7 @@ class FaultLaw:
                 r[tk] = fm.tooth0[side]
                 if fm.z[side] > 0:
                     r[pk] = len(ints)
-                    ints.extend(int(p) for p in fm.profile[side])
+                    ints.extend(np.asarray(fm.profile[side], dtype=np.int64).tolist())
                     r[hk] = put(fm.shift[side])
             r[R_PROFV] = put(np.concatenate([p.ravel() for p in fm.profiles])
                              if fm.profiles else np.zeros(0))
@@ -434,7 +434,7 @@ class FaultLaw:
             r[R_PERIOD] = need.size
             r[R_NEEDRES] = 1 if fm.always else NEED_CELLS
             r[R_NEED] = len(ints)
-            ints.extend(int(v) for v in need)
+            ints.extend(need.tolist())
             ints[base:base + N_RECORD] = r
         flat = np.concatenate(vals) if vals else np.zeros(0)
         return rec, np.asarray(ints, dtype=np.int64), flat
