@@ -1130,7 +1130,7 @@ def _stiffness_flanks(ints, vals, tables, m, r, s, d, dd, dr, ddr, half, damping
     return fl, fr, ke, st
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, inline="always")
 def _faulty_meshes(y, dy, mesh_out, ints, vals, tables):
     """The meshes with faults under their own law (``mesh_out[m, 7]`` set): forces added to
     ``dy`` and ``mesh_out[m, :7]`` written as in :func:`_rhs`.
