@@ -25,9 +25,10 @@ bit. A mesh with local tooth faults or manufacturing errors (:mod:`gearvib.fault
 evaluated by its own law while a faulty pair is in contact or the mesh has deviations, in a
 second pass after the other meshes (:func:`_faulty_meshes`): the table law with shifted
 deflections for mesh-wide deviations and for pitch offsets alone where every pair of a flank
-is loaded or none is (:func:`_mean_offset`), else tooth pair by tooth pair
-(:func:`_faulty_flanks`); its force acts along the same vectors. Healthy meshes never enter
-that path, so runs without faults are unchanged bit for bit.
+is loaded or none is (:func:`_mean_offset`), stiffness-only tooth faults (crack, broken
+tooth) by the table law with the pairs' summed stiffness (:func:`_stiffness_flanks`), else
+tooth pair by tooth pair (:func:`_faulty_flanks`); its force acts along the same vectors.
+Healthy meshes never enter that path, so runs without faults are unchanged bit for bit.
 
 Drive (``ipar[IP_MODE]``):
 
@@ -1135,10 +1136,11 @@ def _faulty_meshes(y, dy, mesh_out, ints, vals, tables):
     """The meshes with faults under their own law (``mesh_out[m, 7]`` set): forces added to
     ``dy`` and ``mesh_out[m, :7]`` written as in :func:`_rhs`.
 
-    One pass after the healthy meshes (one call per right-hand side, and no fault code in
+    One pass after the healthy meshes (compiled into the right-hand side; no fault code in
     the loop of the healthy meshes). Mesh-wide deviations (eccentricity, rigid pin errors)
     shift the table law; pitch offsets alone take the mean-offset law where it holds
-    (:func:`_mean_offset`), everything else the pair law (:func:`_faulty_flanks`).
+    (:func:`_mean_offset`), stiffness-only tooth faults the stiffness law
+    (:func:`_stiffness_flanks`), everything else the pair law (:func:`_faulty_flanks`).
     """
     n = _U(ints[H_N])
     n_table = tables.shape[2]
