@@ -108,6 +108,7 @@ __all__ = [
     "integrate_chunk",
     "jump_positions",
     "n_signals",
+    "need_interval",
     "operators",
     "pack",
     "periodic_interp",
@@ -632,26 +633,60 @@ def _table_at(tab: np.ndarray, t: float) -> float:
 
 
 @njit(cache=True, _nrt=False)
-def _pairs_needed(ints, rec, c_lo, c_hi):
-    """A faulty mesh needs its pair law somewhere in the cells ``c_lo .. c_hi`` of its need
-    table (``F_NEEDRES`` cells per mesh cycle, over the period of the faulty teeth; a pair
-    with a faulty tooth in contact, margin included, :meth:`gearvib.faults.law.FaultedMesh.
-    need_table`), or always (deviations). Read in floating point: no integer division."""
+def _need_interval(ints, rec, c_lo, c_hi):
+    """Whether a faulty mesh needs its pair law somewhere in the cells ``c_lo .. c_hi`` of its
+    need table (``F_NEEDRES`` cells per mesh cycle, over the period of the faulty teeth; a
+    pair with a faulty tooth in contact, margin included, :meth:`gearvib.faults.law.
+    FaultedMesh.need_table`), or always (deviations), with the run of cells around it with
+    the same answer: ``(flag, a, b)``. Needed: every range of cells that meets ``a .. b`` (a
+    run of needed cells holding the first needed one found) needs it; not needed: no range
+    inside ``a .. b`` (the free run around ``c_lo .. c_hi``, at most a period either side)
+    does. The caller keeps the run and asks again only when a step leaves it (about twice
+    per period of the faulty teeth instead of at every change of the step's cells). Read in
+    floating point: no integer division in the loop."""
     r = ints[H_FINT] + rec
     if ints[r + F_ALWAYS] != 0:
-        return True
+        return 1.0, -np.inf, np.inf
     period = ints[r + F_PERIOD]
     need = ints[H_FINT] + ints[r + F_NEED]
-    for c in range(int(c_lo), int(c_hi) + 1):
-        x = float(c)
-        k = int(x - period * np.floor(x / period))
-        if k >= period:
-            k -= period
-        elif k < 0:
-            k += period
-        if ints[need + k] != 0:
-            return True
-    return False
+    x = float(c_lo)
+    k = _tooth_index(x, period)  # c_lo mod period
+    kk = k
+    c = c_lo
+    while c <= c_hi:
+        if ints[need + kk] != 0:  # needed: the run of needed cells around c
+            a = c
+            ka = kk
+            for _ in range(period):
+                ka = ka - 1 if ka > 0 else period - 1
+                if ints[need + ka] == 0:
+                    break
+                a -= 1.0
+            b = c
+            kb = kk
+            for _ in range(period):
+                kb = kb + 1 if kb < period - 1 else 0
+                if ints[need + kb] == 0:
+                    break
+                b += 1.0
+            return 1.0, a, b
+        c += 1.0
+        kk = kk + 1 if kk < period - 1 else 0
+    a = c_lo  # not needed: the free run around c_lo .. c_hi
+    ka = k
+    for _ in range(period):
+        ka = ka - 1 if ka > 0 else period - 1
+        if ints[need + ka] != 0:
+            break
+        a -= 1.0
+    b = c_hi
+    kb = _tooth_index(float(c_hi), period)
+    for _ in range(period):
+        kb = kb + 1 if kb < period - 1 else 0
+        if ints[need + kb] != 0:
+            break
+        b += 1.0
+    return 0.0, a, b
 
 
 @njit(cache=True, inline="always")
@@ -1498,10 +1533,17 @@ def _split_times(y, dt, ints, vals, mesh_out, splits):
             res = ints[fi0 + rec + F_NEEDRES]
             flo = np.floor(lo * res)
             fhi = np.floor(hi * res)
-            if not (mesh_out[m, 8] == flo and mesh_out[m, 9] == fhi):
-                mesh_out[m, 7] = 1.0 if _pairs_needed(ints, rec, flo, fhi) else 0.0
-                mesh_out[m, 8] = flo
-                mesh_out[m, 9] = fhi
+            # kept: a run of cells (columns 8, 9) known to need it (column 7 = 1: needed by
+            # every range meeting it) or known free (0: free for every range inside it)
+            if mesh_out[m, 7] != 0.0:
+                keep = flo <= mesh_out[m, 9] and mesh_out[m, 8] <= fhi  # NaN: ask
+            else:
+                keep = mesh_out[m, 8] <= flo and fhi <= mesh_out[m, 9]
+            if not keep:
+                flag, ca, cb = _need_interval(ints, rec, flo, fhi)
+                mesh_out[m, 7] = flag
+                mesh_out[m, 8] = ca
+                mesh_out[m, 9] = cb
         if sd == 0.0:
             continue
         base = np.floor(lo)
@@ -1812,5 +1854,6 @@ def integrate(
 # The per-variant pieces :mod:`gearvib.kernels_batch` evaluates exactly as here (public names
 # of this module's compiled helpers).
 insert_split = _insert_split
+need_interval = _need_interval  # for tests
 speed_at = _speed_at
 table_at = _table_at

@@ -222,6 +222,49 @@ def test_mean_offset_law_gives_the_pair_law(preset) -> None:
     assert mixed > 20  # the states reach partial contact (the pair law's part)
 
 
+def test_need_runs_answer_as_the_need_table(case1) -> None:
+    """The kernel decides per step whether a faulty mesh needs its own law from the cells its
+    step covers in the need table, and keeps the run of cells around them with the same
+    answer (``need_interval``), asking again only when a step leaves it. For random ranges
+    of cells over several periods (negative cells included) the answer equals the table's,
+    the run is uniform (all needed or all free), holds the range (free) or meets it (needed)
+    and ends where the table changes (or a period away)."""
+    faulty = case1.with_faults([Crack("sun", 3, severity=0.3),
+                                Pitting("planet2", 7, severity=0.3, path_start=0.2,
+                                        path_end=0.7, depth=3e-6)])
+    setup = prepare_run(faulty, SpeedRamp(1000, 1000, 1.0, input_torque=60.0), False)
+    ints = setup.system.astuple()[0]
+    rng = np.random.default_rng(3)
+    checked = needed = 0
+    for m, fm in setup.faults.meshes.items():
+        rec = int(setup.system.fault_records[m])
+        table = fm.need_table()
+        period = table.size
+        assert 0 < table.sum() < period
+
+        def need(c: float, table=table, period=period) -> int:
+            return int(table[int(c) % period])
+
+        for _ in range(400):
+            lo = float(rng.integers(-3 * period, 3 * period))
+            hi = lo + float(rng.integers(0, 3))
+            flag, a, b = kn.need_interval(ints, rec, lo, hi)
+            want = any(need(c) for c in np.arange(lo, hi + 1.0))
+            assert flag == float(want)
+            assert a <= b and b - a <= 2 * period + hi - lo
+            assert all(need(c) == want for c in np.arange(a, b + 1.0))
+            if want:
+                assert a <= hi and lo <= b
+                needed += 1
+            else:
+                assert a <= lo and hi <= b
+            assert need(a - 1.0) != want or b - a >= period
+            assert need(b + 1.0) != want or b - a >= period
+            checked += 1
+    assert len(setup.faults.meshes) == 4  # the sun meshes, planet2's ring mesh
+    assert checked == 1600 and needed > 20
+
+
 @pytest.mark.parametrize("stiffness", [
     None,  # the preset's rectangular model: pairs share the table
     {"model": "pairs", "position": [0.0, 0.4, 0.8, 1.2, 1.6436041005447102],
