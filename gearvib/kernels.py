@@ -470,15 +470,16 @@ def pack(system: KernelSystem, patterns: list[np.ndarray] | None = None,
 MESH_OUT_COLUMNS = 31
 """Columns of the per-mesh scratch ``mesh_out``: ``F_L, -F_R, k_eff, state, delta, s,
 delta_R``; for a faulty mesh whether its pair law is needed during the current step (set
-before every step by :func:`_split_times`; 1 is always correct), the range of need-table
-cells that flag was found for, an interval of mesh positions free of its long-period jump
-positions, and two reference angles of its eccentricities with their cosines and sines
-(columns 12-17). Row 0, columns 18-20: the eccentricity angle evaluated last in any mesh
-with its cosine and sine (the meshes of an eccentric gear share its angle: one evaluation
-per right-hand side). Columns 21-23: a mesh cycle ``floor(s)`` of a faulty mesh with the
-teeth of its next pair. Columns 24-30 (a mesh under the mean-offset law, :func:`_offset_cycle`):
-the mesh cycle they were kept for, then ``(mean, lowest, highest)`` of the offsets of the
-pairs in contact before the leaving pair's ramp cell and the same after it."""
+before every step by :func:`_split_times`; 1 is always correct), the run of need-table cells
+that flag holds for (:func:`_need_interval`), an interval of mesh positions free of its
+long-period jump positions, and two reference angles of its eccentricities with their
+cosines and sines (columns 12-17). Row 0, columns 18-20: the eccentricity angle evaluated
+last in any mesh with its cosine and sine (the meshes of an eccentric gear share its angle:
+one evaluation per right-hand side). Columns 21-23: a mesh cycle ``floor(s)`` of a faulty
+mesh with the teeth of its next pair. Columns 24-30 (a mesh under the mean-offset law,
+:func:`_offset_cycle`): the mesh cycle they were kept for, then ``(mean, lowest, highest)``
+of the offsets of the pairs in contact before the leaving pair's ramp cell and the same
+after it."""
 
 
 def n_signals(n_dof: int, n_mesh: int) -> int:
