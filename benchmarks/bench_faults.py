@@ -16,7 +16,9 @@ OpenBLAS thread; docs/faults-sensors.md).
 Why some faults cost more than others:
 
 * a local tooth fault evaluates the pairs of the meshes of that gear one by one only while the
-  faulty pair is in contact (a few of every ``z`` mesh cycles), elsewhere the healthy table;
+  faulty pair is in contact (a few of every ``z`` mesh cycles), elsewhere the healthy table; a
+  crack or broken tooth (stiffness only) sums the pairs' stiffness into the table law, pitting
+  (a gap) takes the full pair law;
 * a fault on one gear of ``paper-case1`` desynchronises its in-phase planets: their meshes then
   reach the stiffness jumps at slightly different times and each gets its own sub-steps, most
   of them far shorter than the step, which take an Euler or midpoint step instead of RK4

@@ -25,9 +25,10 @@ bit. A mesh with local tooth faults or manufacturing errors (:mod:`gearvib.fault
 evaluated by its own law while a faulty pair is in contact or the mesh has deviations, in a
 second pass after the other meshes (:func:`_faulty_meshes`): the table law with shifted
 deflections for mesh-wide deviations and for pitch offsets alone where every pair of a flank
-is loaded or none is (:func:`_mean_offset`), else tooth pair by tooth pair
-(:func:`_faulty_flanks`); its force acts along the same vectors. Healthy meshes never enter
-that path, so runs without faults are unchanged bit for bit.
+is loaded or none is (:func:`_mean_offset`), stiffness-only tooth faults (crack, broken
+tooth) by the table law with the pairs' summed stiffness (:func:`_stiffness_flanks`), else
+tooth pair by tooth pair (:func:`_faulty_flanks`); its force acts along the same vectors.
+Healthy meshes never enter that path, so runs without faults are unchanged bit for bit.
 
 Drive (``ipar[IP_MODE]``):
 
@@ -107,6 +108,7 @@ __all__ = [
     "integrate_chunk",
     "jump_positions",
     "n_signals",
+    "need_interval",
     "operators",
     "pack",
     "periodic_interp",
@@ -468,15 +470,16 @@ def pack(system: KernelSystem, patterns: list[np.ndarray] | None = None,
 MESH_OUT_COLUMNS = 31
 """Columns of the per-mesh scratch ``mesh_out``: ``F_L, -F_R, k_eff, state, delta, s,
 delta_R``; for a faulty mesh whether its pair law is needed during the current step (set
-before every step by :func:`_split_times`; 1 is always correct), the range of need-table
-cells that flag was found for, an interval of mesh positions free of its long-period jump
-positions, and two reference angles of its eccentricities with their cosines and sines
-(columns 12-17). Row 0, columns 18-20: the eccentricity angle evaluated last in any mesh
-with its cosine and sine (the meshes of an eccentric gear share its angle: one evaluation
-per right-hand side). Columns 21-23: a mesh cycle ``floor(s)`` of a faulty mesh with the
-teeth of its next pair. Columns 24-30 (a mesh under the mean-offset law, :func:`_offset_cycle`):
-the mesh cycle they were kept for, then ``(mean, lowest, highest)`` of the offsets of the
-pairs in contact before the leaving pair's ramp cell and the same after it."""
+before every step by :func:`_split_times`; 1 is always correct), the run of need-table cells
+that flag holds for (:func:`_need_interval`), an interval of mesh positions free of its
+long-period jump positions, and two reference angles of its eccentricities with their
+cosines and sines (columns 12-17). Row 0, columns 18-20: the eccentricity angle evaluated
+last in any mesh with its cosine and sine (the meshes of an eccentric gear share its angle:
+one evaluation per right-hand side). Columns 21-23: a mesh cycle ``floor(s)`` of a faulty
+mesh with the teeth of its next pair. Columns 24-30 (a mesh under the mean-offset law,
+:func:`_offset_cycle`): the mesh cycle they were kept for, then ``(mean, lowest, highest)``
+of the offsets of the pairs in contact before the leaving pair's ramp cell and the same
+after it."""
 
 
 def n_signals(n_dof: int, n_mesh: int) -> int:
@@ -631,26 +634,60 @@ def _table_at(tab: np.ndarray, t: float) -> float:
 
 
 @njit(cache=True, _nrt=False)
-def _pairs_needed(ints, rec, c_lo, c_hi):
-    """A faulty mesh needs its pair law somewhere in the cells ``c_lo .. c_hi`` of its need
-    table (``F_NEEDRES`` cells per mesh cycle, over the period of the faulty teeth; a pair
-    with a faulty tooth in contact, margin included, :meth:`gearvib.faults.law.FaultedMesh.
-    need_table`), or always (deviations). Read in floating point: no integer division."""
+def _need_interval(ints, rec, c_lo, c_hi):
+    """Whether a faulty mesh needs its pair law somewhere in the cells ``c_lo .. c_hi`` of its
+    need table (``F_NEEDRES`` cells per mesh cycle, over the period of the faulty teeth; a
+    pair with a faulty tooth in contact, margin included, :meth:`gearvib.faults.law.
+    FaultedMesh.need_table`), or always (deviations), with the run of cells around it with
+    the same answer: ``(flag, a, b)``. Needed: every range of cells that meets ``a .. b`` (a
+    run of needed cells holding the first needed one found) needs it; not needed: no range
+    inside ``a .. b`` (the free run around ``c_lo .. c_hi``, at most a period either side)
+    does. The caller keeps the run and asks again only when a step leaves it (about twice
+    per period of the faulty teeth instead of at every change of the step's cells). Read in
+    floating point: no integer division in the loop."""
     r = ints[H_FINT] + rec
     if ints[r + F_ALWAYS] != 0:
-        return True
+        return 1.0, -np.inf, np.inf
     period = ints[r + F_PERIOD]
     need = ints[H_FINT] + ints[r + F_NEED]
-    for c in range(int(c_lo), int(c_hi) + 1):
-        x = float(c)
-        k = int(x - period * np.floor(x / period))
-        if k >= period:
-            k -= period
-        elif k < 0:
-            k += period
-        if ints[need + k] != 0:
-            return True
-    return False
+    x = float(c_lo)
+    k = _tooth_index(x, period)  # c_lo mod period
+    kk = k
+    c = c_lo
+    while c <= c_hi:
+        if ints[need + kk] != 0:  # needed: the run of needed cells around c
+            a = c
+            ka = kk
+            for _ in range(period):
+                ka = ka - 1 if ka > 0 else period - 1
+                if ints[need + ka] == 0:
+                    break
+                a -= 1.0
+            b = c
+            kb = kk
+            for _ in range(period):
+                kb = kb + 1 if kb < period - 1 else 0
+                if ints[need + kb] == 0:
+                    break
+                b += 1.0
+            return 1.0, a, b
+        c += 1.0
+        kk = kk + 1 if kk < period - 1 else 0
+    a = c_lo  # not needed: the free run around c_lo .. c_hi
+    ka = k
+    for _ in range(period):
+        ka = ka - 1 if ka > 0 else period - 1
+        if ints[need + ka] != 0:
+            break
+        a -= 1.0
+    b = c_hi
+    kb = _tooth_index(float(c_hi), period)
+    for _ in range(period):
+        kb = kb + 1 if kb < period - 1 else 0
+        if ints[need + kb] != 0:
+            break
+        b += 1.0
+    return 0.0, a, b
 
 
 @njit(cache=True, inline="always")
@@ -998,14 +1035,148 @@ def _faulty_flanks(ints, vals, tables, m, r, s, d, dd, dr, ddr, el, er, edl, edr
 
 
 @njit(cache=True, _nrt=False)
+def _stiffness_flanks(ints, vals, tables, m, r, s, d, dd, dr, ddr, half, damping, mesh_out):
+    """Contact law of a faulty mesh whose tooth faults change the stiffness only
+    (:attr:`gearvib.faults.law.FaultedMesh.stiffness_only`): the table law with the summed
+    stiffness of the pairs present.
+
+    ``d, dd, dr, ddr`` include the mesh-wide offsets. Every pair meets the same deflection, so
+    the pair law's sums become one product per flank: the same stiffness sums as
+    :func:`_faulty_flanks` (bit for bit), the force equal to rounding. Returns ``(f_left,
+    f_right, k_eff, state)`` like :func:`flank_forces_two_lines`.
+    """
+    fi0 = ints[H_FINT]
+    fv0 = ints[H_FVAL]
+    z1 = ints[r + F_Z1]
+    z2 = ints[r + F_Z2]
+    nu = ints[r + F_NU]
+    nper = ints[r + F_NPER]
+    nslot = ints[r + F_NSLOT]
+    ce = ints[r + F_EXIT]
+    sg1 = ints[r + F_S1]
+    sg2 = ints[r + F_S2]
+    p1 = fi0 + ints[r + F_PROF1]
+    p2 = fi0 + ints[r + F_PROF2]
+    sf = np.floor(s)
+    frac = s - sf
+    x0 = frac * nper
+    i0 = int(x0)
+    w = x0 - i0
+    if i0 >= nper:
+        i0 = 0
+        w = 0.0
+    if sf == mesh_out[m, 21]:  # the teeth of the next pair, kept per mesh cycle
+        k1 = int(mesh_out[m, 22])
+        k2 = int(mesh_out[m, 23])
+    else:
+        k1 = 0
+        k2 = 0
+        if z1 > 0:
+            k1 = _tooth_index(sg1 * (sf + 1.0) + ints[r + F_T1], z1)
+        if z2 > 0:
+            k2 = _tooth_index(sg2 * (sf + 1.0) + ints[r + F_T2], z2)
+        mesh_out[m, 21] = sf
+        mesh_out[m, 22] = k1
+        mesh_out[m, 23] = k2
+    shared = ints[r + F_SHARED] != 0
+    pv = fv0 + ints[r + F_PAIRV]
+    prv = fv0 + ints[r + F_PROFV]
+    psum = 0.0
+    ke_l = 0.0
+    ke_r = 0.0
+    for i in range(-1, nslot + 1):
+        pres = _presence(i, i0, w, nper, ce)
+        if pres > 0.0:
+            psum += pres
+            idx = 0
+            wi = 0.0
+            if i >= 0:
+                idx = i0 + i * nper
+                wi = w
+            if shared:
+                kl = pres
+                kr = pres
+            else:
+                a = _U(pv + idx)
+                c = _U(pv + nu + idx)
+                kl = ((1.0 - wi) * vals[a] + wi * vals[a + _U1]) * pres
+                kr = ((1.0 - wi) * vals[c] + wi * vals[c + _U1]) * pres
+            if z1 > 0:
+                prof = ints[_U(p1 + k1)]
+                if prof >= 0:
+                    b0 = _U(prv + prof * 4 * nu + idx)
+                    b1 = _U(prv + prof * 4 * nu + nu + idx)
+                    kl *= (1.0 - wi) * vals[b0] + wi * vals[b0 + _U1]
+                    kr *= (1.0 - wi) * vals[b1] + wi * vals[b1 + _U1]
+            if z2 > 0:
+                prof = ints[_U(p2 + k2)]
+                if prof >= 0:
+                    b0 = _U(prv + prof * 4 * nu + idx)
+                    b1 = _U(prv + prof * 4 * nu + nu + idx)
+                    kl *= (1.0 - wi) * vals[b0] + wi * vals[b0 + _U1]
+                    kr *= (1.0 - wi) * vals[b1] + wi * vals[b1 + _U1]
+            if kl > 0.0:
+                ke_l += kl
+            if kr > 0.0:
+                ke_r += kr
+        k1 -= sg1  # the next older pair
+        if k1 < 0:
+            k1 += z1
+        elif k1 >= z1:
+            k1 -= z1
+        k2 -= sg2
+        if k2 < 0:
+            k2 += z2
+        elif k2 >= z2:
+            k2 -= z2
+    on_l = ke_l > 0.0 and d > half
+    on_r = ke_r > 0.0 and dr < -half
+    f_el = ke_l * (d - half)
+    f_er = ke_r * (dr + half)
+    if shared:
+        share_l = 0.0
+        share_r = 0.0
+        if psum > 0.0:
+            i1 = i0 + 1
+            if i1 == nper:
+                i1 = 0
+            share_l = ((1.0 - w) * tables[0, m, i0] + w * tables[0, m, i1]) / psum
+            share_r = ((1.0 - w) * tables[1, m, i0] + w * tables[1, m, i1]) / psum
+        on_l = on_l and share_l > 0.0
+        on_r = on_r and share_r > 0.0
+        f_el *= share_l
+        f_er *= share_r
+        ke_l *= share_l
+        ke_r *= share_r
+    ke = 0.0
+    fl = 0.0
+    fr = 0.0
+    st = 0
+    if on_l:
+        fl = f_el + damping * dd
+        if fl < 0.0:
+            fl = 0.0
+        ke += ke_l
+        st += 1
+    if on_r:
+        fr = f_er + damping * ddr
+        if fr > 0.0:
+            fr = 0.0
+        ke += ke_r
+        st += 2
+    return fl, fr, ke, st
+
+
+@njit(cache=True, inline="always")
 def _faulty_meshes(y, dy, mesh_out, ints, vals, tables):
     """The meshes with faults under their own law (``mesh_out[m, 7]`` set): forces added to
     ``dy`` and ``mesh_out[m, :7]`` written as in :func:`_rhs`.
 
-    One pass after the healthy meshes (one call per right-hand side, and no fault code in
+    One pass after the healthy meshes (compiled into the right-hand side; no fault code in
     the loop of the healthy meshes). Mesh-wide deviations (eccentricity, rigid pin errors)
     shift the table law; pitch offsets alone take the mean-offset law where it holds
-    (:func:`_mean_offset`), everything else the pair law (:func:`_faulty_flanks`).
+    (:func:`_mean_offset`), stiffness-only tooth faults the stiffness law
+    (:func:`_stiffness_flanks`), everything else the pair law (:func:`_faulty_flanks`).
     """
     n = _U(ints[H_N])
     n_table = tables.shape[2]
@@ -1062,24 +1233,33 @@ def _faulty_meshes(y, dy, mesh_out, ints, vals, tables):
         if ints[r + _U(F_MESHWIDE)] != 0:
             el, er, edl, edr = _deviation_offsets(ints, vals, r, y, n, mesh_out, m)
         law = ints[r + _U(F_LAW)]  # gearvib.faults.law.LAW_*
-        pairs = law == 2
-        i0, i1, w = _interp_cell(n_table, s)
-        kl = (1.0 - w) * tables[0, m, _U(i0)] + w * tables[0, m, _U(i1)]
-        kr = (1.0 - w) * tables[1, m, _U(i0)] + w * tables[1, m, _U(i1)]
-        if law == 1:  # pitch offsets only: the mean-offset law where it holds
-            mean, holds = _mean_offset(ints, vals, r, s, i0, d, dr, el, er, kl, kr, half,
-                                       mesh_out, m)
-            if holds:
-                el += mean
-                er += mean
-            else:
-                pairs = True
-        if pairs:  # tooth pair by tooth pair
-            fl, fr, ke, st = _faulty_flanks(ints, vals, tables, m, r, s, d, dd, dr, ddr, el,
-                                            er, edl, edr, half, vals[mc + m], mesh_out)
-        else:  # the same offset on every pair in contact: the table law, shifted
-            fl, fr, ke, st = flank_forces_two_lines(d + el, dd + edl, dr + er, ddr + edr, kl,
-                                                    kr, 2.0 * half, vals[mc + m])
+        if law == 3:  # stiffness-only tooth faults: the table law with the pairs' stiffness
+            fl, fr, ke, st = _stiffness_flanks(ints, vals, tables, m, r, s, d + el, dd + edl,
+                                               dr + er, ddr + edr, half, vals[mc + m],
+                                               mesh_out)
+        else:
+            pairs = law == 2
+            kl = 0.0
+            kr = 0.0
+            if not pairs:
+                i0, i1, w = _interp_cell(n_table, s)
+                kl = (1.0 - w) * tables[0, m, _U(i0)] + w * tables[0, m, _U(i1)]
+                kr = (1.0 - w) * tables[1, m, _U(i0)] + w * tables[1, m, _U(i1)]
+                if law == 1:  # pitch offsets only: the mean-offset law where it holds
+                    mean, holds = _mean_offset(ints, vals, r, s, i0, d, dr, el, er, kl, kr,
+                                               half, mesh_out, m)
+                    if holds:
+                        el += mean
+                        er += mean
+                    else:
+                        pairs = True
+            if pairs:  # tooth pair by tooth pair
+                fl, fr, ke, st = _faulty_flanks(ints, vals, tables, m, r, s, d, dd, dr, ddr,
+                                                el, er, edl, edr, half, vals[mc + m],
+                                                mesh_out)
+            else:  # the same offset on every pair in contact: the table law, shifted
+                fl, fr, ke, st = flank_forces_two_lines(d + el, dd + edl, dr + er, ddr + edr,
+                                                        kl, kr, 2.0 * half, vals[mc + m])
         if two_lines:
             if fl != 0.0:
                 for p in range(_U(ints[fp + m]), _U(ints[fp + m + _U1])):
@@ -1354,10 +1534,17 @@ def _split_times(y, dt, ints, vals, mesh_out, splits):
             res = ints[fi0 + rec + F_NEEDRES]
             flo = np.floor(lo * res)
             fhi = np.floor(hi * res)
-            if not (mesh_out[m, 8] == flo and mesh_out[m, 9] == fhi):
-                mesh_out[m, 7] = 1.0 if _pairs_needed(ints, rec, flo, fhi) else 0.0
-                mesh_out[m, 8] = flo
-                mesh_out[m, 9] = fhi
+            # kept: a run of cells (columns 8, 9) known to need it (column 7 = 1: needed by
+            # every range meeting it) or known free (0: free for every range inside it)
+            if mesh_out[m, 7] != 0.0:
+                keep = flo <= mesh_out[m, 9] and mesh_out[m, 8] <= fhi  # NaN: ask
+            else:
+                keep = mesh_out[m, 8] <= flo and fhi <= mesh_out[m, 9]
+            if not keep:
+                flag, ca, cb = _need_interval(ints, rec, flo, fhi)
+                mesh_out[m, 7] = flag
+                mesh_out[m, 8] = ca
+                mesh_out[m, 9] = cb
         if sd == 0.0:
             continue
         base = np.floor(lo)
@@ -1668,5 +1855,6 @@ def integrate(
 # The per-variant pieces :mod:`gearvib.kernels_batch` evaluates exactly as here (public names
 # of this module's compiled helpers).
 insert_split = _insert_split
+need_interval = _need_interval  # for tests
 speed_at = _speed_at
 table_at = _table_at

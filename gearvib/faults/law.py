@@ -93,6 +93,9 @@ LAW_MEAN_OFFSET = 1
 it holds, else the pair law."""
 LAW_PAIRS = 2
 """R_LAW: tooth pair by tooth pair."""
+LAW_STIFFNESS = 3
+"""R_LAW: tooth faults that change the stiffness only (:attr:`FaultedMesh.stiffness_only`):
+the table law with the summed stiffness of the pairs present."""
 
 
 @dataclass
@@ -203,6 +206,23 @@ class FaultedMesh:
         no_profiles = all(not np.any(p >= 0) for p in self.profile)
         return (self.shared and no_profiles and self.has_teeth
                 and self.exit_cell >= self.n_per)
+
+    @property
+    def stiffness_only(self) -> bool:
+        """The stiffness law applies: some tooth has a fault profile, no profile has a gap
+        (crack, broken tooth; pitting has one) and no tooth a pitch deviation.
+
+        Then every pair present meets the same deflection (``delta`` plus the mesh-wide
+        offsets), so every pair with a positive stiffness is in contact on a flank or none
+        is, and the pair law's force ``sum_i k_i (delta - j/2)`` is the table law's with the
+        summed stiffness ``sum_i k_i`` (equal to rounding: the kernel multiplies once,
+        :func:`gearvib.kernels._stiffness_flanks`); the loop over the pairs remains, without
+        their offsets and contact tests.
+        """
+        has_profile = any(self.z[g] > 0 and np.any(self.profile[g] >= 0) for g in (0, 1))
+        no_shift = all(not np.any(self.shift[g]) for g in (0, 1) if self.z[g] > 0)
+        no_gap = all(not np.any(p[2:]) for p in self.profiles)
+        return has_profile and no_shift and no_gap
 
     @property
     def has_teeth(self) -> bool:
@@ -375,8 +395,9 @@ class FaultLaw:
             r[R_NPAIR] = fm.n_slots
             r[R_EXIT] = fm.exit_cell
             r[R_RAMPOUT] = fm.exit_cell % fm.n_per
-            r[R_LAW] = (LAW_MEAN_OFFSET if fm.offsets_only else LAW_PAIRS if fm.has_teeth
-                        else LAW_SHIFTED)
+            r[R_LAW] = (LAW_MEAN_OFFSET if fm.offsets_only
+                        else LAW_STIFFNESS if fm.stiffness_only
+                        else LAW_PAIRS if fm.has_teeth else LAW_SHIFTED)
             r[R_MESHWIDE] = int(bool(fm.ecc) or fm.const_left != 0.0 or fm.const_right != 0.0)
             r[R_SHARED] = int(fm.shared)
             r[R_EPS] = put([fm.eps])
@@ -395,7 +416,7 @@ class FaultLaw:
                 r[tk] = fm.tooth0[side]
                 if fm.z[side] > 0:
                     r[pk] = len(ints)
-                    ints.extend(int(p) for p in fm.profile[side])
+                    ints.extend(np.asarray(fm.profile[side], dtype=np.int64).tolist())
                     r[hk] = put(fm.shift[side])
             r[R_PROFV] = put(np.concatenate([p.ravel() for p in fm.profiles])
                              if fm.profiles else np.zeros(0))
@@ -413,7 +434,7 @@ class FaultLaw:
             r[R_PERIOD] = need.size
             r[R_NEEDRES] = 1 if fm.always else NEED_CELLS
             r[R_NEED] = len(ints)
-            ints.extend(int(v) for v in need)
+            ints.extend(need.tolist())
             ints[base:base + N_RECORD] = r
         flat = np.concatenate(vals) if vals else np.zeros(0)
         return rec, np.asarray(ints, dtype=np.int64), flat

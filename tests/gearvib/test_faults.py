@@ -222,6 +222,117 @@ def test_mean_offset_law_gives_the_pair_law(preset) -> None:
     assert mixed > 20  # the states reach partial contact (the pair law's part)
 
 
+def test_need_runs_answer_as_the_need_table(case1) -> None:
+    """The kernel decides per step whether a faulty mesh needs its own law from the cells its
+    step covers in the need table, and keeps the run of cells around them with the same
+    answer (``need_interval``), asking again only when a step leaves it. For random ranges
+    of cells over several periods (negative cells included) the answer equals the table's,
+    the run is uniform (all needed or all free), holds the range (free) or meets it (needed)
+    and ends where the table changes (or a period away)."""
+    faulty = case1.with_faults([Crack("sun", 3, severity=0.3),
+                                Pitting("planet2", 7, severity=0.3, path_start=0.2,
+                                        path_end=0.7, depth=3e-6)])
+    setup = prepare_run(faulty, SpeedRamp(1000, 1000, 1.0, input_torque=60.0), False)
+    ints = setup.system.astuple()[0]
+    rng = np.random.default_rng(3)
+    checked = needed = 0
+    for m, fm in setup.faults.meshes.items():
+        rec = int(setup.system.fault_records[m])
+        table = fm.need_table()
+        period = table.size
+        assert 0 < table.sum() < period
+
+        def need(c: float, table=table, period=period) -> int:
+            return int(table[int(c) % period])
+
+        for _ in range(400):
+            lo = float(rng.integers(-3 * period, 3 * period))
+            hi = lo + float(rng.integers(0, 3))
+            flag, a, b = kn.need_interval(ints, rec, lo, hi)
+            want = any(need(c) for c in np.arange(lo, hi + 1.0))
+            assert flag == float(want)
+            assert a <= b and b - a <= 2 * period + hi - lo
+            assert all(need(c) == want for c in np.arange(a, b + 1.0))
+            if want:
+                assert a <= hi and lo <= b
+                needed += 1
+            else:
+                assert a <= lo and hi <= b
+            assert need(a - 1.0) != want or b - a >= period
+            assert need(b + 1.0) != want or b - a >= period
+            checked += 1
+    assert len(setup.faults.meshes) == 4  # the sun meshes, planet2's ring mesh
+    assert checked == 1600 and needed > 20
+
+
+@pytest.mark.parametrize("stiffness", [
+    None,  # the preset's rectangular model: pairs share the table
+    {"model": "pairs", "position": [0.0, 0.4, 0.8, 1.2, 1.6436041005447102],
+     "stiffness": [2.0e7, 3.0e7, 3.3e7, 3.0e7, 2.0e7], "contact_ratio": 1.6436041005447102},
+])
+def test_stiffness_law_gives_the_pair_law(stiffness) -> None:
+    """Meshes whose tooth faults change the stiffness only (crack, broken tooth; no pitch
+    errors, no pitting gap) take the stiffness law (``FaultedMesh.stiffness_only``): the
+    table law with the summed stiffness of the pairs present, plus the mesh-wide offsets of
+    an eccentricity and a pin error. Along a path across many mesh cycles with deflections
+    from the loaded equilibrium to contact loss and back-flank contact it gives the pair
+    law's forces (forced through the records' law code) to rounding, the same stiffness and
+    contact states bit for bit, on a shared table and on a single-pair curve; a mesh with
+    pitting keeps the pair law."""
+    cfg, base = load_config("paper-case1")
+    cfg = copy.deepcopy(cfg)
+    if stiffness is not None:
+        cfg["meshes"]["sun"]["stiffness"] = stiffness
+    model = assemble(gearset_from_dict(cfg, base=base))
+    faulty = model.with_faults([
+        Crack("sun", 3, severity=0.4),
+        BrokenTooth("planet1", 5),
+        Pitting("planet2", 7, severity=0.3, path_start=0.2, path_end=0.7, depth=3e-6),
+        Eccentricity("sun", 8e-6, 30.0),
+        PinError("planet3", tangential=-6e-6),
+    ])
+    setup = prepare_run(faulty, SpeedRamp(1000, 1000, 1.0, input_torque=60.0), False)
+    law = setup.faults
+    under = [m for m, fm in law.meshes.items() if fm.stiffness_only]
+    assert under == [0, 2, 3]  # the sun meshes of planets 1 and 3, planet1's ring mesh
+    assert not law.meshes[1].stiffness_only  # pitting: a gap on the path
+    fast = setup.system
+    pairs = copy.deepcopy(fast)
+    for r in pairs.fault_records[under]:
+        assert pairs.fault_ints[r + fault_law.R_LAW] == fault_law.LAW_STIFFNESS
+        pairs.fault_ints[r + fault_law.R_LAW] = fault_law.LAW_PAIRS
+    fast_t, pairs_t = fast.astuple(), pairs.astuple()
+    healthy_t = prepare_run(model, SpeedRamp(1000, 1000, 1.0, input_torque=60.0),
+                            False).system.astuple()
+    rng = np.random.default_rng(11)
+    q0, _ = static_equilibrium(fast, setup.mass, setup.rigid, setup.rigid * setup.omega0)
+    angles = np.cumsum(np.concatenate([rng.uniform(0.0, 0.003, 300),
+                                       rng.uniform(-0.03, 0.01, 150),
+                                       rng.uniform(0.0, 0.2, 150)]))
+    kept = np.full((faulty.n_mesh, kn.MESH_OUT_COLUMNS), np.nan)
+    kept[:, 7] = 1.0
+    dy = np.empty(2 * q0.size)
+    worst = 0.0
+    weakened = off = back = 0
+    for i, a in enumerate(angles):
+        q = q0 + setup.rigid * a + rng.normal(0, (1e-8, 1e-6, 1e-4, 3e-4)[i % 4], q0.size)
+        y = np.concatenate([q, setup.rigid * setup.omega0 + rng.normal(0, 1e-3, q0.size)])
+        kn.rhs_loop(y[None, :], 0.0, 1e-5, 1, fast_t, dy, kept)
+        dy_ref, ref = kn.evaluate_rhs(0.0, y, pairs_t)
+        _, healthy = kn.evaluate_rhs(0.0, y, healthy_t)
+        for m in under:
+            assert kept[m, 2] == ref[m, 2] and kept[m, 3] == ref[m, 3]
+            scale = abs(ref[m, 0]) + abs(ref[m, 1]) + 1e-9 * ref[m, 2] + 1e-6
+            worst = max(worst, abs(kept[m, 0] - ref[m, 0]) / scale,
+                        abs(kept[m, 1] - ref[m, 1]) / scale)
+            weakened += bool(ref[m, 2] < 0.99 * healthy[m, 2])
+            off += ref[m, 3] == 0
+            back += ref[m, 3] >= 2
+        worst = max(worst, float(np.abs(dy - dy_ref).max() / np.abs(dy_ref).max()))
+    assert worst < 1e-12  # measured 6e-16 (shared table and single-pair curve)
+    assert weakened > 10 and off > 50 and back > 5  # faulty pairs, contact loss, back flank
+
+
 @pytest.mark.parametrize("stiffness", [
     None,  # the preset's rectangular model: pairs share the table
     {"model": "pairs", "position": [0.0, 0.4, 0.8, 1.2, 1.6436041005447102],
