@@ -800,6 +800,96 @@ def _tooth_index(x, z):
     return k
 
 
+@njit(cache=True, inline="always")
+def _pair_cell(ints, r, s, mesh_out, m):
+    """Where faulty mesh ``m`` (record at ``ints[r]``) is at position ``s``: ``(i0, w, k1,
+    k2)``, the cell ``i0`` of the ``F_NPER`` cells of the mesh cycle ``floor(s)`` and the weight
+    ``w`` within it, and the teeth ``k1``, ``k2`` of the two gears in the next pair (counter
+    ``floor(s) + 1``; each older pair steps back by the gear's sign, :func:`_older_tooth`).
+
+    The teeth are kept in ``mesh_out[m, 21:24]`` for the mesh cycle (floating-point modulo,
+    :func:`_tooth_index`, only when the cycle changes)."""
+    nper = ints[r + F_NPER]
+    sf = np.floor(s)
+    frac = s - sf
+    x0 = frac * nper
+    i0 = int(x0)
+    w = x0 - i0
+    if i0 >= nper:
+        i0 = 0
+        w = 0.0
+    if sf == mesh_out[m, 21]:  # NaN (nothing kept) fails the test
+        k1 = int(mesh_out[m, 22])
+        k2 = int(mesh_out[m, 23])
+    else:
+        z1 = ints[r + F_Z1]
+        z2 = ints[r + F_Z2]
+        k1 = 0
+        k2 = 0
+        if z1 > 0:
+            k1 = _tooth_index(ints[r + F_S1] * (sf + 1.0) + ints[r + F_T1], z1)
+        if z2 > 0:
+            k2 = _tooth_index(ints[r + F_S2] * (sf + 1.0) + ints[r + F_T2], z2)
+        mesh_out[m, 21] = sf
+        mesh_out[m, 22] = k1
+        mesh_out[m, 23] = k2
+    return i0, w, k1, k2
+
+
+@njit(cache=True, inline="always")
+def _older_tooth(k, sg, z):
+    """The tooth of a gear (``z`` teeth, pair-counter sign ``sg``) in the next older pair."""
+    k -= sg
+    if k < 0:
+        k += z
+    elif k >= z:
+        k -= z
+    return k
+
+
+@njit(cache=True, inline="always")
+def _slot_stiffness(vals, pv, nu, i, i0, w, nper, pres, shared):
+    """``(idx, wi, kl, kr)`` of pair slot ``i`` with presence ``pres``: its sample ``idx`` on
+    the path grid and weight ``wi`` (path position ``u = frac + i``; the entering pair, ``u <
+    0``, takes the values at ``u = 0``) and its stiffness on both flanks, the pair table at
+    ``pv`` times ``pres`` (a shared table: ``pres``, scaled by :func:`_table_shares`)."""
+    idx = 0
+    wi = 0.0
+    if i >= 0:
+        idx = i0 + i * nper
+        wi = w
+    if shared:
+        return idx, wi, pres, pres
+    a = _U(pv + idx)  # offsets and counters >= 0: unsigned, no wraparound
+    c = _U(pv + nu + idx)
+    kl = ((1.0 - wi) * vals[a] + wi * vals[a + _U1]) * pres
+    kr = ((1.0 - wi) * vals[c] + wi * vals[c + _U1]) * pres
+    return idx, wi, kl, kr
+
+
+@njit(cache=True, inline="always")
+def _profile_scaled(vals, base, nu, idx, wi, kl, kr):
+    """``kl``, ``kr`` times the stiffness factors of the tooth profile whose rows start at
+    ``vals[base]`` (left, right; the rows ``base + 2 nu``, ``base + 3 nu`` hold the gaps)."""
+    b0 = _U(base + idx)
+    b1 = _U(base + nu + idx)
+    return (kl * ((1.0 - wi) * vals[b0] + wi * vals[b0 + _U1]),
+            kr * ((1.0 - wi) * vals[b1] + wi * vals[b1 + _U1]))
+
+
+@njit(cache=True, inline="always")
+def _table_shares(tables, m, i0, w, nper, psum):
+    """Shares ``(left, right)`` of the mesh table at cell ``i0``, weight ``w``, for pairs of
+    summed presence ``psum`` (pairs that share the table carry ``table / psum`` each)."""
+    if psum > 0.0:
+        i1 = i0 + 1
+        if i1 == nper:
+            i1 = 0
+        return (((1.0 - w) * tables[0, m, i0] + w * tables[0, m, i1]) / psum,
+                ((1.0 - w) * tables[1, m, i0] + w * tables[1, m, i1]) / psum)
+    return 0.0, 0.0
+
+
 @njit(cache=True, _nrt=False)
 def _offset_cycle(ints, vals, r, sf, mesh_out, m):
     """Keep the pair offsets of mesh cycle ``sf`` of a mesh under the mean-offset law.
@@ -900,30 +990,7 @@ def _faulty_flanks(ints, vals, tables, m, r, s, d, dd, dr, ddr, el, er, edl, edr
     sg2 = ints[r + F_S2]
     p1 = fi0 + ints[r + F_PROF1]
     p2 = fi0 + ints[r + F_PROF2]
-    sf = np.floor(s)
-    frac = s - sf
-    x0 = frac * nper
-    i0 = int(x0)
-    w = x0 - i0
-    if i0 >= nper:
-        i0 = 0
-        w = 0.0
-    # teeth of the next pair (counter floor(s) + 1; floating-point modulo: no integer
-    # division); each older pair steps back by the sign
-    # (kept in mesh_out[m, 21:24] for the mesh cycle floor(s): no division while it lasts)
-    if sf == mesh_out[m, 21]:  # NaN (nothing kept) fails the test
-        k1 = int(mesh_out[m, 22])
-        k2 = int(mesh_out[m, 23])
-    else:
-        k1 = 0
-        k2 = 0
-        if z1 > 0:
-            k1 = _tooth_index(sg1 * (sf + 1.0) + ints[r + F_T1], z1)
-        if z2 > 0:
-            k2 = _tooth_index(sg2 * (sf + 1.0) + ints[r + F_T2], z2)
-        mesh_out[m, 21] = sf
-        mesh_out[m, 22] = k1
-        mesh_out[m, 23] = k2
+    i0, w, k1, k2 = _pair_cell(ints, r, s, mesh_out, m)
     shared = ints[r + F_SHARED] != 0
     pv = fv0 + ints[r + F_PAIRV]
     prv = fv0 + ints[r + F_PROFV]
@@ -944,21 +1011,7 @@ def _faulty_flanks(ints, vals, tables, m, r, s, d, dd, dr, ddr, el, er, edl, edr
         pres = _presence(i, i0, w, nper, ce)
         if pres > 0.0:
             psum += pres
-            # path position u = frac + i on the sampled grid; the entering pair (u < 0) takes
-            # the values at u = 0
-            idx = 0
-            wi = 0.0
-            if i >= 0:
-                idx = i0 + i * nper
-                wi = w
-            if shared:
-                kl = pres
-                kr = pres
-            else:
-                a = _U(pv + idx)  # offsets and counters >= 0: unsigned, no wraparound
-                c = _U(pv + nu + idx)
-                kl = ((1.0 - wi) * vals[a] + wi * vals[a + _U1]) * pres
-                kr = ((1.0 - wi) * vals[c] + wi * vals[c + _U1]) * pres
+            idx, wi, kl, kr = _slot_stiffness(vals, pv, nu, i, i0, w, nper, pres, shared)
             ol = el
             orr = er
             for g in range(2):
@@ -975,12 +1028,10 @@ def _faulty_flanks(ints, vals, tables, m, r, s, d, dd, dr, ddr, el, er, edl, edr
                 ol += sh
                 orr += sh
                 if prof >= 0:
-                    b0 = _U(prv + prof * 4 * nu + idx)
-                    b1 = _U(prv + prof * 4 * nu + nu + idx)
-                    b2 = _U(prv + prof * 4 * nu + 2 * nu + idx)
-                    b3 = _U(prv + prof * 4 * nu + 3 * nu + idx)
-                    kl *= (1.0 - wi) * vals[b0] + wi * vals[b0 + _U1]
-                    kr *= (1.0 - wi) * vals[b1] + wi * vals[b1 + _U1]
+                    base = prv + prof * 4 * nu
+                    kl, kr = _profile_scaled(vals, base, nu, idx, wi, kl, kr)
+                    b2 = _U(base + 2 * nu + idx)
+                    b3 = _U(base + 3 * nu + idx)
                     ol -= (1.0 - wi) * vals[b2] + wi * vals[b2 + _U1]
                     orr += (1.0 - wi) * vals[b3] + wi * vals[b3 + _U1]
             if kl > 0.0 and d + ol > half:
@@ -991,26 +1042,10 @@ def _faulty_flanks(ints, vals, tables, m, r, s, d, dd, dr, ddr, el, er, edl, edr
                 f_er += kr * (dr + orr + half)
                 ke_r += kr
                 on_r = True
-        # the next older pair
-        k1 -= sg1
-        if k1 < 0:
-            k1 += z1
-        elif k1 >= z1:
-            k1 -= z1
-        k2 -= sg2
-        if k2 < 0:
-            k2 += z2
-        elif k2 >= z2:
-            k2 -= z2
+        k1 = _older_tooth(k1, sg1, z1)  # the next older pair
+        k2 = _older_tooth(k2, sg2, z2)
     if shared:
-        share_l = 0.0
-        share_r = 0.0
-        if psum > 0.0:
-            i1 = i0 + 1
-            if i1 == nper:
-                i1 = 0
-            share_l = ((1.0 - w) * tables[0, m, i0] + w * tables[0, m, i1]) / psum
-            share_r = ((1.0 - w) * tables[1, m, i0] + w * tables[1, m, i1]) / psum
+        share_l, share_r = _table_shares(tables, m, i0, w, nper, psum)
         on_l = on_l and share_l > 0.0
         on_r = on_r and share_r > 0.0
         f_el *= share_l
@@ -1057,27 +1092,7 @@ def _stiffness_flanks(ints, vals, tables, m, r, s, d, dd, dr, ddr, half, damping
     sg2 = ints[r + F_S2]
     p1 = fi0 + ints[r + F_PROF1]
     p2 = fi0 + ints[r + F_PROF2]
-    sf = np.floor(s)
-    frac = s - sf
-    x0 = frac * nper
-    i0 = int(x0)
-    w = x0 - i0
-    if i0 >= nper:
-        i0 = 0
-        w = 0.0
-    if sf == mesh_out[m, 21]:  # the teeth of the next pair, kept per mesh cycle
-        k1 = int(mesh_out[m, 22])
-        k2 = int(mesh_out[m, 23])
-    else:
-        k1 = 0
-        k2 = 0
-        if z1 > 0:
-            k1 = _tooth_index(sg1 * (sf + 1.0) + ints[r + F_T1], z1)
-        if z2 > 0:
-            k2 = _tooth_index(sg2 * (sf + 1.0) + ints[r + F_T2], z2)
-        mesh_out[m, 21] = sf
-        mesh_out[m, 22] = k1
-        mesh_out[m, 23] = k2
+    i0, w, k1, k2 = _pair_cell(ints, r, s, mesh_out, m)
     shared = ints[r + F_SHARED] != 0
     pv = fv0 + ints[r + F_PAIRV]
     prv = fv0 + ints[r + F_PROFV]
@@ -1088,60 +1103,27 @@ def _stiffness_flanks(ints, vals, tables, m, r, s, d, dd, dr, ddr, half, damping
         pres = _presence(i, i0, w, nper, ce)
         if pres > 0.0:
             psum += pres
-            idx = 0
-            wi = 0.0
-            if i >= 0:
-                idx = i0 + i * nper
-                wi = w
-            if shared:
-                kl = pres
-                kr = pres
-            else:
-                a = _U(pv + idx)
-                c = _U(pv + nu + idx)
-                kl = ((1.0 - wi) * vals[a] + wi * vals[a + _U1]) * pres
-                kr = ((1.0 - wi) * vals[c] + wi * vals[c + _U1]) * pres
+            idx, wi, kl, kr = _slot_stiffness(vals, pv, nu, i, i0, w, nper, pres, shared)
             if z1 > 0:
                 prof = ints[_U(p1 + k1)]
                 if prof >= 0:
-                    b0 = _U(prv + prof * 4 * nu + idx)
-                    b1 = _U(prv + prof * 4 * nu + nu + idx)
-                    kl *= (1.0 - wi) * vals[b0] + wi * vals[b0 + _U1]
-                    kr *= (1.0 - wi) * vals[b1] + wi * vals[b1 + _U1]
+                    kl, kr = _profile_scaled(vals, prv + prof * 4 * nu, nu, idx, wi, kl, kr)
             if z2 > 0:
                 prof = ints[_U(p2 + k2)]
                 if prof >= 0:
-                    b0 = _U(prv + prof * 4 * nu + idx)
-                    b1 = _U(prv + prof * 4 * nu + nu + idx)
-                    kl *= (1.0 - wi) * vals[b0] + wi * vals[b0 + _U1]
-                    kr *= (1.0 - wi) * vals[b1] + wi * vals[b1 + _U1]
+                    kl, kr = _profile_scaled(vals, prv + prof * 4 * nu, nu, idx, wi, kl, kr)
             if kl > 0.0:
                 ke_l += kl
             if kr > 0.0:
                 ke_r += kr
-        k1 -= sg1  # the next older pair
-        if k1 < 0:
-            k1 += z1
-        elif k1 >= z1:
-            k1 -= z1
-        k2 -= sg2
-        if k2 < 0:
-            k2 += z2
-        elif k2 >= z2:
-            k2 -= z2
+        k1 = _older_tooth(k1, sg1, z1)  # the next older pair
+        k2 = _older_tooth(k2, sg2, z2)
     on_l = ke_l > 0.0 and d > half
     on_r = ke_r > 0.0 and dr < -half
     f_el = ke_l * (d - half)
     f_er = ke_r * (dr + half)
     if shared:
-        share_l = 0.0
-        share_r = 0.0
-        if psum > 0.0:
-            i1 = i0 + 1
-            if i1 == nper:
-                i1 = 0
-            share_l = ((1.0 - w) * tables[0, m, i0] + w * tables[0, m, i1]) / psum
-            share_r = ((1.0 - w) * tables[1, m, i0] + w * tables[1, m, i1]) / psum
+        share_l, share_r = _table_shares(tables, m, i0, w, nper, psum)
         on_l = on_l and share_l > 0.0
         on_r = on_r and share_r > 0.0
         f_el *= share_l
