@@ -1150,6 +1150,74 @@ def _stiffness_flanks(ints, vals, tables, m, r, s, d, dd, dr, ddr, half, damping
 
 
 @njit(cache=True, inline="always")
+def _mesh_header(ints):
+    """Offsets of the mesh operators in the packed system, unsigned (:func:`pack`): ``(vp, vi,
+    vv, fp, fi, fv, pp, pi, pv, s0, bl, mc, rflag, rvp, rvi, rvv, rfp, rfi, rfv, frec)``."""
+    return (_U(ints[H_VP]), _U(ints[H_VI]), _U(ints[H_VV]), _U(ints[H_FP]), _U(ints[H_FI]),
+            _U(ints[H_FV]), _U(ints[H_PP]), _U(ints[H_PI]), _U(ints[H_PV]), _U(ints[H_S0]),
+            _U(ints[H_BL]), _U(ints[H_MC]), _U(ints[H_RFLAG]), _U(ints[H_RVP]),
+            _U(ints[H_RVI]), _U(ints[H_RVV]), _U(ints[H_RFP]), _U(ints[H_RFI]),
+            _U(ints[H_RFV]), _U(ints[H_FREC]))
+
+
+@njit(cache=True, inline="always")
+def _mesh_deflections(y, ints, vals, m, n, hdr):
+    """``(d, dd, dr, ddr, s, two_lines)`` of mesh ``m``: the deflection along the line of
+    action and its rate, the same of the back flank (its own line where the mesh has two,
+    ``two_lines``; else ``d, dd``) and the mesh position ``s`` [mesh cycles]."""
+    vp, vi, vv, _fp, _fi, _fv, pp, pi, pv, s0 = hdr[:10]
+    rflag, rvp, rvi, rvv = hdr[12:16]
+    d = 0.0
+    dd = 0.0
+    for p in range(_U(ints[vp + m]), _U(ints[vp + m + _U1])):
+        j = _U(ints[vi + p])
+        d += vals[vv + p] * y[j]
+        dd += vals[vv + p] * y[n + j]
+    two_lines = ints[rflag + m] != 0
+    dr = d
+    ddr = dd
+    if two_lines:  # the back flank's own line of action
+        dr = 0.0
+        ddr = 0.0
+        for p in range(_U(ints[rvp + m]), _U(ints[rvp + m + _U1])):
+            j = _U(ints[rvi + p])
+            dr += vals[rvv + p] * y[j]
+            ddr += vals[rvv + p] * y[n + j]
+    s = vals[s0 + m]
+    for p in range(_U(ints[pp + m]), _U(ints[pp + m + _U1])):
+        s += vals[pv + p] * y[_U(ints[pi + p])]
+    return d, dd, dr, ddr, s, two_lines
+
+
+@njit(cache=True, inline="always")
+def _add_mesh_forces(dy, ints, vals, mesh_out, m, n, hdr, two_lines, fl, fr, ke, st, d, s, dr):
+    """Subtract the flank forces ``fl``, ``fr`` of mesh ``m`` from the accelerations in ``dy``
+    (one line of action: their sum, bit for bit as a one-line model) and write ``mesh_out[m,
+    :7] = (F_L, -F_R, k_eff, state, delta, s, delta_R)``."""
+    fp, fi, fv = hdr[3:6]
+    rfp, rfi, rfv = hdr[16:19]
+    if two_lines:
+        if fl != 0.0:
+            for p in range(_U(ints[fp + m]), _U(ints[fp + m + _U1])):
+                dy[n + _U(ints[fi + p])] -= fl * vals[fv + p]
+        if fr != 0.0:
+            for p in range(_U(ints[rfp + m]), _U(ints[rfp + m + _U1])):
+                dy[n + _U(ints[rfi + p])] -= fr * vals[rfv + p]
+    else:
+        f = fl + fr
+        if f != 0.0:
+            for p in range(_U(ints[fp + m]), _U(ints[fp + m + _U1])):
+                dy[n + _U(ints[fi + p])] -= f * vals[fv + p]
+    mesh_out[m, 0] = fl
+    mesh_out[m, 1] = -fr
+    mesh_out[m, 2] = ke
+    mesh_out[m, 3] = st
+    mesh_out[m, 4] = d
+    mesh_out[m, 5] = s
+    mesh_out[m, 6] = dr
+
+
+@njit(cache=True, inline="always")
 def _faulty_meshes(y, dy, mesh_out, ints, vals, tables):
     """The meshes with faults under their own law (``mesh_out[m, 7]`` set): forces added to
     ``dy`` and ``mesh_out[m, :7]`` written as in :func:`_rhs`.
@@ -1162,50 +1230,16 @@ def _faulty_meshes(y, dy, mesh_out, ints, vals, tables):
     """
     n = _U(ints[H_N])
     n_table = tables.shape[2]
-    vp = _U(ints[H_VP])
-    vi = _U(ints[H_VI])
-    vv = _U(ints[H_VV])
-    fp = _U(ints[H_FP])
-    fi = _U(ints[H_FI])
-    fv = _U(ints[H_FV])
-    pp = _U(ints[H_PP])
-    pi = _U(ints[H_PI])
-    pv = _U(ints[H_PV])
-    s0 = _U(ints[H_S0])
-    bl = _U(ints[H_BL])
-    mc = _U(ints[H_MC])
-    rflag = _U(ints[H_RFLAG])
-    rvp = _U(ints[H_RVP])
-    rvi = _U(ints[H_RVI])
-    rvv = _U(ints[H_RVV])
-    rfp = _U(ints[H_RFP])
-    rfi = _U(ints[H_RFI])
-    rfv = _U(ints[H_RFV])
-    frec = _U(ints[H_FREC])
+    hdr = _mesh_header(ints)
+    bl = hdr[10]
+    mc = hdr[11]
+    frec = hdr[19]
     fi0 = _U(ints[H_FINT])
     for m in range(_U(ints[H_NMESH])):
         rec = ints[frec + m]
         if rec < 0 or mesh_out[m, 7] == 0.0:
             continue
-        d = 0.0
-        dd = 0.0
-        for p in range(_U(ints[vp + m]), _U(ints[vp + m + _U1])):
-            j = _U(ints[vi + p])
-            d += vals[vv + p] * y[j]
-            dd += vals[vv + p] * y[n + j]
-        two_lines = ints[rflag + m] != 0
-        dr = d
-        ddr = dd
-        if two_lines:  # the back flank's own line of action
-            dr = 0.0
-            ddr = 0.0
-            for p in range(_U(ints[rvp + m]), _U(ints[rvp + m + _U1])):
-                j = _U(ints[rvi + p])
-                dr += vals[rvv + p] * y[j]
-                ddr += vals[rvv + p] * y[n + j]
-        s = vals[s0 + m]
-        for p in range(_U(ints[pp + m]), _U(ints[pp + m + _U1])):
-            s += vals[pv + p] * y[_U(ints[pi + p])]
+        d, dd, dr, ddr, s, two_lines = _mesh_deflections(y, ints, vals, m, n, hdr)
         r = fi0 + _U(rec)
         half = 0.5 * vals[bl + m]
         el = 0.0
@@ -1242,25 +1276,8 @@ def _faulty_meshes(y, dy, mesh_out, ints, vals, tables):
             else:  # the same offset on every pair in contact: the table law, shifted
                 fl, fr, ke, st = flank_forces_two_lines(d + el, dd + edl, dr + er, ddr + edr,
                                                         kl, kr, 2.0 * half, vals[mc + m])
-        if two_lines:
-            if fl != 0.0:
-                for p in range(_U(ints[fp + m]), _U(ints[fp + m + _U1])):
-                    dy[n + _U(ints[fi + p])] -= fl * vals[fv + p]
-            if fr != 0.0:
-                for p in range(_U(ints[rfp + m]), _U(ints[rfp + m + _U1])):
-                    dy[n + _U(ints[rfi + p])] -= fr * vals[rfv + p]
-        else:
-            f = fl + fr
-            if f != 0.0:
-                for p in range(_U(ints[fp + m]), _U(ints[fp + m + _U1])):
-                    dy[n + _U(ints[fi + p])] -= f * vals[fv + p]
-        mesh_out[m, 0] = fl
-        mesh_out[m, 1] = -fr
-        mesh_out[m, 2] = ke
-        mesh_out[m, 3] = st
-        mesh_out[m, 4] = d
-        mesh_out[m, 5] = s
-        mesh_out[m, 6] = dr
+        _add_mesh_forces(dy, ints, vals, mesh_out, m, n, hdr, two_lines, fl, fr, ke, st, d, s,
+                         dr)
 
 
 @njit(cache=True, _nrt=False)
@@ -1333,74 +1350,23 @@ def _rhs(t, y, dy, mesh_out, ints, vals, tables, speed_tab, torque_tab):
         ov = _U(ints[H_OV])
         for p in range(_U(ints[H_NO])):
             dy[n + _U(ints[oi + p])] += vals[ov + p] * load
-    vp = _U(ints[H_VP])
-    vi = _U(ints[H_VI])
-    vv = _U(ints[H_VV])
-    fp = _U(ints[H_FP])
-    fi = _U(ints[H_FI])
-    fv = _U(ints[H_FV])
-    pp = _U(ints[H_PP])
-    pi = _U(ints[H_PI])
-    pv = _U(ints[H_PV])
-    s0 = _U(ints[H_S0])
-    bl = _U(ints[H_BL])
-    mc = _U(ints[H_MC])
-    rflag = _U(ints[H_RFLAG])
-    rvp = _U(ints[H_RVP])
-    rvi = _U(ints[H_RVI])
-    rvv = _U(ints[H_RVV])
-    rfp = _U(ints[H_RFP])
-    rfi = _U(ints[H_RFI])
-    rfv = _U(ints[H_RFV])
-    frec = _U(ints[H_FREC])
+    hdr = _mesh_header(ints)
+    bl = hdr[10]
+    mc = hdr[11]
+    frec = hdr[19]
     faulty = False
     for m in range(n_mesh):
         if ints[frec + m] >= 0 and mesh_out[m, 7] != 0.0:
             faulty = True  # a mesh with faults under its own law: the pass below
             continue
-        d = 0.0
-        dd = 0.0
-        for p in range(_U(ints[vp + m]), _U(ints[vp + m + _U1])):
-            j = _U(ints[vi + p])
-            d += vals[vv + p] * y[j]
-            dd += vals[vv + p] * y[n + j]
-        two_lines = ints[rflag + m] != 0
-        dr = d
-        ddr = dd
-        if two_lines:  # the back flank's own line of action
-            dr = 0.0
-            ddr = 0.0
-            for p in range(_U(ints[rvp + m]), _U(ints[rvp + m + _U1])):
-                j = _U(ints[rvi + p])
-                dr += vals[rvv + p] * y[j]
-                ddr += vals[rvv + p] * y[n + j]
-        s = vals[s0 + m]
-        for p in range(_U(ints[pp + m]), _U(ints[pp + m + _U1])):
-            s += vals[pv + p] * y[_U(ints[pi + p])]
+        d, dd, dr, ddr, s, two_lines = _mesh_deflections(y, ints, vals, m, n, hdr)
         i0, i1, w = _interp_cell(n_table, s)
         kl = (1.0 - w) * tables[0, m, _U(i0)] + w * tables[0, m, _U(i1)]
         kr = (1.0 - w) * tables[1, m, _U(i0)] + w * tables[1, m, _U(i1)]
         fl, fr, ke, st = flank_forces_two_lines(d, dd, dr, ddr, kl, kr, vals[bl + m],
                                                 vals[mc + m])
-        if two_lines:
-            if fl != 0.0:
-                for p in range(_U(ints[fp + m]), _U(ints[fp + m + _U1])):
-                    dy[n + _U(ints[fi + p])] -= fl * vals[fv + p]
-            if fr != 0.0:
-                for p in range(_U(ints[rfp + m]), _U(ints[rfp + m + _U1])):
-                    dy[n + _U(ints[rfi + p])] -= fr * vals[rfv + p]
-        else:  # one line of action: the summed force (bit for bit as a one-line model)
-            f = fl + fr
-            if f != 0.0:
-                for p in range(_U(ints[fp + m]), _U(ints[fp + m + _U1])):
-                    dy[n + _U(ints[fi + p])] -= f * vals[fv + p]
-        mesh_out[m, 0] = fl
-        mesh_out[m, 1] = -fr
-        mesh_out[m, 2] = ke
-        mesh_out[m, 3] = st
-        mesh_out[m, 4] = d
-        mesh_out[m, 5] = s
-        mesh_out[m, 6] = dr
+        _add_mesh_forces(dy, ints, vals, mesh_out, m, n, hdr, two_lines, fl, fr, ke, st, d, s,
+                         dr)
     if faulty:
         _faulty_meshes(y, dy, mesh_out, ints, vals, tables)
 
