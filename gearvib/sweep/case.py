@@ -23,8 +23,10 @@ import dataclasses
 import multiprocessing
 import sys
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import xarray as xr
 from threadpoolctl import threadpool_limits
@@ -160,6 +162,24 @@ def _prepare_worker() -> None:
         _worker_ready = True
 
 
+def _in_worker(fn: Callable[[Any], Any], arg: Any) -> Any:
+    """``fn(arg)`` as a worker runs a case or a group of cases: refused once the process got
+    Ctrl-C (the calls still queued for it are skipped), one BLAS/OpenMP thread during the call
+    whatever the process (a forked worker keeps the thread pools its parent loaded; the
+    caller's own setting is restored after)."""
+    global _interrupted
+    if _interrupted:
+        raise KeyboardInterrupt
+    _prepare_worker()
+    try:
+        with threadpool_limits(limits=1):
+            return fn(arg)
+    except KeyboardInterrupt:
+        if multiprocessing.parent_process() is not None:  # a pool worker, not the caller
+            _interrupted = True
+        raise
+
+
 def run_case(task: CaseTask) -> CaseOutcome:
     """Simulate (or reuse) one case, write its run file and summarise it.
 
@@ -174,19 +194,7 @@ def run_case(task: CaseTask) -> CaseOutcome:
         combination of values, the simulation blows up or the summary is impossible (e.g. an
         empty window); other exceptions propagate.
     """
-    global _interrupted
-    if _interrupted:
-        raise KeyboardInterrupt
-    _prepare_worker()
-    try:
-        # one BLAS/OpenMP thread during the case, whatever the process (a forked worker keeps
-        # the thread pools its parent loaded; the caller's own setting is restored after)
-        with threadpool_limits(limits=1):
-            return _run(task)
-    except KeyboardInterrupt:
-        if multiprocessing.parent_process() is not None:  # a pool worker, not the caller
-            _interrupted = True
-        raise
+    return _in_worker(_run, task)
 
 
 def run_case_group(tasks: list[CaseTask]) -> list[CaseOutcome]:
@@ -211,17 +219,7 @@ def run_case_group(tasks: list[CaseTask]) -> list[CaseOutcome]:
     list of CaseOutcome
         In the order of ``tasks``.
     """
-    global _interrupted
-    if _interrupted:
-        raise KeyboardInterrupt
-    _prepare_worker()
-    try:
-        with threadpool_limits(limits=1):
-            return _run_group(list(tasks))
-    except KeyboardInterrupt:
-        if multiprocessing.parent_process() is not None:
-            _interrupted = True
-        raise
+    return _in_worker(_run_group, list(tasks))
 
 
 def _case_config(case: SweepCase) -> dict:
