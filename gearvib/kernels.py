@@ -848,33 +848,65 @@ def _older_tooth(k, sg, z):
 
 
 @njit(cache=True, inline="always")
-def _slot_stiffness(vals, pv, nu, i, i0, w, nper, pres, shared):
-    """``(idx, wi, kl, kr)`` of pair slot ``i`` with presence ``pres``: its sample ``idx`` on
-    the path grid and weight ``wi`` (path position ``u = frac + i``; the entering pair, ``u <
-    0``, takes the values at ``u = 0``) and its stiffness on both flanks, the pair table at
-    ``pv`` times ``pres`` (a shared table: ``pres``, scaled by :func:`_table_shares`)."""
+def _pair_record(ints, r):
+    """Fields of the pair law of the faulty mesh with record ``ints[r]``
+    (:mod:`gearvib.faults.law`): ``(z1, z2, nu, nper, nslot, ce, sg1, sg2, p1, p2, shared, pv,
+    prv)``, the teeth of the two gears (0: no tooth of its own), path samples, cells per
+    cycle, pair slots, exit cell, pair-counter signs, the offsets of the gears' profile
+    indices in ``ints``, whether the pairs share the mesh table, and the offsets of the pair
+    table and the profiles in ``vals``."""
+    fi0 = ints[H_FINT]
+    fv0 = ints[H_FVAL]
+    return (ints[r + F_Z1], ints[r + F_Z2], ints[r + F_NU], ints[r + F_NPER],
+            ints[r + F_NSLOT], ints[r + F_EXIT], ints[r + F_S1], ints[r + F_S2],
+            fi0 + ints[r + F_PROF1], fi0 + ints[r + F_PROF2], ints[r + F_SHARED] != 0,
+            fv0 + ints[r + F_PAIRV], fv0 + ints[r + F_PROFV])
+
+
+@njit(cache=True, inline="always")
+def _profile_factor(vals, base, nu, idx, wi, k, row):
+    """``k`` times row ``row`` (0: left, 1: right stiffness factor) of the tooth profile whose
+    rows start at ``vals[base]``, at sample ``idx`` with weight ``wi``."""
+    b = _U(base + row * nu + idx)
+    return k * ((1.0 - wi) * vals[b] + wi * vals[b + _U1])
+
+
+@njit(cache=True, inline="always")
+def _slot_pair(ints, vals, pv, prv, nu, p1, p2, z1, z2, k1, k2, i, i0, w, nper, pres, shared):
+    """Pair slot ``i`` (presence ``pres``, teeth ``k1``, ``k2``): ``(idx, wi, kl, kr, q1,
+    q2)``, its sample ``idx`` on the path grid and weight ``wi`` (path position ``u = frac +
+    i``; the entering pair, ``u < 0``, takes the values at ``u = 0``), its stiffness on both
+    flanks (the pair table at ``pv`` times ``pres``, or ``pres`` for a shared table, scaled by
+    :func:`_table_shares`; times the profile factors of both teeth) and where the profile rows
+    of each tooth start in ``vals`` (-1: no profile deviation; rows 2 and 3 hold the gaps)."""
     idx = 0
     wi = 0.0
     if i >= 0:
         idx = i0 + i * nper
         wi = w
     if shared:
-        return idx, wi, pres, pres
-    a = _U(pv + idx)  # offsets and counters >= 0: unsigned, no wraparound
-    c = _U(pv + nu + idx)
-    kl = ((1.0 - wi) * vals[a] + wi * vals[a + _U1]) * pres
-    kr = ((1.0 - wi) * vals[c] + wi * vals[c + _U1]) * pres
-    return idx, wi, kl, kr
-
-
-@njit(cache=True, inline="always")
-def _profile_scaled(vals, base, nu, idx, wi, kl, kr):
-    """``kl``, ``kr`` times the stiffness factors of the tooth profile whose rows start at
-    ``vals[base]`` (left, right; the rows ``base + 2 nu``, ``base + 3 nu`` hold the gaps)."""
-    b0 = _U(base + idx)
-    b1 = _U(base + nu + idx)
-    return (kl * ((1.0 - wi) * vals[b0] + wi * vals[b0 + _U1]),
-            kr * ((1.0 - wi) * vals[b1] + wi * vals[b1 + _U1]))
+        kl = pres
+        kr = pres
+    else:
+        a = _U(pv + idx)  # offsets and counters >= 0: unsigned, no wraparound
+        c = _U(pv + nu + idx)
+        kl = ((1.0 - wi) * vals[a] + wi * vals[a + _U1]) * pres
+        kr = ((1.0 - wi) * vals[c] + wi * vals[c + _U1]) * pres
+    q1 = -1
+    q2 = -1
+    if z1 > 0:
+        prof = ints[_U(p1 + k1)]
+        if prof >= 0:
+            q1 = prv + prof * 4 * nu
+            kl = _profile_factor(vals, q1, nu, idx, wi, kl, 0)
+            kr = _profile_factor(vals, q1, nu, idx, wi, kr, 1)
+    if z2 > 0:
+        prof = ints[_U(p2 + k2)]
+        if prof >= 0:
+            q2 = prv + prof * 4 * nu
+            kl = _profile_factor(vals, q2, nu, idx, wi, kl, 0)
+            kr = _profile_factor(vals, q2, nu, idx, wi, kr, 1)
+    return idx, wi, kl, kr, q1, q2
 
 
 @njit(cache=True, inline="always")
@@ -978,24 +1010,10 @@ def _faulty_flanks(ints, vals, tables, m, r, s, d, dd, dr, ddr, el, er, edl, edr
     offsets and their rates (:func:`_deviation_offsets`). Returns ``(f_left, f_right, k_eff,
     state)`` like :func:`flank_forces_two_lines`.
     """
-    fi0 = ints[H_FINT]
-    fv0 = ints[H_FVAL]
-    z1 = ints[r + F_Z1]
-    z2 = ints[r + F_Z2]
-    nu = ints[r + F_NU]
-    nper = ints[r + F_NPER]
-    nslot = ints[r + F_NSLOT]
-    ce = ints[r + F_EXIT]
-    sg1 = ints[r + F_S1]
-    sg2 = ints[r + F_S2]
-    p1 = fi0 + ints[r + F_PROF1]
-    p2 = fi0 + ints[r + F_PROF2]
+    z1, z2, nu, nper, nslot, ce, sg1, sg2, p1, p2, shared, pv, prv = _pair_record(ints, r)
     i0, w, k1, k2 = _pair_cell(ints, r, s, mesh_out, m)
-    shared = ints[r + F_SHARED] != 0
-    pv = fv0 + ints[r + F_PAIRV]
-    prv = fv0 + ints[r + F_PROFV]
-    h1 = fv0 + ints[r + F_SHIFT1V]
-    h2 = fv0 + ints[r + F_SHIFT2V]
+    h1 = ints[H_FVAL] + ints[r + F_SHIFT1V]
+    h2 = ints[H_FVAL] + ints[r + F_SHIFT2V]
     # one pass over the pair slots (the next pair, slot -1, ramps in over the last cell of the
     # cycle, a pair ramps out over the cell that holds the contact ratio, as the table ramps).
     # Shared pairs carry table / psum each: their sums are taken with a unit share and scaled
@@ -1011,25 +1029,24 @@ def _faulty_flanks(ints, vals, tables, m, r, s, d, dd, dr, ddr, el, er, edl, edr
         pres = _presence(i, i0, w, nper, ce)
         if pres > 0.0:
             psum += pres
-            idx, wi, kl, kr = _slot_stiffness(vals, pv, nu, i, i0, w, nper, pres, shared)
+            idx, wi, kl, kr, q1, q2 = _slot_pair(ints, vals, pv, prv, nu, p1, p2, z1, z2, k1,
+                                                 k2, i, i0, w, nper, pres, shared)
             ol = el
             orr = er
-            for g in range(2):
+            for g in range(2):  # the offsets of the pair's two teeth: pitch shift, profile gap
                 if g == 0:
                     if z1 <= 0:
                         continue
                     sh = vals[_U(h1 + k1)]
-                    prof = ints[_U(p1 + k1)]
+                    base = q1
                 else:
                     if z2 <= 0:
                         continue
                     sh = vals[_U(h2 + k2)]
-                    prof = ints[_U(p2 + k2)]
+                    base = q2
                 ol += sh
                 orr += sh
-                if prof >= 0:
-                    base = prv + prof * 4 * nu
-                    kl, kr = _profile_scaled(vals, base, nu, idx, wi, kl, kr)
+                if base >= 0:
                     b2 = _U(base + 2 * nu + idx)
                     b3 = _U(base + 3 * nu + idx)
                     ol -= (1.0 - wi) * vals[b2] + wi * vals[b2 + _U1]
@@ -1080,22 +1097,8 @@ def _stiffness_flanks(ints, vals, tables, m, r, s, d, dd, dr, ddr, half, damping
     :func:`_faulty_flanks` (bit for bit), the force equal to rounding. Returns ``(f_left,
     f_right, k_eff, state)`` like :func:`flank_forces_two_lines`.
     """
-    fi0 = ints[H_FINT]
-    fv0 = ints[H_FVAL]
-    z1 = ints[r + F_Z1]
-    z2 = ints[r + F_Z2]
-    nu = ints[r + F_NU]
-    nper = ints[r + F_NPER]
-    nslot = ints[r + F_NSLOT]
-    ce = ints[r + F_EXIT]
-    sg1 = ints[r + F_S1]
-    sg2 = ints[r + F_S2]
-    p1 = fi0 + ints[r + F_PROF1]
-    p2 = fi0 + ints[r + F_PROF2]
+    z1, z2, nu, nper, nslot, ce, sg1, sg2, p1, p2, shared, pv, prv = _pair_record(ints, r)
     i0, w, k1, k2 = _pair_cell(ints, r, s, mesh_out, m)
-    shared = ints[r + F_SHARED] != 0
-    pv = fv0 + ints[r + F_PAIRV]
-    prv = fv0 + ints[r + F_PROFV]
     psum = 0.0
     ke_l = 0.0
     ke_r = 0.0
@@ -1103,15 +1106,8 @@ def _stiffness_flanks(ints, vals, tables, m, r, s, d, dd, dr, ddr, half, damping
         pres = _presence(i, i0, w, nper, ce)
         if pres > 0.0:
             psum += pres
-            idx, wi, kl, kr = _slot_stiffness(vals, pv, nu, i, i0, w, nper, pres, shared)
-            if z1 > 0:
-                prof = ints[_U(p1 + k1)]
-                if prof >= 0:
-                    kl, kr = _profile_scaled(vals, prv + prof * 4 * nu, nu, idx, wi, kl, kr)
-            if z2 > 0:
-                prof = ints[_U(p2 + k2)]
-                if prof >= 0:
-                    kl, kr = _profile_scaled(vals, prv + prof * 4 * nu, nu, idx, wi, kl, kr)
+            _, _, kl, kr, _, _ = _slot_pair(ints, vals, pv, prv, nu, p1, p2, z1, z2, k1, k2, i,
+                                            i0, w, nper, pres, shared)
             if kl > 0.0:
                 ke_l += kl
             if kr > 0.0:
