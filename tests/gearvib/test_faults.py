@@ -157,6 +157,18 @@ def test_kernel_caches_across_evaluations_give_the_fresh_law() -> None:
     assert worst < 1e-12
 
 
+def _states_along_path(rng, q0, setup):
+    """States along a rigid-body path over many mesh cycles, forwards and backwards (small,
+    negative and large angle increments), with random deflections of four sizes (1e-8 to
+    3e-4) and random speeds: contact loss, back-flank contact and every kind of pair cell."""
+    angles = np.cumsum(np.concatenate([rng.uniform(0.0, 0.003, 300),
+                                       rng.uniform(-0.03, 0.01, 150),
+                                       rng.uniform(0.0, 0.2, 150)]))
+    for i, a in enumerate(angles):
+        q = q0 + setup.rigid * a + rng.normal(0, (1e-8, 1e-6, 1e-4, 3e-4)[i % 4], q0.size)
+        yield np.concatenate([q, setup.rigid * setup.omega0 + rng.normal(0, 1e-3, q0.size)])
+
+
 @pytest.mark.parametrize("preset", ["paper-case1", "paper-case2"])
 def test_mean_offset_law_gives_the_pair_law(preset) -> None:
     """Meshes whose teeth carry pitch offsets only (shared table, no fault profile) take the
@@ -188,18 +200,14 @@ def test_mean_offset_law_gives_the_pair_law(preset) -> None:
         pairs.fault_ints[r + fault_law.R_LAW] = fault_law.LAW_PAIRS
     fast_t, pairs_t = fast.astuple(), pairs.astuple()
     q0, _ = static_equilibrium(fast, setup.mass, setup.rigid, setup.rigid * setup.omega0)
-    angles = np.cumsum(np.concatenate([rng.uniform(0.0, 0.003, 300),
-                                       rng.uniform(-0.03, 0.01, 150),
-                                       rng.uniform(0.0, 0.2, 150)]))
     half = 0.5 * faulty.mesh_backlash
     kept = np.full((faulty.n_mesh, kn.MESH_OUT_COLUMNS), np.nan)
     kept[:, 7] = 1.0
     dy = np.empty(2 * q0.size)
     worst = 0.0
     double = differ = mixed = 0
-    for i, a in enumerate(angles):
-        q = q0 + setup.rigid * a + rng.normal(0, (1e-8, 1e-6, 1e-4, 3e-4)[i % 4], q0.size)
-        y = np.concatenate([q, setup.rigid * setup.omega0 + rng.normal(0, 1e-3, q0.size)])
+    for y in _states_along_path(rng, q0, setup):
+        q = y[: q0.size]
         kn.rhs_loop(y[None, :], 0.0, 1e-5, 1, fast_t, dy, kept)
         dy_ref, ref = kn.evaluate_rhs(0.0, y, pairs_t)
         for m in under:
@@ -306,17 +314,12 @@ def test_stiffness_law_gives_the_pair_law(stiffness) -> None:
                             False).system.astuple()
     rng = np.random.default_rng(11)
     q0, _ = static_equilibrium(fast, setup.mass, setup.rigid, setup.rigid * setup.omega0)
-    angles = np.cumsum(np.concatenate([rng.uniform(0.0, 0.003, 300),
-                                       rng.uniform(-0.03, 0.01, 150),
-                                       rng.uniform(0.0, 0.2, 150)]))
     kept = np.full((faulty.n_mesh, kn.MESH_OUT_COLUMNS), np.nan)
     kept[:, 7] = 1.0
     dy = np.empty(2 * q0.size)
     worst = 0.0
     weakened = off = back = 0
-    for i, a in enumerate(angles):
-        q = q0 + setup.rigid * a + rng.normal(0, (1e-8, 1e-6, 1e-4, 3e-4)[i % 4], q0.size)
-        y = np.concatenate([q, setup.rigid * setup.omega0 + rng.normal(0, 1e-3, q0.size)])
+    for y in _states_along_path(rng, q0, setup):
         kn.rhs_loop(y[None, :], 0.0, 1e-5, 1, fast_t, dy, kept)
         dy_ref, ref = kn.evaluate_rhs(0.0, y, pairs_t)
         _, healthy = kn.evaluate_rhs(0.0, y, healthy_t)
