@@ -28,7 +28,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from gearvib import kernels as kn
-from gearvib import kernels_batch as kb
 from gearvib.config import ConfigError
 from gearvib.model import AssembledModel
 from gearvib.sensors.signal import add_sensor_signals
@@ -465,6 +464,7 @@ def simulate_batch(
         a variant with faults, or a bad argument; the errors of :func:`simulate` for an
         inadmissible variant (prefixed with its index).
     """
+    from gearvib import kernels_batch as kb  # only batches need it (start-up of a single run)
     models = list(models) if not isinstance(models, AssembledModel) else [models]
     if not models:
         raise ValueError("simulate_batch needs at least one model (models is empty)")
@@ -547,6 +547,7 @@ def batch_groups(
     list of list of int
         Indices into ``models``; every index once.
     """
+    from gearvib import kernels_batch as kb  # only batches need it (start-up of a single run)
     models = list(models)
     nv = len(models)
     conds = list(conditions) if isinstance(conditions, list | tuple) else [conditions] * nv
@@ -579,6 +580,7 @@ def batch_groups(
 
 def _run_batch(group: list[_Variant], batch, gyroscopic: bool) -> tuple[list, np.ndarray, list]:
     """The chunked loop of :func:`simulate` on the lanes of one batch."""
+    from gearvib import kernels_batch as kb  # only batches need it (start-up of a single run)
     v0 = group[0]
     step = v0.step
     n, nm = v0.model.n_dof, v0.model.n_mesh
