@@ -16,14 +16,24 @@ Speeds and torques at the input member are positive in the member's positive rot
 (``model.rotation_dofs[model.input_member]``). The load torque at the output member always
 *resists* the forward motion of the output member (the sense of
 ``model.kinematic_ratios[model.output_member]``).
+
+Threads
+-------
+A run is serial: :func:`simulate` and :func:`simulate_batch` run with one BLAS/OpenMP thread
+(``threadpoolctl``). The set-up's small linear algebra gains nothing from more, and
+OpenBLAS's idle threads would otherwise spin on a second core after every call (measured: a
+second process-CPU second per second of a paper-case1 run-up in a loop of runs, none of it
+useful). The arithmetic is that of a sweep worker, which runs the same way.
 """
 
 from __future__ import annotations
 
+import functools
 import math
 import time as _time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from typing import Any, TypeVar
 
 import numpy as np
 
@@ -136,6 +146,24 @@ def _blow_up_message(t: float, code: int, setup: RunSetup, step: StepChoice, gyr
     )
 
 
+
+_F = TypeVar("_F", bound=Any)
+
+
+def _one_blas_thread(func: _F) -> _F:
+    """Run ``func`` with one BLAS/OpenMP thread (module docstring, "Threads")."""
+
+    @functools.wraps(func)
+    def wrapper(*args: Any, **kwargs: Any) -> Any:
+        from threadpoolctl import threadpool_limits  # on demand: ~15 ms of imports
+
+        with threadpool_limits(limits=1):
+            return func(*args, **kwargs)
+
+    return wrapper  # type: ignore[return-value]
+
+
+@_one_blas_thread
 def simulate(
     model: AssembledModel,
     conditions: Conditions,
@@ -408,6 +436,7 @@ def _batch_difference(a: _Variant, b: _Variant) -> str | None:
     return None
 
 
+@_one_blas_thread
 def simulate_batch(
     models: Sequence[AssembledModel],
     conditions: Conditions | Sequence[Conditions],

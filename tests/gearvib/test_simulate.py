@@ -431,3 +431,30 @@ def test_decimation_filter_equals_scipy_firwin_bit_for_bit() -> None:
         assert kaiser_design(att, width) == scipy.signal.kaiserord(att, width)
     with pytest.raises(ValueError, match="width"):
         kaiser_design(85.0, 0.0)
+
+
+def test_simulate_runs_with_one_blas_thread(monkeypatch) -> None:
+    """A run is serial: its set-up's linear algebra runs with one BLAS thread (idle OpenBLAS
+    threads would spin on another core), and the caller's setting is back afterwards."""
+    threadpoolctl = pytest.importorskip("threadpoolctl")
+    import gearvib.simulate as gs
+
+    def blas_threads() -> list[int]:
+        return [p["num_threads"] for p in threadpoolctl.threadpool_info()
+                if p["user_api"] == "blas"]
+
+    seen: list[list[int]] = []
+    original = gs.static_equilibrium
+
+    def spy(*args, **kwargs):
+        seen.append(blas_threads())
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(gs, "static_equilibrium", spy)
+    with threadpoolctl.threadpool_limits(limits=2, user_api="blas"):
+        before = blas_threads()
+        if not before or max(before) < 2:
+            pytest.skip("no BLAS library with a thread pool of its own")
+        simulate(planetary(), SpeedRamp(10, 10, 1e-3, input_torque=1.0), fs_out=20_000)
+        assert blas_threads() == before
+    assert seen and all(n == [1] * len(n) for n in seen), seen
