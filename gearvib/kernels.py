@@ -1214,7 +1214,7 @@ def _add_mesh_forces(dy, ints, vals, mesh_out, m, n, hdr, two_lines, fl, fr, ke,
 
 
 @njit(cache=True, inline="always")
-def _faulty_meshes(y, dy, mesh_out, ints, vals, tables):
+def _faulty_meshes(y, dy, mesh_out, ints, vals, tables, hdr):
     """The meshes with faults under their own law (``mesh_out[m, 7]`` set): forces added to
     ``dy`` and ``mesh_out[m, :7]`` written as in :func:`_rhs`.
 
@@ -1223,10 +1223,10 @@ def _faulty_meshes(y, dy, mesh_out, ints, vals, tables):
     shift the table law; pitch offsets alone take the mean-offset law where it holds
     (:func:`_mean_offset`), stiffness-only tooth faults the stiffness law
     (:func:`_stiffness_flanks`), everything else the pair law (:func:`_faulty_flanks`).
+    ``hdr``: the right-hand side's mesh header (:func:`_mesh_header`), not read again.
     """
     n = _U(ints[H_N])
     n_table = tables.shape[2]
-    hdr = _mesh_header(ints)
     bl = hdr[10]
     mc = hdr[11]
     frec = hdr[19]
@@ -1364,7 +1364,7 @@ def _rhs(t, y, dy, mesh_out, ints, vals, tables, speed_tab, torque_tab):
         _add_mesh_forces(dy, ints, vals, mesh_out, m, n, hdr, two_lines, fl, fr, ke, st, d, s,
                          dr)
     if faulty:
-        _faulty_meshes(y, dy, mesh_out, ints, vals, tables)
+        _faulty_meshes(y, dy, mesh_out, ints, vals, tables, hdr)
 
 
 @njit(cache=True)
