@@ -715,10 +715,11 @@ def _cos_sin_ref(ang, mesh_out, m, term):
     c0 = _U(12 + 3 * term)
     dlt = ang - mesh_out[m, c0]
     if abs(dlt) < ECC_TAYLOR_RANGE:  # NaN (no reference yet) fails the test
-        d2 = dlt * dlt
-        cd = 1.0 - d2 * (0.5 - d2 * (1.0 / 24.0 - d2 * (1.0 / 720.0 - d2 / 40320.0)))
-        sd = dlt * (1.0 - d2 * (1.0 / 6.0 - d2 * (1.0 / 120.0 - d2 * (1.0 / 5040.0
-                                                                        - d2 / 362880.0))))
+        d2 = dlt * dlt  # Estrin's scheme: the powers in parallel with the low terms
+        d4 = d2 * d2
+        cd = (1.0 - d2 * 0.5) + d4 * ((1.0 / 24.0 - d2 * (1.0 / 720.0)) + d4 * (1.0 / 40320.0))
+        sd = dlt * ((1.0 - d2 * (1.0 / 6.0))
+                    + d4 * ((1.0 / 120.0 - d2 * (1.0 / 5040.0)) + d4 * (1.0 / 362880.0)))
         cr = mesh_out[m, c0 + _U1]
         sr = mesh_out[m, c0 + _U(2)]
         return cr * cd - sr * sd, sr * cd + cr * sd

@@ -836,3 +836,27 @@ def test_elastic_pin_error_tends_to_the_rigid_one() -> None:
                   for n in faulty.dof_names])
     np.testing.assert_allclose(res.bearing_force[b], 1e12 * (u @ q - 20e-6), rtol=1e-6,
                                atol=1e-3)
+
+
+def test_eccentricity_cosine_and_sine_from_the_cached_reference() -> None:
+    """The eccentricity's cosine and sine (a Taylor series about a cached reference angle) agree
+    with ``np.cos``/``np.sin`` to rounding over the whole series range, at large angles, for
+    both terms of a mesh, and the same angle as the last one takes the stored values."""
+    rng = np.random.default_rng(7)
+    mesh_out = np.full((2, kn.MESH_OUT_COLUMNS), np.nan)
+    worst = 0.0
+    taylor = 0
+    for ref in rng.uniform(-2e4, 2e4, 40):
+        for term in (0, 1):
+            kn._cos_sin(ref, mesh_out, 1, term)  # a new reference: exact
+            assert mesh_out[1, 12 + 3 * term] == ref
+            for dlt in np.concatenate([rng.uniform(-1, 1, 25) * kn.ECC_TAYLOR_RANGE,
+                                       [0.0, 0.999 * kn.ECC_TAYLOR_RANGE,
+                                        -0.999 * kn.ECC_TAYLOR_RANGE]]):
+                ang = ref + dlt
+                ca, sa = kn._cos_sin(ang, mesh_out, 1, term)
+                worst = max(worst, abs(ca - np.cos(ang)), abs(sa - np.sin(ang)))
+                taylor += mesh_out[1, 12 + 3 * term] == ref  # the reference stayed
+                assert kn._cos_sin(ang, mesh_out, 0, term) == (ca, sa)  # the same angle
+    assert taylor == 40 * 2 * 28
+    assert worst < 6e-16, worst
