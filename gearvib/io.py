@@ -258,11 +258,13 @@ def atomic_write(dest: str | os.PathLike, write: Callable[[Path], T], *,
     Notes
     -----
     The temporary file ``.<name>.gearvib-<host>-<pid>-<token>.tmp``
-    (:func:`gearvib.tempfiles.temp_path`) lives in the destination directory (so
-    ``os.replace`` is an atomic rename on the same file system), is fsync-ed before the rename
-    and is removed on any error, including ``KeyboardInterrupt`` and SIGTERM under the command
-    line; the directory is fsync-ed after the rename where possible. Only SIGKILL can leave
-    it; :func:`gearvib.tempfiles.remove_stale` removes it later.
+    (:func:`gearvib.tempfiles.temp_path`; for an abandonable write the file ``<name>`` in a
+    private folder of that name, which an abandoned writer cannot fill again once removed)
+    lives in the destination directory (so ``os.replace`` is an atomic rename on the same file
+    system), is fsync-ed before the rename and is removed on any error, including
+    ``KeyboardInterrupt`` and SIGTERM under the command line; the directory is fsync-ed after
+    the rename where possible. Only SIGKILL can leave it;
+    :func:`gearvib.tempfiles.remove_stale` removes it later.
     """
     dest = Path(dest)
     directory = dest.parent if str(dest.parent) else Path(".")
@@ -270,9 +272,14 @@ def atomic_write(dest: str | os.PathLike, write: Callable[[Path], T], *,
         raise FileNotFoundError(f"directory of {dest} does not exist")
     if dest.is_dir():
         raise IsADirectoryError(f"{dest} is a directory (give a file name)")
-    tmp = tempfiles.temp_path(dest)
-    tempfiles.register(tmp)
+    temporary = tempfiles.temp_path(dest)
+    # an abandonable write goes into a private folder of that name: once the folder is gone,
+    # the abandoned writer cannot create its file again (tempfiles docstring)
+    tmp = temporary / dest.name if abandonable else temporary
+    tempfiles.register(temporary)
     try:
+        if abandonable:
+            os.mkdir(temporary, 0o700)
         # O_EXCL: never clobber; mode 0o666 so the process umask applies as for a plain open()
         os.close(os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666))
 
@@ -286,14 +293,15 @@ def atomic_write(dest: str | os.PathLike, write: Callable[[Path], T], *,
         check_interrupted()  # nothing is committed after a signal, even a swallowed one
         os.replace(tmp, dest)
     except BaseException as exc:
-        with contextlib.suppress(OSError):
-            tmp.unlink()
+        tempfiles.remove_temporary(temporary)
         if isinstance(exc, Exception):
-            tempfiles.unregister(tmp)
-        # else (an interrupt): abandoned work may still create it; it stays listed for the
-        # removal just before a forced exit (gearvib.interrupts.exit_now)
+            tempfiles.unregister(temporary)
+        # else (an interrupt): it stays listed for the removal just before a forced exit
+        # (gearvib.interrupts.exit_now)
         raise
-    tempfiles.unregister(tmp)
+    if abandonable:
+        tempfiles.remove_temporary(temporary)  # the empty folder
+    tempfiles.unregister(temporary)
     with contextlib.suppress(OSError):  # persist the rename (POSIX); not possible everywhere
         dir_fd = os.open(directory, os.O_RDONLY)
         try:

@@ -1,18 +1,23 @@
 """Temporary files of atomic writes: one recognisable name, and the removal of stale ones.
 
-Every atomic write of gearvib (netCDF runs, reports) writes the whole file to a hidden
-temporary file beside its destination and renames it over the destination when complete. The
-temporary file is named ::
+Every atomic write of gearvib (netCDF runs, reports) writes the whole file to a hidden temporary
+file beside its destination and renames it over the destination when complete. The temporary file
+is named ::
 
     .<destination name>.gearvib-<host>-<pid>-<8 random characters>.tmp
 
-e.g. ``.run.nc.gearvib-ws17-40213-9f3a06c1.tmp``: the host and the process id of the writer
-(the same pattern as :func:`analysis.readers.write_netcdf`, which cannot import this module).
-An error or an interrupt (SIGINT, SIGTERM) removes it; only a process killed with SIGKILL (or
-a power cut) leaves it behind. :func:`remove_stale` removes the temporary files of such dead
-writers: every command that writes into a folder calls it first, so the next run in the same
-folder cleans up. A file is removed only when its host is this host and its process is no
-longer alive (a live writer, or one on another machine sharing the folder, is left alone).
+e.g. ``.run.nc.gearvib-ws17-40213-9f3a06c1.tmp``: the host and the process id of the writer (the
+same pattern as :func:`analysis.readers.write_netcdf`, which cannot import this module). A write
+that runs in a worker thread an interrupt can abandon (netCDF,
+:func:`gearvib.interrupts.run_abandonable`) writes instead into a hidden *folder* of that name,
+which holds the file under its destination name: once the folder is removed, the abandoned writer
+cannot create its file again (a plain temporary file it could re-create between its removal and the
+exit of the process). An error or an interrupt (SIGINT, SIGTERM) removes the file or folder; only a
+process killed with SIGKILL (or a power cut) leaves it behind. :func:`remove_stale` removes the
+temporary files of such dead writers: every command that writes into a folder calls it first, so
+the next run in the same folder cleans up. A file is removed only when its host is this host and
+its process is no longer alive (a live writer, or one on another machine sharing the folder, is
+left alone).
 """
 
 from __future__ import annotations
@@ -34,6 +39,7 @@ __all__ = [
     "register",
     "remove_own",
     "remove_stale",
+    "remove_temporary",
     "temp_path",
     "unregister",
 ]
@@ -115,11 +121,37 @@ def remove_stale(directory: str | os.PathLike) -> list[Path]:
         info = parse(p)
         if info is None or info[1] != host or pid_alive(info[2]):
             continue
-        with contextlib.suppress(OSError):
-            if p.is_file() and not p.is_symlink():
-                p.unlink()
-                removed.append(p)
+        if remove_temporary(p):
+            removed.append(p)
     return removed
+
+
+def remove_temporary(path: str | os.PathLike, attempts: int = 100) -> bool:
+    """Remove a temporary file, or a temporary folder with the files in it; True if removed.
+
+    A folder whose abandoned writer creates its file again meanwhile is emptied again, up to
+    ``attempts`` times; once the folder is gone nothing can be created in it. Symbolic links
+    are never followed. Safe in a signal handler (no lock; errors are swallowed).
+    """
+    p = Path(path)
+    for _ in range(attempts):
+        try:
+            if p.is_symlink() or not p.exists():
+                return False
+            if not p.is_dir():
+                p.unlink()
+                return True
+            for entry in os.scandir(p):
+                with contextlib.suppress(OSError):
+                    if entry.is_dir(follow_symlinks=False):
+                        os.rmdir(entry.path)
+                    else:
+                        os.unlink(entry.path)
+            os.rmdir(p)
+            return True
+        except OSError:
+            continue  # not empty any more (the writer created its file again): again
+    return False
 
 
 def register(path: Path) -> None:
@@ -141,5 +173,4 @@ def remove_own() -> None:
     paths = list(_OWN)
     _OWN.clear()
     for p in paths:
-        with contextlib.suppress(OSError):
-            p.unlink()
+        remove_temporary(p)

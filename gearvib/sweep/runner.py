@@ -153,8 +153,7 @@ def batch_units(tasks: list[CaseTask], workers: int, batch: bool | None
 
 def _remove_stale_temporaries(runs: Path) -> None:
     for p in runs.glob(".*.nc.*.tmp"):  # left by a killed worker (atomic_write's temporaries)
-        with contextlib.suppress(OSError):
-            p.unlink()
+        tempfiles.remove_temporary(p)
 
 
 def run_sweep(sweep: Sweep, out_dir: str | os.PathLike, *, workers: int | None = None,

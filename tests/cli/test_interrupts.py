@@ -185,8 +185,12 @@ def test_remove_stale_keeps_live_and_foreign_files(tmp_path):
     unrelated = tmp_path / ".d.nc.0123456789abcdef.tmp"
     for p in (stale, live, other, unrelated):
         p.write_bytes(b"")
+    folder = tmp_path / f".e.nc.gearvib-{host}-{pid}-4567cdef.tmp"  # of an abandonable write
+    folder.mkdir()
+    (folder / "e.nc").write_bytes(b"partial")
     assert not tempfiles.pid_alive(pid)
-    assert tempfiles.remove_stale(tmp_path) == [stale]
+    assert tempfiles.remove_stale(tmp_path) == [stale, folder]
+    assert not folder.exists()
     assert live.exists() and other.exists() and unrelated.exists()
     t = tempfiles.temp_path(tmp_path / "run.nc")
     assert tempfiles.parse(t) == ("run.nc", host, os.getpid())

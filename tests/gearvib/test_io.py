@@ -121,3 +121,71 @@ def test_read_errors_name_the_path(tmp_path: Path) -> None:
     xr.Dataset({"x": ("t", np.arange(3.0))}).to_netcdf(other, engine="netcdf4")
     with pytest.raises(GearvibFileError, match=r"other\.nc.*not a gearvib file"):
         read_run(other)
+
+
+def test_an_abandoned_write_cannot_leave_its_temporary_file(tmp_path: Path) -> None:
+    """An interrupt abandons a netCDF write in its worker thread; the writer may create its
+    file only after the interrupt's clean-up (CI saw a SIGTERM leave one). The write goes
+    into a private folder that the clean-up removes, so the late create fails and nothing is
+    left. The old layout (a plain temporary file) let the late writer re-create it."""
+    import _thread
+    import threading
+    import time
+
+    from gearvib import tempfiles
+    from gearvib.io import atomic_write
+
+    release = threading.Event()
+    outcome: list[object] = []
+
+    def late_writer(tmp: Path) -> None:
+        release.wait(10.0)  # until the main thread has cleaned up after the interrupt
+        try:
+            tmp.write_bytes(b"late")  # what netCDF4.Dataset(tmp, "w") does: create anew
+            outcome.append("created")
+        except OSError as exc:
+            outcome.append(exc)
+
+    threading.Timer(0.2, _thread.interrupt_main).start()
+    dest = tmp_path / "run.nc"
+    with pytest.raises(KeyboardInterrupt):
+        atomic_write(dest, late_writer, abandonable=True)
+    release.set()
+    t0 = time.monotonic()
+    while not outcome and time.monotonic() - t0 < 10.0:
+        time.sleep(0.01)
+    assert outcome and isinstance(outcome[0], FileNotFoundError), outcome
+    assert list(tmp_path.iterdir()) == []
+    tempfiles.remove_own()  # what the command line's exit does: nothing left to remove
+
+
+def test_remove_temporary_empties_a_folder_that_is_being_refilled(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import os
+
+    from gearvib import tempfiles
+
+    folder = tmp_path / ".run.nc.gearvib-host-1-0123abcd.tmp"
+    folder.mkdir()
+    (folder / "run.nc").write_bytes(b"x")
+    refills: list[int] = []
+    real_rmdir = os.rmdir
+
+    def refilling_rmdir(path, *args, **kwargs):  # the writer re-creates its file twice
+        if len(refills) < 2:
+            refills.append(1)
+            (folder / "run.nc").write_bytes(b"again")
+        return real_rmdir(path, *args, **kwargs)
+
+    monkeypatch.setattr(os, "rmdir", refilling_rmdir)
+    assert tempfiles.remove_temporary(folder)
+    monkeypatch.undo()
+    assert len(refills) == 2 and not folder.exists()
+    link = tmp_path / ".x.nc.gearvib-host-1-0123abcd.tmp"
+    target = tmp_path / "keep"
+    target.mkdir()
+    (target / "file").write_bytes(b"k")
+    link.symlink_to(target)
+    assert not tempfiles.remove_temporary(link)  # never follows a link
+    assert (target / "file").exists()
