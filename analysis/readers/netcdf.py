@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
 import tempfile
@@ -140,19 +141,37 @@ def write_netcdf(ds: xr.Dataset, path: str | os.PathLike[str], *, compress: bool
                 enc.update(zlib=True, complevel=4, shuffle=True)
         encoding[str(v)] = enc
     directory = target.parent if str(target.parent) else Path(".")
-    # the temporary file is named like gearvib's (.<name>.gearvib-<host>-<pid>-<8 chars>.tmp),
-    # so that the next gearvib command in the folder removes it after a SIGKILL
-    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.gearvib-{_host()}-{os.getpid()}-",
-                               suffix=".tmp", dir=directory)
-    os.close(fd)
+    # a private temporary folder named like gearvib's temporary files (.<name>.gearvib-<host>-
+    # <pid>-<8 chars>.tmp: the next gearvib command in the folder removes it after a SIGKILL)
+    # holds the file; once it is removed, a write abandoned by an interrupt cannot create the
+    # file again (a plain temporary file it could re-create after its removal)
+    folder = Path(tempfile.mkdtemp(prefix=f".{target.name}.gearvib-{_host()}-{os.getpid()}-",
+                                   suffix=".tmp", dir=directory))
+    tmp = folder / target.name
     try:
+        os.close(os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666))
         _abandonable(out.to_netcdf, tmp, engine="netcdf4", format="NETCDF4", encoding=encoding)
         os.replace(tmp, target)
     except BaseException:
-        if os.path.exists(tmp):
-            os.remove(tmp)
+        _remove_folder(folder)
         raise
+    _remove_folder(folder)
     return target
+
+
+def _remove_folder(folder: Path, attempts: int = 100) -> None:
+    """Remove a temporary folder and the files in it, again while a writer refills it."""
+    for _ in range(attempts):
+        try:
+            for entry in os.scandir(folder):
+                with contextlib.suppress(OSError):
+                    os.unlink(entry.path)
+            os.rmdir(folder)
+            return
+        except FileNotFoundError:
+            return
+        except OSError:
+            continue
 
 
 def _host() -> str:

@@ -168,6 +168,37 @@ def test_netcdf_write_is_atomic(sample, tmp_path, monkeypatch):
     assert sorted(os.listdir(tmp_path)) == ["rec.nc"]
 
 
+def test_netcdf_write_abandoned_by_an_interrupt_leaves_nothing(sample, tmp_path, monkeypatch):
+    """A write that an interrupt abandons in its worker thread may create its file only after
+    the clean-up; the private temporary folder is gone by then, so the late create fails (the
+    old plain temporary file was re-created and stayed)."""
+    import _thread
+    import threading
+    import time
+
+    release = threading.Event()
+    outcome: list[object] = []
+
+    def late(self, path, **kwargs):
+        release.wait(10.0)
+        try:
+            Path(path).write_bytes(b"late")
+            outcome.append("created")
+        except OSError as exc:
+            outcome.append(exc)
+
+    monkeypatch.setattr(xr.Dataset, "to_netcdf", late)
+    threading.Timer(0.2, _thread.interrupt_main).start()
+    with pytest.raises(KeyboardInterrupt):
+        write_netcdf(sample, tmp_path / "rec.nc")
+    release.set()
+    t0 = time.monotonic()
+    while not outcome and time.monotonic() - t0 < 10.0:
+        time.sleep(0.01)
+    assert outcome and isinstance(outcome[0], FileNotFoundError), outcome
+    assert os.listdir(tmp_path) == []
+
+
 def test_netcdf_corrupt_file(sample, tmp_path):
     path = write_netcdf(sample, tmp_path / "rec.nc")
     cut = tmp_path / "cut.nc"
