@@ -873,6 +873,20 @@ def _profile_factor(vals, base, nu, idx, wi, k, row):
 
 
 @njit(cache=True, inline="always")
+def _tooth_profile(ints, vals, prv, nu, p, k, idx, wi, kl, kr):
+    """``(q, kl, kr)`` for tooth ``k`` of a gear whose profile indices start at ``ints[p]``:
+    where its profile rows start in ``vals`` (-1: a healthy profile) and the pair stiffness
+    ``kl``, ``kr`` times its stiffness factors at sample ``idx``, weight ``wi``."""
+    q = -1
+    prof = ints[_U(p + k)]
+    if prof >= 0:
+        q = prv + prof * 4 * nu
+        kl = _profile_factor(vals, q, nu, idx, wi, kl, 0)
+        kr = _profile_factor(vals, q, nu, idx, wi, kr, 1)
+    return q, kl, kr
+
+
+@njit(cache=True, inline="always")
 def _slot_pair(ints, vals, pv, prv, nu, p1, p2, z1, z2, k1, k2, i, i0, w, nper, pres, shared):
     """Pair slot ``i`` (presence ``pres``, teeth ``k1``, ``k2``): ``(idx, wi, kl, kr, q1,
     q2)``, its sample ``idx`` on the path grid and weight ``wi`` (path position ``u = frac +
@@ -896,17 +910,9 @@ def _slot_pair(ints, vals, pv, prv, nu, p1, p2, z1, z2, k1, k2, i, i0, w, nper, 
     q1 = -1
     q2 = -1
     if z1 > 0:
-        prof = ints[_U(p1 + k1)]
-        if prof >= 0:
-            q1 = prv + prof * 4 * nu
-            kl = _profile_factor(vals, q1, nu, idx, wi, kl, 0)
-            kr = _profile_factor(vals, q1, nu, idx, wi, kr, 1)
+        q1, kl, kr = _tooth_profile(ints, vals, prv, nu, p1, k1, idx, wi, kl, kr)
     if z2 > 0:
-        prof = ints[_U(p2 + k2)]
-        if prof >= 0:
-            q2 = prv + prof * 4 * nu
-            kl = _profile_factor(vals, q2, nu, idx, wi, kl, 0)
-            kr = _profile_factor(vals, q2, nu, idx, wi, kr, 1)
+        q2, kl, kr = _tooth_profile(ints, vals, prv, nu, p2, k2, idx, wi, kl, kr)
     return idx, wi, kl, kr, q1, q2
 
 
