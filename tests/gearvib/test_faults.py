@@ -157,6 +157,16 @@ def test_kernel_caches_across_evaluations_give_the_fresh_law() -> None:
     assert worst < 1e-12
 
 
+def _with_pair_law(system, meshes, law):
+    """A copy of a kernel system whose ``meshes`` (under the fast ``law``, asserted) take the
+    pair-by-pair law instead: the reference of the fast laws."""
+    pairs = copy.deepcopy(system)
+    for r in pairs.fault_records[meshes]:
+        assert pairs.fault_ints[r + fault_law.R_LAW] == law
+        pairs.fault_ints[r + fault_law.R_LAW] = fault_law.LAW_PAIRS
+    return pairs
+
+
 def _states_along_path(rng, q0, setup):
     """States along a rigid-body path over many mesh cycles, forwards and backwards (small,
     negative and large angle increments), with random deflections of four sizes (1e-8 to
@@ -194,10 +204,7 @@ def test_mean_offset_law_gives_the_pair_law(preset) -> None:
     under = [m for m, fm in law.meshes.items() if fm.offsets_only]
     assert under == [0, 1, 2, 3]  # the sun meshes and planet1's ring mesh
     fast = setup.system
-    pairs = copy.deepcopy(fast)
-    for r in pairs.fault_records[under]:
-        assert pairs.fault_ints[r + fault_law.R_LAW] == fault_law.LAW_MEAN_OFFSET
-        pairs.fault_ints[r + fault_law.R_LAW] = fault_law.LAW_PAIRS
+    pairs = _with_pair_law(fast, under, fault_law.LAW_MEAN_OFFSET)
     fast_t, pairs_t = fast.astuple(), pairs.astuple()
     q0, _ = static_equilibrium(fast, setup.mass, setup.rigid, setup.rigid * setup.omega0)
     half = 0.5 * faulty.mesh_backlash
@@ -305,10 +312,7 @@ def test_stiffness_law_gives_the_pair_law(stiffness) -> None:
     assert under == [0, 2, 3]  # the sun meshes of planets 1 and 3, planet1's ring mesh
     assert not law.meshes[1].stiffness_only  # pitting: a gap on the path
     fast = setup.system
-    pairs = copy.deepcopy(fast)
-    for r in pairs.fault_records[under]:
-        assert pairs.fault_ints[r + fault_law.R_LAW] == fault_law.LAW_STIFFNESS
-        pairs.fault_ints[r + fault_law.R_LAW] = fault_law.LAW_PAIRS
+    pairs = _with_pair_law(fast, under, fault_law.LAW_STIFFNESS)
     fast_t, pairs_t = fast.astuple(), pairs.astuple()
     healthy_t = prepare_run(model, SpeedRamp(1000, 1000, 1.0, input_torque=60.0),
                             False).system.astuple()
