@@ -14,10 +14,9 @@ from gearvib import kernels_batch as kb
 from gearvib.assembly import assemble
 from gearvib.config import gearset_from_dict, load_config
 from gearvib.faults import Crack
-from gearvib.simulate import SpeedRamp, TorqueDriven, prepare_run, static_equilibrium
+from gearvib.simulate import SpeedRamp, TorqueDriven, prepare_run
 from gearvib.sweep.keys import set_path
-
-RAMP = SpeedRamp(1500.0, 2500.0, 1.0, input_torque=60.0)
+from tests.gearvib.batch_support import RAMP, start_state
 
 
 def _variant(preset: str, damping: float, radial: float | None = None):
@@ -28,20 +27,11 @@ def _variant(preset: str, damping: float, radial: float | None = None):
     return assemble(gearset_from_dict(d, base=base))
 
 
-def _start(model, cond=RAMP):
-    """Kernel system and static-equilibrium state of a run (as simulate() prepares them)."""
-    setup = prepare_run(model, cond, False)
-    qd0 = setup.rigid * setup.omega0
-    q0, _ = static_equilibrium(setup.system, setup.mass, setup.rigid, qd0)
-    setup.system.deflection_limit[:] = 1.0
-    return setup.system, np.concatenate([q0, qd0])
-
-
 @pytest.fixture(scope="module")
 def elastic_variants():
     models = [_variant("paper-case1-elastic", 0.005 * (1 + k), 1.5e8 * (1 + 0.05 * k))
               for k in range(4)]
-    return [_start(m) for m in models]
+    return [start_state(m) for m in models]
 
 
 def _assert_batch_equals_singles(systems, y0, dt, n_steps):
@@ -82,14 +72,14 @@ def test_batch_with_different_sub_steps_per_variant(elastic_variants):
 
 def test_batch_of_one_and_of_the_rigid_model():
     models = [_variant("paper-case1", 0.005 * (1 + k)) for k in range(2)]
-    runs = [_start(m) for m in models]
+    runs = [start_state(m) for m in models]
     _assert_batch_equals_singles([s for s, _ in runs], [y for _, y in runs], 1e-5, 300)
     _assert_batch_equals_singles([runs[0][0]], [runs[0][1]], 1e-5, 100)
 
 
 def test_topology_differences_are_named(elastic_variants):
     elastic = elastic_variants[0][0]
-    rigid, _ = _start(_variant("paper-case1", 0.005))
+    rigid, _ = start_state(_variant("paper-case1", 0.005))
     with pytest.raises(ValueError, match=r"variant 1 .*number of coordinates"):
         kb.pack_batch([elastic, rigid])
     torque = prepare_run(_variant("paper-case1-elastic", 0.005),
@@ -118,7 +108,7 @@ def _elastic(damping: float, radial: float | None = None, k_max: float | None = 
         d = set_path(d, "bodies.planet.support.radial", radial)
     if k_max is not None:
         d = set_path(d, "meshes.sun.stiffness.k_max", k_max)
-    return _start(assemble(gearset_from_dict(d, base=base)))
+    return start_state(assemble(gearset_from_dict(d, base=base)))
 
 
 def test_full_batch_and_more_than_one_batch(elastic_variants):

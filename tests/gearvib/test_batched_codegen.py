@@ -20,18 +20,8 @@ from gearvib import kernels_batch as kb
 from gearvib.assembly import assemble
 from gearvib.batch_codegen import rhs_source
 from gearvib.config import gearset_from_dict, load_config, load_gearset
-from gearvib.simulate import SpeedRamp, prepare_run, static_equilibrium
 from gearvib.sweep.keys import set_path
-
-RAMP = SpeedRamp(1500.0, 2500.0, 1.0, input_torque=60.0)
-
-
-def _start(model, gyroscopic=False):
-    setup = prepare_run(model, RAMP, gyroscopic)
-    qd0 = setup.rigid * setup.omega0
-    q0, _ = static_equilibrium(setup.system, setup.mass, setup.rigid, qd0)
-    setup.system.deflection_limit[:] = 1.0
-    return setup.system, np.concatenate([q0, qd0])
+from tests.gearvib.batch_support import start_state
 
 
 def _preset_variants(preset: str, radial: bool = False):
@@ -41,14 +31,14 @@ def _preset_variants(preset: str, radial: bool = False):
         d = set_path(cfg, "meshes.sun.damping_ratio", 0.005 * (1 + k))
         if radial:
             d = set_path(d, "bodies.planet.support.radial", 1.5e8 * (1 + 0.05 * k))
-        runs.append(_start(assemble(gearset_from_dict(d, base=base))))
+        runs.append(start_state(assemble(gearset_from_dict(d, base=base))))
     return runs
 
 
 def _other_topology():
     """Another gear set with the gyroscopic and centripetal terms on: variants of the mesh
     damping and of the bearing stiffness (scaled, so every operator differs per lane)."""
-    system, y0 = _start(assemble(load_gearset("two-stage-example")), gyroscopic=True)
+    system, y0 = start_state(assemble(load_gearset("two-stage-example")), gyroscopic=True)
     assert system.ipar[kn.IP_GYRO] == 1
     runs = []
     for k in range(3):
