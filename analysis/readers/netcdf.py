@@ -160,7 +160,8 @@ def write_netcdf(ds: xr.Dataset, path: str | os.PathLike[str], *, compress: bool
 
 
 def _remove_folder(folder: Path, attempts: int = 100) -> None:
-    """Remove a temporary folder and the files in it, again while a writer refills it."""
+    """Remove a temporary folder and the files in it, again while a writer refills it (as
+    ``gearvib.tempfiles.remove_temporary``, which this package cannot import)."""
     for _ in range(attempts):
         try:
             for entry in os.scandir(folder):
