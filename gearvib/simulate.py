@@ -23,7 +23,9 @@ A run is serial: :func:`simulate` and :func:`simulate_batch` run with one BLAS/O
 (``threadpoolctl``). The set-up's small linear algebra gains nothing from more, and
 OpenBLAS's idle threads would otherwise spin on a second core after every call (measured: a
 second process-CPU second per second of a paper-case1 run-up in a loop of runs, none of it
-useful). The arithmetic is that of a sweep worker, which runs the same way.
+useful). The arithmetic is that of a sweep worker, which runs the same way. The limit is set
+through one controller per process (:func:`analysis.threads.one_blas_thread`; finding the
+libraries at every call would cost 1-2 ms per run).
 """
 
 from __future__ import annotations
@@ -37,6 +39,7 @@ from typing import Any, TypeVar
 
 import numpy as np
 
+from analysis.threads import one_blas_thread
 from gearvib import kernels as kn
 from gearvib.config import ConfigError
 from gearvib.model import AssembledModel
@@ -155,9 +158,7 @@ def _one_blas_thread(func: _F) -> _F:
 
     @functools.wraps(func)
     def wrapper(*args: Any, **kwargs: Any) -> Any:
-        from threadpoolctl import threadpool_limits  # on demand: ~15 ms of imports
-
-        with threadpool_limits(limits=1):
+        with one_blas_thread():
             return func(*args, **kwargs)
 
     return wrapper  # type: ignore[return-value]

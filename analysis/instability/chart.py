@@ -35,6 +35,7 @@ import scipy.optimize
 from analysis.checks import require_finite, require_monotonic, require_positive
 from analysis.instability.floquet import floquet
 from analysis.instability.theory import Candidates
+from analysis.threads import one_blas_thread
 
 __all__ = ["ATTRIBUTION_RTOL", "StabilityChart", "attribute_region", "chart_chunk",
            "stability_chart", "terminate_pool"]
@@ -284,15 +285,10 @@ def terminate_pool(pool: Executor) -> None:
 
 
 def _one_thread() -> Any:
-    """One BLAS/OpenMP thread (threadpoolctl) while a chunk is evaluated, wherever it runs: no
-    oversubscription by workers, and the same arithmetic in this process and in any worker."""
-    try:
-        from threadpoolctl import threadpool_limits
-    except ImportError:  # pragma: no cover - a required dependency of gearvib
-        import contextlib
-
-        return contextlib.nullcontext()
-    return threadpool_limits(limits=1)
+    """One BLAS/OpenMP thread (:func:`analysis.threads.one_blas_thread`) while a chunk is
+    evaluated, wherever it runs: no oversubscription by workers, and the same arithmetic in
+    this process and in any worker."""
+    return one_blas_thread()
 
 
 def _evaluate_point(system_at: SystemAt, f: float, p: Any, opts: dict) -> tuple:

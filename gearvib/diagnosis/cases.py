@@ -19,9 +19,9 @@ from dataclasses import dataclass
 
 import numpy as np
 import xarray as xr
-from threadpoolctl import threadpool_limits
 
 from analysis.diagnosis import order_profile
+from analysis.threads import one_blas_thread
 from gearvib.config import ConfigError
 from gearvib.io import write_netcdf
 from gearvib.simulate import SimulationError, simulate
@@ -97,7 +97,7 @@ def profile_case(settings: ProfileSettings, task: CaseTask) -> CaseOutcome:
     t0 = time.perf_counter()
     case = task.case
     try:
-        with threadpool_limits(limits=1):
+        with one_blas_thread():
             model = build_case(case)
             prof = profile_path(task.run_path, settings)
             if os.path.isfile(prof) and finished_run_exists(task.run_path):

@@ -29,10 +29,10 @@ from pathlib import Path
 from typing import Any
 
 import xarray as xr
-from threadpoolctl import threadpool_limits
 
 from analysis.fft import set_workers
 from analysis.readers.ncimage import open_image
+from analysis.threads import one_blas_thread
 from gearvib.assembly import assemble
 from gearvib.config import ConfigError, gearset_from_dict
 from gearvib.io import read_run, write_netcdf
@@ -172,7 +172,7 @@ def _in_worker(fn: Callable[[Any], Any], arg: Any) -> Any:
         raise KeyboardInterrupt
     _prepare_worker()
     try:
-        with threadpool_limits(limits=1):
+        with one_blas_thread():
             return fn(arg)
     except KeyboardInterrupt:
         if multiprocessing.parent_process() is not None:  # a pool worker, not the caller
