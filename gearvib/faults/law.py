@@ -227,8 +227,8 @@ class FaultedMesh:
     @property
     def has_teeth(self) -> bool:
         """Some tooth of the mesh has a fault profile or a pitch deviation."""
-        return any(self.z[g] > 0 and (np.any(self.profile[g] >= 0) or np.any(self.shift[g]))
-                   for g in (0, 1))
+        return any(self.z[g] > 0 and (bool((self.profile[g] >= 0).any())
+                                      or bool(self.shift[g].any())) for g in (0, 1))
 
     def faulty_pair(self, j: int) -> bool:
         """Pair ``j`` has a tooth with a fault profile."""
@@ -487,6 +487,7 @@ class FaultLaw:
             share_l = ((1.0 - w) * tl[i0] + w * tl[i1]) / psum
             share_r = ((1.0 - w) * tr[i0] + w * tr[i1]) / psum
         out = []
+        teeth = fm.has_teeth  # once per call (it scans the teeth)
         for i, p in zip(slots, pres, strict=True):
             if p <= 0.0:
                 continue
@@ -501,7 +502,7 @@ class FaultLaw:
             else:
                 kl, kr = at(fm.pair_left) * p, at(fm.pair_right) * p
             dl, dr = el, er
-            if fm.has_teeth:
+            if teeth:
                 for g in (0, 1):
                     if fm.z[g] == 0:
                         continue
@@ -763,18 +764,21 @@ def _events(model: AssembledModel, fm: FaultedMesh) -> None:
     of the pairs it shares the load with, and its own entry and exit.
     """
     n_per = fm.n_per
-    healthy_l = healthy_pair(model, fm)
-    healthy_r = healthy_pair(model, fm, back=True)
-    span = float(max(np.ptp(healthy_l), np.ptp(healthy_r), 0.0))
     # the cells where pairs ramp in (the cycle's last) and out (the one holding eps)
     ramp = {(n_per - 1) / n_per, 0.0, (fm.exit_cell % n_per) / n_per,
             ((fm.exit_cell + 1) % n_per) / n_per}
     cycle: set[float] = set(ramp) if fm.always else set()
+    sides = [g for g in (0, 1) if fm.z[g] > 0 and np.any(fm.profile[g] >= 0)]
+    if fm.shared and not sides:  # mesh-wide deviations, pitch offsets: no pair curves needed
+        fm.cycle_jumps = np.array(sorted(cycle), dtype=float)
+        return
+    healthy_l = healthy_pair(model, fm)
+    healthy_r = healthy_pair(model, fm, back=True)
+    span = float(max(np.ptp(healthy_l), np.ptp(healthy_r), 0.0))
     if not fm.shared:
         cycle |= {(i % n_per) / n_per for i in _jump_cells(healthy_l, span)
                   | _jump_cells(healthy_r, span)}
     fm.cycle_jumps = np.array(sorted(cycle), dtype=float)
-    sides = [g for g in (0, 1) if fm.z[g] > 0 and np.any(fm.profile[g] >= 0)]
     if not sides:
         return
     period = 1
