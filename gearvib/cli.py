@@ -741,10 +741,12 @@ def prepare_process(argv: Sequence[str]) -> None:
       directory holds a ``.numba_config.yaml``: numba imports it (0.015 s) only to read that
       file.
     * ``simulate``: :mod:`analysis.jit` (numba's cache folder, which :mod:`gearvib.kernels`
-      prepares) is loaded without the package :mod:`analysis`, whose import registers its
-      xarray accessor and so imports xarray and pandas (0.4 s) in a command that writes its
-      run with netCDF4 directly (:class:`gearvib.cfdata.PlainDataset`). The module is the
-      same file under its own name; a later ``import analysis`` works as usual.
+      prepares) and :mod:`analysis.threads` (the one-thread BLAS limit of
+      :func:`gearvib.simulate.simulate`) are loaded without the package :mod:`analysis`,
+      whose import registers its xarray accessor and so imports xarray and pandas (0.4 s) in
+      a command that writes its run with netCDF4 directly
+      (:class:`gearvib.cfdata.PlainDataset`). Each module is the same file under its own
+      name; a later ``import analysis`` works as usual.
 
     Only the console script does this (its process ends with the command), never
     :func:`main`, which may run inside a user's program.
@@ -761,6 +763,7 @@ def prepare_process(argv: Sequence[str]) -> None:
     if not os.path.exists(".numba_config.yaml"):  # numba's config file, read from the cwd
         sys.modules.setdefault("yaml", None)  # type: ignore[arg-type]
     _load_without_package("analysis.jit")
+    _load_without_package("analysis.threads")
 
 
 def _load_without_package(name: str) -> None:

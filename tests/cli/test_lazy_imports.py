@@ -83,6 +83,7 @@ def test_simulate_command_imports_nothing_it_does_not_need(tmp_path):
     for name in ("dask", "distributed", "cffi"):  # hidden: sys.modules holds None for them
         assert name in state["hidden"] and name not in top
     assert "analysis.jit" in mods  # numba's cache folder (gearvib.kernels), without the package
+    assert "analysis.threads" in mods  # simulate()'s one BLAS thread, without the package
 
 
 @pytest.mark.parametrize(("argv", "env", "expected"), [
