@@ -4,13 +4,13 @@ Run ``python3 benchmarks/bench_faults.py [--quick]``. For ``paper-case1`` (three
 planets) and ``paper-case2`` (unequal spacing), a 1 s run-up 0 -> 4000 min^-1 at 60 N m is
 simulated healthy and with one housing sensor, one sensor and one local fault (a 30 % crack of
 sun tooth 3), the same crack at severity 0 (the pair law runs, the dynamics stay those of the
-healthy set), a pitting zone on a planet tooth, the eccentricity of the sun, pitch errors on
-every sun tooth and a planet pin error. Every variant runs interleaved with the others, each
-timed by the process CPU time (the machine is shared); each round's times are divided by the
-same round's healthy run and the median of these paired ratios is reported (with the best
-time), which is robust against the load of a shared machine; the quartiles and the extremes
-of the paired ratios and the load average before and after show how far to trust it. Where
-the load makes times too noisy, count work instead (instructions under callgrind, one
+healthy set), the same tooth broken, a pitting zone on a planet tooth, the eccentricity of the
+sun, pitch errors on every sun tooth and a planet pin error. Every variant runs interleaved
+with the others, each timed by the process CPU time (the machine is shared); each round's times
+are divided by the same round's healthy run and the median of these paired ratios is reported
+(with the best time), which is robust against the load of a shared machine; the quartiles and
+the extremes of the paired ratios and the load average before and after show how far to trust
+it. Where the load makes times too noisy, count work instead (instructions under callgrind, one
 OpenBLAS thread; docs/faults-sensors.md).
 
 Why some faults cost more than others:
@@ -42,7 +42,7 @@ import numpy as np
 
 from gearvib.assembly import assemble
 from gearvib.config import load_gearset
-from gearvib.faults import Crack, Eccentricity, PinError, PitchError, Pitting
+from gearvib.faults import BrokenTooth, Crack, Eccentricity, PinError, PitchError, Pitting
 from gearvib.sensors import HousingMode, HousingSensor
 from gearvib.simulate import SpeedRamp, simulate
 
@@ -60,6 +60,8 @@ def variants(preset: str) -> list[tuple[str, object]]:
         ("1 sensor + sun crack 30 %", model.with_faults([Crack("sun", 3, severity=0.3)])
          .with_sensors(sensor)),
         ("1 sensor + sun crack, severity 0", model.with_faults([Crack("sun", 3, severity=0.0)])
+         .with_sensors(sensor)),
+        ("1 sensor + sun broken tooth", model.with_faults([BrokenTooth("sun", 3)])
          .with_sensors(sensor)),
         ("1 sensor + planet pitting", model.with_faults(
             [Pitting("planet1", 5, severity=0.5, path_start=0.3, path_end=0.6, depth=2e-6)])
