@@ -149,7 +149,6 @@ def _blow_up_message(t: float, code: int, setup: RunSetup, step: StepChoice, gyr
     )
 
 
-
 _F = TypeVar("_F", bound=Any)
 
 

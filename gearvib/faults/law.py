@@ -769,15 +769,13 @@ def _events(model: AssembledModel, fm: FaultedMesh) -> None:
             ((fm.exit_cell + 1) % n_per) / n_per}
     cycle: set[float] = set(ramp) if fm.always else set()
     sides = [g for g in (0, 1) if fm.z[g] > 0 and np.any(fm.profile[g] >= 0)]
-    if fm.shared and not sides:  # mesh-wide deviations, pitch offsets: no pair curves needed
-        fm.cycle_jumps = np.array(sorted(cycle), dtype=float)
-        return
-    healthy_l = healthy_pair(model, fm)
-    healthy_r = healthy_pair(model, fm, back=True)
-    span = float(max(np.ptp(healthy_l), np.ptp(healthy_r), 0.0))
-    if not fm.shared:
-        cycle |= {(i % n_per) / n_per for i in _jump_cells(healthy_l, span)
-                  | _jump_cells(healthy_r, span)}
+    if sides or not fm.shared:  # the healthy pair curves (not needed for deviations alone)
+        healthy_l = healthy_pair(model, fm)
+        healthy_r = healthy_pair(model, fm, back=True)
+        span = float(max(np.ptp(healthy_l), np.ptp(healthy_r), 0.0))
+        if not fm.shared:
+            cycle |= {(i % n_per) / n_per for i in _jump_cells(healthy_l, span)
+                      | _jump_cells(healthy_r, span)}
     fm.cycle_jumps = np.array(sorted(cycle), dtype=float)
     if not sides:
         return
