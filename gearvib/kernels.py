@@ -29,6 +29,10 @@ is loaded or none is (:func:`_mean_offset`), stiffness-only tooth faults (crack,
 tooth) by the table law with the pairs' summed stiffness (:func:`_stiffness_flanks`), else
 tooth pair by tooth pair (:func:`_faulty_flanks`); its force acts along the same vectors.
 Healthy meshes never enter that path, so runs without faults are unchanged bit for bit.
+:func:`gearvib.simulate.simulate` runs that pass as straight-line code generated and compiled
+for the fault configuration (:mod:`gearvib.fault_pass`; its address in ``ints[H_FPASS]``,
+called by :func:`_call_pass`): the same floating-point operations without the sparse loops,
+record reads and law dispatch. A packed system without that address takes the generic pass.
 
 Drive (``ipar[IP_MODE]``):
 
@@ -81,7 +85,9 @@ from __future__ import annotations
 from dataclasses import dataclass, fields
 
 import numpy as np
-from numba import njit
+from llvmlite import ir
+from numba import njit, types
+from numba.extending import intrinsic
 
 from analysis.jit import prepare_cache
 
@@ -278,7 +284,11 @@ _FLOAT_BLOCKS = (
 ) = range(H_LP + len(_INT_BLOCKS), H_LP + len(_INT_BLOCKS) + len(_FLOAT_BLOCKS))
 H_NI = H_FVAL + 1  # number of entries of the sparse input column
 H_NO = H_FVAL + 2  # ... and of the output column
-N_HEADER = H_FVAL + 3
+#: Address of the faulty-mesh pass compiled for this system (:mod:`gearvib.fault_pass`), 0:
+#: the generic pass. Set only in the process that runs the kernel (an address is no value
+#: to pickle): :func:`pack` writes 0.
+H_FPASS = H_FVAL + 3
+N_HEADER = H_FVAL + 4
 
 # record of a faulty mesh in the fault integer block (gearvib.faults.law.FaultLaw.pack); int
 # entries that are offsets point into the fault int block or (``*V``) the fault float block
@@ -1282,6 +1292,24 @@ def _faulty_meshes(y, dy, mesh_out, ints, vals, tables, hdr):
         _add_mesh_forces(dy, ints, vals, mesh_out, m, n, hdr, two_lines, fl, fr, ke, st, d, s,
                          dr)
 
+@intrinsic
+def _call_pass(typingctx, address, y, dy, mesh_out, ints, vals, tables):
+    """Call the compiled faulty-mesh pass at ``address``: a C function of the data pointers
+    of ``y, dy, mesh_out, ints, vals, tables`` and the lengths of ``ints`` and ``vals``
+    (:mod:`gearvib.fault_pass`). An indirect call with plain pointers and integers: a compiled
+    numba function would take every array as a struct."""
+    sig = types.void(address, y, dy, mesh_out, ints, vals, tables)
+
+    def codegen(context, builder, signature, args):
+        arrays = [context.make_array(ty)(context, builder, val)
+                  for ty, val in zip(signature.args[1:], args[1:], strict=True)]
+        params = [a.data for a in arrays] + [arrays[3].nitems, arrays[4].nitems]
+        fnty = ir.FunctionType(ir.VoidType(), [p.type for p in params])
+        builder.call(builder.inttoptr(args[0], fnty.as_pointer()), params)
+        return context.get_dummy_value()
+
+    return sig, codegen
+
 
 @njit(cache=True, _nrt=False)
 def _rhs(t, y, dy, mesh_out, ints, vals, tables, speed_tab, torque_tab):
@@ -1371,7 +1399,11 @@ def _rhs(t, y, dy, mesh_out, ints, vals, tables, speed_tab, torque_tab):
         _add_mesh_forces(dy, ints, vals, mesh_out, m, n, hdr, two_lines, fl, fr, ke, st, d, s,
                          dr)
     if faulty:
-        _faulty_meshes(y, dy, mesh_out, ints, vals, tables, hdr)
+        fpass = ints[H_FPASS]
+        if fpass != 0:  # the pass compiled for this system's faults
+            _call_pass(fpass, y, dy, mesh_out, ints, vals, tables)
+        else:
+            _faulty_meshes(y, dy, mesh_out, ints, vals, tables, hdr)
 
 
 @njit(cache=True)
@@ -1809,3 +1841,9 @@ insert_split = _insert_split
 need_interval = _need_interval  # for tests
 speed_at = _speed_at
 table_at = _table_at
+# ... and the pieces a generated faulty-mesh pass calls (:mod:`gearvib.fault_pass`)
+interp_cell = _interp_cell
+cos_sin = _cos_sin
+mean_offset = _mean_offset
+faulty_flanks = _faulty_flanks
+stiffness_flanks = _stiffness_flanks

@@ -42,6 +42,7 @@ import numpy as np
 from analysis.threads import one_blas_thread
 from gearvib import kernels as kn
 from gearvib.config import ConfigError
+from gearvib.fault_pass import with_fault_pass
 from gearvib.model import AssembledModel
 from gearvib.sensors.signal import add_sensor_signals
 from gearvib.simulation.conditions import (
@@ -248,7 +249,7 @@ def simulate(
     status = np.zeros(2, dtype=np.int64)
     flank_state = np.full(nm, -1, dtype=np.int64)
     changes = np.zeros(nm, dtype=np.int64)
-    sys_tuple = system.astuple()
+    sys_tuple = with_fault_pass(system.astuple())  # its faults' pass compiled (or generic)
     rigid = setup.rigid
 
     def reference(times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
