@@ -50,6 +50,7 @@ __all__ = [
     "dependency_digest",
     "pass_address",
     "pass_source",
+    "specialised_folder",
     "with_fault_pass",
 ]
 
