@@ -1292,6 +1292,7 @@ def _faulty_meshes(y, dy, mesh_out, ints, vals, tables, hdr):
         _add_mesh_forces(dy, ints, vals, mesh_out, m, n, hdr, two_lines, fl, fr, ke, st, d, s,
                          dr)
 
+
 @intrinsic
 def _call_pass(typingctx, address, y, dy, mesh_out, ints, vals, tables):
     """Call the compiled faulty-mesh pass at ``address``: a C function of the data pointers

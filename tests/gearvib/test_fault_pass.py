@@ -112,7 +112,7 @@ def test_one_source_per_structure() -> None:
 
     def source(faults):
         _, generic, _ = _packed(base.with_faults(faults))
-        return fp.pass_source(*generic[:3])
+        return fp.pass_source(generic[0], generic[2])
 
     crack = source([Crack("sun", 3, severity=0.3)])
     assert crack == source([Crack("sun", 3, severity=0.3)])
@@ -128,12 +128,12 @@ def test_one_source_per_structure() -> None:
 def test_no_faults_or_generic_requested_keep_the_generic_pass(monkeypatch) -> None:
     base = assemble(load_gearset("paper-case1"))
     _, healthy, _ = _packed(base)
-    assert fp.pass_address(*healthy[:3]) == 0
+    assert fp.pass_address(healthy[0], healthy[2]) == 0
     with pytest.raises(ValueError, match="no faulty mesh"):
-        fp.pass_source(*healthy[:3])
+        fp.pass_source(healthy[0], healthy[2])
     _, faulty, _ = _packed(base.with_faults([Crack("sun", 3, severity=0.3)]))
     monkeypatch.setenv(fp.PASS_ENV, "Generic ")
-    assert fp.pass_address(*faulty[:3]) == 0
+    assert fp.pass_address(faulty[0], faulty[2]) == 0
 
 
 def test_an_unwritable_folder_gives_the_generic_pass_with_a_warning(monkeypatch,
@@ -145,7 +145,7 @@ def test_an_unwritable_folder_gives_the_generic_pass_with_a_warning(monkeypatch,
     model = assemble(load_gearset("paper-case1")).with_faults([Crack("sun", 3, severity=0.3)])
     generic = prepare_run(model, COND, False).system.astuple()
     with pytest.warns(RuntimeWarning, match="generic pass"):
-        assert fp.pass_address(*generic[:3]) == 0
+        assert fp.pass_address(generic[0], generic[2]) == 0
     assert list(tmp_path.iterdir()) == [blocker]  # nothing written
 
 
@@ -161,6 +161,6 @@ def test_a_source_numba_refuses_gives_the_generic_pass_with_a_warning(monkeypatc
     model = assemble(load_gearset("paper-case1")).with_faults([Crack("sun", 3, severity=0.3)])
     generic = prepare_run(model, COND, False).system.astuple()
     with pytest.warns(RuntimeWarning, match="generic pass"):
-        assert fp.pass_address(*generic[:3]) == 0
+        assert fp.pass_address(generic[0], generic[2]) == 0
     assert not any(str(getattr(mod, "__file__", None) or "").startswith(str(tmp_path))
                    for mod in list(sys.modules.values()))  # the failed module not registered
