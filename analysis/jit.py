@@ -9,6 +9,14 @@ decorates its functions: if numba would find no writable place, it points numba 
 (``NUMBA_CACHE_DIR``): ``$XDG_CACHE_HOME/gearvib/numba`` or ``~/.cache/gearvib/numba``,
 else ``<tempdir>/gearvib-numba-<user>``. A ``NUMBA_CACHE_DIR`` set by the user is always
 respected.
+
+Only private folders are used (:func:`private_folder`): owned by this user, a real directory
+(not a symbolic link) and not writable by group or others; the folders made here are made with
+mode 0700. numba's cache index is a pickle and gearvib loads generated Python modules from the
+cache (:mod:`gearvib.kernels_batch`, :mod:`gearvib.fault_pass`), so a folder another local user
+can write to (say ``/tmp/gearvib-numba-<user>`` planted with mode 777) would let that user run
+code as this one: such a folder is skipped with a :class:`UnsafeCacheWarning`. When no private
+folder is left, a new private temporary folder serves this process (compiled again next time).
 """
 
 from __future__ import annotations
@@ -20,18 +28,74 @@ import sys
 import tempfile
 from pathlib import Path
 
-__all__ = ["cache_candidates", "prepare_cache"]
+__all__ = ["UnsafeCacheWarning", "cache_candidates", "prepare_cache", "private_folder"]
+
+
+class UnsafeCacheWarning(UserWarning):
+    """A cache folder was skipped because another user could write to it."""
+
+
+def private_folder(folder: str | os.PathLike[str], *, create: bool = True) -> bool:
+    """Whether ``folder`` is private to this user: a directory (not a symbolic link) owned by
+    the current user and writable by nobody else.
+
+    Parameters
+    ----------
+    folder : path-like
+        The folder.
+    create : bool
+        Make it (and missing parents) with mode 0700 when it does not exist.
+
+    Returns
+    -------
+    bool
+        ``False`` for a folder that is missing (and not created), a symbolic link, a file,
+        owned by another user or writable by group or others. On systems without POSIX
+        ownership (Windows) every existing directory counts as private.
+    """
+    path = Path(folder)
+    if create and not os.path.lexists(path):
+        with contextlib.suppress(OSError):
+            os.makedirs(path, mode=0o700, exist_ok=True)
+    try:
+        st = os.lstat(path)
+    except OSError:
+        return False
+    import stat
+
+    if not stat.S_ISDIR(st.st_mode):
+        return False
+    if not hasattr(os, "getuid"):
+        return True
+    return st.st_uid == os.getuid() and not st.st_mode & (stat.S_IWGRP | stat.S_IWOTH)
 
 
 def _writable(folder: Path) -> bool:
-    """Whether a file can be created in ``folder`` (created if missing), as numba checks."""
+    """Whether a file can be created in ``folder`` (made with mode 0700 if missing), as numba
+    checks."""
     try:
-        folder.mkdir(parents=True, exist_ok=True)
+        if not folder.exists():
+            os.makedirs(folder, mode=0o700, exist_ok=True)
         with tempfile.TemporaryFile(dir=folder):
             pass
     except OSError:
         return False
     return True
+
+
+def _usable(folder: Path) -> bool:
+    """Writable and private; an existing folder that is writable but not private is skipped
+    with a warning."""
+    if not _writable(folder):
+        return False
+    if private_folder(folder, create=False):
+        return True
+    import warnings
+
+    warnings.warn(f"gearvib: numba cache folder {folder} skipped: it is not private to this "
+                  "user (owned by another user, a symbolic link, or writable by others)",
+                  UnsafeCacheWarning, stacklevel=3)
+    return False
 
 
 def _user() -> str:
@@ -74,16 +138,23 @@ def prepare_cache(source_file: str) -> str | None:
     """
     if os.environ.get("NUMBA_CACHE_DIR"):
         return None
-    if _writable(Path(source_file).resolve().parent / "__pycache__"):
+    here = Path(source_file).resolve().parent / "__pycache__"
+    if _writable(here) and private_folder(here, create=False):
         return None
     own = _numba_user_cache()
-    if own is not None and _writable(own):
-        return None
+    if own is not None and _usable(own):
+        # numba's second choice; named explicitly when its first (``here``) is writable but
+        # not private, else numba would take that
+        return _use(own) if _writable(here) else None
     for folder in cache_candidates():
-        if _writable(folder):
-            os.environ["NUMBA_CACHE_DIR"] = str(folder)
-            config = sys.modules.get("numba.core.config")
-            if config is not None:  # numba already imported: its config was read then
-                config.CACHE_DIR = str(folder)
-            return str(folder)
-    return None
+        if _usable(folder):
+            return _use(folder)
+    return _use(Path(tempfile.mkdtemp(prefix="gearvib-numba-")))  # mode 0700, this process
+
+
+def _use(folder: Path) -> str:
+    os.environ["NUMBA_CACHE_DIR"] = str(folder)
+    config = sys.modules.get("numba.core.config")
+    if config is not None:  # numba already imported: its config was read then
+        config.CACHE_DIR = str(folder)
+    return str(folder)

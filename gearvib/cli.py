@@ -16,6 +16,7 @@ Each subcommand is one ``_cmd_<name>(args)`` function and one block in :func:`_p
 from __future__ import annotations
 
 import argparse
+import contextlib
 import math
 import signal
 import sys
@@ -450,6 +451,13 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
         return 0
     if not args.output:
         raise CliError("gearvib sweep: -o/--output DIR is required (the output folder)")
+    from gearvib.outputs import check_output_folder
+
+    # the summary and the report follow the output rule of every command; finished case runs
+    # (DIR/runs) are always reused: an interrupted sweep resumes without --overwrite
+    _report_removed(check_output_folder(
+        args.output, ["sweep.nc"] + ([] if args.no_report else ["sweep.html"]),
+        overwrite=args.overwrite)[1])
     client = None
     executor = None
     if args.scheduler:
@@ -492,6 +500,14 @@ _revolutions = _int_range(4, 256)
 
 _OVERWRITE_HELP = ("replace existing output files (atomically, once the new ones are "
                    "complete); without it an existing output is an error")
+
+
+def _add_output_options(p: argparse.ArgumentParser, output_help: str, *,
+                        required: bool = False, default: str | None = None) -> None:
+    """The options every command that writes files has: ``-o``, ``-f`` and ``-q``."""
+    p.add_argument("-o", "--output", required=required, default=default, help=output_help)
+    p.add_argument("-f", "--overwrite", action="store_true", help=_OVERWRITE_HELP)
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress display")
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -543,8 +559,7 @@ def _parser() -> argparse.ArgumentParser:
                        "torque) and write tooth forces, bearing forces, displacements and "
                        "speeds as a CF netCDF4 file.")
     s.add_argument("config", help="TOML file or preset name")
-    s.add_argument("-o", "--output", required=True, help="output .nc file")
-    s.add_argument("-f", "--overwrite", action="store_true", help=_OVERWRITE_HELP)
+    _add_output_options(s, "output .nc file", required=True)
     s.add_argument("--speed", type=_speed_range, metavar="START:END",
                    help="input speed range [min-1], e.g. 0:4000")
     s.add_argument("--duration", type=_limits(1e-6, 1e7), metavar="S",
@@ -559,7 +574,6 @@ def _parser() -> argparse.ArgumentParser:
     s.add_argument("--max-steps", type=_steps, default=None, metavar="N",
                    help="time budget: refuse runs of more internal steps (default 1e9, about "
                    "50 min for a small set)")
-    s.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     s.set_defaults(func=_cmd_simulate)
 
     pr = sub.add_parser("preset", help="list the built-in gear sets, or print one's TOML",
@@ -580,12 +594,10 @@ def _parser() -> argparse.ArgumentParser:
     r.add_argument("--gearset", metavar="CONFIG", help="gear set of a measurement (TOML file "
                    "or preset name)")
     _add_speed_options(r)
-    r.add_argument("-o", "--output", default="gearvib-report", help="output folder "
-                   "(default ./gearvib-report)")
-    r.add_argument("-f", "--overwrite", action="store_true", help=_OVERWRITE_HELP)
+    _add_output_options(r, "output folder (default ./gearvib-report)",
+                        default="gearvib-report")
     r.add_argument("--duration", type=_limits(1e-6, 1e7), metavar="S",
                    help="override the run-up duration of a study [s]")
-    r.add_argument("-q", "--quiet", action="store_true", help="no progress display")
     r.set_defaults(func=_cmd_report)
 
     g = sub.add_parser("diagnose", help="fault-cause diagnosis of a measurement (simulation "
@@ -603,9 +615,8 @@ def _parser() -> argparse.ArgumentParser:
     g.add_argument("--baseline", metavar="HEALTHY", help="a measurement of the healthy gearbox "
                    "with the same sensor (default: the healthy simulation)")
     _add_speed_options(g)
-    g.add_argument("-o", "--output", default="gearvib-diagnosis", help="output folder "
-                   "(default ./gearvib-diagnosis)")
-    g.add_argument("-f", "--overwrite", action="store_true", help=_OVERWRITE_HELP)
+    _add_output_options(g, "output folder (default ./gearvib-diagnosis)",
+                        default="gearvib-diagnosis")
     g.add_argument("--workers", type=_workers, metavar="N", help="local worker processes of "
                    "the candidate simulations (default: the CPUs available)")
     g.add_argument("--threshold", type=_limits(0.0, 1.0, strict=True), default=None,
@@ -616,7 +627,6 @@ def _parser() -> argparse.ArgumentParser:
                    "orders; default 16)")
     g.add_argument("--json", action="store_true", help='print {"threshold": ..., "causes": '
                    '[{"cause", "member", "score", "evidence"}, ...]}, best first')
-    g.add_argument("-q", "--quiet", action="store_true", help="no progress display")
     g.set_defaults(func=_cmd_diagnose)
     cp = sub.add_parser("compare", help="a measurement against a simulated run (HTML, PDF, "
                         "netCDF)", description="Compare a measurement with a simulated run "
@@ -631,9 +641,8 @@ def _parser() -> argparse.ArgumentParser:
     cp.add_argument("measured", help="measurement file (any readable format)")
     cp.add_argument("simulated", help="simulated run (.nc; a virtual sensor and a tacho are "
                     "optional)")
-    cp.add_argument("-o", "--output", default="gearvib-compare", help="output folder "
-                    "(default ./gearvib-compare)")
-    cp.add_argument("-f", "--overwrite", action="store_true", help=_OVERWRITE_HELP)
+    _add_output_options(cp, "output folder (default ./gearvib-compare)",
+                        default="gearvib-compare")
     cp.add_argument("--gearset", metavar="CONFIG", help="the model (TOML file or preset; "
                     "default: the gear set stored in the simulated run)")
     _add_speed_options(cp)
@@ -655,12 +664,9 @@ def _parser() -> argparse.ArgumentParser:
                        description="Simulate the paper's cases 1 (planets at 120 deg) and 2 "
                        "(0, 122.45, 244.90 deg), 0 -> 4000 min-1 in 1 s at constant input "
                        "torque, and write the netCDF runs and an order-analysis report.")
-    d.add_argument("-o", "--output", default="gearvib-demo",
-                   help="output folder (default ./gearvib-demo)")
-    d.add_argument("-f", "--overwrite", action="store_true", help=_OVERWRITE_HELP)
+    _add_output_options(d, "output folder (default ./gearvib-demo)", default="gearvib-demo")
     d.add_argument("--duration", type=_limits(1e-6, 1e7), metavar="S",
                    help="run-up duration [s] (default 1; shorter for a quick look)")
-    d.add_argument("-q", "--quiet", action="store_true", help="no progress display")
     d.set_defaults(func=_cmd_demo)
 
     w = sub.add_parser("sweep", help="parameter sweep: many runs, one summary (sweep.nc)",
@@ -670,7 +676,7 @@ def _parser() -> argparse.ArgumentParser:
                        "(resumable), the combined summary DIR/sweep.nc and the report "
                        "DIR/sweep.html. See docs/sweeps.md.")
     w.add_argument("sweep", help="sweep description (.toml)")
-    w.add_argument("-o", "--output", help="output folder (required unless --list)")
+    _add_output_options(w, "output folder (required unless --list)")
     w.add_argument("--workers", type=_workers, metavar="N",
                    help="local worker processes (default: the CPUs available; 1 runs in this "
                    "process)")
@@ -682,7 +688,6 @@ def _parser() -> argparse.ArgumentParser:
                    "10; where nothing listens the sweep fails at once)")
     w.add_argument("--list", action="store_true", help="print the cases and exit")
     w.add_argument("--no-report", action="store_true", help="write sweep.nc only")
-    w.add_argument("-q", "--quiet", action="store_true", help="no progress display")
     w.set_defaults(func=_cmd_sweep)
     return p
 
@@ -811,9 +816,28 @@ def hide_unused_modules(argv: Sequence[str]) -> None:
         sys.modules.setdefault(name, None)  # type: ignore[arg-type]
 
 
+EXIT_BROKEN_PIPE = 128 + 13
+"""Exit code when the reader of the output went away (``gearvib ... | head``): 128 + SIGPIPE,
+what the shell reports for a Unix tool ended by that signal; nothing is printed."""
+
+
+def _quiet_broken_pipe() -> int:
+    """Point stdout at ``/dev/null`` (the interpreter's final flush must not fail again)."""
+    import os
+
+    with contextlib.suppress(OSError, ValueError):
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+    return EXIT_BROKEN_PIPE
+
+
 def _run_command(argv: Sequence[str] | None) -> int:
     try:
         code = _main(argv)
+        sys.stdout.flush()  # a closed pipe shows here at the latest
+    except BrokenPipeError:
+        return _quiet_broken_pipe()
     except BaseException as exc:
         sig = pending_signal()
         if sig is None and isinstance(exc, KeyboardInterrupt):
@@ -847,6 +871,8 @@ def _main(argv: Sequence[str] | None) -> int:
         warnings.showwarning = _show_warning
         try:
             return int(args.func(args) or 0)
+        except BrokenPipeError:
+            raise
         except Exception as exc:
             sig = pending_signal()
             if sig is not None:  # an interrupt that library code turned into another error
@@ -879,9 +905,25 @@ def _show_warning(message, category, filename, lineno, file=None, line=None) -> 
     print(f"gearvib: warning: {_one_line(message)}", file=sys.stderr)
 
 
+MAX_WORD = 80
+"""Longest run of non-blank characters an error message shows whole (longer ones are cut)."""
+
+MAX_MESSAGE = 1000
+"""Longest error message printed [characters]; the rest is cut."""
+
+
+def _cut(word: str) -> str:
+    if len(word) <= MAX_WORD:
+        return word
+    return f"{word[:MAX_WORD - 24]}...[{len(word)} characters]{word[-6:]}"
+
+
 def _one_line(exc: BaseException | Warning | str) -> str:
-    """The message on one line, control characters escaped (messages may echo input)."""
-    text = " ".join(str(exc).split())
+    """The message on one line, control characters escaped and long values cut (messages may
+    echo input: a word longer than :data:`MAX_WORD` characters keeps its start and end, the
+    message at most :data:`MAX_MESSAGE`)."""
+    text = " ".join(_cut(w) for w in str(exc).split())
     if not text:
         return type(exc).__name__
-    return "".join(c if c.isprintable() else repr(c)[1:-1] for c in text)
+    text = "".join(c if c.isprintable() else repr(c)[1:-1] for c in text)
+    return text if len(text) <= MAX_MESSAGE else text[:MAX_MESSAGE - 3] + "..."

@@ -48,6 +48,8 @@ __all__ = [
     "MAX_LIST",
     "MAX_PLANETS",
     "MAX_TEETH",
+    "MAX_TOML_BYTES",
+    "MAX_TOML_DEPTH",
     "ConfigError",
     "check_keys",
     "config_hash",
@@ -57,6 +59,7 @@ __all__ = [
     "load_gearset",
     "preset_text",
     "preset_titles",
+    "read_toml",
 ]
 
 
@@ -791,6 +794,108 @@ def preset_titles() -> dict[str, str]:
             list_presets()}
 
 
+MAX_TOML_BYTES = 16 * 2**20
+"""Largest description file read (16 MiB; a gear set, study or sweep needs a few kB)."""
+
+MAX_TOML_DEPTH = 64
+"""Deepest nesting of arrays and inline tables accepted in a description file."""
+
+
+def _nesting_depth(text: str) -> int:
+    """Deepest nesting of ``[``/``{`` outside strings and comments (an upper bound: table
+    headers ``[a]`` count one level)."""
+    depth = deepest = 0
+    quote = ""
+    i, n = 0, len(text)
+    while i < n:
+        c = text[i]
+        if quote:
+            if c == "\\" and quote == '"':
+                i += 2
+                continue
+            if text.startswith(quote, i):
+                i += len(quote)
+                quote = ""
+                continue
+        elif c == "#":
+            j = text.find("\n", i)
+            i = n if j < 0 else j
+            continue
+        elif c in "\"'":
+            quote = c * 3 if text.startswith(c * 3, i) else c
+            i += len(quote)
+            continue
+        elif c in "[{":
+            depth += 1
+            deepest = max(deepest, depth)
+        elif c in "]}":
+            depth = max(depth - 1, 0)
+        i += 1
+    return deepest
+
+
+def read_toml(path: str | Path, what: str = "file") -> dict:
+    """Read a TOML file with errors that name it and never a traceback.
+
+    Parameters
+    ----------
+    path : path-like
+        The file.
+    what : str
+        What the file is, for the message (``"configuration file"``, ``"sweep file"``, ...).
+
+    Returns
+    -------
+    dict
+        The parsed document.
+
+    Raises
+    ------
+    ConfigError
+        The file is missing or unreadable, larger than :data:`MAX_TOML_BYTES`, not UTF-8,
+        invalid TOML, nested deeper than :data:`MAX_TOML_DEPTH` or holds an integer with more
+        digits than Python converts (the message names the file, and the line where known).
+    """
+    p = Path(path)
+    if not is_file(p):
+        raise ConfigError(f"{what} {_short(str(p))} not found")
+    try:
+        size = p.stat().st_size
+        if size > MAX_TOML_BYTES:
+            raise ConfigError(f"{p}: {size} bytes; admissible: a description file of at most "
+                              f"{MAX_TOML_BYTES // 2**20} MiB")
+        text = p.read_text(encoding="utf-8")
+    except UnicodeDecodeError as exc:
+        raise ConfigError(f"{p}: not a UTF-8 text file ({exc.reason})") from None
+    except OSError as exc:
+        raise ConfigError(f"{p}: cannot be read ({exc.strerror or exc})") from None
+    if _nesting_depth(text) > MAX_TOML_DEPTH:
+        raise ConfigError(f"{p}: arrays or inline tables nested deeper than "
+                          f"{MAX_TOML_DEPTH} levels; admissible: at most {MAX_TOML_DEPTH}")
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"{p}: invalid TOML: {exc}") from None
+    except ValueError as exc:  # an integer beyond Python's digit limit (int_max_str_digits)
+        raise ConfigError(f"{p}: {_long_integer(text) or _short(str(exc))}") from None
+    except RecursionError:
+        raise ConfigError(f"{p}: nested too deeply to be read") from None
+
+
+def _long_integer(text: str) -> str:
+    """Where the first integer of more than 4300 digits is, as ``line N (key)``."""
+    import re
+
+    m = re.search(r"[0-9_]{4300,}", text)
+    if m is None:
+        return ""
+    line = text.count("\n", 0, m.start()) + 1
+    start = text.rfind("\n", 0, m.start()) + 1
+    key = text[start:m.start()].split("=")[0].strip()
+    return (f"line {line}{f' ({_short(key)})' if key else ''}: an integer of "
+            f"{m.end() - m.start()} digits; admissible: at most 4300 digits")
+
+
 def load_config(name_or_path: str | Path) -> tuple[dict, Path | None]:
     """Read a description from a TOML file or a preset name.
 
@@ -801,12 +906,7 @@ def load_config(name_or_path: str | Path) -> tuple[dict, Path | None]:
     """
     p = Path(name_or_path)
     if p.suffix == ".toml" or exists(p):
-        if not is_file(p):
-            raise ConfigError(f"configuration file {str(p)!r} not found")
-        try:
-            return tomllib.loads(p.read_text(encoding="utf-8")), p.parent
-        except tomllib.TOMLDecodeError as exc:
-            raise ConfigError(f"{p}: invalid TOML: {exc}") from None
+        return read_toml(p, "configuration file"), p.parent
     name = str(name_or_path)
     if name not in list_presets():
         raise ConfigError(

@@ -214,7 +214,9 @@ def signals_as_exceptions(grace: float = GRACE_SECONDS) -> Iterator[None]:
     ``except:`` clauses) cannot make the command go on -- no output is committed after it
     (:func:`gearvib.io.atomic_write` checks), and a watchdog thread exits the process with
     ``128 + signum`` after ``grace`` seconds if it is still running, removing this process's
-    temporary files. A second signal exits at once the same way. A signal that is ignored when
+    temporary files. A second signal exits at once the same way. The signal's exception raised
+    where it cannot propagate (a finalizer, a weakref callback) is not printed: the command's
+    one-line message is the only output of an interrupt. A signal that is ignored when
     the block starts (e.g. SIGHUP under ``nohup``, SIGINT of a background job) stays ignored.
     Outside the main thread the block changes nothing. The previous handlers are restored at
     the end.
@@ -234,6 +236,17 @@ def signals_as_exceptions(grace: float = GRACE_SECONDS) -> Iterator[None]:
                          name="gearvib-interrupt-watchdog").start()
         raise Interrupted(signum)
 
+    previous_hook = sys.unraisablehook
+
+    def quiet_interrupts(unraisable: object) -> None:
+        # the signal's exception raised inside a finalizer or a weakref callback cannot
+        # propagate; Python would print it with a traceback ("Exception ignored in ...")
+        # before the command's one line. The signal is pending: the command ends anyway.
+        if isinstance(getattr(unraisable, "exc_value", None), Interrupted) and _PENDING:
+            return
+        previous_hook(unraisable)  # type: ignore[arg-type]
+
+    sys.unraisablehook = quiet_interrupts
     previous = {}
     for s in _signals():
         old = signal.getsignal(s)
@@ -245,6 +258,7 @@ def signals_as_exceptions(grace: float = GRACE_SECONDS) -> Iterator[None]:
         yield
     finally:
         _BLOCK.clear()  # a watchdog of this block does nothing any more
+        sys.unraisablehook = previous_hook
         for s, old in previous.items():
             with contextlib.suppress(ValueError, TypeError, OSError):
                 signal.signal(s, old if old is not None else signal.SIG_DFL)

@@ -296,6 +296,9 @@ def atomic_write(dest: str | os.PathLike, write: Callable[[Path], T], *,
         tempfiles.remove_temporary(temporary)
         if isinstance(exc, Exception):
             tempfiles.unregister(temporary)
+            full = _no_space(exc, dest, directory)
+            if full is not None:
+                raise full from None
         # else (an interrupt): it stays listed for the removal just before a forced exit
         # (gearvib.interrupts.exit_now)
         raise
@@ -309,6 +312,38 @@ def atomic_write(dest: str | os.PathLike, write: Callable[[Path], T], *,
         finally:
             os.close(dir_fd)
     return result
+
+
+LOW_SPACE_BYTES = 4 * 2**20
+"""A failed write with less than this left on its file system is reported as a full disk."""
+
+
+def _no_space(exc: Exception, dest: Path, directory: Path) -> OSError | None:
+    """The error to raise when a write failed because its file system is full, else None.
+
+    Libraries do not always say so: HDF5 reports a full disk as ``NetCDF: HDF error``. A write
+    that failed with ``ENOSPC``/``EDQUOT``, or while less than :data:`LOW_SPACE_BYTES` are
+    left (measured after the temporary file was removed), becomes
+    an ``OSError`` (``errno`` ENOSPC) ``"<dest>: No space left on device ..."``.
+    """
+    import errno
+    import shutil
+
+    code = getattr(exc, "errno", None)
+    if code not in (errno.ENOSPC, errno.EDQUOT):
+        try:
+            free = shutil.disk_usage(directory).free
+        except OSError:
+            return None
+        if free >= LOW_SPACE_BYTES:
+            return None
+        detail = f" ({format_bytes(free)} free on its file system when the write failed)"
+    else:
+        detail = ""
+    what = "Disk quota exceeded" if code == errno.EDQUOT else "No space left on device"
+    error = OSError(f"{dest}: {what}{detail}; nothing was written")
+    error.errno = errno.ENOSPC if code is None else code
+    return error
 
 
 def _declared_bytes(nc: netCDF4.Dataset) -> int:

@@ -73,7 +73,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from analysis.jit import prepare_cache
+from analysis.jit import prepare_cache, private_folder
 from gearvib.batch_codegen import RowTerms, rhs_source
 from gearvib.kernels import (
     DRIVE_MOTOR,
@@ -188,6 +188,7 @@ __all__ = [
     "kernel_namespace",
     "kernels_for",
     "pack_batch",
+    "require_private",
     "rhs_loop_batch",
     "rhs_loop_lanes",
     "specialised_folder",
@@ -1106,6 +1107,23 @@ def specialised_folder() -> Path:
     return Path(integrate_lanes._cache._cache_path) / "specialised"
 
 
+def require_private(folder: Path) -> None:
+    """Refuse a folder of generated modules that another user could write to (the folder or
+    its parent not private, :func:`analysis.jit.private_folder`): its modules are executed.
+    The folder is made with mode 0700 where missing.
+
+    Raises
+    ------
+    PermissionError
+        Naming the folder; the callers then run the generic kernels with a warning.
+    """
+    for f in (folder.parent, folder):
+        if not private_folder(f):
+            raise PermissionError(f"folder {f} is not private to this user (owned by another "
+                                  "user, a symbolic link, or writable by others): generated "
+                                  "modules are not written or loaded there")
+
+
 def write_once(path: Path, text: str) -> None:
     """Create ``path`` with ``text`` atomically unless it holds ``text`` already.
 
@@ -1114,12 +1132,12 @@ def write_once(path: Path, text: str) -> None:
     not available, renamed over it. A file with other content (a torn write of an older
     version) is replaced. Sweep workers that generate the same module concurrently thus
     never see a partial file, and an existing file keeps its modification time (numba's
-    cache index of it stays valid).
+    cache index of it stays valid). The folder must be private (:func:`require_private`).
     """
+    require_private(path.parent)
     with contextlib.suppress(OSError):
         if path.read_text() == text:
             return
-    path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.parent / f".{path.name}.{os.getpid()}.{secrets.token_hex(4)}.tmp"
     tmp.write_text(text)
     try:

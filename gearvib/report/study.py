@@ -30,14 +30,13 @@ from __future__ import annotations
 
 import math
 import re
-import tomllib
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
 from gearvib.checks import RECIPE, check_integer, check_number
 from gearvib.checks import short as _short
-from gearvib.config import ConfigError, check_keys, list_presets, load_config
+from gearvib.config import ConfigError, check_keys, list_presets, load_config, read_toml
 from gearvib.memory import require_memory
 from gearvib.simulation.settings import MAX_DURATION, MAX_SPEED_RPM, MAX_TORQUE, MIN_DURATION
 
@@ -437,14 +436,7 @@ def load_study(path: str | Path) -> Study:
         missing gear-set files.
     """
     p = Path(path)
-    if not p.is_file():
-        raise ConfigError(f"study file {str(p)!r} not found")
-    try:
-        doc = tomllib.loads(p.read_text(encoding="utf-8"))
-    except tomllib.TOMLDecodeError as exc:
-        raise ConfigError(f"{p}: invalid TOML: {exc}") from None
-    except UnicodeDecodeError as exc:
-        raise ConfigError(f"{p}: not a UTF-8 text file ({exc.reason})") from None
+    doc = read_toml(p, "study file")
     check_keys(doc, _TOP, f"{p.name} (top level)")
     st = check_keys(doc.get("study", None) if "study" in doc else None, _STUDY, "[study]") \
         if "study" in doc else None

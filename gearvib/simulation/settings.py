@@ -147,6 +147,8 @@ def read_run_settings(sim: Mapping[str, Any] | None,
     """
     if sim is not None and not isinstance(sim, Mapping):
         raise ConfigError(f"[simulation] must be a table, got {type(sim).__name__}")
+    if overrides and any(v is not None for v in overrides.values()):
+        read_run_settings(sim)  # the file's own values are checked too, not only the winners
     table = dict(sim or {})
     unknown = sorted(str(k) for k in set(table) - SIMULATION_KEYS)
     if unknown:

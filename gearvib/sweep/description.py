@@ -36,7 +36,6 @@ import copy
 import itertools
 import math
 import pickle
-import tomllib
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
@@ -45,9 +44,15 @@ import numpy as np
 from scipy import special
 
 from gearvib import __version__
-from gearvib.config import ConfigError, check_keys, config_hash, gearset_from_dict, load_config
+from gearvib.config import (
+    ConfigError,
+    check_keys,
+    config_hash,
+    gearset_from_dict,
+    load_config,
+    read_toml,
+)
 from gearvib.memory import format_bytes, require_memory
-from gearvib.paths import is_file
 from gearvib.simulation.settings import SIMULATION_KEYS, read_run_settings
 from gearvib.sweep.keys import get_path, parse_path, path_units, set_path, value_kind, value_label
 from gearvib.sweep.summary import SummarySettings
@@ -577,14 +582,7 @@ def load_sweep(path: str | Path) -> Sweep:
         Missing file, invalid TOML, unknown or invalid keys (the message names the key).
     """
     p = Path(path)
-    if not is_file(p):
-        raise ConfigError(f"sweep file {str(p)!r} not found")
-    try:
-        d = tomllib.loads(p.read_text(encoding="utf-8"))
-    except tomllib.TOMLDecodeError as exc:
-        raise ConfigError(f"{p}: invalid TOML: {exc}") from None
-    except UnicodeDecodeError as exc:
-        raise ConfigError(f"{p}: not a UTF-8 text file ({exc.reason})") from None
+    d = read_toml(p, "sweep file")
     sweep = sweep_from_dict(d, base_dir=p.resolve().parent)
     if not sweep.title:
         sweep = replace(sweep, title=p.stem)

@@ -10,18 +10,21 @@ file permissions are used instead).
 
 from __future__ import annotations
 
+import getpass
 import os
 import shutil
+import stat
 import subprocess
 import sys
 import textwrap
+import warnings
 from pathlib import Path
 
 import pytest
 
 import analysis
 import gearvib
-from analysis.jit import cache_candidates, prepare_cache
+from analysis.jit import UnsafeCacheWarning, cache_candidates, prepare_cache, private_folder
 
 _SIMULATE = """
 import os, sys
@@ -53,7 +56,7 @@ def _read_only_run(tmp_path: Path, script: str) -> subprocess.CompletedProcess:
         "from numba import njit\n\n@njit(cache=True)\ndef f(x):\n    return x + 1\n"
     )
     home.mkdir()
-    scratch.mkdir()
+    scratch.mkdir(exist_ok=True)
     env = {k: v for k, v in os.environ.items() if not k.startswith(("NUMBA_", "XDG_"))}
     env.update(HOME=str(home), TMPDIR=str(scratch), PYTHONPATH=str(site),
                PYTHONDONTWRITEBYTECODE="1", MPLBACKEND="Agg")  # fmt: skip
@@ -97,3 +100,72 @@ def test_prepare_cache_respects_user_setting_and_writable_trees(tmp_path, monkey
     assert prepare_cache(str(tmp_path / "module.py")) is None  # __pycache__ writable
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))
     assert cache_candidates()[0] == tmp_path / "xdg" / "gearvib" / "numba"
+
+
+NOBODY = 65534
+
+
+def test_a_planted_cache_folder_is_not_used(tmp_path):
+    """Issue 26: with the package and home read-only, another user's folder at the fallback
+    place (``<tmp>/gearvib-numba-<user>``, mode 777) is skipped with a warning; a private
+    folder of this process is used, and nothing is written into the planted one."""
+    scratch = tmp_path / "p" / "scratch"
+    scratch.mkdir(parents=True)
+    planted = scratch / f"gearvib-numba-{getpass.getuser()}"
+    planted.mkdir()
+    planted.chmod(0o777)
+    if os.geteuid() == 0:
+        os.chown(planted, NOBODY, NOBODY)  # another user's folder
+    out = _read_only_run(tmp_path / "p", _SIMULATE)
+    assert out.returncode == 0, out.stderr[-3000:]
+    assert "UnsafeCacheWarning" in out.stderr and str(planted) in out.stderr
+    assert not any(planted.iterdir())
+    cache = Path(out.stdout.split("NUMBA_CACHE_DIR=")[1].split()[0])
+    assert cache != planted and cache.parent == scratch and private_folder(cache, create=False)
+    assert any(cache.rglob("*.nbi"))
+
+
+def test_private_folder(tmp_path):
+    made = tmp_path / "a" / "b"
+    assert private_folder(made)  # made with mode 0700
+    assert stat.S_IMODE(made.stat().st_mode) == 0o700
+    assert not private_folder(tmp_path / "missing", create=False)
+    made.chmod(0o777)
+    assert not private_folder(made)
+    made.chmod(0o720)
+    assert not private_folder(made)  # group-writable
+    made.chmod(0o755)
+    assert private_folder(made)
+    link = tmp_path / "link"
+    link.symlink_to(made)
+    assert not private_folder(link)
+    (tmp_path / "file").write_text("")
+    assert not private_folder(tmp_path / "file")
+    if os.geteuid() == 0:
+        os.chown(made, NOBODY, NOBODY)
+        assert not private_folder(made)
+
+
+def test_unsafe_candidate_is_skipped_with_a_warning(tmp_path, monkeypatch):
+    from analysis import jit
+
+    unsafe = tmp_path / "unsafe"
+    unsafe.mkdir()
+    unsafe.chmod(0o777)
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        assert not jit._usable(unsafe)
+    assert [w.category for w in seen] == [UnsafeCacheWarning]
+
+
+def test_generated_modules_refuse_a_folder_others_can_write(tmp_path):
+    from gearvib.kernels_batch import write_once
+
+    folder = tmp_path / "specialised"
+    folder.mkdir(mode=0o700)
+    write_once(folder / "m.py", "x = 1\n")
+    assert (folder / "m.py").read_text() == "x = 1\n"
+    folder.chmod(0o777)
+    with pytest.raises(PermissionError, match="not private"):
+        write_once(folder / "n.py", "x = 2\n")
+    assert not (folder / "n.py").exists()

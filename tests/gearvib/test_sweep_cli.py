@@ -52,8 +52,12 @@ def test_cli_sweep_writes_runs_summary_and_report(tmp_path, capsys):
             "figures/normal_force_order_level.png"} <= set(images)
     for img in images:
         assert (out / img).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
-    # a second call finds every run finished
-    assert main(["sweep", str(spec), "-o", str(out), "--workers", "1", "-q", "--no-report"]) == 0
+    # outputs of a finished sweep are kept unless --overwrite, as by every command
+    assert main(["sweep", str(spec), "-o", str(out), "--workers", "1", "-q", "--no-report"]) == 2
+    assert "sweep.nc" in capsys.readouterr().err and (out / "sweep.nc").is_file()
+    # with it, a second call finds every run finished
+    assert main(["sweep", str(spec), "-o", str(out), "--workers", "1", "-q", "--no-report",
+                 "-f"]) == 0
     assert "(0 simulated, 3 reused, 0 failed)" in capsys.readouterr().out
 
 
