@@ -117,13 +117,13 @@ class Toothing:
     Parameters
     ----------
     z : int
-        Signed number of teeth; negative for an internal gear (|z| >= 3).
+        Signed number of teeth; negative for an internal gear (``|z| >= 3``).
     module : float
         Normal module ``m_n`` [m], > 0.
     pressure_angle : float
         Normal pressure angle ``alpha_n`` [rad] of the basic rack, 0 < alpha_n < 45°.
     helix_angle : float
-        Helix angle ``beta`` at the reference circle [rad], |beta| < 45°.
+        Helix angle ``beta`` at the reference circle [rad], ``|beta| < 45°``.
     profile_shift : float
         Profile shift coefficient ``x`` (DIN 3960 sign, see module docstring).
     face_width : float

@@ -724,7 +724,7 @@ def wolfrom(*, z_sun: int, z_ring1: int, z_ring2: int, z_planet1: int, z_planet2
         ``(z_s z_p2 + |z_r2| z_p1) psi / (2 pi gcd(z_p1, z_p2))`` too (step 2; the planet may
         be inserted turned by any number of step-1 teeth); if neighbouring planets overlap
         (either step); if the centre distances of sun and ring 1 differ with a given
-        ``profile_shift_planet1``; if a helix angle is out of range (|beta| < 45°).
+        ``profile_shift_planet1``; if a helix angle is out of range (``|beta| < 45°``).
     """
     if ring1_mesh is None or ring2_mesh is None:
         if ring_mesh is None:

@@ -4,7 +4,7 @@ The mesh position ``s`` of a mesh counts tooth pairs: the pair that entered cont
 ``s = j`` (``j`` an integer, the *pair counter*) is at the path position ``u = s - j``
 [base pitches] while ``0 <= u < eps_alpha``. Because ``s`` follows from the actual rotation
 angles of both gears (``s = [z1 (theta1 - theta_c) - z2 (theta2 - theta_c)] / 4 pi + s0``), so
-does the pair counter, and the tooth of each gear in pair ``j`` is
+does the pair counter, and the tooth of each gear in pair ``j`` is::
 
     tooth_g(j) = (sign_g j + tooth_g(0)) mod |z_g|
 

@@ -8,11 +8,12 @@ Descriptions (:mod:`gearvib.faults.description`): :class:`Crack`, :class:`Pittin
 (:mod:`gearvib.faults.law`: the tooth pairs in contact follow from the rotation angles,
 :mod:`gearvib.teeth`). Model and keys: ``docs/faults-sensors.md``.
 
-```python
-from gearvib.faults import Crack, Eccentricity
-faulty = model.with_faults([Crack("sun", tooth=3, severity=0.3),
-                            {"kind": "eccentricity", "member": "sun", "eccentricity": 20e-6}])
-```
+Example::
+
+    from gearvib.faults import Crack, Eccentricity
+    faulty = model.with_faults([Crack("sun", tooth=3, severity=0.3),
+                                {"kind": "eccentricity", "member": "sun",
+                                 "eccentricity": 20e-6}])
 """
 
 from gearvib.faults.apply import add_faults, fault_targets, mesh_lines
