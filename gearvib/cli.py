@@ -1,5 +1,5 @@
-"""Command line: ``gearvib demo | modes | catalogue | simulate | preset | report | sweep |
-diagnose``.
+"""Command line: ``gearvib demo | modes | catalogue | simulate | preset | example | report |
+sweep | diagnose | compare``.
 
 Every subcommand has ``--help``. Errors are printed as one line on stderr with exit code 2
 (bad input: a description, a setting, an option, an output that exists or cannot be
@@ -225,6 +225,21 @@ def _cmd_preset(args: argparse.Namespace) -> int:
         print("\n`gearvib preset NAME > my-set.toml` writes one to start your own file from.")
         return 0
     sys.stdout.write(preset_text(args.name))
+    return 0
+
+
+def _cmd_example(args: argparse.Namespace) -> int:
+    from gearvib.config import example_text, example_titles
+
+    if args.name is None:
+        titles = example_titles()
+        width = max(len(n) for n in titles)
+        for name, title in titles.items():
+            print(f"{name:<{width}}  {title}")
+        print("\n`gearvib example NAME > study.toml` writes one; `gearvib report study.toml` "
+              "renders a study, `gearvib sweep study.toml -o DIR` runs a sweep.")
+        return 0
+    sys.stdout.write(example_text(args.name))
     return 0
 
 
@@ -582,6 +597,14 @@ def _parser() -> argparse.ArgumentParser:
                         "from, e.g. `gearvib preset wolfrom-example > my-set.toml`.")
     pr.add_argument("name", nargs="?", metavar="NAME", help="preset name")
     pr.set_defaults(func=_cmd_preset)
+
+    ex = sub.add_parser("example", help="list the example studies and sweeps, or print one",
+                        description="Without NAME: list the example recipes shipped with "
+                        "gearvib (studies for `gearvib report`, sweeps for `gearvib sweep`) "
+                        "with their titles. With NAME: print its TOML to start from, e.g. "
+                        "`gearvib example paper-cases > study.toml`.")
+    ex.add_argument("name", nargs="?", metavar="NAME", help="example name")
+    ex.set_defaults(func=_cmd_example)
 
     r = sub.add_parser("report", help="order-analysis report (HTML + PDF)",
                        description="Render a study recipe (TOML: simulates its cases), "

@@ -53,7 +53,10 @@ __all__ = [
     "ConfigError",
     "check_keys",
     "config_hash",
+    "example_text",
+    "example_titles",
     "gearset_from_dict",
+    "list_examples",
     "list_presets",
     "load_config",
     "load_gearset",
@@ -786,6 +789,35 @@ def preset_text(name: str) -> str:
     if name not in list_presets():
         raise ConfigError(f"unknown preset {name!r} (available: {', '.join(list_presets())})")
     return resources.files("gearvib.presets").joinpath(f"{name}.toml").read_text("utf-8")
+
+
+def list_examples() -> list[str]:
+    """Names of the example recipes shipped with gearvib (studies and sweeps)."""
+    files = resources.files("gearvib.recipes").iterdir()
+    return sorted(f.name[:-5] for f in files if f.name.endswith(".toml"))
+
+
+def example_text(name: str) -> str:
+    """The TOML text of an example recipe (comments included), to start a study or sweep from.
+
+    Raises
+    ------
+    ConfigError
+        For an unknown example (the message lists the available ones).
+    """
+    if name not in list_examples():
+        raise ConfigError(f"unknown example {_short(name)} (available: "
+                          f"{', '.join(list_examples())})")
+    return resources.files("gearvib.recipes").joinpath(f"{name}.toml").read_text("utf-8")
+
+
+def example_titles() -> dict[str, str]:
+    """``{name: title}`` of every example: a study's ``[study].title``, a sweep's ``title``."""
+    out = {}
+    for name in list_examples():
+        doc = tomllib.loads(example_text(name))
+        out[name] = str(doc.get("study", {}).get("title", "") or doc.get("title", ""))
+    return out
 
 
 def preset_titles() -> dict[str, str]:

@@ -4,7 +4,7 @@ Typical use::
 
     from gearvib.report import load_study, run_study, build_report
 
-    result = run_study(load_study("reports/paper-cases.toml"), "out")
+    result = run_study(load_study("study.toml"), "out")  # gearvib example paper-cases > study.toml
     result.report.html        # out/report.html (self-contained), out/report.pdf
     build_report(["out/case1.nc", "out/case2.nc"], "again")   # from the runs alone
 

@@ -8,7 +8,8 @@ by an extreme number (NaN, +-inf, 1e308, 5e-324, 0, -1, an integer of 320 digits
 by 1e-300..1e300. The result goes the way of ``gearvib modes`` / ``simulate`` up to the run:
 :func:`gearset_from_dict`, :func:`assemble`, :func:`modal_analysis`, and the ``[simulation]``
 table through :func:`read_run_settings` and :func:`conditions_from_settings`. The study recipes
-of ``reports/`` are mutated the same way, written as TOML and read with :func:`load_study`,
+of ``reports/`` and the shipped examples are mutated the same way, written as TOML and read
+with :func:`load_study`,
 followed by the checks a study makes before its first simulation (every case's description, run
 settings and map size). Property: only documented errors occur
 (:mod:`tests.gearvib.fuzz_support`), each within 30 s.
@@ -54,7 +55,9 @@ def _recipe(path: Path) -> dict:
     return doc
 
 
-RECIPES = {p.name: _recipe(p) for p in sorted((REPO / "reports").glob("*.toml"))}
+RECIPE_FILES = [*(REPO / "reports").glob("*.toml"),
+                *(REPO / "gearvib" / "recipes").glob("paper*.toml")]
+RECIPES = {p.name: _recipe(p) for p in sorted(RECIPE_FILES)}
 # a literature model (type = "general", [[body]] / [[mesh]] / [[coupling]]) and a two-stage set
 # with its own stages, as the tests build them
 PRESETS["general: lin-parker"] = lin_parker()

@@ -85,10 +85,25 @@ def test_load_study_rejects_bad_recipes_naming_the_key(tmp_path, text, needle):
         load_study(p)
 
 
-def test_shipped_recipes_load():
-    for name in ("paper-cases.toml", "paper-case1-elastic.toml"):
-        st = load_study(REPO / "reports" / name)
-        assert len(st.cases) == 2 and st.run.duration == 1.0
+def test_shipped_recipes_load(tmp_path, capsys):
+    """Every example prints, and loads from an unrelated folder (presets only, no paths)."""
+    from gearvib.cli import main
+    from gearvib.config import list_examples
+    from gearvib.sweep import load_sweep
+
+    assert {"paper-cases", "paper-case1-elastic", "paper-cases-study",
+            "sweep-damping-phasing"} <= set(list_examples())
+    for name in list_examples():
+        assert main(["example", name]) == 0
+        f = tmp_path / f"{name}.toml"
+        f.write_text(capsys.readouterr().out)
+        if name.startswith("sweep"):
+            assert len(load_sweep(f).cases()) == 6
+        else:
+            st = load_study(f)
+            # 1 s run-ups, set by the recipe or (None) by the presets' [simulation]
+            assert len(st.cases) == 2 and st.run.duration in (1.0, None), name
+    assert main(["example"]) == 0 and "paper-cases" in capsys.readouterr().out
 
 
 def test_summed_sun_stiffness_matches_paper_figures_9_and_10():

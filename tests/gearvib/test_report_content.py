@@ -48,7 +48,7 @@ def _tables(html: str) -> dict:
 def elastic(tmp_path_factory):
     """The shipped recipe (rigid against elastic bearings), 0.25 s run-ups."""
     out = tmp_path_factory.mktemp("elastic")
-    return run_study(load_study(REPO / "reports" / "paper-case1-elastic.toml"), out,
+    return run_study(load_study(REPO / "gearvib" / "recipes" / "paper-case1-elastic.toml"), out,
                      progress=False, duration=0.25)
 
 

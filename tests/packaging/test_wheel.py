@@ -83,8 +83,9 @@ def test_wheel_holds_every_package_and_data_file(wheel):
     names = set(zipfile.ZipFile(wheel).namelist())
     missing = sorted(p for p in _packages(ROOT) if f"{p}/__init__.py" not in names)
     assert not missing, f"packages missing from the wheel: {missing}"
-    presets = {p.name for p in (ROOT / "gearvib" / "presets").glob("*.toml")}
-    assert presets and all(f"gearvib/presets/{n}" in names for n in presets)
+    for folder in ("presets", "recipes"):
+        data = {p.name for p in (ROOT / "gearvib" / folder).glob("*.toml")}
+        assert data and all(f"gearvib/{folder}/{n}" in names for n in data), folder
     meta = next(n for n in names if n.endswith(".dist-info/METADATA"))
     import gearvib
 
@@ -142,6 +143,8 @@ def test_every_command_runs_from_an_unrelated_folder(venv, tmp_path):
 
     assert "gearvib" in ok("--version")
     assert "paper-case1" in ok("preset")
+    assert "sweep-damping-phasing" in ok("example")
+    assert "[study]" in ok("example", "paper-cases")
     (work / "g.toml").write_text(ok("preset", "paper-case1") + SENSOR_TABLES)
     assert json.loads(ok("modes", "paper-case1", "--json"))["modes"]
     assert json.loads(ok("catalogue", "paper-case1", "--speed", "1500", "--json"))
