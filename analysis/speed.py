@@ -272,20 +272,42 @@ def _state_levels(x: np.ndarray) -> tuple[float, float]:
     return float(centres[np.argmax(counts[:50])]), float(centres[50 + np.argmax(counts[50:])])
 
 
-def _rising_edges(x: np.ndarray, fs: float, level: float, hysteresis: float) -> np.ndarray:
-    """Times [s] of rising edges by a Schmitt trigger, crossing of ``level`` interpolated."""
+def _rising_edges(
+    x: np.ndarray, fs: float, level: float, hysteresis: float, block: int = 1 << 20
+) -> np.ndarray:
+    """Times [s] of rising edges by a Schmitt trigger, crossing of ``level`` interpolated.
+
+    Works through the signal in blocks of ``block`` samples (the trigger state and the last
+    crossing carried from block to block), so that its working memory does not grow with the
+    record; the edges equal those of a single pass over the whole signal.
+    """
     upper, lower = level + 0.5 * hysteresis, level - 0.5 * hysteresis
-    ev = np.flatnonzero((x >= upper) | (x <= lower))
-    if ev.size < 2:
-        return np.empty(0)
-    high = x[ev] >= upper
-    trig = ev[np.flatnonzero(high[1:] & ~high[:-1]) + 1]  # first sample >= upper after a low
-    cross = np.flatnonzero((x[:-1] < level) & (x[1:] >= level)) + 1
-    if trig.size == 0 or cross.size == 0:
-        return np.empty(0)
-    c = cross[np.searchsorted(cross, trig, side="right") - 1]
-    frac = (level - x[c - 1]) / (x[c] - x[c - 1])
-    return (c - 1 + frac) / fs
+    n = x.size
+    out: list[np.ndarray] = []
+    prev_high: bool | None = None  # state of the last event (sample outside the band) so far
+    last_cross = -1  # last sample c with x[c - 1] < level <= x[c] so far
+    for s in range(0, n, block):
+        e = min(n, s + block)
+        seg = x[s:e]
+        lo = max(0, s - 1)
+        w = x[lo:e]
+        cross = np.flatnonzero((w[:-1] < level) & (w[1:] >= level)) + (lo + 1)
+        ev = np.flatnonzero((seg >= upper) | (seg <= lower))
+        if ev.size:
+            high = seg[ev] >= upper
+            before = np.empty_like(high)
+            before[1:] = high[:-1]
+            before[0] = high[0] if prev_high is None else prev_high  # no edge at the first
+            trig = ev[np.flatnonzero(high & ~before)] + s  # first sample >= upper after a low
+            prev_high = bool(high[-1])
+            if trig.size:
+                known = cross if last_cross < 0 else np.concatenate([[last_cross], cross])
+                c = known[np.searchsorted(known, trig, side="right") - 1]
+                frac = (level - x[c - 1]) / (x[c] - x[c - 1])
+                out.append((c - 1 + frac) / fs)
+        if cross.size:
+            last_cross = int(cross[-1])
+    return np.concatenate(out) if out else np.empty(0)
 
 
 def _nominal(d: np.ndarray) -> np.ndarray:
