@@ -22,6 +22,7 @@ __all__ = [
     "require_mass_matrix",
     "require_monotonic",
     "require_positive",
+    "require_real",
     "require_same_length",
     "require_square",
     "sample_rate",
@@ -63,6 +64,25 @@ def require_positive(value: float, name: str, *, allow_zero: bool = False) -> fl
     if not ok:
         bound = ">= 0" if allow_zero else "> 0"
         raise ValueError(f"{name} = {value!r} is not admissible: must be finite and {bound}")
+    return v
+
+
+def require_real(value: Any, name: str) -> float:
+    """Return ``value`` as float; raise unless it is one finite real number.
+
+    A bool, a string or an array is not a number here (:class:`TypeError`, naming ``name``);
+    NaN and inf raise :class:`ValueError`.
+    """
+    if isinstance(value, bool | np.bool_ | str | bytes) or not isinstance(
+        value, int | float | np.integer | np.floating
+    ):
+        raise TypeError(
+            f"{name} = {value!r} is not admissible: must be a real number "
+            f"(got {type(value).__name__})"
+        )
+    v = float(value)
+    if not np.isfinite(v):
+        raise ValueError(f"{name} = {value!r} is not admissible: must be finite")
     return v
 
 

@@ -273,7 +273,7 @@ def _state_levels(x: np.ndarray) -> tuple[float, float]:
 
 
 def _rising_edges(
-    x: np.ndarray, fs: float, level: float, hysteresis: float, block: int = 1 << 20
+    x: np.ndarray, fs: float, level: float, hysteresis: float, block: int = 1 << 18
 ) -> np.ndarray:
     """Times [s] of rising edges by a Schmitt trigger, crossing of ``level`` interpolated.
 
