@@ -45,7 +45,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from analysis.cf import processing_attrs
-from analysis.checks import require_block_size, require_int, time_or_rate
+from analysis.checks import require_block_size, require_int, require_real, time_or_rate
 from analysis.fft import irfft, rfft
 from analysis.inputs import Signal, channel_coords, select_channel, signal_input
 from analysis.resample import AngleResampler, check_sampling, default_samples_per_rev
@@ -339,6 +339,8 @@ def synchronous(
     multiple of ``multiple`` (and is at least ``4 * multiple``).
     """
     fs, time = time_or_rate(fs, time, function)
+    if fs is not None:
+        require_real(fs, "fs")
     lengths = tuple(
         np.shape(r)[0] for r in (rpm, angle, tacho) if r is not None and np.ndim(r) == 1
     )
@@ -354,6 +356,12 @@ def synchronous(
     )  # fmt: skip
     if samples_per_rev is None:
         spr, _ = default_samples_per_rev(sig.fs, shaft.rpm_max)
+        # about fs at the lowest speed when that costs at most 25 % more samples: the
+        # resampler then needs no oversampling (half the interpolation work, no FIR)
+        rpm_min = shaft.track.step_min * sig.fs * 60.0 / (2.0 * np.pi)
+        low, _ = default_samples_per_rev(sig.fs, rpm_min)
+        if low <= 1.25 * spr:
+            spr = low
         spr = max(4, -(-spr // multiple)) * multiple
         mo = max_order
     else:
@@ -462,7 +470,9 @@ _PARAMS_DOC = """
     ratio : float, default 1
         Speed of the shaft to average over the speed of the reference shaft.
     samples_per_rev : int, optional
-        Samples per revolution of the average; default about ``fs`` at the top speed
+        Samples per revolution of the average; default about ``fs`` at the lowest speed of
+        the record when that is at most 25 % more than at the top speed (the resampler then
+        needs no oversampling), else about ``fs`` at the top speed
         (:func:`analysis.resample.default_samples_per_rev`).
     max_order : float, optional
         Highest order kept by the resampler (default ``samples_per_rev / 2.56``).

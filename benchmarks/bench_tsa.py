@@ -154,8 +154,8 @@ def main() -> None:
     print(f"record: {seconds:g} s, {CHANNELS} channels at {FS:g} Hz, float64 "
           f"({channel / 1e6:.0f} MB per channel); load {os.getloadavg()[0]:.2f}")  # fmt: skip
     # warm-up: compile or load the numba kernels once
-    tsa(x[:, : int(2 * FS)], FS, tacho=tacho[: int(2 * FS)])
-    r0 = tsa(x[:, : int(2 * FS)], FS, tacho=tacho[: int(2 * FS)])
+    tsa(x[:, : int(4 * FS)], FS, tacho=tacho[: int(4 * FS)])
+    r0 = tsa(x[:, : int(4 * FS)], FS, tacho=tacho[: int(4 * FS)])
     spr = r0.samples_per_rev
 
     def ours_tsa() -> np.ndarray:
@@ -163,7 +163,7 @@ def main() -> None:
 
     compare("TSA", ours_tsa, lambda: straightforward_tsa(x, tacho, spr), repeat, channel,
             lambda v: _order_error(v[0], ORDER))  # fmt: skip
-    spt = planetary_tsa(x[:, : int(2 * FS)], FS, tacho=tacho[: int(2 * FS)], z_sun=ZS,
+    spt = planetary_tsa(x[:, : int(4 * FS)], FS, tacho=tacho[: int(4 * FS)], z_sun=ZS,
                         z_planet=ZP, z_ring=ZR, n_planets=NP).samples_per_tooth  # fmt: skip
 
     def ours_planetary() -> np.ndarray:
