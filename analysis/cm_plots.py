@@ -114,6 +114,9 @@ def tsa_figure(
     )
     if tsa.coverage < 1.0:
         title += f", {100 * tsa.coverage:.0f} % of the teeth seen"
+    left = np.asarray(tsa.residual_noise_rms)
+    if left.size == 1 and np.isfinite(left):
+        title += f"; noise left ~ {float(left):.2g} {tsa.units} rms"
     ax.set_title(title, fontsize=9)
     return fig
 
@@ -152,7 +155,7 @@ def planetary_figure(
             f"{g.noise_reduction:.2g}{cov}",
             fontsize=8, loc="left",
         )  # fmt: skip
-        ax.set_ylabel(f"[{g.units}]", fontsize=8)
+        ax.set_ylabel(f"{g.name} [{g.units}]", fontsize=8)
         ax.tick_params(labelsize=7)
     np.atleast_1d(axes)[-1].set_xlabel("tooth position (teeth in the order they enter the mesh)")
     fig.suptitle(
@@ -189,40 +192,56 @@ def gear_signals_figure(
 
     fig = _new(figsize)
     axes = fig.subplots(4, 1)
-    x = np.degrees(signals.angle)
     u = signals.units
-    axes[0].plot(x, pick(signals.tsa), lw=0.7, label="TSA")
-    axes[0].plot(x, pick(signals.regular) + pick(signals.tsa).mean(), lw=0.7,
-                 label="regular (+ mean)")  # fmt: skip
-    axes[0].legend(fontsize=7, loc="upper right")
-    axes[1].plot(x, pick(signals.residual), lw=0.7, color="C2")
-    axes[2].plot(x, pick(signals.difference), lw=0.7, color="C3")
-    titles = [
-        "TSA and regular meshing components",
-        "residual: TSA - shaft orders - mesh harmonics (sidebands kept)",
-        "difference: TSA - regular components (first-order sidebands removed too)",
-    ]
-    for ax, t in zip(axes[:3], titles, strict=True):
-        ax.set_title(t, fontsize=8, loc="left")
-        ax.set_xlim(0, 360)
-        ax.set_xticks(np.arange(0, 361, 45))
-        ax.set_ylabel(f"[{u}]", fontsize=8)
+    tsa_row = pick(signals.tsa)
+    series = [
+        ("TSA and regular meshing components", [(tsa_row, "TSA", "C0"),
+                                                (pick(signals.regular) + tsa_row.mean(),
+                                                 "regular (+ mean)", "C1")]),
+        ("residual: TSA - shaft orders - mesh harmonics (sidebands kept)",
+         [(pick(signals.residual), None, "C2")]),
+        ("difference: TSA - regular components (first-order sidebands removed too)",
+         [(pick(signals.difference), None, "C3")]),
+    ]  # fmt: skip
+    for ax, (title, lines) in zip(axes[:3], series, strict=True):
+        if signals.teeth:
+            x = _tooth_axis(ax, signals.teeth, signals.angle)
+        else:
+            x = np.degrees(signals.angle)
+            ax.set_xlim(0, 360)
+            ax.set_xticks(np.arange(0, 361, 45))
+        for y, label, colour in lines:
+            ax.plot(x, y, lw=0.7, label=label, color=colour)
+        ax.set_title(title, fontsize=8, loc="left")
+        ax.set_ylabel(f"{signals.name} [{u}]", fontsize=8)
         ax.grid(True, lw=0.3, alpha=0.5)
-    axes[2].set_xlabel(f"{signals.shaft} angle [deg]")
+    axes[0].legend(fontsize=7, loc="upper right")
+    axes[2].set_xlabel(
+        f"{signals.shaft} tooth position" if signals.teeth else f"{signals.shaft} angle [deg]"
+    )
     amp = pick(signals.amplitudes)
-    orders = np.arange(amp.size)
     top = int(min(amp.size - 1, max(signals.regular_orders.max(initial=1), 1) * 1.1 + 2))
+    orders = np.arange(1, top + 1)
+    floor = max(float(np.max(amp[orders])) * 1e-4, np.finfo(float).tiny)
     ax = axes[3]
-    ax.vlines(orders[1 : top + 1], 0, amp[1 : top + 1], lw=0.8, color="0.5", label="orders")
+    ax.vlines(orders, floor, np.maximum(amp[orders], floor), lw=0.8, color="0.6",
+              label="orders of the TSA")  # fmt: skip
     reg = signals.regular_orders[signals.regular_orders <= top]
-    ax.plot(reg, amp[reg], "o", ms=3, color="C1", label="regular (removed in the difference)")
+    ax.plot(reg, np.maximum(amp[reg], floor), "o", ms=3, color="C1",
+            label="regular (removed in the difference)")  # fmt: skip
     mesh = signals.mesh_lines[signals.mesh_lines <= top]
-    ax.plot(mesh, amp[mesh], "v", ms=5, color="C3", label="mesh harmonics")
+    ax.plot(mesh, np.maximum(amp[mesh], floor), "v", ms=5, color="C3", label="mesh harmonics")
+    ax.set_yscale("log")
+    ax.set_ylim(floor, None)
     ax.set_xlim(0, top + 1)
     ax.set_xlabel(f"order of the {signals.shaft}")
     ax.set_ylabel(f"peak amplitude [{u}]", fontsize=8)
-    ax.set_title(f"order amplitudes of the TSA (mesh orders {signals.mesh_orders})",
-                 fontsize=8, loc="left")  # fmt: skip
+    mesh_txt = ", ".join(str(z) for z in signals.mesh_orders)
+    ax.set_title(
+        f"order amplitudes of the TSA: mesh order {mesh_txt}, {signals.harmonics} harmonics, "
+        f"sidebands +-{signals.sidebands}, shaft orders 1-{signals.shaft_harmonics}",
+        fontsize=8, loc="left",
+    )  # fmt: skip
     ax.legend(fontsize=7, loc="upper right")
     ax.grid(True, lw=0.3, alpha=0.5)
     return fig

@@ -80,6 +80,8 @@ class GearSignals:
         Channel dimensions and their coordinates.
     shaft : str
         What the angle is of (``"shaft"``, ``"planet 1"``, ``"sun"``).
+    teeth : int or None
+        Teeth of the gear when the TSA is a gear's (planet, sun), else ``None``.
     """
 
     angle: np.ndarray
@@ -102,6 +104,7 @@ class GearSignals:
     dims: tuple[str, ...] = ()
     coords: dict[str, np.ndarray] = field(default_factory=dict)
     shaft: str = "shaft"
+    teeth: int | None = None
 
     def to_dataset(self) -> xr.Dataset:
         """CF :class:`xarray.Dataset` with the five signals along ``angle`` and the line
@@ -214,7 +217,7 @@ def gear_signals(
         values = np.asarray(tsa.values, dtype=float)
         top = float(tsa.max_order)
         meta = dict(units=tsa.units, name=tsa.name, dims=tsa.dims, coords=tsa.coords,
-                    shaft=tsa.shaft)  # fmt: skip
+                    shaft=tsa.shaft, teeth=tsa.teeth)  # fmt: skip
         angle = tsa.angle
     else:
         arr = np.asarray(tsa)
@@ -227,7 +230,7 @@ def gear_signals(
         dims = ("channel",) if values.ndim == 2 else tuple(
             f"dim_{i}" for i in range(values.ndim - 1)
         )
-        meta = dict(units="1", name="x", dims=dims, coords={}, shaft="shaft")
+        meta = dict(units="1", name="x", dims=dims, coords={}, shaft="shaft", teeth=None)
         angle = 2.0 * np.pi * np.arange(values.shape[-1]) / values.shape[-1]
     n = values.shape[-1]
     if n < 8:
