@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from analysis.checks import require_choice, require_real
+from analysis.cm_plots import trend_figure
 
 if TYPE_CHECKING:
     import matplotlib.figure
@@ -93,8 +94,6 @@ class AlarmLimits:
     def plot(self, indicators: xr.Dataset, **kwargs: Any) -> matplotlib.figure.Figure:
         """Trend figure of ``indicators`` with these limits (see
         :func:`analysis.cm_plots.trend_figure`)."""
-        from analysis.cm_plots import trend_figure
-
         return trend_figure(indicators, limits=self, **kwargs)
 
 

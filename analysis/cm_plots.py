@@ -15,6 +15,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from analysis.inputs import select_channel
+
 if TYPE_CHECKING:
     import xarray as xr
     from matplotlib.figure import Figure
@@ -50,8 +52,6 @@ def _rows(values: np.ndarray, dims: tuple[str, ...], coords: dict, name: str) ->
 def _select(values: np.ndarray, dims: tuple[str, ...], coords: dict, channel: Any) -> tuple:
     if channel is None or values.ndim == 1:
         return values, dims, coords
-    from analysis.inputs import select_channel
-
     v, d, c, _ = select_channel(values, dims, coords, channel)
     return v, d, c
 

@@ -37,6 +37,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from analysis.checks import require_int
+from analysis.cm_plots import gear_signals_figure
 from analysis.fft import irfft, rfft
 from analysis.inputs import channel_coords
 from analysis.tsa import TSA
@@ -152,8 +153,6 @@ class GearSignals:
 
     def plot(self, **kwargs: Any) -> matplotlib.figure.Figure:
         """Figure of the signals (see :func:`analysis.cm_plots.gear_signals_figure`)."""
-        from analysis.cm_plots import gear_signals_figure
-
         return gear_signals_figure(self, **kwargs)
 
 

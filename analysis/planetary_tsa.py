@@ -76,6 +76,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from analysis.checks import require_choice, require_int, require_real
+from analysis.cm_plots import planetary_figure
 from analysis.inputs import channel_coords
 from analysis.tsa import TSA, Synchronous, fractional_shift, synchronous
 
@@ -216,8 +217,6 @@ class PlanetarySeparation:
     def plot(self, **kwargs: Any) -> matplotlib.figure.Figure:
         """Figure of the planet and sun averages (see
         :func:`analysis.cm_plots.planetary_figure`)."""
-        from analysis.cm_plots import planetary_figure
-
         return planetary_figure(self, **kwargs)
 
 

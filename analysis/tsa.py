@@ -46,6 +46,7 @@ import numpy as np
 
 from analysis.cf import processing_attrs
 from analysis.checks import require_block_size, require_int, require_real, time_or_rate
+from analysis.cm_plots import tsa_figure
 from analysis.fft import irfft, rfft
 from analysis.inputs import Signal, channel_coords, select_channel, signal_input
 from analysis.resample import AngleResampler, check_sampling, default_samples_per_rev
@@ -226,8 +227,6 @@ class TSA:
 
     def plot(self, **kwargs: Any) -> matplotlib.figure.Figure:
         """Figure of the average (see :func:`analysis.cm_plots.tsa_figure`)."""
-        from analysis.cm_plots import tsa_figure
-
         return tsa_figure(self, **kwargs)
 
 
