@@ -36,6 +36,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from analysis.cf import result_dataset
 from analysis.checks import require_int
 from analysis.cm_plots import gear_signals_figure
 from analysis.fft import irfft, rfft
@@ -149,7 +150,11 @@ class GearSignals:
             "envelope_band": np.asarray(self.envelope_band, dtype=np.int64),
             "shaft": self.shaft,
         }
-        return xr.Dataset(data, coords=coords, attrs=attrs)
+        return result_dataset(
+            xr.Dataset(data, coords=coords, attrs=attrs),
+            f"regular, residual and difference signals of {self.name} ({self.shaft})",
+            "analysis.gear_signals (gearvib project)",
+        )
 
     def plot(self, **kwargs: Any) -> matplotlib.figure.Figure:
         """Figure of the signals (see :func:`analysis.cm_plots.gear_signals_figure`)."""

@@ -46,6 +46,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from analysis.cf import result_dataset, time_attrs
 from analysis.gear_signals import GearSignals, gear_signals
 from analysis.inputs import channel_coords
 from analysis.tsa import TSA
@@ -373,7 +374,8 @@ def condition_indicators(
     coords: dict[str, Any] = {
         "record": ("record", np.arange(len(recs)), {"units": "1", "long_name": "record number"}),
         "time": ("record", np.asarray(times, dtype=float),
-                 {"units": "s", "long_name": "start of the record's average"}),
+                 time_attrs("start of the record's average (seconds since the start of its "
+                            "record)")),
     }  # fmt: skip
     if labels is not None:
         coords["record_label"] = ("record", np.asarray([str(v) for v in labels]),
@@ -389,4 +391,7 @@ def condition_indicators(
         "shaft": first.shaft,
         "comment": "NA4/NB4 normalised by the run-to-date mean variance of records 0 .. k",
     }
-    return xr.Dataset(data, coords=coords, attrs=attrs)
+    return result_dataset(
+        xr.Dataset(data, coords=coords, attrs=attrs), "gear condition indicators",
+        "analysis.indicators.condition_indicators (gearvib project)",
+    )  # fmt: skip
