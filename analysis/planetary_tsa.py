@@ -32,11 +32,12 @@ in carrier angle, centred on the pass, ``window_teeth`` ring tooth pitches wide 
 about the carrier angle between planets, and a width on which the Hann windows of a closed
 placement cycle add up to a constant). The average at each angle is the window-weighted mean
 ``sum(w x) / sum(w)`` of the samples placed there, so a cycle that does not close in the
-record still gives a valid average where teeth were seen (the others are NaN; ``coverage``
-says how much of the gear was seen) and the number of passes is stated per planet. The noise
-reduction of a weighted mean is ``1 / sqrt(n_eff)`` with ``n_eff = (sum w)^2 / sum w^2``
-(reported as ``effective_averages``, median over the observed angles). McFadden (1991) used a
-rectangular window of about one tooth period; McFadden (1994) showed that tapered windows
+record still gives a valid average where teeth were seen (where the summed weight reaches 5 %
+of its maximum; the others are NaN and ``coverage`` says how much of the gear was seen),
+and the number of passes is stated per planet. The noise reduction of a weighted mean is
+``1 / sqrt(n_eff)`` with ``n_eff = (sum w)^2 / sum w^2`` (reported as
+``effective_averages``, median over the observed angles). McFadden (1991) used a rectangular
+window of about one tooth period; McFadden (1994) showed that tapered windows
 reduce the errors. A rectangular window is not offered here: the sub-sample placement of the
 windows (below) assumes a tapered one.
 
@@ -88,7 +89,7 @@ if TYPE_CHECKING:
 __all__ = ["PlanetarySeparation", "planetary_tsa"]
 
 _WINDOWS = ("hann", "tukey")
-_OBSERVED = 1e-3  # an angle is observed where the window weights reach this fraction of the max
+_OBSERVED = 0.05  # an angle is observed where the window weights reach this fraction of the max
 
 
 @dataclass(frozen=True)
