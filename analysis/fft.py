@@ -24,6 +24,11 @@ backend, the thread count and the plan cache are controlled in one place.
   ``(rows, n)`` input buffer that the caller fills (e.g. windowed frames) and one FFTW execute
   for all rows, whose output buffer the caller reads before the next execute. This is the hot
   path of :func:`analysis.spectrum.spectrum` (no temporaries, no copies).
+* **Complex rows in place.** :class:`RowIfft` is an aligned complex buffer whose rows are
+  inverse-transformed in place, one execute for all rows, for any split of the buffer into
+  rows (one FFTW plan per split, all on the same memory): the band-limited analytic signals
+  of :mod:`analysis.bands` need one such transform per level of a filter bank, and a buffer
+  per level would multiply the memory.
 * **Threads.** Explicit: ``workers=None`` means the module default, which is 1 unless changed
   with :func:`set_workers`. pyFFTW's global ``config.NUM_THREADS`` and scipy's
   ``set_workers`` context are *not* consulted (they disagree with each other; see the
@@ -51,6 +56,7 @@ import numpy as np
 
 __all__ = [
     "RfftPlan",
+    "RowIfft",
     "backend",
     "empty_aligned",
     "get_workers",
@@ -543,3 +549,76 @@ def irfft(
 
         return _fallback(scipy.fft.irfft, a, n, axis, threads, out)
     return _execute(_builder("irfft", a, n, axis, threads), a, out)
+
+
+class RowIfft:
+    """In-place inverse complex FFT of every row of one aligned buffer, any row layout.
+
+    The buffer of ``size`` complex128 elements is viewed as ``(rows, size // rows)``; each
+    :meth:`execute` transforms every row in place with one FFTW execute (a plan per layout,
+    made on first use with the module's planner effort and kept by the object; all plans
+    share the one buffer, so the memory is ``16 size`` bytes whatever the layouts). Without
+    pyFFTW, :func:`scipy.fft.ifft` does the work (with a temporary copy).
+
+    Parameters
+    ----------
+    size : int
+        Complex elements of the buffer (>= 1).
+    workers : int, optional
+        Threads; ``None`` uses :func:`get_workers`, -1 all CPUs.
+
+    Notes
+    -----
+    The transform is unnormalised: row ``r`` becomes ``y_j = sum_k r_k exp(+2 pi i j k / n)``
+    (``n`` times :func:`numpy.fft.ifft`). Use the object in one thread only.
+    """
+
+    def __init__(self, size: int, *, workers: int | None = None) -> None:
+        self.size = _check_size(size, "size")
+        self.workers = _workers if workers is None else _check_workers(workers)
+        self.buffer = empty_aligned(self.size, np.complex128)
+        self._plans: dict[int, Any] = {}
+
+    def rows(self, rows: int) -> np.ndarray:
+        """The buffer as ``(rows, size // rows)`` (a view; ``rows`` must divide ``size``).
+
+        The plan of this layout is made here, before the caller fills the view (a measuring
+        planner effort overwrites the buffer while it plans).
+        """
+        r = _check_size(rows, "rows")
+        if self.size % r:
+            raise ValueError(f"rows = {rows!r} is not admissible: must divide size = {self.size}")
+        view = self.buffer.reshape(r, self.size // r)
+        fftw = _fftw()
+        if fftw is not None and r not in self._plans:
+            self._plans[r] = fftw.FFTW(
+                view,
+                view,
+                axes=(-1,),
+                direction="FFTW_BACKWARD",
+                flags=(_planner_effort, "FFTW_DESTROY_INPUT"),
+                threads=self.workers,
+            )
+        return view
+
+    def execute(self, rows: int) -> np.ndarray:
+        """Inverse-transform every row of the ``(rows, size // rows)`` view in place.
+
+        Call :meth:`rows` with the same ``rows`` first and fill the view it returns.
+
+        Returns
+        -------
+        numpy.ndarray
+            The transformed view.
+        """
+        r = _check_size(rows, "rows")
+        if _fftw() is None:
+            import scipy.fft
+
+            view = self.rows(r)
+            view[...] = scipy.fft.ifft(view, axis=-1, norm="forward", workers=self.workers)
+            return view
+        if r not in self._plans:
+            raise ValueError(f"rows = {rows!r}: call rows({r}) and fill the view before execute")
+        self._plans[r].execute()
+        return self.buffer.reshape(r, self.size // r)

@@ -46,6 +46,7 @@ __all__ = [
     "dataset_variable",
     "find_reference",
     "moving_range",
+    "one_channel",
     "reference_input",
     "select_channel",
     "signal_input",
@@ -379,6 +380,17 @@ def signal_input(
         name if name is not None else "x",
         reference,
     )
+
+
+def one_channel(sig: Signal, function: str) -> np.ndarray:
+    """The samples of a one-channel :class:`Signal` as a 1-D array; raise for several
+    channels (the functions that choose a band or an alarm per channel take one at a time)."""
+    if int(np.prod(sig.lead, dtype=np.int64)) != 1:
+        raise ValueError(
+            f"{function} analyses one channel; x has {int(np.prod(sig.lead))} channels "
+            f"(dims {sig.dims}, shape {sig.lead}): select one, e.g. x.sel(channel=...) or x[:, k]"
+        )
+    return sig.values.reshape(sig.n)
 
 
 def _values_of(ref: Any, kind: str) -> tuple[np.ndarray, str]:

@@ -244,3 +244,22 @@ def test_environment_forces_the_scipy_backend():
     env = {**os.environ, "GEARVIB_FFT": "scipy"}
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env)
     assert out.stdout.split() == ["scipy", "8.0"], out.stderr
+
+
+def test_row_ifft_in_place_matches_numpy_for_every_layout():
+    plan = gfft.RowIfft(48)
+    rng = np.random.default_rng(9)
+    for rows in (1, 2, 3, 4, 6, 8, 12, 16, 24, 48):
+        view = plan.rows(rows)
+        a = rng.standard_normal(view.shape) + 1j * rng.standard_normal(view.shape)
+        view[...] = a
+        out = plan.execute(rows)
+        assert np.shares_memory(out, plan.buffer)
+        np.testing.assert_allclose(out, np.fft.ifft(a, axis=-1) * (48 // rows), atol=1e-12)
+    with pytest.raises(ValueError, match="rows"):
+        plan.rows(5)
+    with pytest.raises(ValueError, match="size"):
+        gfft.RowIfft(0)
+    if gfft.backend() == "pyfftw":
+        with pytest.raises(ValueError, match="rows"):
+            gfft.RowIfft(8).execute(2)  # no plan made for this layout

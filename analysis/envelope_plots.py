@@ -1,0 +1,256 @@
+"""Figure builders for envelope analysis and spectral kurtosis.
+
+Plotting only, like :mod:`analysis.plots`: each function takes a result of
+:mod:`analysis.envelope` or :mod:`analysis.kurtogram` and returns a
+:class:`matplotlib.figure.Figure` built without pyplot (a new one, or the figure of ``ax=``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from analysis.levels import to_db
+from analysis.lines import LineFamily
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+    from analysis.envelope import EnvelopeOrderSpectrum, EnvelopeSpectrum, SquaredEnvelope
+    from analysis.kurtogram import Kurtogram, SpectralKurtosis
+
+__all__ = [
+    "envelope_spectrum_figure",
+    "kurtogram_figure",
+    "spectral_kurtosis_figure",
+    "squared_envelope_figure",
+]
+
+_FAMILY_COLOURS = ("C3", "C2", "C1", "C4", "C5", "C6", "C8", "C9")
+
+
+def _axes(ax: Any, figsize: tuple[float, float]) -> tuple[Figure, Any]:
+    if ax is None:
+        from matplotlib.figure import Figure
+
+        fig = Figure(figsize=figsize, layout="constrained")
+        return fig, fig.add_subplot()
+    if not hasattr(ax, "figure") or not hasattr(ax, "plot"):
+        raise ValueError(f"ax must be matplotlib Axes; got {type(ax).__name__}")
+    return ax.figure, ax
+
+
+def _families(families: Any) -> list[LineFamily]:
+    if families is None:
+        return []
+    fams = [families] if isinstance(families, LineFamily) else list(families)
+    for f in fams:
+        if not isinstance(f, LineFamily):
+            raise ValueError(f"families: {f!r} is not a LineFamily (see analysis.lines)")
+    return fams
+
+
+def _value_label(amplitude: str, units: str, db: bool) -> str:
+    name = {"peak": "peak amplitude", "rms": "rms amplitude", "power": "power",
+            "density": "PSD"}.get(amplitude, amplitude)  # fmt: skip
+    return f"{name} [dB re 1 {units}]" if db else f"{name} [{units}]"
+
+
+def envelope_spectrum_figure(
+    result: EnvelopeSpectrum | EnvelopeOrderSpectrum,
+    *,
+    families: LineFamily | Sequence[LineFamily] | None = None,
+    db: bool = False,
+    axis_max: float | None = None,
+    ax: Any = None,
+    figsize: tuple[float, float] = (9.0, 4.2),
+) -> Figure:
+    """Squared envelope (order) spectrum with line families marked.
+
+    Parameters
+    ----------
+    result : EnvelopeSpectrum or EnvelopeOrderSpectrum
+        The spectrum.
+    families : LineFamily or sequence of LineFamily, optional
+        Lines to mark on the spectrum's axis (Hz, or orders for an order spectrum), e.g.
+        :func:`analysis.lines.bearing_families`: harmonics as dashed lines labelled
+        ``h x NAME``, sidebands dotted, one colour per family.
+    db : bool, default False
+        Level in dB instead of linear (envelope spectra are usually read linear).
+    axis_max : float, optional
+        Upper end of the axis; default 1.15 times the highest marked line, else the band's
+        width for a frequency spectrum (the squared envelope holds nothing above it) and the
+        whole order axis for an order spectrum; at most the spectrum's end.
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw into.
+    figsize : (float, float)
+        Size of a new figure [in].
+    """
+    fams = _families(families)
+    fig, ax = _axes(ax, figsize)
+    is_order = hasattr(result, "order")
+    axis = result.order if is_order else result.frequency
+    top_line = max((float(f.lines()[2].max()) for f in fams), default=0.0)
+    if axis_max is None:
+        if top_line > 0:
+            axis_max = 1.15 * top_line
+        else:  # the squared envelope holds nothing above the band's width (in Hz)
+            axis_max = float(axis[-1]) if is_order else result.band.width
+    axis_max = min(float(axis_max), float(axis[-1]))
+    keep = axis <= axis_max
+    y = to_db(result.values, result.amplitude) if db else result.values
+    ax.plot(axis[keep], y[keep], lw=0.8, color="C0")
+    ymax = float(np.max(y[keep][1:])) if np.count_nonzero(keep) > 1 else 1.0
+    for j, fam in enumerate(fams):
+        colour = _FAMILY_COLOURS[j % len(_FAMILY_COLOURS)]
+        h, s, p = fam.lines()
+        first = True
+        for hh, ss, pp in zip(h, s, p, strict=True):
+            if pp > axis_max:
+                continue
+            ax.axvline(pp, color=colour, lw=1.0 if ss == 0 else 0.7,
+                       ls="--" if ss == 0 else ":", alpha=0.8 if ss == 0 else 0.6,
+                       label=fam.name if first else None)  # fmt: skip
+            first = False
+            if ss == 0:
+                ax.annotate(f"{hh}×{fam.name}", (pp, 1.0), xycoords=("data", "axes fraction"),
+                            xytext=(2, -2), textcoords="offset points", rotation=90,
+                            va="top", ha="left", fontsize=7, color=colour)  # fmt: skip
+    if fams:
+        ax.legend(fontsize=8, loc="upper right")
+    ax.set_xlim(0.0, axis_max)
+    if not db:
+        ax.set_ylim(0.0, 1.12 * ymax if ymax > 0 else 1.0)
+    ax.set_xlabel("order [-]" if is_order else "frequency [Hz]")
+    ax.set_ylabel(_value_label(result.amplitude, result.units, db))
+    b = result.band
+    src = "kurtogram" if result.kurtogram is not None else "given"
+    if is_order:
+        res = f"RBW {result.resolution_orders:.3g} orders"
+        what = "squared envelope order spectrum"
+    else:
+        res = f"RBW {result.resolution_hz:.3g} Hz, {result.n_averages} avg."
+        what = "squared envelope spectrum"
+    ax.set_title(f"{result.name}: {what}, band {b.low:.5g}-{b.high:.5g} Hz ({src}), {res}",
+                 fontsize=10)  # fmt: skip
+    ax.grid(True, alpha=0.3)
+    return fig
+
+
+def kurtogram_figure(
+    kurtogram: Kurtogram,
+    *,
+    ax: Any = None,
+    cmap: str = "viridis",
+    figsize: tuple[float, float] = (9.0, 4.5),
+) -> Figure:
+    """The usual kurtogram image: kurtosis per band (colour), frequency across, level down;
+    the band of largest kurtosis framed.
+
+    Parameters
+    ----------
+    kurtogram : Kurtogram
+        Result of :func:`analysis.kurtogram.fast_kurtogram`.
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw into.
+    cmap : str
+        Colour map.
+    figsize : (float, float)
+        Size of a new figure [in].
+    """
+    from matplotlib.patches import Rectangle
+
+    fig, ax = _axes(ax, figsize)
+    freq, image = kurtogram.grid()
+    rows = kurtogram.levels.size
+    nyq = 0.5 * kurtogram.fs
+    edges_f = np.linspace(0.0, nyq, freq.size + 1)
+    edges_r = np.arange(rows + 1) - 0.5
+    mesh = ax.pcolormesh(edges_f, edges_r, image, cmap=cmap, shading="flat", rasterized=True)
+    fig.colorbar(mesh, ax=ax, label="spectral kurtosis K [-]")
+    ax.set_ylim(rows - 0.5, -0.5)
+    ax.set_yticks(np.arange(rows))
+    ax.set_yticklabels([f"{lv:.1f}".rstrip("0").rstrip(".") for lv in kurtogram.levels],
+                       fontsize=8)  # fmt: skip
+    ax.set_ylabel("level k (band width = fs / 2^(k+1))")
+    ax.set_xlabel("frequency [Hz]")
+    row, _ = kurtogram.best
+    b = kurtogram.band
+    ax.add_patch(Rectangle((b.low, row - 0.5), b.width, 1.0, fill=False, ec="w", lw=1.5))
+    ax.set_title(
+        f"{kurtogram.name}: fast kurtogram, K max = {kurtogram.kurtosis_max:.3g} at level "
+        f"{kurtogram.level:.1f}, band {b.low:.5g}-{b.high:.5g} Hz (centre {b.centre:.5g} Hz, "
+        f"width {b.width:.4g} Hz)",
+        fontsize=9,
+    )
+    return fig
+
+
+def spectral_kurtosis_figure(
+    sk: SpectralKurtosis,
+    *,
+    probability: float = 0.01,
+    ax: Any = None,
+    figsize: tuple[float, float] = (8.0, 3.8),
+) -> Figure:
+    """Spectral kurtosis against frequency with the Gaussian-noise threshold.
+
+    Parameters
+    ----------
+    sk : SpectralKurtosis
+        Result of :func:`analysis.kurtogram.spectral_kurtosis`.
+    probability : float, default 0.01
+        False-alarm probability per bin of the threshold drawn.
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw into.
+    figsize : (float, float)
+        Size of a new figure [in].
+    """
+    fig, ax = _axes(ax, figsize)
+    ax.plot(sk.frequency, sk.kurtosis, lw=0.9, color="C0", label="K(f)")
+    thr = sk.threshold(probability)
+    ax.axhline(thr, color="C3", ls="--", lw=0.9,
+               label=f"Gaussian noise, p = {probability:g}: {thr:.3g}")  # fmt: skip
+    ax.axhline(0.0, color="k", lw=0.5)
+    ax.set_xlim(0.0, float(sk.frequency[-1]))
+    ax.set_xlabel("frequency [Hz]")
+    ax.set_ylabel("spectral kurtosis K [-]")
+    ax.set_title(f"{sk.name}: spectral kurtosis, {sk.window} {sk.segment_length} samples "
+                 f"(RBW {sk.resolution_hz:.3g} Hz), {sk.n_frames} frames", fontsize=10)  # fmt: skip
+    ax.legend(fontsize=8)
+    ax.grid(True, alpha=0.3)
+    return fig
+
+
+def squared_envelope_figure(
+    env: SquaredEnvelope,
+    *,
+    duration: float | None = None,
+    ax: Any = None,
+    figsize: tuple[float, float] = (8.0, 3.5),
+) -> Figure:
+    """The squared envelope against time.
+
+    Parameters
+    ----------
+    env : SquaredEnvelope
+        Result of :func:`analysis.envelope.squared_envelope`.
+    duration : float, optional
+        Seconds shown from the start (default all).
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw into.
+    figsize : (float, float)
+        Size of a new figure [in].
+    """
+    fig, ax = _axes(ax, figsize)
+    t = env.time
+    keep = slice(None) if duration is None else t <= t[0] + float(duration)
+    ax.plot(t[keep], env.values[keep], lw=0.7)
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel(f"squared envelope [{env.units}]")
+    ax.set_title(f"{env.name}: squared envelope of {env.band.low:.5g}-{env.band.high:.5g} Hz",
+                 fontsize=10)  # fmt: skip
+    ax.grid(True, alpha=0.3)
+    return fig
