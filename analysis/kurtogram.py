@@ -4,8 +4,8 @@
 
     K(f) = <|X(t, f)|^4> / <|X(t, f)|^2>^2 - 2,
 
-the average ``<.>`` running over the frames ``t`` (Antoni 2006, eq. 21 with the STFT-based
-estimator of sec. 4). ``K = 0`` for stationary Gaussian noise (complex circular STFT
+the average ``<.>`` running over the frames ``t`` (Antoni 2006, its STFT-based estimator).
+``K = 0`` for stationary Gaussian noise (complex circular STFT
 coefficients), ``-1`` for a constant sine, and large where a band carries transients, which
 is what makes it the detector of impulsive (bearing, local gear) faults: it says *where* in
 frequency the impulses stand out of the noise. At DC and Nyquist the coefficients are real:
@@ -23,8 +23,12 @@ and the band of largest ``K`` is the one in which the impulses stand out best: t
 for envelope analysis (:mod:`analysis.envelope`). Here the band signals are not made by the
 paper's cascade of short quasi-analytic FIR filters but by the smooth-edged bands of
 :mod:`analysis.bands` in the DFT of the record (block by block), decimated like the paper's
-(a band of width ``B`` sampled at ``2B``): sharper band edges, the same tree, ``O(N log N)``
-per level.
+(a band of width ``B`` sampled at ``2B``): sharper band edges (gain 1/2 at the band
+edges, 1 over the central half: ``KURTOGRAM_TRANSITION``), the same tree, ``O(N log N)``
+per level. The band-signal samples within ten transition periods of the record's ends are
+left out (:func:`analysis.bands.band_moments`): there a band holds the filter's response to
+the start and end of the record, which would dominate a band with little energy. The band
+of largest ``K`` may be restricted to bands at least ``min_bandwidth`` wide.
 
 **Spread under Gaussian noise.** For ``M`` independent complex Gaussian samples the
 estimator has mean ``-2 / (M + 1)`` and variance ``4 / M`` (delta method; the fourth-moment
@@ -35,8 +39,8 @@ threshold ``u_(1-p) * 2 / sqrt(M_eff)``.
 
 **Caveats.** (1) Low frequency resolution (wide bands, short STFT windows) dilutes the
 impulses in the noise of the whole band: ``K`` of signal plus noise is
-``K_s / (1 + rho)^2`` with ``rho`` the noise-to-signal power ratio in the band (Antoni 2006,
-eq. 13), so a wide band of weak impulses reads low. (2) High resolution (narrow bands, long
+``K_s / (1 + rho)^2`` with ``rho`` the noise-to-signal power ratio in the band (Antoni
+2006), so a wide band of weak impulses reads low. (2) High resolution (narrow bands, long
 windows) lets the impulse responses of successive impacts overlap: the band signal tends to
 Gaussian and ``K`` falls again, and its estimate is noisier (fewer independent samples):
 the maximum over the many narrow bands of a Gaussian record is a few spreads above 0, not 0.

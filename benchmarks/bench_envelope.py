@@ -6,7 +6,7 @@ Run: ``python benchmarks/bench_envelope.py [--quick] [--repeat N]``.
 The record: 60 s (``--quick``: 2 s) of one float64 channel at 51.2 kHz, an impulse train
 (87.3 Hz, 1.5 % period jitter) through a 3.7 kHz resonance in white noise at -10 dB SNR.
 
-1. **Fast kurtogram**, levels 0 to 8 with the 1/3 levels (17 rows, 1281 bands).
+1. **Fast kurtogram**, levels 0 to 8 with the 1/3 levels (16 rows, 892 bands).
    Baseline: Antoni's (2007) decimating tree done the straightforward way: 16-tap
    ``scipy.signal.firwin`` low-pass prototypes (cut-off at a quarter of the node's band for
    the binary split, a sixth for the ternary split) modulated to quasi-analytic band-pass
@@ -20,10 +20,10 @@ The record: 60 s (``--quick``: 2 s) of one float64 channel at 51.2 kHz, an impul
 
 Times: median of ``--repeat`` runs, the two implementations interleaved (A, B, A, B, ...).
 Memory: peak allocation beyond the input (``tracemalloc``: NumPy's and pyFFTW's arrays) and
-the growth of the process's peak resident size (``resource.getrusage``: also FFTW's own
-work space), each in a fresh subprocess that makes a warm-up call on a short record (numba
-compiled or loaded, FFTW plans of other sizes) and then loads the record from a file, in
-units of one float64 channel (8 bytes per sample). The load average is printed beside the figures.
+the growth of the process's peak resident size (``VmHWM``: also FFTW's own work space),
+each in a fresh subprocess that makes a warm-up call on a short record (numba compiled or
+loaded, FFTW plans of other sizes) and then loads the record from a file, in units of one
+float64 channel (8 bytes per sample). The load average is printed beside the figures.
 """
 
 from __future__ import annotations
@@ -146,6 +146,20 @@ CASES = {
 # ---------------------------------------------------------------------------------- runs
 
 
+def peak_rss() -> int:
+    """Peak resident size of this process [bytes]: ``VmHWM`` of ``/proc/self/status``
+    (Linux; it starts afresh at exec, whereas ``ru_maxrss`` keeps the parent's peak at the
+    fork), else ``ru_maxrss``."""
+    try:
+        with open("/proc/self/status") as f:
+            for line in f:
+                if line.startswith("VmHWM:"):
+                    return int(line.split()[1]) * 1024
+    except OSError:
+        pass
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+
+
 def worker(case: str, which: int, path: str) -> None:
     """Memory of one call on the record saved at ``path``, in this (fresh) process; prints
     JSON. The record is loaded after the warm-up (on a short record), so that the peak
@@ -153,14 +167,14 @@ def worker(case: str, which: int, path: str) -> None:
     fn = CASES[case][which]
     fn(record(WARM_UP, seed=1))  # warm-up: numba compiled or loaded, imports done
     x = np.load(path)
-    rss0 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    rss0 = peak_rss()
     tracemalloc.start()
     base, _ = tracemalloc.get_traced_memory()
     fn(x)
     _, peak = tracemalloc.get_traced_memory()
     tracemalloc.stop()
-    rss1 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
-    print(json.dumps({"traced": peak - base, "rss": (rss1 - rss0) * 1024}))
+    rss1 = peak_rss()
+    print(json.dumps({"traced": peak - base, "rss": rss1 - rss0}))
 
 
 def memory(case: str, which: int, path: str) -> dict[str, float]:

@@ -135,7 +135,7 @@ def test_amplitude_convention_of_an_am_signal():
     assert es.amplitude == "peak" and es.kurtogram is None
     peaks = es.peaks(max_peaks=2)
     np.testing.assert_allclose(peaks.frequency, [fm, 2 * fm], rtol=1e-4)
-    np.testing.assert_allclose(peaks.amplitude, [2 * m * a * a, m * m * a * a / 2], rtol=2e-3)
+    np.testing.assert_allclose(peaks.amplitude, [2 * m * a * a, m * m * a * a / 2], rtol=1e-5)
     rms = envelope_spectrum(x, fs, band=(1000.0, 2000.0), amplitude="rms")
     np.testing.assert_allclose(rms.values[1:-1], es.values[1:-1] / np.sqrt(2), rtol=1e-12)
     # the default resolution: segments of a quarter of the record, Hann, 50 % overlap
@@ -237,7 +237,7 @@ def test_many_steady_tones_rate_is_the_chance_of_hitting_a_beat_line():
 
         rates[duration] = _false_rates(make, seeds=100 if duration > 5 else 200)
     assert rates[2.0][2] <= 0.3
-    assert rates[10.0][2] <= 0.12
+    assert rates[10.0][2] <= 0.08  # measured 0.24 (2 s) and 0.03 (10 s)
     assert rates[10.0][2] < rates[2.0][2]
 
 
