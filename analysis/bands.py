@@ -89,6 +89,13 @@ class Band:
     transition: float = float("nan")
 
     def __post_init__(self) -> None:
+        numbers = (int, float, np.number)
+        values = (self.low, self.high, self.transition)
+        if any(isinstance(v, bool) or not isinstance(v, numbers) for v in values):
+            raise ValueError(
+                f"band = ({self.low!r}, {self.high!r}), transition = {self.transition!r}: "
+                "not admissible, the edges and the transition must be numbers [Hz]"
+            )
         lo, hi = float(self.low), float(self.high)
         if not (math.isfinite(lo) and math.isfinite(hi) and 0.0 <= lo < hi):
             raise ValueError(
@@ -281,6 +288,18 @@ class BlockSpectra:
             yield plan.execute()[0], b * self.hop, min(self.hop, self.n - b * self.hop)
 
 
+def _check_ringing(margin: int, n: int, fs: float, band: Band) -> None:
+    """Refuse a band whose filter rings longer than the record (checked before the blocks,
+    whose size follows from it, are allocated)."""
+    if margin > n:
+        raise ValueError(
+            f"band = ({band.low:.6g}, {band.high:.6g}) Hz is too narrow for a record of "
+            f"{n / fs:.6g} s: its filter rings for {margin / fs:.6g} s "
+            f"({MARGIN_TRANSITIONS:g} / transition of {band.transition:.6g} Hz); widen the "
+            "band or give a longer record"
+        )
+
+
 def _band_bins(band: Band, nb: int, fs: float) -> tuple[int, int, int, float, float, float]:
     """First and last DFT bin of ``band``'s support, the bin moved to 0 Hz (the centre), and
     the rising and falling transition centres and the transition width, in bins of an
@@ -335,10 +354,10 @@ def band_moments(
         A level keeps no sample between its end guards.
     """
     unit = math.lcm(*(int(d) for d in decimations))
-    tw_min = min(b.transition for bands in levels for b in bands)
-    blocks = BlockSpectra(
-        x, unit=unit, margin=math.ceil(MARGIN_TRANSITIONS * fs / tw_min), workers=workers
-    )
+    narrowest = min((b for bands in levels for b in bands), key=lambda b: b.transition)
+    margin = math.ceil(MARGIN_TRANSITIONS * fs / narrowest.transition)
+    _check_ringing(margin, x.shape[-1], fs, narrowest)
+    blocks = BlockSpectra(x, unit=unit, margin=margin, workers=workers)
     nb = blocks.block
     ifft = RowIfft(nb, workers=workers)
     tables = []
@@ -411,9 +430,9 @@ def squared_envelope_samples(
         ``ceil(n / D)`` samples, in the squared units of ``x``.
     """
     d = int(decimation)
-    blocks = BlockSpectra(
-        x, unit=d, margin=math.ceil(MARGIN_TRANSITIONS * fs / band.transition), workers=workers
-    )
+    margin = math.ceil(MARGIN_TRANSITIONS * fs / band.transition)
+    _check_ringing(margin, x.shape[-1], fs, band)
+    blocks = BlockSpectra(x, unit=d, margin=margin, workers=workers)
     nb = blocks.block
     length = nb // d
     k_lo, k_hi, shift, rise, fall, width = _band_bins(band, nb, fs)

@@ -1,8 +1,9 @@
 """Figure builders for envelope analysis and spectral kurtosis.
 
 Plotting only, like :mod:`analysis.plots`: each function takes a result of
-:mod:`analysis.envelope` or :mod:`analysis.kurtogram` and returns a
-:class:`matplotlib.figure.Figure` built without pyplot (a new one, or the figure of ``ax=``).
+:mod:`analysis.envelope`, :mod:`analysis.envelope_orders` or :mod:`analysis.kurtogram` and
+returns a :class:`matplotlib.figure.Figure` built without pyplot (a new one, or the figure
+of ``ax=``).
 """
 
 from __future__ import annotations
@@ -18,7 +19,8 @@ from analysis.lines import LineFamily
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-    from analysis.envelope import EnvelopeOrderSpectrum, EnvelopeSpectrum, SquaredEnvelope
+    from analysis.envelope import EnvelopeSpectrum, SquaredEnvelope
+    from analysis.envelope_orders import EnvelopeOrderSpectrum
     from analysis.kurtogram import Kurtogram, SpectralKurtosis
 
 __all__ = [

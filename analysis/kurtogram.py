@@ -69,7 +69,7 @@ import numpy as np
 import scipy.special
 
 from analysis.bands import Band, band_moments, smooth_step
-from analysis.checks import require_int, time_or_rate
+from analysis.checks import require_int, require_real, time_or_rate
 from analysis.envelope_plots import kurtogram_figure, spectral_kurtosis_figure
 from analysis.fft import rfft_plan
 from analysis.inputs import one_channel, signal_input
@@ -558,8 +558,8 @@ def fast_kurtogram(
     nyq = 0.5 * sig.fs
     min_bw = 0.0
     if min_bandwidth is not None:
-        min_bw = float(min_bandwidth)
-        if not (math.isfinite(min_bw) and 0.0 <= min_bw <= nyq):
+        min_bw = require_real(min_bandwidth, "min_bandwidth")
+        if not 0.0 <= min_bw <= nyq:
             raise ValueError(
                 f"min_bandwidth = {min_bandwidth!r} Hz is not admissible: must be in "
                 f"[0, fs/2 = {nyq:g}]"

@@ -40,7 +40,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from analysis.checks import require_finite, require_int, require_positive
+from analysis.checks import require_finite, require_int, require_positive, require_real
 
 if TYPE_CHECKING:
     import xarray as xr
@@ -89,7 +89,9 @@ class LineFamily:
     sidebands: int = 0
 
     def __post_init__(self) -> None:
-        require_positive(self.fundamental, f"family {self.name!r}: fundamental")
+        require_positive(require_real(self.fundamental, f"family {self.name!r}: fundamental"),
+                         f"family {self.name!r}: fundamental")  # fmt: skip
+        require_real(self.sideband_spacing, f"family {self.name!r}: sideband_spacing")
         require_int(self.harmonics, f"family {self.name!r}: harmonics", 1)
         require_int(self.sidebands, f"family {self.name!r}: sidebands", 0)
         require_positive(self.sideband_spacing, f"family {self.name!r}: sideband_spacing",
@@ -288,12 +290,10 @@ def check_lines(
     pw = require_finite(power, "power")
     if ax.ndim != 1 or pw.shape != ax.shape or ax.size < 2 * _MIN_FLOOR_LINES + 3:
         raise ValueError("axis and power must be 1-D of equal length (>= 23 lines)")
-    tol = require_positive(tolerance, "tolerance")
-    if tol >= 0.5:
+    tol = require_real(tolerance, "tolerance")
+    if not 0.0 < tol < 0.5:
         raise ValueError(f"tolerance = {tolerance!r} is not admissible: must be in (0, 0.5)")
-    thr = float(threshold_db)
-    if not math.isfinite(thr):
-        raise ValueError(f"threshold_db = {threshold_db!r} is not admissible: must be finite")
+    thr = require_real(threshold_db, "threshold_db")
     require_int(min_harmonics, "min_harmonics", 1)
     spacing = float(ax[1] - ax[0])
     h, s, p = family.lines()

@@ -21,11 +21,8 @@ import xarray as xr
 from matplotlib.figure import Figure
 
 from analysis.bands import Band
-from analysis.envelope import (
-    envelope_order_spectrum,
-    envelope_spectrum,
-    squared_envelope,
-)
+from analysis.envelope import envelope_spectrum, squared_envelope
+from analysis.envelope_orders import envelope_order_spectrum
 from analysis.kurtogram import fast_kurtogram
 from analysis.lines import LineFamily, bearing_families, check_lines
 
@@ -399,11 +396,17 @@ def test_a_dataarray_gives_rate_units_and_name():
         ({"max_level": 40}, "max_level"),
         ({"max_level": True}, "max_level"),
         ({"amplitude": "dB"}, "amplitude"),
+        ({"resolution": True}, "resolution"),
+        ({"resolution": "1"}, "resolution"),
+        ({"min_bandwidth": True}, "min_bandwidth"),
+        ({"band": (True, 2000.0)}, "band"),
+        ({"band": ("1000", 2000.0)}, "band"),
+        ({"band": (1000.0, 1000.5)}, "too narrow"),
     ],
 )
 def test_bad_input_names_the_parameter(kwargs, match):
     x = np.random.default_rng(0).standard_normal(20000)
-    with pytest.raises(ValueError, match=match):
+    with pytest.raises((ValueError, TypeError), match=match):  # TypeError: a bool, a string
         envelope_spectrum(x, 10000.0, **kwargs)
 
 
@@ -430,6 +433,15 @@ def test_bad_signals_are_refused():
         LineFamily("f", 1.0, sidebands=1)
     with pytest.raises(ValueError, match="bpfo"):
         bearing_families(30.0)
+    with pytest.raises(TypeError, match="fundamental"):
+        LineFamily("f", True)
+    axis = np.arange(100.0)
+    with pytest.raises(ValueError, match="tolerance"):
+        check_lines(axis, np.ones(100), LineFamily("f", 10.0), tolerance=0.6)
+    with pytest.raises(ValueError, match="threshold_db"):
+        check_lines(axis, np.ones(100), LineFamily("f", 10.0), threshold_db=float("nan"))
+    with pytest.raises(ValueError, match="power"):
+        check_lines(axis, np.ones(99), LineFamily("f", 10.0))
 
 
 def test_bearing_families_follow_randall_and_antoni():
