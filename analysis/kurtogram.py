@@ -1,6 +1,6 @@
 """Spectral kurtosis (Antoni 2006) and the fast kurtogram (Antoni 2007).
 
-**Spectral kurtosis** of a signal with short-time Fourier transform ``X(t, f)``:
+**Spectral kurtosis** of a signal with short-time Fourier transform ``X(t, f)``::
 
     K(f) = <|X(t, f)|^4> / <|X(t, f)|^2>^2 - 2,
 
@@ -15,7 +15,7 @@ biased the same way.
 **Fast kurtogram** (Antoni 2007): the kurtosis of the complex band signals of a 1/3-binary
 tree of bands covering ``[0, fs/2]``: level ``k`` (``k = 0, 1, 2, ...``) cuts it into
 ``2^k`` bands of ``fs / 2^(k+1)``, the intermediate level ``k + log2(3) - 1`` (labelled 1.6,
-2.6, ...) into ``3 * 2^(k-1)`` bands of ``fs / (3 * 2^k)``. For a band signal ``c(n)``
+2.6, ...) into ``3 * 2^(k-1)`` bands of ``fs / (3 * 2^k)``. For a band signal ``c(n)``::
 
     K = <|c(n)|^4> / <|c(n)|^2>^2 - 2,
 
