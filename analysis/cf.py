@@ -1,7 +1,7 @@
-"""CF-1.11 conventions of the files every tool reads: the time coordinate, labels, history.
+"""CF-1.11 conventions of every file the toolkit writes: time, labels, provenance.
 
-Decisions (documented in ``docs/analysis-readers-speed.md``), checked with the IOOS
-compliance-checker at CF-1.11 in the tests:
+Decisions (documented in ``docs/files.md``), checked with the IOOS compliance-checker at
+CF-1.11 in the tests (no message at any priority):
 
 * **Time** stays float64 *elapsed* seconds in memory and on disk, so that analysis code and
   users never juggle datetimes, but its attributes make it a CF time coordinate:
@@ -10,18 +10,29 @@ compliance-checker at CF-1.11 in the tests:
   elapsed seconds without leap seconds) and ``units = "seconds since <reference>"``, where
   the reference is the absolute start of the recording when the file states it
   (``time_coverage_start``) and otherwise the Unix epoch ``1970-01-01T00:00:00Z`` as a
-  conventional origin: a run or recording without an absolute
-  start then decodes to dates in January 1970, read as "seconds after the start". A plain
-  ``units = "s"`` is not a CF time unit (the checker refuses it). Open files with
-  ``decode_times=False`` to keep float seconds; the analysis functions also accept the
-  decoded datetimes (they use the time since the first sample).
-* **String labels** (mesh, flank, bearing, member names) cannot be CF coordinate variables,
-  which must be numeric. In memory they are dimension coordinates (``ds.sel(mesh=...)``); in
-  a file each becomes a label variable ``<dim>_label(<dim>)`` (an auxiliary coordinate, CF
-  section 6.1) and the dimension has no coordinate variable. :func:`labels_to_cf` and
-  :func:`labels_from_cf` convert between the two.
-* **history** is a deterministic global attribute (which program made the data, no time
-  stamp, so that the same input gives the same file bit for bit).
+  conventional origin. CF and its checker leave no other choice for a dimension named
+  ``time``: the checker requires ``standard_name = "time"`` on it (CF section 5.1) and a time
+  coordinate needs a reference date (section 4.4). xarray decodes every ``units`` holding
+  ``since`` into ``datetime64``, so a plain ``xarray.open_dataset`` gives datetimes (in
+  January 1970 without an absolute start, read as time after the start); ``decode_times=False``
+  or ``engine="gearvib"`` (:mod:`gearvib.xarray_backend`) give float seconds, and the analysis
+  functions accept the decoded axes as well (:func:`elapsed_seconds`, time since the first
+  sample).
+* **String labels** (mesh, flank, sensor, channel names) are dimension coordinates in memory
+  (``ds.sel(mesh=...)``). In a file each is a character array named after its dimension,
+  ``char mesh(mesh, mesh_strlen)`` with ``_Encoding = "utf-8"``: the netCDF User Guide's form
+  of a string coordinate variable and a CF section 6.1 label variable. A plain
+  ``xarray.open_dataset`` decodes it into a string index, so ``ds.sel(mesh="sun-planet1")``
+  works on any reader; the compliance-checker accepts it (a numeric-only CF *coordinate
+  variable* is one-dimensional, a label array is two-dimensional). :func:`labels_to_cf` sets
+  the encoding, :func:`labels_from_cf` restores ``str`` labels (and reads files of earlier
+  versions, whose labels were ``<dim>_label`` variables).
+* **Provenance**: :func:`cf_dataset` finishes every result Dataset with ``Conventions``,
+  ``title``, ``source``, ``history``, the toolkit version and the inputs. ``history`` is
+  deterministic (which program made the data, no time stamp), so the same input gives the
+  same file bit for bit.
+* **Levels in dB** are not UDUNITS units: such variables have ``units = "1"``, the decibel
+  reference in ``long_name`` (as the run-up maps do).
 """
 
 from __future__ import annotations

@@ -157,20 +157,57 @@ def uniform_rate(time: Any, name: str = "time", rtol: float = 1e-6) -> float:
 
     Unlike :func:`sample_rate` it never converts the whole axis at once, so it suits
     memory-mapped or very long axes.
+
+    Parameters
+    ----------
+    time : array_like
+        Float seconds, or a decoded axis (``datetime64``/``timedelta64``, as
+        ``xarray.open_dataset`` gives for CF time units), counted from its first sample.
+    name : str
+        Name of the axis in messages.
+    rtol : float
+        Admissible deviation of every step from the mean step, relative to the step.
+
+    Notes
+    -----
+    Every step ``t[k+1] - t[k]`` must equal the mean step ``dt = (t[-1] - t[0]) / (n - 1)``
+    within ``rtol * dt`` plus the resolution of the representation: ``1e-12 |t[-1]|`` for float
+    seconds (the rounding of large values), two quanta of a decoded axis (its unit, 1 ns for
+    ``datetime64[ns]``; a decoder rounds every sample to it, so a step of 1/51200 s =
+    19531.25 ns is stored as 19531 or 19532 ns). A real gap or a second sample rate deviates
+    by a fraction of the step, far above that.
     """
     t = np.asarray(time)
     if t.ndim != 1 or t.size < 2:
         raise ValueError(f"{name}: needs a 1-D axis with at least two samples")
-    if not np.issubdtype(t.dtype, np.number):
+    decoded = t.dtype.kind in "mM"
+    if not decoded and not np.issubdtype(t.dtype, np.number):
         raise ValueError(f"{name}: must be numeric seconds (units 's'), got dtype {t.dtype}")
     n = t.size
-    dt = (float(t[-1]) - float(t[0])) / (n - 1)
+    if decoded:
+        unit, count = np.datetime_data(t.dtype)
+        quantum = float(np.timedelta64(count, unit) / np.timedelta64(1, "s"))
+        origin = t[0]
+
+        def seconds(seg: np.ndarray) -> np.ndarray:
+            return np.asarray((seg - origin) / np.timedelta64(1, "s"), dtype=float)
+
+        first, last = 0.0, float(seconds(t[-1:])[0])
+        resolution = 2.0 * quantum
+    else:
+
+        def seconds(seg: np.ndarray) -> np.ndarray:
+            return np.asarray(seg, dtype=float)
+
+        first, last = float(t[0]), float(t[-1])
+        resolution = 1e-12 * abs(last)
+    dt = (last - first) / (n - 1)
     if not np.isfinite(dt) or dt <= 0:
         raise ValueError(f"{name} must be finite and strictly increasing")
-    tol = rtol * dt + 1e-12 * abs(float(t[-1]))
+    tol = rtol * dt + resolution
     block = 1 << 18
     for start in range(0, n - 1, block):
-        seg = np.asarray(t[start : min(n, start + block + 1)], dtype=float)
+        seg = seconds(t[start : min(n, start + block + 1)])
         if not np.all(np.isfinite(seg)):
             raise ValueError(f"{name}: non-finite value near sample {start}")
         d = np.diff(seg)
@@ -183,7 +220,9 @@ def uniform_rate(time: Any, name: str = "time", rtol: float = 1e-6) -> float:
         if dev > tol:
             raise ValueError(
                 f"{name} is not uniformly sampled: step deviates by {dev:.3g} s from the mean "
-                f"{dt:.6g} s (allowed {rtol:g} relative); resample the channel first"
+                f"{dt:.6g} s (allowed {rtol:g} relative"
+                + (f" plus {resolution:.3g} s, two quanta of its {t.dtype}" if decoded else "")
+                + "); resample the channel first"
             )
     return 1.0 / dt
 

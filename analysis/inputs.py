@@ -310,8 +310,9 @@ def signal_input(
             raise ValueError(f"{where}: DataArray needs a 'time' coordinate in seconds")
         if axis is not None:
             raise ValueError("axis= is for plain arrays; a DataArray has its 'time' dimension")
-        t_coord = elapsed_seconds(x["time"].values)  # decoded datetimes: since the first
-        fs_t = uniform_rate(t_coord, f"{where}.time")
+        t_raw = x["time"].values  # float seconds, or decoded datetimes: since the first
+        fs_t = uniform_rate(t_raw, f"{where}.time")  # a decoded axis within its resolution
+        t_coord = elapsed_seconds(t_raw)
         if fs is not None and abs(float(fs) - fs_t) > 1e-6 * fs_t:
             raise ValueError(
                 f"sample-rate mismatch: fs = {fs!r} Hz but the time coordinate of {where} "

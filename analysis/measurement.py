@@ -50,7 +50,14 @@ from analysis.readers.integrity import require_memory
 from analysis.readers.ncimage import file_image, load_image, open_image
 from analysis.speed import SpeedReference, from_angle, from_rpm, from_tacho
 
-__all__ = ["MIN_SAMPLES", "RUN_CHANNELS", "Measurement", "load_measurement"]
+__all__ = [
+    "MIN_SAMPLES",
+    "RUN_CHANNELS",
+    "Measurement",
+    "load_measurement",
+    "reference_channel",
+    "tacho_reference",
+]
 
 MIN_SAMPLES = 64
 """Fewest samples of a record that order analysis can use."""
@@ -251,12 +258,13 @@ def _netcdf_run_image(path: Path) -> bytes | None:
 def _time_seconds(ds: xr.Dataset, where: str) -> np.ndarray:
     if "time" not in ds.coords:
         raise ValueError(f"{where} has no 'time' coordinate; a measurement needs one in seconds")
-    t = np.asarray(elapsed_seconds(ds["time"].values), dtype=float)
+    raw = np.asarray(ds["time"].values)
+    t = np.asarray(elapsed_seconds(raw), dtype=float)
     if t.ndim != 1 or t.size < MIN_SAMPLES:
         raise ValueError(
             f"{where} has {t.size} samples; a measurement needs at least {MIN_SAMPLES}"
         )
-    uniform_rate(t, f"{where}: time")
+    uniform_rate(raw, f"{where}: time")  # a decoded (datetime) axis within its resolution
     return t
 
 
@@ -385,13 +393,14 @@ def _channels_of_layout(ds: xr.Dataset, t: np.ndarray) -> xr.Dataset:
 # ---------------------------------------------------------------------------------------------
 
 
-def _require_channel(signals: xr.Dataset, name: str, option: str) -> xr.DataArray:
-    if not isinstance(name, str) or name not in signals.data_vars:
+def _require_channel(signals: Any, name: str, option: str) -> xr.DataArray:
+    names = list(signals.data_vars) if hasattr(signals, "data_vars") else \
+        _channels_along_time(signals)
+    if not isinstance(name, str) or name not in names:
         raise ValueError(
-            f"{option} = {name!r} is not a channel of the measurement; channels: "
-            f"{list(signals.data_vars)}"
+            f"{option} = {name!r} is not a channel of the measurement; channels: {names}"
         )
-    return signals[name]
+    return signals[name] if hasattr(signals, "data_vars") else signals.coords[name]
 
 
 def _ppr(value: Any, channel: xr.DataArray) -> tuple[int, str]:
@@ -412,10 +421,32 @@ def _ppr(value: Any, channel: xr.DataArray) -> tuple[int, str]:
     return int(value), origin
 
 
-def _speed_from_tacho(signals: xr.Dataset, name: str, ppr: Any, t: np.ndarray
-                      ) -> tuple[SpeedReference, str]:
+def tacho_reference(signals: Any, name: str, pulses_per_rev: Any, t: np.ndarray
+                    ) -> tuple[SpeedReference, str]:
+    """The speed and angle of the reference shaft from a tacho (pulse) channel.
+
+    Parameters
+    ----------
+    signals : xarray.Dataset or xarray.DataArray
+        Holds the tacho channel ``name`` along ``time`` (a data variable, or a coordinate of
+        a DataArray).
+    name : str
+        The tacho channel.
+    pulses_per_rev : int or None
+        Pulses per revolution (1..10 000); ``None``: the channel's ``pulses_per_rev``
+        attribute, else 1.
+    t : numpy.ndarray
+        Time [s] of the samples (uniform).
+
+    Returns
+    -------
+    (analysis.speed.SpeedReference, str)
+        The reference (:func:`analysis.speed.from_tacho` on ``t - t[0]``) and a sentence
+        saying how it was obtained, e.g. ``"tacho channel 'tacho' (sun shaft), 60 pulses/rev
+        (given), 1234 pulses"``.
+    """
     ch = _require_channel(signals, name, "tacho")
-    n, origin = _ppr(ppr, ch)
+    n, origin = _ppr(pulses_per_rev, ch)
     fs = 1.0 / float(np.median(np.diff(t)))
     try:
         ref = from_tacho(np.asarray(ch.values, dtype=float), fs, pulses_per_rev=n,
@@ -451,16 +482,34 @@ def _speed_from_channel(signals: xr.Dataset, name: str, t: np.ndarray, kind: str
     return ref, f"angle channel {name!r} [{ch.attrs.get('units', '')}]"
 
 
-def _by_name(signals: xr.Dataset) -> tuple[str, str] | None:
-    """``(kind, channel)`` of a channel named tacho / speed / rpm (case-insensitive)."""
+def _channels_along_time(signals: Any) -> list[str]:
+    """Names of the data variables (and, for a DataArray, the coordinates) along ``time``."""
+    pool = signals.data_vars if hasattr(signals, "data_vars") else signals.coords
+    return [str(k) for k, v in pool.items() if v.dims == ("time",) and str(k) != "time"]
+
+
+def reference_channel(signals: Any) -> tuple[str, str] | None:
+    """The speed-reference channel that :func:`load_measurement` (and the command line) uses
+    when none is named.
+
+    Parameters
+    ----------
+    signals : xarray.Dataset or xarray.DataArray
+        Channels along ``time`` (for a DataArray, its coordinates along ``time``).
+
+    Returns
+    -------
+    (str, str) or None
+        ``(kind, channel)`` with ``kind`` ``"tacho"``, ``"speed"`` or ``"angle"``: a channel
+        named ``tacho`` (case-insensitive), else one named ``speed`` or ``rpm``, else the one
+        whose units are an angle or a rotational speed
+        (:func:`analysis.inputs.find_reference`); ``None`` when there is none.
+    """
+    names = _channels_along_time(signals)
     for wanted in ("tacho", "speed"):
-        for k in signals.data_vars:
-            if _REFERENCE_NAMES.get(str(k).lower()) == wanted:
-                return wanted, str(k)
-    return None
-
-
-def _by_units(signals: xr.Dataset) -> tuple[str, str] | None:
+        for k in names:
+            if _REFERENCE_NAMES.get(k.lower()) == wanted:
+                return wanted, k
     try:
         ref = find_reference(signals)
     except ValueError:
@@ -589,7 +638,7 @@ def load_measurement(
         elif extra.get("kind") == "simulation" and _RUN_ANGLE in signals.data_vars:
             kind, name = "angle", _RUN_ANGLE  # a run without a tacho: its own input angle
         else:
-            found = _by_name(signals) or _by_units(signals)
+            found = reference_channel(signals)
             if found is None:
                 raise ValueError(
                     "no speed reference found: give --tacho CHANNEL [--pulses-per-rev N], "
@@ -603,7 +652,7 @@ def load_measurement(
             raise ValueError(f"pulses_per_rev applies to a tacho channel; the reference is the "
                              f"{kind} channel {name!r}")
         if kind == "tacho":
-            sref, reference = _speed_from_tacho(signals, name, pulses_per_rev, t)
+            sref, reference = tacho_reference(signals, name, pulses_per_rev, t)
         else:
             sref, reference = _speed_from_channel(signals, name, t, kind)
             if extra.get("kind") == "simulation" and (name == _RUN_ANGLE
