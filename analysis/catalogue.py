@@ -31,6 +31,7 @@ from typing import Any
 
 import numpy as np
 
+from analysis.cf import cf_dataset
 from analysis.checks import require_finite, require_positive
 
 __all__ = [
@@ -339,7 +340,8 @@ class KinematicCatalogue:
         }
         if self.speed_rpm is not None:
             attrs["reference_speed_rpm"] = float(self.speed_rpm)
-        return xr.Dataset(data, coords=coords, attrs=attrs)
+        ds = xr.Dataset(data, coords=coords, attrs=attrs)
+        return cf_dataset(ds, title="kinematic frequency catalogue", producer="analysis.catalogue")
 
     def to_dict(self, *, visible_only: bool = True) -> dict:
         """``{"reference": {...}, "lines": [{family, harmonic, sideband, member,

@@ -42,6 +42,7 @@ import numpy as np
 import xarray as xr
 from scipy.signal import find_peaks as _scipy_peaks
 
+from analysis.cf import cf_dataset
 from analysis.maps import rpm_frequency_map, rpm_order_map
 from analysis.measurement import Measurement
 from analysis.runup import map_features
@@ -304,7 +305,10 @@ class MeasuredSimulatedComparison:
                    "order_resolution": float(self.order_resolution),
                    "match_tolerance": float(self.match_tolerance),
                    "summary": self.summary(), "notes": json.dumps(list(self.notes))})
-        return ds
+        return cf_dataset(
+            ds, title="measured against simulated",
+            producer="analysis.comparison.compare_measurements"
+        )
 
     def plot(self, figsize: tuple[float, float] = (8.0, 7.5)) -> Figure:
         """Order spectra of both records (lines marked by status) and the difference map."""

@@ -42,6 +42,7 @@ import numpy as np
 import xarray as xr
 from scipy import ndimage, signal, stats
 
+from analysis.cf import cf_dataset
 from analysis.resample import resample_to_angle
 
 __all__ = [
@@ -667,7 +668,7 @@ class Diagnosis:
                                                 for c in self.causes}),
                    "next_steps": "; ".join(self.next_steps),
                    "notes": "; ".join(self.notes), **self.attrs})
-        return ds
+        return cf_dataset(ds, title="gearvib fault-cause diagnosis", producer="analysis.diagnosis")
 
     def plot(self, *, top: int = 3, figsize: tuple[float, float] = (9.0, 7.0)):
         """The measured difference against the signatures of the ``top`` causes.

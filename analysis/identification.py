@@ -30,6 +30,7 @@ from typing import Any
 
 import numpy as np
 
+from analysis.cf import cf_dataset
 from analysis.checks import require_finite, require_positive
 
 __all__ = [
@@ -571,7 +572,7 @@ class PeakIdentification:
             return (dims, x, {"units": units, "long_name": long_name})
 
         pr = ("peak", "rank")
-        return xr.Dataset(
+        ds = xr.Dataset(
             {
                 "peak_position": v(self.peaks, unit, f"peak {self.axis}"),
                 "label": v(np.asarray(self.labels, dtype=str), "1", "identification label"),
@@ -602,6 +603,10 @@ class PeakIdentification:
                    "band_high": float(self.band[1]), "local_width": self.local_width,
                    "max_coincidence": self.max_coincidence,
                    **{f"coverage_{k2}": float(v2) for k2, v2 in self.coverage.items()}},
+        )
+        return cf_dataset(
+            ds, title="identified peaks",
+            producer="analysis.identification.identify_peaks"
         )
 
     def plot(self, frequency: Any = None, amplitude: Any = None, ax: Any = None,

@@ -29,7 +29,7 @@ from typing import TYPE_CHECKING, Any, Literal, Self
 
 import numpy as np
 
-from analysis.cf import processing_attrs
+from analysis.cf import cf_dataset, processing_attrs
 from analysis.checks import require_choice, require_finite
 from analysis.frames import frame_coords, frequency_plan, order_plan, stft_into
 from analysis.inputs import channel_coords, dataset_reference, dataset_variable, select_channel
@@ -153,7 +153,10 @@ class _MapBase:
             **self._attrs(),
         )
         ds.attrs.update(processing_attrs(self.reference, self.notes))
-        return ds
+        kind = "rpm_order_map" if name == "order" else "rpm_frequency_map"
+        return cf_dataset(ds, title=f"run-up {name} map of {self.name}",
+                          producer=f"analysis.maps.{kind}",
+                          inputs={"signal": self.name, "speed_reference": self.reference})
 
 
 @dataclass
@@ -528,7 +531,7 @@ class OverallLevel:
             "scale": self.scale,
         }
         attrs.update(processing_attrs(self.reference))
-        return xr.Dataset(
+        ds = xr.Dataset(
             {
                 "overall_level": (
                     (*self.dims, "time"),
@@ -542,6 +545,9 @@ class OverallLevel:
             },
             attrs=attrs,
         )
+        return cf_dataset(ds, title=f"overall level of {self.name}",
+                          producer="analysis.maps.overall_level",
+                          inputs={"signal": self.name, "speed_reference": self.reference})
 
     def plot(self, **kwargs: Any) -> matplotlib.figure.Figure:
         """Figure (see :func:`analysis.plots.overall_level_figure`)."""
@@ -647,7 +653,7 @@ class Campbell:
         """Dataset with ``order_frequency(order, rpm)`` and ``critical_rpm(order, mode)``."""
         import xarray as xr
 
-        return xr.Dataset(
+        ds = xr.Dataset(
             {
                 "order_frequency": (
                     ("order", "rpm"),
@@ -682,6 +688,7 @@ class Campbell:
                 ),
             },
         )
+        return cf_dataset(ds, title="Campbell diagram", producer="analysis.maps.campbell")
 
     def plot(self, **kwargs: Any) -> matplotlib.figure.Figure:
         """Figure (see :func:`analysis.plots.campbell_figure`)."""

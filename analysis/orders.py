@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
-from analysis.cf import processing_attrs
+from analysis.cf import cf_dataset, processing_attrs
 from analysis.checks import require_block_size, require_choice, require_finite, time_or_rate
 from analysis.frames import (
     BLOCK_ELEMENTS,
@@ -152,7 +152,7 @@ class OrderSpectrum:
             "max_order": float(self.max_order),
         }
         attrs.update(processing_attrs(self.reference, self.notes))
-        return xr.Dataset(
+        ds = xr.Dataset(
             {
                 "order_spectrum": (
                     (*self.dims, "order"),
@@ -170,6 +170,9 @@ class OrderSpectrum:
             },
             attrs=attrs,
         )
+        return cf_dataset(ds, title=f"{long} of {self.name}",
+                          producer="analysis.orders.order_spectrum",
+                          inputs={"signal": self.name, "speed_reference": self.reference})
 
     def peaks(self, **kwargs: Any) -> Peaks:
         """Peaks (see :func:`analysis.spectrum.find_peaks`); ``frequency`` is in orders."""
@@ -444,7 +447,7 @@ class OrderCut:
             "scale": self.scale,
             "bandwidth": float(self.bandwidth),
             "bandwidth_kind": self.bandwidth_kind,
-            "source": self.source,
+            "cut_source": self.source,
             "window": self.window,
             "resolution": float(self.resolution),
             "resolution_units": self.resolution_units,
@@ -453,7 +456,7 @@ class OrderCut:
             "overlap": float(self.overlap),
         }
         attrs.update(processing_attrs(self.reference, self.notes))
-        return xr.Dataset(
+        ds = xr.Dataset(
             {
                 "level": (
                     (*self.dims, "order", "time"),
@@ -468,6 +471,9 @@ class OrderCut:
             },
             attrs=attrs,
         )
+        return cf_dataset(ds, title=f"order cuts of {self.name}",
+                          producer="analysis.orders.order_cuts",
+                          inputs={"signal": self.name, "speed_reference": self.reference})
 
     def plot(self, **kwargs: Any) -> matplotlib.figure.Figure:
         """Figure (see :func:`analysis.plots.order_cuts_figure`)."""

@@ -47,7 +47,7 @@ import numpy as np
 import scipy.integrate
 import scipy.signal
 
-from analysis.cf import processing_attrs
+from analysis.cf import cf_dataset, processing_attrs
 from analysis.checks import (
     BLOCK_SAMPLES,
     require_block_size,
@@ -178,7 +178,7 @@ class AngleSignal:
             "oversampling": int(self.oversampling),
         }
         attrs.update(processing_attrs(self.reference, self.notes))
-        return xr.Dataset(
+        ds = xr.Dataset(
             {
                 self.name: (
                     (*lead, "angle"),
@@ -188,6 +188,11 @@ class AngleSignal:
             },
             coords=coords,
             attrs=attrs,
+        )
+        return cf_dataset(
+            ds, title=f"{self.name} resampled to the shaft angle",
+            producer="analysis.resample.resample_to_angle",
+            inputs={"signal": self.name, "speed_reference": self.reference}
         )
 
 

@@ -31,6 +31,7 @@ import numpy as np
 import scipy.ndimage
 import scipy.signal
 
+from analysis.cf import cf_dataset
 from analysis.checks import require_finite, require_positive
 
 __all__ = [
@@ -201,7 +202,7 @@ class MapFeatures:
         """Features and profiles as :class:`xarray.Dataset` (CF attributes)."""
         import xarray as xr
 
-        return xr.Dataset(
+        ds = xr.Dataset(
             {
                 "ray_order": ("ray", self.orders, {"units": "1",
                                                    "long_name": "order of an order-locked ray"}),
@@ -236,6 +237,7 @@ class MapFeatures:
             attrs={"speed_low_rpm": self.speed_range[0], "speed_high_rpm": self.speed_range[1],
                    "notes": " | ".join(self.notes)},
         )
+        return cf_dataset(ds, title="run-up map features", producer="analysis.runup.map_features")
 
     def plot(self, ax: Any = None):
         """Both profiles with the features marked (two stacked axes unless ``ax`` given)."""

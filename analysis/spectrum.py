@@ -32,6 +32,7 @@ import numpy as np
 import scipy.optimize
 import scipy.signal
 
+from analysis.cf import cf_dataset
 from analysis.checks import require_choice, require_int, time_or_rate
 from analysis.fft import RfftPlan, rfft_plan
 from analysis.inputs import channel_coords, select_channel, signal_input
@@ -193,7 +194,8 @@ class Spectrum:
             average=self.average,
             sample_rate_hz=float(self.fs),
         )
-        return ds
+        return cf_dataset(ds, title=f"{long} of {self.name}",
+                          producer="analysis.spectrum.spectrum", inputs={"signal": self.name})
 
     def peaks(self, **kwargs: Any) -> Peaks:
         """Shortcut for :func:`find_peaks` ``(self, **kwargs)``."""
@@ -465,7 +467,7 @@ class Peaks:
         """:class:`xarray.Dataset` with dimension ``peak``."""
         import xarray as xr
 
-        return xr.Dataset(
+        ds = xr.Dataset(
             {
                 "frequency": (
                     "peak",
@@ -497,6 +499,7 @@ class Peaks:
             },
             attrs={"scaling": self.scaling, "window": self.window},
         )
+        return cf_dataset(ds, title="spectral peaks", producer="analysis.spectrum.find_peaks")
 
 
 class _Kernel:

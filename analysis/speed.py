@@ -25,7 +25,7 @@ import xarray as xr
 from scipy.interpolate import CubicSpline, PchipInterpolator, make_lsq_spline
 from scipy.ndimage import median_filter
 
-from analysis.cf import time_attrs
+from analysis.cf import cf_dataset, time_attrs
 from analysis.checks import require_finite, require_monotonic, require_positive
 
 __all__ = ["SpeedAccuracy", "SpeedReference", "from_angle", "from_rpm", "from_tacho"]
@@ -109,7 +109,7 @@ class SpeedReference:
             "speed_method": self.method,
         }
         attrs.update({f"speed_{k}": v for k, v in asdict(self.accuracy).items()})
-        return xr.Dataset(
+        ds = xr.Dataset(
             {
                 "angle": (
                     "time",
@@ -124,6 +124,10 @@ class SpeedReference:
             },
             coords={"time": ("time", self.time, time_attrs("time"))},
             attrs=attrs,
+        )
+        return cf_dataset(
+            ds, title=f"shaft speed reference ({self.method})",
+            producer="analysis.speed"
         )
 
 

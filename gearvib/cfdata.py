@@ -9,8 +9,8 @@ them with netCDF4 directly, and :meth:`PlainDataset.to_xarray` gives the same
 
 Two conventions of :mod:`analysis.cf` are repeated here, because importing any module of
 :mod:`analysis` imports xarray (the package registers its accessor): the attributes of the time
-coordinate (:func:`time_attrs`) and the suffix of label variables (:data:`LABEL_SUFFIX`). A
-test keeps them equal to the originals.
+coordinate (:func:`time_attrs`) and the suffix of the string-length dimension of a label array
+(:data:`STRLEN_SUFFIX`). A test keeps them equal to the originals.
 
 This module imports nothing of gearvib.
 """
@@ -26,12 +26,12 @@ import numpy as np
 if TYPE_CHECKING:
     import xarray as xr
 
-__all__ = ["EPOCH", "LABEL_SUFFIX", "PlainDataset", "PlainVariable", "time_attrs"]
+__all__ = ["EPOCH", "STRLEN_SUFFIX", "PlainDataset", "PlainVariable", "time_attrs"]
 
 #: Reference of the time axis when the absolute start is not known (as :data:`analysis.cf.EPOCH`).
 EPOCH = "1970-01-01T00:00:00Z"
-#: Suffix of the label variable of a dimension with string labels (:mod:`analysis.cf`).
-LABEL_SUFFIX = "_label"
+#: Suffix of the string-length dimension of a label array (:data:`analysis.cf.STRLEN_SUFFIX`).
+STRLEN_SUFFIX = "_strlen"
 
 
 def time_attrs(long_name: str) -> dict[str, str]:

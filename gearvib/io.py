@@ -8,8 +8,10 @@ over the destination, so a crash or Ctrl-C never leaves a partial file. The temp
 named ``.<name>.gearvib-<host>-<pid>-<token>.tmp`` (:mod:`gearvib.tempfiles`); netCDF files are
 written and read in a worker thread that an interrupt abandons (:mod:`gearvib.interrupts`
 explains why: xarray's backend locks are not safe against an exception from a signal handler).
-String labels (mesh, flank, ... names) are written as CF label variables ``<dim>_label`` and
-restored by :func:`read_run`; ``time`` is read as float seconds (see :mod:`analysis.cf`).
+String labels (mesh, flank, sensor ... names) are written as UTF-8 character arrays named after
+their dimension, ``char mesh(mesh, mesh_strlen)``, which a plain ``xarray.open_dataset`` reads
+as a string index (``ds.sel(mesh=...)``) and :func:`read_run` as ``str`` labels; ``time`` is
+read as float seconds (see :mod:`analysis.cf`).
 
 A :class:`~gearvib.cfdata.PlainDataset` (a run as NumPy arrays,
 :meth:`gearvib.simulate.RunUpResult.to_plain_dataset`) is written with netCDF4 directly,
@@ -31,7 +33,7 @@ import netCDF4
 import numpy as np
 
 from gearvib import tempfiles
-from gearvib.cfdata import LABEL_SUFFIX, PlainDataset, PlainVariable
+from gearvib.cfdata import STRLEN_SUFFIX, PlainDataset, PlainVariable
 from gearvib.interrupts import check_interrupted, run_abandonable
 from gearvib.memory import RunSizeError, format_bytes, require_memory
 
@@ -104,12 +106,15 @@ def _variable_encoding(dims: tuple, shape: tuple, kind: str, has_nan: Callable[[
 
 
 def _encoding(ds: xr.Dataset) -> dict:
-    return {
-        str(name): _variable_encoding(
+    out = {}
+    for name, var in ds.variables.items():
+        if var.dims == (name,) and var.dtype.kind in "USO":  # a label array
+            out[str(name)] = {"dtype": "S1", "char_dim_name": f"{name}{STRLEN_SUFFIX}"}
+            continue
+        out[str(name)] = _variable_encoding(
             var.dims, var.shape, var.dtype.kind,
             lambda var=var: bool(np.isnan(var.values).any()), name in ds.coords)
-        for name, var in ds.variables.items()
-    }
+    return out
 
 
 def write_netcdf(ds: xr.Dataset | PlainDataset, path: str | os.PathLike) -> Path:
@@ -145,7 +150,7 @@ def write_netcdf(ds: xr.Dataset | PlainDataset, path: str | os.PathLike) -> Path
         return dest
     from analysis.cf import labels_to_cf
 
-    out = labels_to_cf(ds.copy(deep=False))  # string labels: CF label variables, not coordinates
+    out = labels_to_cf(ds)  # string labels: character arrays (a shallow copy)
     out.attrs = sanitize_attrs(ds.attrs)
     for name in out.variables:
         out[name].attrs = sanitize_attrs(out[name].attrs)
@@ -158,35 +163,40 @@ def _plain_file_content(ds: PlainDataset) -> tuple[dict[str, PlainVariable], dic
     """Variables, global attributes and coordinate names as xarray's netCDF4 writer stores
     ``ds.to_xarray()``.
 
-    String dimension coordinates become label variables at the end (as
-    :func:`analysis.cf.labels_to_cf`), attributes are sanitised, every data variable gets the
-    CF ``coordinates`` attribute naming the auxiliary coordinates that share its dimensions
-    (sorted, as xarray writes it), and auxiliary coordinates that no variable names go into a
-    global ``coordinates`` attribute.
+    String dimension coordinates become UTF-8 character arrays ``<dim>(<dim>, <dim>_strlen)``
+    with ``_Encoding = "utf-8"`` (as :func:`analysis.cf.labels_to_cf` and xarray's string
+    coders), attributes are sanitised, every data variable gets the CF ``coordinates``
+    attribute naming the auxiliary coordinates that share its dimensions (sorted, as xarray
+    writes it), and auxiliary coordinates that no variable names go into a global
+    ``coordinates`` attribute.
     """
     variables = dict(ds.variables())
     coord_names = list(ds.coords)
+    sizes = ds.sizes
+    labels: dict[str, PlainVariable] = {}
     for name, var in ds.coords.items():
         if var.dims == (name,) and var.data.dtype.kind in "USO":
-            label = f"{name}{LABEL_SUFFIX}"
-            if label in variables:
-                raise ValueError(f"label variable {label!r} of coordinate {name!r} exists already")
+            strlen = f"{name}{STRLEN_SUFFIX}"
+            if strlen in sizes:
+                raise ValueError(f"dimension {strlen!r} exists; it is the string length of the "
+                                 f"labels of {name!r}")
             attrs = dict(var.attrs)
             attrs.setdefault("long_name", f"{name} label")
-            del variables[name]
-            coord_names.remove(name)
-            variables[label] = PlainVariable((name,), np.asarray(var.data).astype(str), attrs)
-            coord_names.append(label)
+            attrs["_Encoding"] = "utf-8"
+            encoded = np.array([str(x).encode("utf-8") for x in var.data.ravel()], dtype=bytes)
+            chars = encoded.reshape((*encoded.shape, 1)).view("S1")
+            labels[name] = PlainVariable((name, strlen), chars, attrs)
     for name, var in variables.items():
-        if var.data.dtype.kind not in "fiuU":
+        if name not in labels and var.data.dtype.kind not in "fiuU":
             raise ValueError(f"variable {name!r}: dtype {var.data.dtype} is not written without "
                              "xarray (admissible: float, integer, string)")
+    variables.update(labels)
     dims = {d for v in variables.values() for d in v.dims}
     auxiliary = {c for c in coord_names if c not in dims}
     written: set[str] = set()
     out: dict[str, PlainVariable] = {}
     for name, var in variables.items():
-        attrs = sanitize_attrs(var.attrs)
+        attrs = var.attrs if name in labels else sanitize_attrs(var.attrs)
         if name not in auxiliary and name not in var.dims and "coordinates" not in attrs:
             mine = sorted(c for c in auxiliary if set(variables[c].dims) <= set(var.dims))
             if mine:

@@ -154,6 +154,8 @@ class ModalResult:
         """The modes as a CF-annotated Dataset."""
         import xarray as xr  # on use: `gearvib modes` does not need it
 
+        from analysis.cf import cf_dataset
+
         mode = np.arange(1, self.n_modes + 1)
         ds = xr.Dataset(
             {
@@ -186,7 +188,10 @@ class ModalResult:
             ds["loaded_flank"] = ("mesh", np.array(self.loaded_flanks, dtype=str),
                                   {"long_name": "flank in contact in the mean system "
                                    "(left, right or both)"})
-        return ds
+        return cf_dataset(
+            ds, title="natural frequencies and mode shapes",
+            producer="gearvib.modal.modal_analysis"
+        )
 
 
 def _classify(model: AssembledModel, phi: np.ndarray, rigid: bool) -> str:

@@ -32,6 +32,7 @@ from typing import Any
 import numpy as np
 import scipy.optimize
 
+from analysis.cf import cf_dataset
 from analysis.checks import require_finite, require_monotonic, require_positive
 from analysis.instability.floquet import floquet
 from analysis.instability.theory import Candidates
@@ -206,7 +207,7 @@ class StabilityChart:
                                       np.outer(ratios, self.mesh_frequencies_hz),
                                       {"units": "Hz", "long_name": "every mesh frequency on "
                                                                   "the grid"})
-        return xr.Dataset(
+        ds = xr.Dataset(
             {
                 "max_modulus": (dims, self.max_modulus,
                                 {"units": "1", "long_name": "largest Floquet multiplier modulus"}),
@@ -217,6 +218,10 @@ class StabilityChart:
             },
             coords=coords,
             attrs={"tol": self.tol, "method": self.method},
+        )
+        return cf_dataset(
+            ds, title="parametric stability chart",
+            producer="analysis.instability.stability_chart"
         )
 
     def plot(self, ax=None):

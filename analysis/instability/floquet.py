@@ -23,6 +23,7 @@ from typing import Any
 
 import numpy as np
 
+from analysis.cf import cf_dataset
 from analysis.checks import (
     require_finite,
     require_mass_matrix,
@@ -261,7 +262,7 @@ class FloquetResult:
             attrs={"stable": int(self.stable), "tol": self.tol, "method": self.method,
                    "n_steps": self.n_steps, "error_estimate": self.error_estimate},
         )
-        return ds
+        return cf_dataset(ds, title="Floquet multipliers", producer="analysis.instability.floquet")
 
     def plot(self, ax=None):
         """Plot the multipliers in the complex plane with the unit circle.

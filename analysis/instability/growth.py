@@ -19,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from analysis.cf import cf_dataset
 from analysis.checks import require_finite, require_positive
 
 __all__ = ["GrowthTable", "UnstableBand", "runup_growth", "unstable_bands"]
@@ -159,7 +160,7 @@ class GrowthTable:
         def v(x, units, long_name):
             return ("band", x, {"units": units, "long_name": long_name})
 
-        return xr.Dataset(
+        ds = xr.Dataset(
             {
                 "candidate": v(self.label.astype(str), "1", "theory candidate of the band"),
                 "lower_speed": v(self.lower_rpm, "min-1", "lower band limit"),
@@ -177,6 +178,10 @@ class GrowthTable:
             coords={"band": ("band", np.arange(len(self)),
                              {"units": "1", "long_name": "band index"})},
             attrs={"threshold_db": self.threshold_db},
+        )
+        return cf_dataset(
+            ds, title="growth of unstable bands along the run-up",
+            producer="analysis.instability.runup_growth"
         )
 
 

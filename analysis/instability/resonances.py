@@ -45,6 +45,7 @@ import numpy as np
 import scipy.ndimage
 import scipy.signal
 
+from analysis.cf import cf_dataset
 from analysis.checks import require_positive
 from analysis.identification import covered_fraction
 from analysis.instability.growth import GrowthTable, runup_growth
@@ -265,7 +266,10 @@ class Resonances:
                    "settle_time": self.settle_time, "summary": self.summary(),
                    "notes": " | ".join(self.notes)},
         )
-        return ds
+        return cf_dataset(
+            ds, title="run-up resonances",
+            producer="analysis.instability.detect_resonances"
+        )
 
     def __str__(self) -> str:
         lines = [f"{'speed':>7} {'f [Hz]':>8} {'k':>3} {'feature':>17} {'dB':>5} {'chance':>6}"

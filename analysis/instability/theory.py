@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 import scipy.linalg
 
+from analysis.cf import cf_dataset
 from analysis.checks import require_finite, require_mass_matrix, require_positive, require_square
 
 __all__ = [
@@ -291,7 +292,7 @@ class Candidates:
         if self.mesh_frequency is not None:
             extra["mesh_frequency"] = v(np.asarray(self.mesh_frequency).astype(str), "1",
                                         "mesh frequency the candidate belongs to")
-        return xr.Dataset(
+        ds = xr.Dataset(
             {
                 **extra,
                 "kind": v(self.kind.astype(str), "1", "region type (principal/sum/difference)"),
@@ -308,6 +309,10 @@ class Candidates:
             coords={"candidate": ("candidate", np.arange(len(self)),
                                   {"units": "1", "long_name": "candidate index"})},
             attrs={"notes": " | ".join(self.notes)},
+        )
+        return cf_dataset(
+            ds, title="parametric instability candidates",
+            producer="analysis.instability.instability_candidates"
         )
 
     def __str__(self) -> str:
@@ -540,7 +545,7 @@ class FirstOrderWidths:
         if self.mesh_frequency is not None:
             extra["mesh_frequency"] = v(np.asarray(self.mesh_frequency).astype(str), "1",
                                         "mesh frequency whose harmonic l the region belongs to")
-        return xr.Dataset(
+        ds = xr.Dataset(
             {
                 **extra,
                 "kind": v(self.kind.astype(str), "1", "region type"),
@@ -560,6 +565,10 @@ class FirstOrderWidths:
             },
             coords={"region": ("region", np.arange(len(self)),
                                {"units": "1", "long_name": "region index"})},
+        )
+        return cf_dataset(
+            ds, title="first-order widths of instability regions",
+            producer="analysis.instability.first_order_widths"
         )
 
     def __str__(self) -> str:

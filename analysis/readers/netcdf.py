@@ -71,7 +71,12 @@ def read_netcdf(path: str | os.PathLike[str]) -> xr.Dataset:
     Returns
     -------
     xarray.Dataset
-        Fully loaded into memory (the file is closed again, so it can be overwritten).
+        Fully loaded into memory (the file is closed again, so it can be overwritten):
+        ``time`` in float seconds, string labels as ``str`` dimension coordinates
+        (:func:`analysis.cf.labels_from_cf`). Data variables without a ``time`` dimension (a
+        simulated run's ``natural_frequency(mode)``, ``flank_contact_changes(mesh)``) are kept
+        as coordinates (metadata beside the channels); every data variable is then along
+        ``time``.
 
     Raises
     ------
@@ -93,6 +98,7 @@ def read_netcdf(path: str | os.PathLike[str]) -> xr.Dataset:
     _check_sizes(p, image)
     with reading(p, "netCDF"):  # an image: see analysis.readers.ncimage
         ds = labels_from_cf(load_image(p, image, decode_times=False, decode_timedelta=False))
+    ds = ds.set_coords([v for v in ds.data_vars if "time" not in ds[v].dims])
     ds.attrs.setdefault("source_file", str(p))
     return validate_dataset(ds, name=str(p))
 

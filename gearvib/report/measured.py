@@ -31,6 +31,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import xarray as xr
 
+from analysis.cf import cf_dataset
 from analysis.identification import (
     CandidateLines,
     PeakIdentification,
@@ -348,7 +349,7 @@ class MeasuredCase:
                                                        "long_name": "order of the reference "
                                                        "shaft"})},
                 attrs={"units": os_.units, "long_name": f"{os_.amplitude} order spectrum"})
-        return ds
+        return cf_dataset(ds, title="measured run-up", producer="gearvib.report.measured")
 
 
 # --------------------------------------------------------------------------- computation

@@ -33,6 +33,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import xarray as xr
 
+from analysis.cf import cf_dataset
 from analysis.comparison import MeasuredSimulatedComparison, compare_measurements
 from analysis.identification import catalogue_lines, identify_peaks
 from analysis.measurement import Measurement, load_measurement
@@ -253,7 +254,10 @@ class SimulationComparison:
                           "that alone explains the offset"})
         ds.attrs["gear_set"] = self.gearset_name or "(none)"
         ds.attrs["model_notes"] = json.dumps(self.notes)
-        return ds
+        return cf_dataset(
+            ds, title="measured against simulated",
+            producer="gearvib.report.measured_compare.compare_with_simulation"
+        )
 
 
 # --------------------------------------------------------------------------- computation

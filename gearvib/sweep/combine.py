@@ -5,17 +5,21 @@ Layout
 * Dimension ``case`` (coordinate ``case`` = 0, 1, ...), plus the dimensions of the summaries
   (``mesh``, ``order``, ``floquet_speed``, ...). A label that only some cases have (e.g. a fourth
   planet's meshes) is NaN (or ``""``) for the others; labels keep the order of first appearance.
-* One coordinate along ``case`` per swept parameter, **named by its key path** (e.g.
-  ``meshes.sun.damping_ratio``), with ``units`` and ``long_name``. Numbers are float64; strings
-  and booleans stay as they are. A list- or table-valued parameter (e.g.
-  ``geometry.planet_angles_deg``) is a **string coordinate**: the value's label from the sweep
-  (``labels = [...]``) or else its compact JSON, e.g. ``"[0, 120, 240]"``. When its values are
-  numeric lists of one length, the numbers are also in a 2-D coordinate ``<path>.values``
-  (dimensions ``case`` and ``<path>.index``).
+* One coordinate along ``case`` per swept parameter, named after its key path with every
+  character that a CF name cannot hold replaced by ``_`` (``meshes.sun.damping_ratio`` ->
+  ``meshes_sun_damping_ratio``; ``_2``, ``_3`` ... appended when that name is taken), with
+  ``units``, ``long_name`` and the key path itself in ``gearvib_parameter_path``; the
+  parameters in ``parameters_json`` name their coordinate (``variable``), and
+  :func:`parameter_variable` finds it. Numbers are float64; strings and booleans stay as they
+  are. A list- or table-valued parameter (e.g. ``geometry.planet_angles_deg``) is a **string
+  coordinate**: the value's label from the sweep (``labels = [...]``) or else its compact
+  JSON, e.g. ``"[0, 120, 240]"``. When its values are numeric lists of one length, the numbers
+  are also in a 2-D coordinate ``<name>_values`` (dimensions ``case`` and ``<name>_index``;
+  :func:`parameter_values`).
 * Coordinates ``run_file`` (path of the case's run file relative to the sweep folder, ``""``
   for a failed case), ``case_sha256`` (the hash that identifies the finished run) and
   ``status`` (``"ok"`` or ``"failed"``), and the data variable ``failure`` (the message).
-* Attributes: CF ``Conventions``, ``title``, ``source``, the sweep description as JSON
+* Attributes: CF ``Conventions``, ``title``, ``source``, ``history``, the sweep description as JSON
   (``sweep_json``) with its SHA-256, the base gear-set description with the sweep's run
   settings merged (``base_json``), the parameters (``parameters_json``) and the summary
   settings. No time stamp: the same sweep gives the same file whatever the scheduler.
@@ -25,18 +29,47 @@ from __future__ import annotations
 
 import hashlib
 import json
+import re
 from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 import xarray as xr
 
+from analysis.cf import cf_dataset
 from gearvib import __version__
 from gearvib.sweep.case import CaseOutcome
 from gearvib.sweep.description import Sweep, SweepCase
 from gearvib.sweep.keys import path_units, value_kind
 
-__all__ = ["combine_summaries"]
+__all__ = ["cf_name", "combine_summaries", "parameter_values", "parameter_variable"]
+
+
+def cf_name(path: str, taken: set[str]) -> str:
+    """A CF variable name for the key path ``path`` that is not in ``taken`` (added to it).
+
+    Characters other than letters, digits and ``_`` become ``_``; a name that does not start
+    with a letter gets ``p_`` in front; ``_2``, ``_3`` ... are appended to a taken name.
+    """
+    name = re.sub(r"[^A-Za-z0-9_]", "_", path)
+    if not name[:1].isalpha():
+        name = f"p_{name}"
+    base, i = name, 2
+    while name in taken:
+        name, i = f"{base}_{i}", i + 1
+    taken.add(name)
+    return name
+
+
+def parameter_variable(ds: xr.Dataset, parameter: dict) -> xr.DataArray:
+    """The coordinate of a swept parameter (an entry of ``parameters_json``) in a sweep
+    Dataset; files of earlier versions named it by its key path."""
+    return ds[parameter.get("variable", parameter["path"])]
+
+
+def parameter_values(ds: xr.Dataset, parameter: dict) -> xr.DataArray:
+    """The 2-D numeric coordinate of a list-valued swept parameter (``has_values_coordinate``)."""
+    return ds[parameter.get("values_variable", f"{parameter['path']}.values")]
 
 
 def _labels_union(datasets: list[xr.Dataset], dim: str) -> list[Any]:
@@ -52,7 +85,8 @@ def _fill_value(dtype: np.dtype) -> Any:
     return "" if dtype.kind in "US" else np.nan
 
 
-def _parameter_coords(sweep: Sweep, cases: Sequence[SweepCase]) -> tuple[dict, list[dict]]:
+def _parameter_coords(sweep: Sweep, cases: Sequence[SweepCase], taken: set[str]
+                      ) -> tuple[dict, list[dict]]:
     coords: dict[str, xr.Variable] = {}
     info = []
     kinds = sweep.coordinate_kinds()
@@ -72,15 +106,20 @@ def _parameter_coords(sweep: Sweep, cases: Sequence[SweepCase]) -> tuple[dict, l
             if kind == "label":
                 attrs["comment"] = ("list or table value: its label, or its JSON when the sweep "
                                     "gives no labels")
-        coords[p.path] = xr.Variable(("case",), data, attrs)
+        name = cf_name(p.path, taken)
+        coords[name] = xr.Variable(("case",), data, attrs)
         lists = [v for v in vals if value_kind(v) == "list"]
         numeric = len(lists) == len(vals) and len({len(v) for v in lists}) == 1 and all(
             value_kind(x) == "number" for v in lists for x in v)
+        entry: dict[str, Any] = {"variable": name}
         if numeric and vals:
-            coords[f"{p.path}.values"] = xr.Variable(
-                ("case", f"{p.path}.index"), np.asarray(vals, dtype=float),
-                {"units": units or "1", "long_name": f"{long_name} (elements)"})
-        info.append({"path": p.path, "kind": kind, "units": units or "",
+            values_name = cf_name(f"{name}_values", taken)
+            coords[values_name] = xr.Variable(
+                ("case", cf_name(f"{name}_index", taken)), np.asarray(vals, dtype=float),
+                {"units": units or "1", "long_name": f"{long_name} (elements)",
+                 "gearvib_parameter_path": p.path})
+            entry["values_variable"] = values_name
+        info.append({**entry, "path": p.path, "kind": kind, "units": units or "",
                      "long_name": long_name, "labels": list(p.labels) if p.labels else None,
                      "values": list(p.values) if p.values is not None else None,
                      "distribution": p.distribution,
@@ -151,7 +190,8 @@ def combine_summaries(sweep: Sweep, cases: Sequence[SweepCase],
         if arr.dtype == object:
             arr = arr.astype(str)
         data[name] = xr.Variable(("case", *map(str, var.dims)), arr, dict(var.attrs))
-    pcoords, info = _parameter_coords(sweep, cases)
+    taken = {*dims, *data, "case", "run_file", "case_sha256", "status", "failure"}
+    pcoords, info = _parameter_coords(sweep, cases, taken)
     coords.update(pcoords)
     coords["case"] = xr.Variable(("case",), np.arange(n, dtype=np.int64),
                                  {"units": "1", "long_name": "case number"})
@@ -186,4 +226,5 @@ def combine_summaries(sweep: Sweep, cases: Sequence[SweepCase],
         "n_cases": np.int64(n),
         "n_failed": np.int64(n - sum(ok)),
     }
-    return xr.Dataset(data, coords=coords, attrs=attrs)
+    ds = xr.Dataset(data, coords=coords, attrs=attrs)
+    return cf_dataset(ds, title=str(attrs["title"]), producer="gearvib.sweep.run_sweep")

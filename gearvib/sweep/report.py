@@ -34,6 +34,7 @@ from matplotlib.figure import Figure
 
 from gearvib import __version__
 from gearvib.io import atomic_write
+from gearvib.sweep.combine import parameter_values, parameter_variable
 
 __all__ = ["MAX_PANELS", "SweepFigure", "build_sweep_report", "sweep_figures"]
 
@@ -78,7 +79,7 @@ def _params(ds: xr.Dataset) -> list[dict]:
 
 def _axis(ds: xr.Dataset, p: dict) -> tuple[np.ndarray, list[str] | None, str]:
     """Positions along a parameter axis, tick labels for categories, axis label."""
-    c = ds[p["path"]]
+    c = parameter_variable(ds, p)
     if p["kind"] == "number":
         factor, units = _SCALE.get(str(c.attrs.get("units", "")),
                                    (1.0, str(c.attrs.get("units", ""))))
@@ -181,7 +182,7 @@ def _line_figure(ds, da, name, xpos, cats, xlabel, markers_only, ok) -> Figure:
 
 def _categories(ds: xr.Dataset, p: dict) -> tuple[np.ndarray, list[str], str]:
     """Cell index of every case along a heat-map axis, the cell labels and the axis label."""
-    c = ds[p["path"]]
+    c = parameter_variable(ds, p)
     if p["kind"] == "number":
         vals = c.values.astype(float)
         cells = np.unique(vals)
@@ -200,13 +201,13 @@ def _heat_figure(ds, da, name, params, ok) -> Figure:
     rest = params[2:]
     combos: list[tuple] = [()]
     if rest:
-        keys = [tuple(str(v) for v in row) for row in zip(*(ds[p["path"]].values
+        keys = [tuple(str(v) for v in row) for row in zip(*(parameter_variable(ds, p).values
                                                             for p in rest), strict=True)]
         combos = list(dict.fromkeys(keys))
 
     def shown(p: dict, v: str) -> str:
         if p["kind"] == "number":
-            return f"{float(v):g} {ds[p['path']].attrs.get('units', '')}".strip()
+            return f"{float(v):g} {parameter_variable(ds, p).attrs.get('units', '')}".strip()
         return v
 
     jobs = [(c, k) for c in combos for k in range(len(panels))][:MAX_PANELS]
@@ -219,7 +220,7 @@ def _heat_figure(ds, da, name, params, ok) -> Figure:
     for ax, (combo, k) in zip(axes, jobs, strict=True):
         img = np.full((len(yc), len(xc)), np.nan)
         for i in np.flatnonzero(ok):
-            if rest and tuple(str(ds[p["path"]].values[i]) for p in rest) != combo:
+            if rest and tuple(str(parameter_variable(ds, p).values[i]) for p in rest) != combo:
                 continue
             img[yi[i], xi[i]] = worst[i, k] * scale
         mesh = ax.pcolormesh(np.arange(len(xc) + 1) - 0.5, np.arange(len(yc) + 1) - 0.5, img,
@@ -250,7 +251,7 @@ def _scatter_figure(ds, da, name, params, ok) -> Figure:
     axes_spec = []
     for p in params:
         if p.get("has_values_coordinate") and p.get("distribution"):
-            el = ds[f"{p['path']}.values"].values
+            el = parameter_values(ds, p).values
             factor, unit = _SCALE.get(p["units"] or "1", (1.0, p["units"] or "1"))
             for j in range(el.shape[1]):
                 if np.ptp(el[ok, j]) > 0:
@@ -262,7 +263,7 @@ def _scatter_figure(ds, da, name, params, ok) -> Figure:
     groups: list[tuple[str, np.ndarray]] = [("", np.ones(ok.size, dtype=bool))]
     for p in params:
         if p["kind"] != "number":
-            labels = [str(v) for v in ds[p["path"]].values]
+            labels = [str(v) for v in parameter_variable(ds, p).values]
             cats = list(dict.fromkeys(labels))
             if 2 <= len(cats) <= 8:
                 groups = [(f"{p['path']} = {c}", np.array([lab == c for lab in labels]))
@@ -386,7 +387,7 @@ def build_sweep_report(ds: xr.Dataset, out_dir: str | Path) -> Path:
     for i in range(min(n, MAX_TABLE_ROWS)):
         kvmax = float(np.nanmax(kv.values[i])) if kv is not None and \
             np.isfinite(kv.values[i]).any() else float("nan")
-        rows.append([str(i), *(_cell(ds[p["path"]].values[i]) for p in params),
+        rows.append([str(i), *(_cell(parameter_variable(ds, p).values[i]) for p in params),
                      str(ds["status"].values[i]), f"{kvmax:.4g}",
                      str(ds["run_file"].values[i]), str(ds["failure"].values[i])])
     summary = json.loads(ds.attrs.get("summary_json", "{}"))

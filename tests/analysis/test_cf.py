@@ -140,11 +140,22 @@ def test_reader_output_passes_the_cf_checker(kind, tmp_path):
     _check_file(write_netcdf(ds, tmp_path / f"{kind}.nc"), tmp_path)
 
 
-def test_labels_round_trip():
+def test_labels_round_trip(tmp_path):
     ds = xr.Dataset(
         {"f": (("mesh", "time"), np.ones((2, 3)), {"units": "N", "long_name": "force"})},
         coords={"mesh": ("mesh", ["sun-planet1", "ring-planet1"], {"long_name": "mesh"})},
     )
     cf = labels_to_cf(ds)
-    assert "mesh" not in cf.variables and cf["mesh_label"].dims == ("mesh",)
+    assert cf["mesh"].encoding == {"dtype": "S1", "char_dim_name": "mesh_strlen"}
+    assert ds["mesh"].encoding == {}  # the caller's dataset is untouched
     xr.testing.assert_identical(labels_from_cf(cf), ds)
+    cf.to_netcdf(tmp_path / "labels.nc", engine="netcdf4")
+    with xr.open_dataset(tmp_path / "labels.nc") as plain:  # any reader: a string index
+        assert plain["f"].sel(mesh="ring-planet1").shape == (3,)
+        back = labels_from_cf(plain.load())
+    xr.testing.assert_identical(back, ds)
+    assert back["mesh"].dtype.kind == "U"
+    # files of earlier versions: label variables <dim>_label
+    old = ds.drop_vars("mesh").assign_coords(mesh_label=("mesh", ds["mesh"].values,
+                                                         {"long_name": "mesh"}))
+    xr.testing.assert_identical(labels_from_cf(old), ds)

@@ -62,7 +62,8 @@ def test_cf_encodings(tmp_path: Path, dataset: xr.Dataset) -> None:
             assert "_FillValue" not in nc[name].ncattrs(), name
         assert nc["time"].units == "seconds since 1970-01-01T00:00:00Z"  # CF time (analysis.cf)
         assert (nc["time"].standard_name, nc["time"].axis) == ("time", "T")
-        assert "mesh" not in nc.variables and "mesh_label" in nc.variables  # CF labels
+        # labels: UTF-8 character arrays named after their dimension (analysis.cf)
+        assert nc["mesh"].dimensions == ("mesh", "mesh_strlen") and "mesh_label" not in nc.variables
         assert nc["normal_force"].filters()["zlib"]
         assert nc["normal_force"].chunking()[-1] == dataset.sizes["time"]
         assert nc.Conventions == "CF-1.11"

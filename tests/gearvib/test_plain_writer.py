@@ -129,12 +129,17 @@ def test_small_datasets_global_coordinates_and_attribute_types(tmp_path: Path) -
     _assert_same_file(a, b)
     with netCDF4.Dataset(a) as nc:
         assert nc.getncattr("coordinates") == "angle"  # used by no variable
-        assert nc["x"].getncattr("coordinates") == "chan_label"
-        assert nc["chan_label"].getncattr("long_name") == "chan label"
+        assert "coordinates" not in nc["x"].ncattrs()  # chan: its dimension's labels
+        assert nc["chan"].dimensions == ("chan", "chan_strlen")  # a UTF-8 character array
+        assert nc["chan"].getncattr("long_name") == "chan label"
+        assert nc["chan"].getncattr("_Encoding") == "utf-8"
+    with xr.open_dataset(a) as plain_open:  # plain xarray: the labels are a string index
+        assert plain_open["x"].sel(chan="bb").shape == (5,)
+        assert plain_open.sizes["other"] == 0
 
 
 def test_the_conventions_repeated_from_analysis_cf_are_the_same() -> None:
-    assert cfdata.LABEL_SUFFIX == analysis.cf.LABEL_SUFFIX
+    assert cfdata.STRLEN_SUFFIX == analysis.cf.STRLEN_SUFFIX
     assert cfdata.EPOCH == analysis.cf.EPOCH
     assert cfdata.time_attrs("t s") == analysis.cf.time_attrs("t s")
 

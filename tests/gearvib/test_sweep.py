@@ -208,9 +208,12 @@ def test_same_sweep_on_one_and_two_workers_and_dask(tmp_path):
     ds = one.dataset
     # the layout of sweep.nc
     assert ds.sizes["case"] == 4 and list(ds.mesh.values[:1]) == ["sun-planet1"]
-    assert ds["meshes.sun.damping_ratio"].attrs["units"] == "1"
-    assert list(ds["geometry.planet_angles_deg"].values) == ["equal", "case2"] * 2
-    np.testing.assert_array_equal(ds["geometry.planet_angles_deg.values"].values[1],
+    # parameters: CF names, the key path in an attribute (docs/sweeps.md)
+    assert ds["meshes_sun_damping_ratio"].attrs["units"] == "1"
+    assert ds["meshes_sun_damping_ratio"].attrs["gearvib_parameter_path"] == \
+        "meshes.sun.damping_ratio"
+    assert list(ds["geometry_planet_angles_deg"].values) == ["equal", "case2"] * 2
+    np.testing.assert_array_equal(ds["geometry_planet_angles_deg_values"].values[1],
                                   [0, 122.45, 244.90])
     assert all(f.startswith("runs/") and f.endswith(".nc") for f in ds.run_file.values)
     for name, var in {**ds.data_vars, **ds.coords}.items():

@@ -43,7 +43,8 @@ def test_cli_sweep_writes_runs_summary_and_report(tmp_path, capsys):
     assert "3 cases (3 simulated, 0 reused, 0 failed)" in text
     with xr.open_dataset(out / "sweep.nc") as ds:
         assert ds.sizes["case"] == 3
-        np.testing.assert_array_equal(ds["meshes.sun.damping_ratio"].values, [0.005, 0.01, 0.02])
+        np.testing.assert_array_equal(ds["meshes_sun_damping_ratio"].values, [0.005, 0.01, 0.02])
+        assert ds["case"].attrs["long_name"] == "case number"
         files = [str(f) for f in ds.run_file.values]
     assert all((out / f).is_file() for f in files)
     html = (out / "sweep.html").read_text()
