@@ -331,7 +331,6 @@ class KinematicCatalogue:
         attrs = {
             "Conventions": "CF-1.11",
             "title": f"kinematic frequency catalogue {self.name}".strip(),
-            "source": "analysis.catalogue.kinematic_catalogue",
             "reference": self.reference,
             "sensor": self.sensor,
             "member_speeds_json": json.dumps(self.member_speeds, sort_keys=True),
@@ -341,7 +340,8 @@ class KinematicCatalogue:
         if self.speed_rpm is not None:
             attrs["reference_speed_rpm"] = float(self.speed_rpm)
         ds = xr.Dataset(data, coords=coords, attrs=attrs)
-        return cf_dataset(ds, title="kinematic frequency catalogue", producer="analysis.catalogue")
+        return cf_dataset(ds, title="kinematic frequency catalogue",
+                          producer="analysis.catalogue.kinematic_catalogue")
 
     def to_dict(self, *, visible_only: bool = True) -> dict:
         """``{"reference": {...}, "lines": [{family, harmonic, sideband, member,

@@ -306,10 +306,13 @@ def cf_dataset(ds: Any, *, title: str, producer: str, inputs: Any = None) -> Any
         A shallow copy with:
 
         * global ``Conventions``, ``title``, ``source``, ``history``, ``gearvib_version`` and
-          ``inputs`` (existing ``title``/``source``/``history`` are kept; a second finishing
-          adds nothing);
-        * a ``time`` dimension coordinate in seconds as a CF time coordinate
-          (:func:`time_attrs`, its ``long_name`` kept);
+          ``inputs`` (an existing ``title``, ``source`` or ``inputs`` is kept, ``history``
+          gets a line for ``producer`` unless it has it);
+        * ``time`` the last dimension of every data variable (CF section 2.4: further
+          dimensions to the left of T);
+        * a ``time`` dimension coordinate in seconds (``units = "s"``) as a CF time
+          coordinate (:func:`time_attrs` from ``time_coverage_start`` when the Dataset states
+          it, its ``long_name`` kept);
         * levels in dB (``units`` starting with ``dB``) with ``units = "1"`` and the decibel
           reference in ``long_name`` (UDUNITS has no decibel);
         * no ``_FillValue`` on coordinates (CF section 2.5.1) and string dimension coordinates
@@ -317,12 +320,16 @@ def cf_dataset(ds: Any, *, title: str, producer: str, inputs: Any = None) -> Any
         * attributes netCDF can store (:func:`clean_attr_value`).
     """
     out = labels_to_cf(ds)
-    attrs = {"Conventions": CONVENTIONS, "title": title}
-    for key, value in provenance_attrs(producer, inputs).items():
-        attrs[key] = value
-    for key in ("Conventions", "title", "source", "history", "inputs"):
+    attrs: dict[str, Any] = {"Conventions": CONVENTIONS, "title": title}
+    attrs.update(provenance_attrs(producer, inputs))
+    for key in ("Conventions", "title", "source", "inputs"):
         if str(out.attrs.get(key, "")).strip():
             attrs[key] = out.attrs[key]  # kept (a run's, a measurement's)
+    before = str(out.attrs.get("history", "")).strip()
+    if before and attrs["history"] not in before.splitlines():  # CF: one line per step
+        attrs["history"] = f"{before}\n{attrs['history']}"
+    elif before:
+        attrs["history"] = before
     out.attrs = _clean({**out.attrs, **attrs})
     if "time" in out.coords and out["time"].dims == ("time",) and (
             out["time"].dtype.kind in "fiu"
@@ -330,8 +337,13 @@ def cf_dataset(ds: Any, *, title: str, producer: str, inputs: Any = None) -> Any
             and "since" not in str(out["time"].attrs.get("units", ""))):
         var = out.variables["time"]
         long_name = str(var.attrs.get("long_name", "time"))
+        start = str(out.attrs.get("time_coverage_start", "")).strip() or None
         var.attrs = {**{k: v for k, v in var.attrs.items() if k != "units"},
-                     **time_attrs(long_name)}
+                     **time_attrs(long_name, start)}
+    for name in list(out.data_vars):  # CF 2.4: further dimensions left of T
+        dims = out[name].dims
+        if "time" in dims and dims[-1] != "time":
+            out[name] = out[name].transpose(..., "time")
     for name, var in out.variables.items():
         units = var.attrs.get("units")
         if isinstance(units, str) and _DB.match(units):

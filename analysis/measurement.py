@@ -41,7 +41,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from analysis.cf import elapsed_seconds, labels_from_cf
+from analysis.cf import cf_dataset, elapsed_seconds, labels_from_cf
 from analysis.checks import uniform_rate
 from analysis.inputs import ANGLE_UNITS, find_reference
 from analysis.readers import FORMATS, ReaderError, read
@@ -184,7 +184,10 @@ class Measurement:
         )
         for k, v in self.accuracy.items():
             ds.attrs[f"speed_{k}"] = v
-        return ds
+        inputs = {k: src[k] for k in ("file", "format", "reader", "reference_channel")
+                  if src.get(k)}
+        return cf_dataset(ds, title=str(ds.attrs.get("title", "") or self.name),
+                          producer="analysis.measurement.load_measurement", inputs=inputs)
 
 
 # ---------------------------------------------------------------------------------------------

@@ -9,9 +9,9 @@ Every reader in :mod:`analysis.readers` returns an :class:`xarray.Dataset` built
 * one data variable per channel with dims ``("time",)`` carrying ``units`` (a UDUNITS string such
   as ``"m s-2"``, ``"Pa"``, ``"N"``, ``"V"``, ``"min-1"``, ``"rad"``, ``"1"``), ``long_name`` and
   channel metadata (``source_channel``, ``sensitivity``, ...);
-* global attributes ``Conventions="CF-1.11"``, ``history``, ``source_format``,
-  ``source_file``, ``sample_rate_hz`` and whatever the file states (``title``,
-  ``time_coverage_start``, ...).
+* global attributes ``Conventions="CF-1.11"``, ``history`` (which toolkit version read it),
+  ``gearvib_version``, ``source_format``, ``source_file``, ``sample_rate_hz`` and whatever the
+  file states (``title``, ``source``, ``time_coverage_start``, ...).
 
 Attribute values are restricted to what netCDF can store (str, int, float, 1-D numeric arrays);
 bool becomes int8, dict becomes a JSON string and None is dropped.
@@ -30,7 +30,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from analysis.cf import is_elapsed_seconds, time_attrs
+from analysis.cf import is_elapsed_seconds, time_attrs, toolkit_version
 from analysis.checks import require_positive
 
 __all__ = [
@@ -338,8 +338,9 @@ def build_dataset(
     if not str(gattrs.get("title", "")).strip():  # CF 2.6.2: a non-empty title
         gattrs["title"] = "measured recording"  # source_format and source_file say which
     gattrs.setdefault(  # the file it came from: source_format, source_file
-        "history", "read by analysis.readers (gearvib project) into the common layout"
+        "history", f"read by analysis.readers (gearvib {toolkit_version()}) into the common layout"
     )
+    gattrs.setdefault("gearvib_version", toolkit_version())
     start = gattrs.get("time_coverage_start")
     coords = {"time": ("time", time, time_attrs(time_long_name, str(start) if start else None))}
     ds = xr.Dataset(data_vars, coords=coords, attrs=clean_attrs(gattrs))

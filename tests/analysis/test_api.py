@@ -120,7 +120,7 @@ def test_dataarray_channels_in_and_out(three_channels):
     )
     m = da.transpose("time", "channel").gearvib.order_map(samples_per_rev=32)
     ds = m.to_dataset()
-    assert ds["amplitude"].dims == ("channel", "time", "order")
+    assert ds["amplitude"].dims == ("channel", "order", "time")  # CF 2.4: time last
     assert list(ds["channel"].values) == ["ring_x", "ring_y", "carrier_z"]
     assert ds.attrs["speed_reference"] == "shaft_speed [min-1]"
     one = rpm_order_map(x[1].astype(np.float32), FS, rpm, samples_per_rev=32)

@@ -46,7 +46,7 @@ def test_frequency_map_matches_shorttimefft_and_metadata():
     np.testing.assert_allclose(m.time, (np.arange(m.time.size) * 96 + 95.5) / FS)
     np.testing.assert_allclose(m.rpm, np.interp(m.time, np.arange(x.size) / FS, rpm))
     ds = m.to_dataset()
-    assert ds["amplitude"].dims == ("time", "frequency")
+    assert ds["amplitude"].dims == ("frequency", "time")  # CF 2.4: time last
     assert ds["rpm"].dims == ("time",)
     for v in [*ds.data_vars, *ds.coords]:
         assert "units" in ds[v].attrs and "long_name" in ds[v].attrs
@@ -79,7 +79,7 @@ def test_order_map_runup_amplitudes():
         assert np.max(np.abs(err_db)) < 0.2  # flat-top: no scalloping correction needed
     assert np.all(np.diff(m.rpm) > 0) and m.rpm[0] > 600 and m.rpm[-1] < 6000
     ds = m.to_dataset()
-    assert ds["amplitude"].dims == ("time", "order")
+    assert ds["amplitude"].dims == ("order", "time")
     assert ds["order"].attrs["units"] == "1"
     cut = order_cuts_from_map(m, [3, 7], bandwidth=1.0, amplitude="peak")
     np.testing.assert_allclose(cut.values[0], 1.5, rtol=0.023)
