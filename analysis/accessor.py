@@ -71,10 +71,14 @@ def _reference(obj: Any, speed: str | None, angle: str | None,
             return find_reference(obj), False  # its message names the options
         return find_reference(obj, **{found[0]: found[1]}), False
     from analysis.cf import elapsed_seconds
+    from analysis.checks import uniform_rate
 
     if "time" not in obj.coords:
         raise ValueError("a tacho reference needs a 'time' coordinate")
-    t = np.asarray(elapsed_seconds(obj["time"].values), dtype=float)
+    raw = obj["time"].values
+    fs = uniform_rate(raw, "time")  # float seconds or a decoded axis, within its resolution
+    t0 = float(elapsed_seconds(raw)[0])
+    t = t0 + np.arange(raw.size) / fs  # uniform: a decoded axis is rounded to 1 ns
     sref, text = tacho_reference(obj, found[1], ppr, t)
     return Reference("angle", np.asarray(sref.angle, dtype=float), text, found[1]), True
 

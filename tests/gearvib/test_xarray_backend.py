@@ -131,3 +131,16 @@ def test_the_registered_entry_point(run_file):
     assert eps[0].value == "gearvib.xarray_backend:GearvibBackendEntrypoint"
     assert "gearvib" in xr.backends.list_engines()
     xr.testing.assert_identical(xr.open_dataset(run_file, engine="gearvib"), read_run(run_file))
+
+
+def test_read_netcdf_reads_a_simulated_run(run_file):
+    """Variables without time (natural_frequency(mode), ...) are kept as coordinates."""
+    ds = read_netcdf(run_file)
+    run = read_run(run_file)
+    assert all("time" in ds[v].dims for v in ds.data_vars)
+    assert set(ds.variables) == set(run.variables)
+    for name in ("natural_frequency", "flank_contact_changes"):
+        assert name in ds.coords and name in run.data_vars
+        np.testing.assert_array_equal(ds[name].values, run[name].values)
+    xr.testing.assert_identical(ds.sensor_acceleration.sel(sensor="acc1").reset_coords(drop=True),
+                                run.sensor_acceleration.sel(sensor="acc1").reset_coords(drop=True))
