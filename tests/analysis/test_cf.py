@@ -47,8 +47,15 @@ def cf_messages(path: Path, tmp_path: Path) -> list[str]:
         for c in result[level]
         for m in c["msgs"]
     ]
-    if result.get("errors"):  # exceptions raised inside the checker
-        messages += [f"checker exception: {e}" for e in result["errors"]]
+    # exceptions raised inside a check (e.g. on a string coordinate variable) are not in the
+    # report: the checks are run once more to collect them
+    suite = CheckSuite()
+    dataset = suite.load_dataset(str(path))
+    try:
+        (_, errors), = suite.run_all(dataset, ["cf:1.11"], skip_checks=[]).values()
+    finally:
+        dataset.close()
+    messages += [f"checker exception in {name}: {exc[0]!r}" for name, exc in errors.items()]
     return messages
 
 
