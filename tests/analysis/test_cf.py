@@ -166,3 +166,34 @@ def test_labels_round_trip(tmp_path):
     old = ds.drop_vars("mesh").assign_coords(mesh_label=("mesh", ds["mesh"].values,
                                                          {"long_name": "mesh"}))
     xr.testing.assert_identical(labels_from_cf(old), ds)
+
+
+def test_cf_dataset_finishes_a_result_without_touching_its_input():
+    from analysis.cf import cf_dataset, toolkit_version
+
+    ds = xr.Dataset(
+        {"level": (("time", "order"), np.zeros((3, 2)), {"units": "dB", "long_name": "level"}),
+         "n": ("ch", [1, 2], {"units": "1", "long_name": "n"})},
+        coords={"time": ("time", [0.0, 0.5, 1.0], {"units": "s", "long_name": "frame time"}),
+                "order": ("order", [1.0, 2.0], {"units": "1", "long_name": "order"}),
+                "ch": ("ch", ["a", "b"])},
+        attrs={"history": "measured on the rig", "flag": True, "none": None,
+               "time_coverage_start": "2024-05-01T10:00:00"})
+    before = ds.copy(deep=True)
+    out = cf_dataset(ds, title="levels", producer="tests.levels", inputs={"signal": "x"})
+    xr.testing.assert_identical(ds, before)
+    assert ds["ch"].encoding == {} and ds.attrs["flag"] is True
+    assert out.attrs["Conventions"] == "CF-1.11" and out.attrs["title"] == "levels"
+    version = toolkit_version()
+    assert out.attrs["history"] == f"measured on the rig\ntests.levels (gearvib {version})"
+    assert out.attrs["source"] == f"gearvib {toolkit_version()} (tests.levels)"
+    assert out.attrs["inputs"] == '{"signal": "x"}' and out.attrs["flag"] == 1
+    assert "none" not in out.attrs
+    assert out["time"].attrs["units"] == "seconds since 2024-05-01T10:00:00"
+    assert out["time"].attrs["long_name"] == "frame time"
+    assert out["level"].dims == ("order", "time")  # CF 2.4: T last
+    assert out["level"].attrs == {"units": "1", "long_name": "level (dB)"}
+    assert out["ch"].encoding["char_dim_name"] == "ch_strlen"
+    assert out["time"].encoding["_FillValue"] is None
+    again = cf_dataset(out, title="other", producer="tests.levels")
+    assert again.attrs == out.attrs  # finishing twice adds nothing
