@@ -162,3 +162,11 @@ def test_every_command_runs_from_an_unrelated_folder(venv, tmp_path):
     for f in ("rep/report.html", "rep/report.pdf", "cmp/comparison.nc", "dg/diagnosis.nc",
               "dg/report.html", "sw/sweep.nc", "demo/report.html"):
         assert (work / f).stat().st_size > 1000, f
+    # the installed entry point xarray.backends: engine="gearvib" gives float seconds
+    r = subprocess.run([str(venv / "bin" / "python"), "-c",
+                        "import xarray as xr; ds = xr.open_dataset('run.nc', engine='gearvib'); "
+                        "print(ds['time'].dtype, ds['mesh'].dtype.kind)"],
+                       cwd=work, capture_output=True, text=True, timeout=300,
+                       env={k: v for k, v in os.environ.items() if k != "PYTHONPATH"})
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.split() == ["float64", "U"]
