@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from analysis.cf import result_dataset
+from analysis.cf import cf_dataset
 from analysis.checks import require_choice, require_real
 from analysis.cm_plots import trend_figure
 
@@ -90,8 +90,11 @@ class AlarmLimits:
         out.attrs.update(k=float(self.k), sides=self.sides,
                          healthy_records=int(self.healthy_records),
                          method="mean +- k std (ddof 1) of the healthy records")  # fmt: skip
-        return result_dataset(out, "alarm limits of condition indicators",
-                              "analysis.alarm_limits (gearvib project)")  # fmt: skip
+        return cf_dataset(
+            out,
+            title="alarm limits of condition indicators",
+            producer="analysis.alarm_limits.learn_limits",
+        )
 
     def plot(self, indicators: xr.Dataset, **kwargs: Any) -> matplotlib.figure.Figure:
         """Trend figure of ``indicators`` with these limits (see

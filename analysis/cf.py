@@ -58,7 +58,6 @@ __all__ = [
     "labels_to_cf",
     "processing_attrs",
     "provenance_attrs",
-    "result_dataset",
     "time_attrs",
     "toolkit_version",
 ]
@@ -113,18 +112,6 @@ def processing_attrs(reference: str = "", notes: Any = ()) -> dict[str, str]:
     if notes:
         attrs["comment"] = "; ".join(notes)
     return attrs
-
-
-def result_dataset(ds: Any, title: str, history: str) -> Any:
-    """``ds`` with the global ``title`` and ``history`` of a result (CF 2.6.2; deterministic
-    text, no time stamp) and no ``_FillValue`` on its coordinates (CF 2.5.1), so that
-    ``ds.to_netcdf(...)`` writes a file the CF checker accepts. Returns ``ds`` (modified)."""
-    ds.attrs.setdefault("Conventions", "CF-1.11")
-    ds.attrs["title"] = title
-    ds.attrs["history"] = history
-    for name in ds.coords:
-        ds[name].encoding["_FillValue"] = None
-    return ds
 
 
 def is_elapsed_seconds(units: Any) -> bool:

@@ -36,7 +36,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from analysis.cf import result_dataset
+from analysis.cf import cf_dataset
 from analysis.checks import require_int
 from analysis.cm_plots import gear_signals_figure
 from analysis.fft import irfft, rfft
@@ -150,10 +150,10 @@ class GearSignals:
             "envelope_band": np.asarray(self.envelope_band, dtype=np.int64),
             "shaft": self.shaft,
         }
-        return result_dataset(
+        return cf_dataset(
             xr.Dataset(data, coords=coords, attrs=attrs),
-            f"regular, residual and difference signals of {self.name} ({self.shaft})",
-            "analysis.gear_signals (gearvib project)",
+            title=f"regular, residual and difference signals of {self.name} ({self.shaft})",
+            producer="analysis.gear_signals.gear_signals",
         )
 
     def plot(self, **kwargs: Any) -> matplotlib.figure.Figure:

@@ -46,7 +46,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from analysis.cf import result_dataset, time_attrs
+from analysis.cf import cf_dataset, time_attrs
 from analysis.gear_signals import GearSignals, gear_signals
 from analysis.inputs import channel_coords
 from analysis.tsa import TSA
@@ -391,7 +391,8 @@ def condition_indicators(
         "shaft": first.shaft,
         "comment": "NA4/NB4 normalised by the run-to-date mean variance of records 0 .. k",
     }
-    return result_dataset(
-        xr.Dataset(data, coords=coords, attrs=attrs), "gear condition indicators",
-        "analysis.indicators.condition_indicators (gearvib project)",
-    )  # fmt: skip
+    return cf_dataset(
+        xr.Dataset(data, coords=coords, attrs=attrs),
+        title="gear condition indicators",
+        producer="analysis.indicators.condition_indicators",
+    )

@@ -76,7 +76,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from analysis.cf import result_dataset
+from analysis.cf import cf_dataset
 from analysis.checks import require_choice, require_int, require_real
 from analysis.cm_plots import planetary_figure
 from analysis.inputs import channel_coords
@@ -214,10 +214,10 @@ class PlanetarySeparation:
             attrs["speed_reference"] = first.reference
         if self.notes:
             attrs["comment"] = "; ".join(self.notes)
-        return result_dataset(
+        return cf_dataset(
             xr.Dataset(data, coords=coords, attrs=attrs),
-            "time-synchronous averages of the planets and the sun (McFadden 1991)",
-            "analysis.planetary_tsa (gearvib project)",
+            title="time-synchronous averages of the planets and the sun (McFadden 1991)",
+            producer="analysis.planetary_tsa.planetary_tsa",
         )
 
     def plot(self, **kwargs: Any) -> matplotlib.figure.Figure:

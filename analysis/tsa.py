@@ -44,7 +44,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from analysis.cf import processing_attrs, result_dataset
+from analysis.cf import cf_dataset, processing_attrs
 from analysis.checks import require_block_size, require_int, require_real, time_or_rate
 from analysis.cm_plots import tsa_figure
 from analysis.fft import irfft, rfft
@@ -224,10 +224,11 @@ class TSA:
             coords=coords,
             attrs=attrs,
         )
-        return result_dataset(
-            ds, f"time-synchronous average of {self.name} ({self.shaft})",
-            "analysis.tsa (gearvib project)",
-        )  # fmt: skip
+        return cf_dataset(
+            ds,
+            title=f"time-synchronous average of {self.name} ({self.shaft})",
+            producer="analysis.tsa.tsa",
+        )
 
     def plot(self, **kwargs: Any) -> matplotlib.figure.Figure:
         """Figure of the average (see :func:`analysis.cm_plots.tsa_figure`)."""
