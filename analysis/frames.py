@@ -19,8 +19,15 @@ from analysis.checks import require_block_size
 from analysis.fft import rfft
 from analysis.inputs import Reference, Signal, moving_range, reference_input, signal_input
 from analysis.levels import line_factors
+from analysis.order_resolution import (
+    choose_order_resolution,
+    default_frequency_resolution,
+    main_lobe_band,
+    optional_positive,
+    requested_orders,
+)
 from analysis.resample import Tracking, tracking
-from analysis.windows import WindowSpec, get_window, window_info
+from analysis.windows import WindowSpec, get_window, main_lobe_half_width, window_info
 
 __all__ = [
     "BLOCK_ELEMENTS",
@@ -73,13 +80,15 @@ def stft_into(
 ) -> None:
     """Fill ``out[..., frame, line]`` with the scaled short-time spectra of ``x[..., time]``.
 
-    Channel by channel, each exactly as a single channel, and block-wise.
+    Channel by channel, each exactly as a single channel, and block-wise. ``out`` may hold
+    fewer lines than ``len(w) // 2 + 1`` (the first ones are kept).
     """
     if x.ndim > 1:
         for ch in np.ndindex(*x.shape[:-1]):
             stft_into(x[ch], w, step, out[ch], amplitude, scale)
         return
     seg = w.size
+    n_lines = out.shape[1]  # may stop below the Nyquist line (an axis ending at max_order)
     frames = np.lib.stride_tricks.sliding_window_view(x, seg)[::step]
     n_frames = out.shape[0]
     s1 = float(w.sum())
@@ -88,7 +97,7 @@ def stft_into(
     block = max(1, BLOCK_ELEMENTS // seg)
     for start in range(0, n_frames, block):
         stop = min(n_frames, start + block)
-        spec = rfft(frames[start:stop] * w, axis=-1)
+        spec = rfft(frames[start:stop] * w, axis=-1)[..., :n_lines]
         dst = out[start:stop]
         np.multiply(spec.real, spec.real, out=dst)
         dst += spec.imag * spec.imag
@@ -246,16 +255,23 @@ class OrderPlan(Plan):
 
     def __init__(
         self, tracking: Tracking, seg: int, step: int, n_frames: int, window: WindowSpec,
-        block: int,
+        block: int, notes: tuple[str, ...] = (),
     ) -> None:  # fmt: skip
         res = tracking.resampler
         super().__init__(
             seg, step, n_frames, window, float(res.samples_per_rev), block, tracking.signal,
-            tracking.reference.label, tracking.notes,
+            tracking.reference.label, (*tracking.notes, *notes),
         )  # fmt: skip
         self.tracking = tracking
         self.resampler = res
         self.fs, self.t0 = tracking.signal.fs, tracking.t0
+
+    @property
+    def axis(self) -> np.ndarray:
+        """Line orders up to ``max_order`` (above it the anti-alias filter attenuates)."""
+        full = np.arange(self.seg // 2 + 1) * (self.rate / self.seg)
+        top = self.resampler.max_order * (1.0 + 1e-9)
+        return full[: max(2, int(np.searchsorted(full, top, side="right")))]
 
     def blocks(self) -> Iterator[tuple[int, int, np.ndarray, np.ndarray, np.ndarray]]:
         m = self.resampler.n_out
@@ -290,8 +306,14 @@ def frequency_plan(
     units: str | None = None,
     name: str | None = None,
     block_size: int | None = None,
+    orders: Any = None,
 ) -> FrequencyPlan:
-    """Checked inputs and frame layout of :func:`analysis.maps.rpm_frequency_map`."""
+    """Checked inputs and frame layout of :func:`analysis.maps.rpm_frequency_map`.
+
+    ``resolution`` [Hz] defaults to :func:`analysis.order_resolution.
+    default_frequency_resolution` (a quarter of the slowest shaft frequency, or the default
+    order resolution of ``orders`` at that speed; frames of at most 1/16 of the record).
+    """
     lengths = tuple(np.shape(r)[0] for r in (rpm, angle) if r is not None and np.ndim(r) == 1)
     sig = signal_input(x, fs, time=time, axis=axis, units=units, name=name, lengths=lengths)
     ref = reference_input(rpm, angle, sig.n, required=True, signal=sig)
@@ -299,10 +321,50 @@ def frequency_plan(
     if ref.kind == "angle":
         moving_range(ref, sig.fs, sig.t0, 0.0)  # checks the angle never decreases
     block = require_block_size(block_size)
-    res = sig.fs / 128.0 if resolution is None else float(resolution)
+    resolution = optional_positive(resolution, "resolution", "Hz")
+    if resolution is None:
+        enbw = window_info(window, 4096).enbw_bins  # also checks the window
+        f_lo, f_hi, duration = _shaft_hz_range(ref, sig.fs, sig.t0)
+        res = default_frequency_resolution(f_lo, f_hi, duration, enbw, requested_orders(orders))
+    else:
+        res = float(resolution)
     seg = window_length(window, sig.fs, res, sig.n, "resolution")
     step, n_frames = frame_layout(sig.n, seg, overlap)
     return FrequencyPlan(sig, ref, seg, step, n_frames, window, block)
+
+
+def _revolutions(ref: Reference, fs: float) -> float:
+    """Revolutions of the whole record (rectangle rule for a speed), without a copy."""
+    if ref.kind == "angle":
+        return (float(ref.values[-1]) - float(ref.values[0])) / (2.0 * np.pi)
+    total = 0.0
+    for a in range(0, ref.values.size, 1 << 20):
+        total += float(np.sum(ref.values[a : a + (1 << 20)], dtype=float))
+    return total / (60.0 * fs)
+
+
+def _shaft_hz_range(ref: Reference, fs: float, t0: float) -> tuple[float, float, float]:
+    """Slowest and fastest shaft frequency [Hz] of the moving part of a record, and its
+    duration [s].
+
+    The moving part leaves out standstill at the ends (below 2 % of the top speed, as order
+    tracking does). An angle's speed is taken over 1/100 of that part (averaging out the
+    tooth-to-tooth ripple of a tacho angle).
+    """
+    a, b, _, _ = moving_range(ref, fs, t0, None)
+    if ref.kind == "rpm":
+        v = np.asarray(ref.values[a:b], dtype=float)
+        low, high = float(np.min(v)) / 60.0, float(np.max(v)) / 60.0
+    else:
+        step = max(1, (b - a) // 100)
+        th = np.asarray(ref.values[np.arange(a, b, step)], dtype=float)
+        if th.size < 2:
+            low = high = (float(ref.values[b - 1]) - float(ref.values[a])) * fs / max(b - 1 - a, 1)
+        else:
+            d = np.diff(th) * (fs / step)
+            low, high = float(np.min(d)), float(np.max(d))
+        low, high = low / (2.0 * np.pi), high / (2.0 * np.pi)
+    return max(low, 0.0), max(high, 0.0), (b - a) / fs
 
 
 def order_plan(
@@ -322,20 +384,42 @@ def order_plan(
     units: str | None = None,
     name: str | None = None,
     block_size: int | None = None,
+    orders: Any = None,
+    band: float | None = None,
 ) -> OrderPlan:
     """Checked inputs, angular resampler and frame layout of :func:`analysis.maps.rpm_order_map`.
 
-    ``resolution`` [orders] defaults to ``samples_per_rev / 256`` (MATLAB ``rpmordermap``).
+    ``resolution`` [orders] defaults to :func:`analysis.order_resolution.
+    default_order_resolution` of ``orders`` and ``max_order``, coarsened on a short record
+    (:func:`analysis.order_resolution.choose_order_resolution`). With ``band`` (order cuts:
+    the band width in orders, or ``0`` for the default main lobe) and neither
+    ``max_order`` nor ``samples_per_rev`` given, ``max_order`` is
+    ``1.25 (max(orders) + band / 2)``, so that the bands lie where the resampling is flat
+    (lowered to the highest alias-free order where ``fs`` does not reach it).
+    Given ``max_order`` only, ``samples_per_rev`` is ``2 ceil(1.28 max_order)``.
     """
     lengths = tuple(np.shape(r)[0] for r in (rpm, angle) if r is not None and np.ndim(r) == 1)
     sig = signal_input(x, fs, time=time, axis=axis, units=units, name=name, lengths=lengths)
     ref = reference_input(rpm, angle, sig.n, required=True, signal=sig)
     assert ref is not None
     block = require_block_size(block_size)
-    tr = tracking(sig, ref, samples_per_rev, max_order, block, min_rpm)
+    ords = requested_orders(orders)
+    resolution = optional_positive(resolution, "resolution", "orders")
+    enbw = window_info(window, 4096).enbw_bins  # also checks the window before the work
+    wanted = None
+    if band is not None and ords is not None and max_order is None and samples_per_rev is None:
+        res0, _ = choose_order_resolution(resolution, ords, None, _revolutions(ref, sig.fs), enbw)
+        lobe = main_lobe_band(main_lobe_half_width(window), res0 / enbw)
+        wanted = 1.25 * (float(ords.max()) + 0.5 * (band if band > 0 else lobe))
+    tr = tracking(
+        sig, ref, samples_per_rev, max_order, block, min_rpm, compact=True,
+        max_order_wanted=wanted,
+    )  # fmt: skip
     spr = tr.resampler.samples_per_rev
-    res = spr / 256.0 if resolution is None else float(resolution)
     m = tr.resampler.n_out
+    res, note = choose_order_resolution(
+        resolution, ords, tr.resampler.max_order, m / spr, enbw
+    )
     seg = window_length(window, float(spr), res, m, "resolution")
     step, n_frames = frame_layout(m, seg, overlap)
-    return OrderPlan(tr, seg, step, n_frames, window, block)
+    return OrderPlan(tr, seg, step, n_frames, window, block, (note,) if note else ())

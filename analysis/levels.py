@@ -66,10 +66,11 @@ def to_db(values: np.ndarray, scaling: str, ref: float = 1.0) -> np.ndarray:
 
 
 def line_factors(n_lines: int, nfft: int) -> np.ndarray:
-    """One-sided factors of the ``n_lines`` lines of an ``nfft``-point real transform."""
+    """One-sided factors of the first ``n_lines`` lines of an ``nfft``-point real transform
+    (1 for DC and, when it is among them, the Nyquist line of an even ``nfft``; 2 else)."""
     f = np.full(n_lines, 2.0)
     f[0] = 1.0
-    if nfft % 2 == 0:
+    if nfft % 2 == 0 and n_lines == nfft // 2 + 1:
         f[-1] = 1.0
     return f
 

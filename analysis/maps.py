@@ -7,9 +7,12 @@ Both maps are short-time spectra; each frame is one line of the map, reported at
 (the window's equivalent noise bandwidth), so the window length is
 ``L = round(ENBW_bins * fs / resolution)`` and the value actually used,
 ``ENBW_bins * fs / L``, is reported as ``resolution_hz``/``resolution_orders`` together with
-the line spacing ``fs / L``. Defaults: ``fs / 128`` Hz with a Hann window for the frequency
-map; ``samples_per_rev / 256`` orders with a flat-top window for the order map; 50 % overlap;
-rms amplitude; linear scale.
+the line spacing ``fs / L``. Defaults (:mod:`analysis.order_resolution`): for the frequency
+map a quarter of the slowest shaft frequency of the record [Hz] (no finer than the run-up's
+sweep allows, frames of at most 1/16 of the record) with a Hann window; for the order map
+``min(1/4, d_min / 4, max_order / 64)`` orders (``d_min``: the smallest distance between
+the ``orders`` of interest and from the lowest to order 0) with a flat-top window, its order
+axis ending at ``max_order``; 50 % overlap; rms amplitude; linear scale.
 
 **Memory.** Frames are windowed and transformed block-wise straight into the preallocated
 output (a few MB of temporaries), so a 10-minute, 51.2 kHz channel needs little more than
@@ -285,7 +288,13 @@ def rpm_frequency_map(
         Shaft angle [rad] per sample instead of ``rpm``; the speed of a frame is then the
         angle it spans over its duration.
     resolution : float, optional
-        Resolution bandwidth [Hz] (= ENBW of the window), default ``fs / 128`` (MATLAB).
+        Resolution bandwidth [Hz] (= ENBW of the window). Default
+        ``max(f_min / 4, sqrt(ENBW_lines (f_max - f_min) / duration),
+        ENBW_lines * 16 / duration)`` from the slowest and fastest shaft frequency of the
+        moving record (below 2 % of the top speed is standstill) and its duration: a quarter
+        order at the slowest speed, no finer than order 1's sweep over a frame, frames of at
+        most 1/16 of the record (:func:`analysis.order_resolution.
+        default_frequency_resolution`). MATLAB's default is ``resolution=fs / 128``.
     window : str or tuple, default "hann"
         Any :func:`scipy.signal.get_window` window (MATLAB's default is Hann).
     overlap : float, default 0.5
@@ -314,7 +323,7 @@ def rpm_frequency_map(
         time=time, axis=axis, units=units, name=name,
     )  # fmt: skip
     sig = p.signal
-    out = np.empty((*sig.lead, p.n_frames, p.seg // 2 + 1))
+    out = np.empty((*sig.lead, p.n_frames, p.axis.size))
     stft_into(p.x, p.w, p.step, out, amplitude, scale)
     tc, rc = p.frame_speeds(0, p.n_frames)
     return RpmFrequencyMap(
@@ -347,6 +356,7 @@ def rpm_order_map(
     rpm: Any = None,
     *,
     angle: Any = None,
+    orders: Any = None,
     resolution: float | None = None,
     window: WindowSpec = "flattop",
     overlap: float = 0.5,
@@ -378,8 +388,15 @@ def rpm_order_map(
         Speed [min-1] per sample (integrated to the angle).
     angle : array_like, optional
         Shaft angle [rad] per sample instead of ``rpm`` (more accurate for a tacho).
+    orders : array_like, optional
+        Orders of interest (> 0); the default ``resolution`` resolves them.
     resolution : float, optional
-        Resolution bandwidth [orders] (= window ENBW), default ``samples_per_rev / 256``.
+        Resolution bandwidth [orders] (= window ENBW). Default
+        ``min(1/4, d_min / 4, max_order / 64)``, ``d_min`` the smallest distance between the
+        ``orders`` and from the lowest to order 0: orders four resolutions apart have
+        separate main lobes (a frame spans ``ENBW_lines / resolution`` revolutions, 15 for
+        the flat-top window at 1/4 order); coarsened where a frame would exceed 1/16 of the
+        record (``notes`` says so). MATLAB's default is ``samples_per_rev / 256``.
     window : str or tuple, default "flattop"
         Any :func:`scipy.signal.get_window` window (MATLAB's default is flat-top).
     overlap : float, default 0.5
@@ -387,10 +404,11 @@ def rpm_order_map(
     amplitude, scale : str
         As in :func:`rpm_frequency_map`.
     samples_per_rev : int, optional
-        Angular sampling; default ``2 * ceil(fs / 2 / f_shaft,max)`` (about ``fs`` at the top
-        speed).
+        Angular sampling; default ``2 ceil(1.28 max_order)`` when ``max_order`` is given, else
+        ``2 * ceil(fs / 2 / f_shaft,max)`` (about ``fs`` at the top speed).
     max_order : float, optional
-        Highest alias-free order (default ``samples_per_rev / 2.56``).
+        Highest alias-free order, where the order axis ends (default
+        ``samples_per_rev / 2.56``).
     min_rpm : float, optional
         Standstill threshold [min-1] (default 2 % of the highest speed): slower samples at
         the start and end are left out and ``notes`` says so.
@@ -408,17 +426,18 @@ def rpm_order_map(
     Returns
     -------
     RpmOrderMap
-        Map ``(*channels, time, order)``; time and speed at the angle-frame centres.
+        Map ``(*channels, time, order)``, orders ``0`` to ``max_order``; time and speed at
+        the angle-frame centres; the resolution and line spacing actually used.
     """
     require_choice(amplitude, _AMPLITUDES, "amplitude")
     require_choice(scale, _SCALES, "scale")
     p = order_plan(
         x, fs, rpm, angle=angle, resolution=resolution, window=window, overlap=overlap,
         samples_per_rev=samples_per_rev, max_order=max_order, time=time, axis=axis,
-        min_rpm=min_rpm, units=units, name=name, block_size=block_size,
+        min_rpm=min_rpm, units=units, name=name, block_size=block_size, orders=orders,
     )  # fmt: skip
     sig = p.signal
-    out = np.empty((*sig.lead, p.n_frames, p.seg // 2 + 1))
+    out = np.empty((*sig.lead, p.n_frames, p.axis.size))
     tc = np.empty(p.n_frames)
     rc = np.empty(p.n_frames)
     for k0, k1, samples, t_blk, r_blk in p.blocks():

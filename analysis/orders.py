@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING, Any, Literal
 import numpy as np
 
 from analysis.cf import cf_dataset, processing_attrs
-from analysis.checks import require_block_size, require_choice, require_finite, time_or_rate
+from analysis.checks import require_block_size, require_choice, time_or_rate
 from analysis.frames import (
     BLOCK_ELEMENTS,
     FrequencyPlan,
@@ -34,6 +34,15 @@ from analysis.frames import (
 from analysis.inputs import channel_coords, reference_input, select_channel, signal_input
 from analysis.levels import AMPLITUDES, amplitude_choice, line_factors, power_of, to_db, units_of
 from analysis.maps import RpmFrequencyMap, RpmOrderMap
+from analysis.order_resolution import (
+    OrderBandWarning,
+    check_bands,
+    choose_order_resolution,
+    main_lobe_band,
+    named_lines,
+    optional_positive,
+    requested_orders,
+)
 from analysis.plots import order_cuts_figure, order_spectrum_figure
 from analysis.resample import AngleSignal, angle_from_speed, resample_to_angle, tracking
 from analysis.spectrum import Peaks, Spectrum, find_peaks, spectrum
@@ -45,6 +54,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     "AngleSignal",
+    "OrderBandWarning",
     "OrderCut",
     "OrderSpectrum",
     "angle_from_speed",
@@ -175,7 +185,8 @@ class OrderSpectrum:
                           inputs={"signal": self.name, "speed_reference": self.reference})
 
     def peaks(self, **kwargs: Any) -> Peaks:
-        """Peaks (see :func:`analysis.spectrum.find_peaks`); ``frequency`` is in orders."""
+        """Peaks on the order axis (see :func:`analysis.spectrum.find_peaks`): ``Peaks.order``
+        (variables ``order``, ``bin_order`` in its Dataset); ``min_distance_orders=``."""
         if "min_distance_orders" in kwargs:
             kwargs["min_distance_hz"] = kwargs.pop("min_distance_orders")
         return find_peaks(self.spectrum, **kwargs)
@@ -191,6 +202,7 @@ def order_spectrum(
     rpm: Any = None,
     *,
     angle: Any = None,
+    orders: Any = None,
     resolution: float | None = None,
     window: WindowSpec = "flattop",
     amplitude: Literal["peak", "rms", "power", "density"] | None = None,
@@ -223,10 +235,15 @@ def order_spectrum(
         Shaft speed [min-1] per sample.
     angle : array_like, optional
         Shaft angle [rad] per sample instead of ``rpm``.
+    orders : array_like, optional
+        Orders of interest (> 0); the default ``resolution`` resolves them.
     resolution : float, optional
         Resolution bandwidth [orders] (the window's ENBW, as in the maps): the segment spans
         ``ENBW_bins / resolution`` revolutions (rounded to whole samples; the values used are
-        reported). Default ``samples_per_rev / 256`` (MATLAB).
+        reported). Default ``min(1/4, d_min / 4, max_order / 64)`` with ``d_min`` the smallest
+        distance between the ``orders`` and from the lowest to 0, coarsened where a segment
+        would exceed 1/16 of the record (said in ``notes``); see
+        :mod:`analysis.order_resolution`.
     window : str or tuple, default "flattop"
         Any :func:`scipy.signal.get_window` window (flat-top like MATLAB ``orderspectrum``).
     amplitude : {"peak", "rms", "power", "density"}, default "rms"
@@ -234,9 +251,11 @@ def order_spectrum(
     overlap : float, default 0.5
         Segment overlap.
     samples_per_rev : int, optional
-        Angular sampling; default so that the top speed is sampled at about ``fs``.
+        Angular sampling; default ``2 ceil(1.28 max_order)`` when ``max_order`` is given,
+        else so that the top speed is sampled at about ``fs``.
     max_order : float, optional
-        Highest order to keep (default ``samples_per_rev / 2.56``).
+        Highest order to keep: the order axis ends there (default ``samples_per_rev / 2.56``,
+        the highest alias-free order at about ``fs`` at the top speed).
     min_rpm : float, optional
         Standstill threshold [min-1] (default 2 % of the highest speed).
     time : array_like, optional
@@ -258,7 +277,8 @@ def order_spectrum(
     Returns
     -------
     OrderSpectrum
-        Energy-averaged order spectrum, shape ``(*channels, order)``.
+        Energy-averaged order spectrum, shape ``(*channels, order)``, orders ``0`` to
+        ``max_order``, with the resolution and line spacing actually used.
     """
     amp = amplitude_choice(amplitude, scaling, "order_spectrum", AMPLITUDES)
     fs, time = time_or_rate(fs, time, "order_spectrum")
@@ -275,8 +295,8 @@ def order_spectrum(
         spacing = float(orders_resolution)
         if not np.isfinite(spacing) or spacing <= 0:
             raise ValueError(f"orders_resolution = {orders_resolution!r} must be finite and > 0")
-    if resolution is not None and not (np.isfinite(float(resolution)) and resolution > 0):
-        raise ValueError(f"resolution = {resolution!r} is not admissible: must be > 0 orders")
+    resolution = optional_positive(resolution, "resolution", "orders")
+    ords = requested_orders(orders)
     if not 0.0 <= float(overlap) < 1.0:
         raise ValueError(f"overlap = {overlap!r} is not admissible: must be in [0, 1)")
     lengths = tuple(np.shape(r)[0] for r in (rpm, angle) if r is not None and np.ndim(r) == 1)
@@ -285,14 +305,17 @@ def order_spectrum(
     assert ref is not None
     block = require_block_size(block_size)
     enbw_bins = window_info(window, 4096).enbw_bins  # also checks the window before the work
-    tr = tracking(sig, ref, samples_per_rev, max_order, block, min_rpm)
+    tr = tracking(sig, ref, samples_per_rev, max_order, block, min_rpm, compact=True)
     resampler = tr.resampler
     spr = resampler.samples_per_rev
     m = resampler.n_out
+    note = ""
     if orders_resolution is not None:
         seg, what = round(spr / spacing), f"orders_resolution = {spacing:g}"
     else:
-        res = spr / 256.0 if resolution is None else float(resolution)
+        res, note = choose_order_resolution(
+            resolution, ords, resampler.max_order, m / spr, enbw_bins
+        )
         seg, what = round(enbw_bins * spr / res), f"resolution = {res:g} orders"
     if seg > m:
         raise ValueError(
@@ -323,13 +346,18 @@ def order_spectrum(
         values, float(spr), window=window, amplitude=amp, segment_length=seg, overlap=overlap,
         axis=-1, units=sig.units, name=sig.name,
     )  # fmt: skip
+    # the order axis ends at max_order (above it the anti-alias filter attenuates)
+    n_lines = max(2, int(np.searchsorted(last.frequency, resampler.max_order * (1 + 1e-9),
+                                         side="right")))  # fmt: skip
     s = dataclasses.replace(
         last,
-        values=total,
+        frequency=last.frequency[:n_lines],
+        values=total[..., :n_lines],
         n_averages=n_seg,
         dims=sig.dims,
         coords=sig.coords,
         units=units_of(sig.units, amp, per=""),
+        axis="order",
     )
     return OrderSpectrum(
         order=s.frequency,
@@ -349,7 +377,7 @@ def order_spectrum(
         dims=sig.dims,
         coords=sig.coords,
         reference=ref.label,
-        notes=tr.notes,
+        notes=(*tr.notes, note) if note else tr.notes,
     )
 
 
@@ -495,22 +523,51 @@ def _cut_setup(
     require_choice(scale, ("linear", "dB"), "scale")
     if orders is None:
         raise ValueError("orders (the orders to track, > 0) are required")
-    ords = np.atleast_1d(require_finite(orders, "orders"))
-    if ords.ndim != 1 or np.any(ords <= 0):
-        raise ValueError("orders must be a 1-D list of orders > 0")
+    ords = requested_orders(orders)
+    assert ords is not None
+    bandwidth = optional_positive(bandwidth, "bandwidth", "orders")
+    bandwidth_hz = optional_positive(bandwidth_hz, "bandwidth_hz", "Hz")
     if bandwidth is not None and bandwidth_hz is not None:
         raise ValueError("give either bandwidth (orders) or bandwidth_hz (Hz), not both")
     spacing = float(axis[1] - axis[0])
     if bandwidth is None and bandwidth_hz is None:
         kind = "Hz" if is_freq else "order"
-        bw = 2.0 * main_lobe_half_width(window) * spacing
+        bw = main_lobe_band(main_lobe_half_width(window), spacing)
     elif bandwidth is not None:
-        kind, bw = "order", float(bandwidth)
+        kind, bw = "order", bandwidth
     else:
         kind, bw = "Hz", float(bandwidth_hz)  # type: ignore[arg-type]
-    if not np.isfinite(bw) or bw <= 0:
-        raise ValueError(f"bandwidth = {bw!r} is not admissible: must be finite and > 0")
     return ords, kind, bw, spacing
+
+
+def _warn_overlaps(
+    ords: np.ndarray,
+    kind: str,
+    bw: float,
+    is_freq: bool,
+    spacing: float,
+    window: WindowSpec,
+    rpm: np.ndarray,
+    lines: list[tuple[str, float]],
+    resolution: float,
+) -> None:
+    """:class:`OrderBandWarning` where a band reaches another order's main lobe.
+
+    Bands and main lobes fixed in Hz are widest in orders at the slowest frame (frames below
+    2 % of the top speed, standstill, are not counted).
+    """
+    moving = rpm[np.isfinite(rpm) & (rpm > 0)]
+    if not moving.size:
+        return
+    f_lo = float(moving[moving >= 0.02 * moving.max()].min()) / 60.0
+    half = 0.5 * bw / (f_lo if kind == "Hz" else 1.0)
+    lobe = main_lobe_half_width(window) * spacing / (f_lo if is_freq else 1.0)
+    res_units = "Hz" if is_freq else "orders"
+    what = (f"band {bw:.4g} {'orders' if kind == 'order' else 'Hz'}, frames of resolution "
+            f"{resolution:.4g} {res_units}")  # fmt: skip
+    if kind == "Hz" or is_freq:
+        what += f", at {60.0 * f_lo:.5g} min-1"
+    check_bands(ords, half, lobe, lines, what=what, stacklevel=4)
 
 
 def _band_power(
@@ -584,6 +641,7 @@ def order_cuts_from_map(
     bandwidth_hz: float | None = None,
     amplitude: Literal["rms", "peak", "power"] = "rms",
     scale: Literal["linear", "dB"] = "linear",
+    lines: Any = None,
 ) -> OrderCut:
     """Order cuts read from an rpm-frequency or rpm-order map by summing the lines in a band.
 
@@ -602,25 +660,37 @@ def order_cuts_from_map(
         Proportional band width in orders (band ``order +- bandwidth/2``).
     bandwidth_hz : float, optional
         Fixed band width in Hz (exclusive with ``bandwidth``).
-        Default (neither given): the window's main-lobe width, in the map's own axis (fixed
-        Hz on a frequency map, proportional on an order map).
+        Default (neither given): the window's main-lobe width ``2 h`` lines (``h`` = 2 for
+        Hann, 5 for flat-top; ``2.67`` resolution bandwidths for both), in the map's own axis
+        (fixed Hz on a frequency map, proportional on an order map).
     amplitude : {"rms", "peak", "power"}, default "rms"
         Convention of the result.
     scale : {"linear", "dB"}, default "linear"
         Linear or dB re 1 unit.
+    lines : mapping or sequence of (str, float), optional
+        Named catalogue lines ``{name: order}`` (e.g. ``dict(zip(cat.formula, cat.order))``
+        of a :class:`analysis.catalogue.KinematicCatalogue`). A line at a requested order
+        names it in messages; a line elsewhere inside a band is warned about.
 
     Returns
     -------
     OrderCut
         Levels ``(*channels, order, time)``; NaN where the band exceeds the map's axis.
+
+    Warns
+    -----
+    OrderBandWarning
+        A band reaches the main lobe of another requested order or of a line (the cut holds
+        both); the message names both, with their orders.
     """
     if not isinstance(m, RpmFrequencyMap | RpmOrderMap):
         raise ValueError("m must be an RpmFrequencyMap or RpmOrderMap")
     is_freq = isinstance(m, RpmFrequencyMap)
     axis = m.frequency if is_freq else m.order
-    ords, kind, bw, _ = _cut_setup(
+    ords, kind, bw, spacing = _cut_setup(
         m.window_spec, axis, is_freq, orders, bandwidth, bandwidth_hz, amplitude, scale
     )
+    named = named_lines(lines)
     lead = m.values.shape[:-2]
     n_frames = m.values.shape[-2]
     band = np.empty((*lead, ords.size, n_frames))
@@ -632,6 +702,8 @@ def order_cuts_from_map(
             band[ch][:, sl] = _band_power(
                 power, m.rpm[sl], axis, ords, kind, bw, is_freq, m.enbw_bins
             )
+    resolution = m.resolution_hz if is_freq else m.resolution_orders  # type: ignore[union-attr]
+    _warn_overlaps(ords, kind, bw, is_freq, spacing, m.window_spec, m.rpm, named, resolution)
     vals, units, ref = _levels(band, amplitude, scale, m.signal_units)
     return OrderCut(
         orders=ords,
@@ -647,7 +719,7 @@ def order_cuts_from_map(
         window=m.window,
         level_reference=ref,
         name=m.name,
-        resolution=m.resolution_hz if is_freq else m.resolution_orders,  # type: ignore[union-attr]
+        resolution=resolution,
         resolution_units="Hz" if is_freq else "1",
         segment_length=m.segment_length,
         samples_per_rev=0 if is_freq else m.samples_per_rev,  # type: ignore[union-attr]
@@ -670,6 +742,7 @@ def order_cuts(
     bandwidth_hz: float | None = None,
     amplitude: Literal["rms", "peak", "power"] = "rms",
     scale: Literal["linear", "dB"] = "linear",
+    lines: Any = None,
     **map_kwargs: Any,
 ) -> OrderCut:
     """Order cuts (level of chosen orders vs rpm) directly from a signal (MATLAB
@@ -681,6 +754,14 @@ def order_cuts(
     computed and summed into the bands a block at a time, so neither the map nor the
     angle-domain signal is ever held whole.
 
+    **Defaults resolve the requested orders** (:mod:`analysis.order_resolution`): the order
+    resolution is ``min(1/4, d_min / 4)`` orders, ``d_min`` the smallest distance between
+    the requested orders and from the lowest to order 0 (fixed-Hz frames: that many orders of
+    the slowest shaft frequency), coarsened where a frame would exceed 1/16 of the record
+    (``notes`` says so); the band is the window's main lobe (``2.67`` resolutions), so
+    neighbouring requested orders never share a band; ``max_order`` is
+    ``1.25 (max(orders) + band / 2)``, where the angular resampling is flat to 0.01 dB.
+
     Parameters
     ----------
     x, fs, rpm
@@ -690,7 +771,7 @@ def order_cuts(
         Orders to track (> 0).
     angle : array_like, optional
         Shaft angle [rad] per sample instead of ``rpm`` (more accurate for a tacho).
-    bandwidth, bandwidth_hz, amplitude, scale
+    bandwidth, bandwidth_hz, amplitude, scale, lines
         As in :func:`order_cuts_from_map`.
     **map_kwargs
         Passed on as to the map function: ``window``, ``resolution``, ``overlap``, ``time``,
@@ -702,11 +783,19 @@ def order_cuts(
     Returns
     -------
     OrderCut
-        See :func:`order_cuts_from_map`; it reports the resolution, frame length and
-        angular sampling of the frames it was read from.
+        See :func:`order_cuts_from_map`; it reports the resolution, band width, frame length
+        and angular sampling actually used (also in its Dataset's attributes).
+
+    Warns
+    -----
+    OrderBandWarning
+        A band reaches the main lobe of another requested order or of a line.
     """
     fs, time = time_or_rate(fs, map_kwargs.pop("time", None), "order_cuts")
     is_freq = bandwidth_hz is not None
+    if orders is None:
+        raise ValueError("orders (the orders to track, > 0) are required")
+    ords_in = requested_orders(orders)
     if is_freq:
         for key in ("samples_per_rev", "max_order", "min_rpm"):
             if map_kwargs.get(key) is not None:
@@ -714,10 +803,14 @@ def order_cuts(
                                  "bandwidth_hz reads frequency frames")
             map_kwargs.pop(key, None)
         plan: FrequencyPlan | OrderPlan = frequency_plan(
-            x, fs, rpm, angle=angle, time=time, **map_kwargs
+            x, fs, rpm, angle=angle, time=time, orders=ords_in, **map_kwargs
         )
     else:
-        plan = order_plan(x, fs, rpm, angle=angle, time=time, **map_kwargs)
+        band0 = optional_positive(bandwidth, "bandwidth", "orders")
+        plan = order_plan(
+            x, fs, rpm, angle=angle, time=time, orders=ords_in,
+            band=0.0 if band0 is None else band0, **map_kwargs,
+        )  # fmt: skip
     axis = plan.axis
     ords, kind, bw, spacing = _cut_setup(
         plan.window, axis, is_freq, orders, bandwidth, bandwidth_hz, amplitude, scale
@@ -727,6 +820,7 @@ def order_cuts(
             f"bandwidth ({bw:g} {kind}) is narrower than the map's line spacing somewhere "
             "(the band would hold no line); widen it or use a finer map"
         )
+    named = named_lines(lines)
     sig = plan.signal
     band = np.empty((*sig.lead, ords.size, plan.n_frames))
     tc = np.empty(plan.n_frames)
@@ -738,6 +832,8 @@ def order_cuts(
             power, r_blk, axis, ords, kind, bw, is_freq, plan.info.enbw_bins
         )
         tc[k0:k1], rc[k0:k1] = t_blk, r_blk
+    resolution = plan.info.enbw_hz(plan.rate)
+    _warn_overlaps(ords, kind, bw, is_freq, spacing, plan.window, rc, named, resolution)
     vals, units, ref = _levels(band, amplitude, scale, sig.units)
     spr = 0 if is_freq else int(plan.rate)
     return OrderCut(
@@ -754,7 +850,7 @@ def order_cuts(
         window=plan.info.label,
         level_reference=ref,
         name=sig.name,
-        resolution=plan.info.enbw_hz(plan.rate),
+        resolution=resolution,
         resolution_units="Hz" if is_freq else "1",
         segment_length=plan.seg,
         samples_per_rev=spr,

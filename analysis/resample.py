@@ -614,11 +614,21 @@ def tracking(
     max_order: float | None,
     block: int,
     min_rpm: float | None,
+    *,
+    compact: bool = False,
+    max_order_wanted: float | None = None,
 ) -> Tracking:
     """Leave out standstill at the ends, check the rest and set up its angular resampler.
 
     ``samples_per_rev`` defaults to ``2 ceil(fs / 2 / f_shaft,max)`` (about ``fs`` at the top
-    speed), ``max_order`` to ``samples_per_rev / 2.56``.
+    speed), ``max_order`` to ``samples_per_rev / 2.56``. With ``compact`` and a given
+    ``max_order`` (order spectra, maps and cuts, which never show orders above it), the
+    default ``samples_per_rev`` is ``2 ceil(1.28 max_order)`` (at least 8), but never more
+    than the former: the alias-free order range still ends at ``max_order`` and the
+    resampling costs ``samples_per_rev`` per revolution, not ``fs`` per second.
+    ``max_order_wanted`` (with neither ``max_order`` nor ``samples_per_rev``) is a default
+    ``max_order`` lowered to ``samples_per_rev / 2.56`` of the former sampling where ``fs``
+    does not reach it at the top speed.
     """
     fs = signal.fs
     a, b, _, note = moving_range(reference, fs, signal.t0, min_rpm)
@@ -642,7 +652,11 @@ def tracking(
         rpm_max = track.step_max * fs * 60.0 / (2.0 * np.pi)
     if samples_per_rev is None:
         spr, mo_default = default_samples_per_rev(fs, rpm_max)
+        if max_order is None and max_order_wanted is not None:
+            max_order = min(float(max_order_wanted), mo_default)
         mo = mo_default if max_order is None else max_order
+        if compact and max_order is not None and np.isfinite(float(max_order)):
+            spr = min(spr, max(8, 2 * int(np.ceil(1.28 * float(max_order)))))
     else:
         spr, mo = samples_per_rev, max_order
     spr, mo = check_sampling(spr, mo)

@@ -108,6 +108,10 @@ class Spectrum:
         Name of the analysed channel.
     window_params : tuple
         Parameters of the window other than Kaiser's beta.
+    axis : str
+        ``"frequency"`` (Hz), or ``"order"`` for the spectrum inside an
+        :class:`analysis.orders.OrderSpectrum`, whose ``frequency`` holds orders and whose
+        ``fs`` is the samples per revolution; its peaks are then named ``order``.
     """
 
     frequency: np.ndarray
@@ -128,6 +132,7 @@ class Spectrum:
     coords: dict[str, np.ndarray] = field(default_factory=dict)
     name: str = "x"
     window_params: tuple[Any, ...] = ()
+    axis: str = "frequency"
 
     @property
     def resolution_hz(self) -> float:
@@ -425,24 +430,28 @@ def spectrum(
 
 @dataclass
 class Peaks:
-    """Spectral peaks with window-corrected frequency and amplitude.
+    """Spectral peaks with window-corrected position and amplitude.
 
     Attributes
     ----------
     frequency : numpy.ndarray
-        Interpolated peak frequencies [Hz] (ascending).
+        Interpolated peak positions (ascending) on the spectrum's axis: frequencies [Hz], or
+        orders when ``axis == "order"`` (peaks of an order spectrum), where they are read as
+        :attr:`order`.
     amplitude : numpy.ndarray
         Peak heights corrected for scalloping, in the spectrum's convention and ``units``: a
         sinusoid of amplitude ``A`` gives ``A`` ("peak"), ``A/sqrt(2)`` ("rms"), ``A^2/2``
         ("power"); for "density" the corrected PSD height (the sine's power is
         ``amplitude * enbw_hz``).
     bin_frequency, bin_value : numpy.ndarray
-        Frequency and raw value of the local-maximum bins.
+        Position (Hz or orders, :attr:`bin_order`) and raw value of the local-maximum bins.
     scaling : str
         The spectrum's amplitude convention (``Spectrum.amplitude``; here the field is called
         ``scaling`` because ``amplitude`` holds the peak heights).
     units, window : str
         Copied from the spectrum.
+    axis : str
+        ``"frequency"`` (Hz) or ``"order"`` (orders; the spectrum of an order spectrum).
     """
 
     frequency: np.ndarray
@@ -452,37 +461,62 @@ class Peaks:
     scaling: str
     units: str
     window: str
+    axis: str = "frequency"
 
     def __len__(self) -> int:
         return int(self.frequency.size)
 
-    def labels(self, fmt: str = "{frequency:.1f} Hz") -> list[str]:
-        """Text labels, ``fmt`` formatted with ``frequency`` and ``amplitude``."""
+    def _orders(self, values: np.ndarray, name: str) -> np.ndarray:
+        if self.axis != "order":
+            raise AttributeError(
+                f"Peaks.{name}: these peaks are on a frequency axis (Hz); read .frequency"
+            )
+        return values
+
+    @property
+    def order(self) -> np.ndarray:
+        """Interpolated peak orders (peaks of an order spectrum, ``axis == "order"``)."""
+        return self._orders(self.frequency, "order")
+
+    @property
+    def bin_order(self) -> np.ndarray:
+        """Orders of the local-maximum lines (``axis == "order"``)."""
+        return self._orders(self.bin_frequency, "bin_order")
+
+    def labels(self, fmt: str | None = None) -> list[str]:
+        """Text labels, ``fmt`` formatted with ``frequency`` (or ``order`` on an order axis)
+        and ``amplitude``; default ``"{frequency:.1f} Hz"`` or ``"order {order:.2f}"``."""
+        on_order = self.axis == "order"
+        if fmt is None:
+            fmt = "order {order:.2f}" if on_order else "{frequency:.1f} Hz"
         return [
-            fmt.format(frequency=f, amplitude=a)
+            fmt.format(frequency=f, amplitude=a, **({"order": f} if on_order else {}))
             for f, a in zip(self.frequency, self.amplitude, strict=True)
         ]
 
     def to_dataset(self) -> xr.Dataset:
-        """:class:`xarray.Dataset` with dimension ``peak``."""
+        """:class:`xarray.Dataset` with dimension ``peak``: ``frequency``/``bin_frequency``
+        [Hz], or ``order``/``bin_order`` on an order axis."""
         import xarray as xr
 
+        on_order = self.axis == "order"
+        pos, unit = ("order", "1") if on_order else ("frequency", "Hz")
         ds = xr.Dataset(
             {
-                "frequency": (
+                pos: (
                     "peak",
                     self.frequency,
-                    {"units": "Hz", "long_name": "interpolated peak frequency"},
+                    {"units": unit, "long_name": f"interpolated peak {pos}"},
                 ),
                 "amplitude": (
                     "peak",
                     self.amplitude,
                     {"units": self.units, "long_name": f"corrected peak {self.scaling} value"},
                 ),
-                "bin_frequency": (
+                f"bin_{pos}": (
                     "peak",
                     self.bin_frequency,
-                    {"units": "Hz", "long_name": "frequency of the maximum bin"},
+                    {"units": unit, "long_name": f"{pos} of the maximum bin"},
                 ),
                 "bin_value": (
                     "peak",
@@ -562,7 +596,8 @@ def find_peaks(
     max_peaks : int, optional
         Keep only the strongest ``max_peaks`` (result sorted by frequency).
     min_distance_hz : float, optional
-        Minimum distance between peaks [Hz]; the stronger one is kept.
+        Minimum distance between peaks [Hz; orders for the spectrum of an order spectrum];
+        the stronger one is kept.
     channel : int, str or tuple of int, optional
         Multi-channel spectra: a label of the channel coordinate, or an index (tuple of
         indices) into the leading dimensions (required then).
@@ -570,7 +605,8 @@ def find_peaks(
     Returns
     -------
     Peaks
-        Peaks; DC and the last bin are never interpolated.
+        Peaks; DC and the last bin are never interpolated. On the spectrum of an order
+        spectrum (``spectrum.axis == "order"``) they are on an order axis (``Peaks.order``).
     """
     if not isinstance(spectrum, Spectrum):
         raise ValueError("spectrum must be a Spectrum (result of analysis.spectrum.spectrum)")
@@ -608,7 +644,7 @@ def find_peaks(
     mag = np.sqrt(vals) if power_like else vals.copy()
     one_sided = np.full(mag.size, 0.5 if spectrum.amplitude == "peak" else np.sqrt(0.5))
     one_sided[0] = 1.0
-    if spectrum.nfft % 2 == 0:
+    if spectrum.nfft % 2 == 0 and mag.size == spectrum.nfft // 2 + 1:
         one_sided[-1] = 1.0
     mag *= one_sided
     w = get_window(spectrum.window_spec, spectrum.segment_length)
@@ -630,4 +666,5 @@ def find_peaks(
         scaling=spectrum.amplitude,
         units=spectrum.units,
         window=spectrum.window,
+        axis=spectrum.axis,
     )

@@ -31,8 +31,9 @@ def test_frequency_map_matches_shorttimefft_and_metadata():
     rng = np.random.default_rng(0)
     x = rng.standard_normal(20000)
     rpm = np.linspace(1000, 3000, x.size)
-    m = rpm_frequency_map(x, FS, rpm, amplitude="power")
+    m = rpm_frequency_map(x, FS, rpm, amplitude="power", resolution=FS / 128)
     # MATLAB definition: resolution = ENBW; Hann ENBW 1.5 bins -> window 1.5 * 128 = 192
+    # (fs / 128 is MATLAB's default resolution)
     assert m.segment_length == 192
     assert m.resolution_hz == pytest.approx(FS / 128)
     assert m.bin_spacing_hz == pytest.approx(FS / 192)
@@ -58,10 +59,11 @@ def test_frequency_map_matches_shorttimefft_and_metadata():
 @pytest.mark.parametrize("amplitude", ["rms", "peak", "power"])
 def test_frequency_map_sine_level_and_db(amplitude):
     n = 16384
-    f0 = 40 * FS / 192  # on a line of the default map
+    f0 = 40 * FS / 192  # on a line of the map of resolution fs / 128 (192-sample Hann)
     x = 2.0 * np.sin(2 * np.pi * f0 * np.arange(n) / FS)
-    lin = rpm_frequency_map(x, FS, np.full(n, 1000.0), amplitude=amplitude)
-    db = rpm_frequency_map(x, FS, np.full(n, 1000.0), amplitude=amplitude, scale="dB")
+    kw = {"amplitude": amplitude, "resolution": FS / 128}
+    lin = rpm_frequency_map(x, FS, np.full(n, 1000.0), **kw)
+    db = rpm_frequency_map(x, FS, np.full(n, 1000.0), **kw, scale="dB")
     expected = {"rms": 2 / np.sqrt(2), "peak": 2.0, "power": 2.0}[amplitude]
     np.testing.assert_allclose(lin.values[:, 40], expected, rtol=1e-9)
     factor = 10 if amplitude == "power" else 20
@@ -89,8 +91,10 @@ def test_order_map_runup_amplitudes():
 def test_overall_level_parseval():
     rng = np.random.default_rng(1)
     x = 0.5 + 2.0 * rng.standard_normal(40960)
-    lvl = overall_level(x, FS, np.full(x.size, 1500.0), window="rectangular")
-    # rectangular window: sum of lines = mean square of each frame exactly (Parseval)
+    lvl = overall_level(x, FS, np.full(x.size, 1500.0), window="rectangular",
+                        resolution=FS / 128)
+    # rectangular window (ENBW 1 line): 128-sample frames; the sum of the lines is the mean
+    # square of each frame exactly (Parseval)
     frames = np.lib.stride_tricks.sliding_window_view(x, 128)[::64]
     np.testing.assert_allclose(lvl.values, np.sqrt(np.mean(frames**2, axis=1)), rtol=1e-10)
     hann = overall_level(x, FS, np.full(x.size, 1500.0), scale="dB")
@@ -199,7 +203,8 @@ def test_order_map_blockwise_equals_whole_record(kw):
         scale=kw.get("scale", "linear"),
     )
     assert frames.segment_length == one.segment_length
-    p_ref = frames.power()
+    p_ref = frames.power()[:, : one.order.size]  # the order map ends at max_order
+    assert one.order[-1] <= one.max_order < one.order[-1] + one.bin_spacing_orders
     np.testing.assert_allclose(one.power(), p_ref, rtol=1e-10, atol=1e-14 * p_ref.max())
     centre = frames.time * spr  # frame centres in samples of the angle signal
     np.testing.assert_allclose(one.time, np.interp(centre, np.arange(ref.size), ref_t))
