@@ -417,8 +417,10 @@ def order_plan(
     )  # fmt: skip
     spr = tr.resampler.samples_per_rev
     m = tr.resampler.n_out
+    # max_order / 64 refines the default for a low max_order chosen by the user (a zoom), not
+    # for the one derived from the orders of a cut
     res, note = choose_order_resolution(
-        resolution, ords, tr.resampler.max_order, m / spr, enbw
+        resolution, ords, None if wanted is not None else tr.resampler.max_order, m / spr, enbw
     )
     seg = window_length(window, float(spr), res, m, "resolution")
     step, n_frames = frame_layout(m, seg, overlap)

@@ -16,24 +16,32 @@ the name ``analysis_baseline``, so both run side by side in one process on the s
    for one channel, baseline and today side by side, and today's for all 4 channels in one
    call (the baseline takes one channel per call: its 4-channel figure is 4x its one).
    The results of both are compared (maximum relative difference of the outputs).
+3. The defaults of issue 29 against the previous defaults, passed explicitly
+   (``resolution = samples_per_rev / 256`` at the sampling of ``fs`` at the top speed; the
+   frequency map's ``fs / 128``), on the issue's signal: 20 s (``--quick``: 5 s) at 51.2 kHz,
+   600 -> 3000 min-1, orders 1, 2.5 and 24. Runs interleaved (new, old, new, old ...),
+   medians of 3 (``--quick``: 2), the machine load (``uptime``) printed beside them, and the
+   largest level error of each (order cuts and order spectrum against the true rms).
 """
 
 from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import subprocess
 import sys
 import tempfile
 import time
 import tracemalloc
+import warnings
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from analysis.maps import rpm_order_map
+from analysis.maps import rpm_frequency_map, rpm_order_map
 from analysis.orders import order_cuts, order_spectrum, resample_to_angle
 
 FS = 51200.0
@@ -157,12 +165,67 @@ def functions(minutes: float, old: Any, only: set[str] | None = None) -> None:
               f"(max difference {_rel(r_one.values, r_ref.values):.1e})")
 
 
+def defaults(seconds: float, repeat: int) -> None:
+    """Part 3: the defaults of issue 29 against the previous ones, side by side."""
+    n = int(FS * seconds)
+    t = np.arange(n) / FS
+    rpm = 600.0 + 2400.0 * t / seconds
+    phi = 2 * np.pi * (600.0 / 60 * t + 0.5 * 2400.0 / 60 / seconds * t**2)
+    x = np.sin(phi) + 0.5 * np.sin(2.5 * phi) + 2.0 * np.sin(24 * phi)
+    ords = [1.0, 2.5, 24.0]
+    rms = np.array([1.0, 0.5, 2.0]) / np.sqrt(2)
+    spr = 2 * int(np.ceil(FS / 2 / (rpm.max() / 60)))  # the previous default sampling
+    old = {"resolution": spr / 256, "samples_per_rev": spr}
+
+    def cut_err(c: Any) -> float:
+        return float(np.nanmax(np.abs(20 * np.log10(c.values / rms[:, None]))))
+
+    def spec_err(s: Any) -> float:
+        k = [int(np.argmin(np.abs(s.order - o))) for o in ords]
+        return float(np.max(np.abs(20 * np.log10(s.values[k] / rms))))
+
+    cases: list[tuple[str, Callable[[], Any], Callable[[], Any], Callable[[Any], str]]] = [
+        ("rpm_order_map", lambda: rpm_order_map(x, FS, rpm),
+         lambda: rpm_order_map(x, FS, rpm, **old),
+         lambda m: f"{m.resolution_orders:.3g} orders, {m.values.shape[-1]} lines"),
+        ("order_spectrum", lambda: order_spectrum(x, FS, rpm, max_order=30),
+         lambda: order_spectrum(x, FS, rpm, **old),
+         lambda s: f"{s.resolution_orders:.3g} orders, error {spec_err(s):.2f} dB"),
+        ("order_cuts", lambda: order_cuts(x, FS, rpm, ords),
+         lambda: order_cuts(x, FS, rpm, ords, **old),
+         lambda c: f"band {c.bandwidth:.3g} orders, error {cut_err(c):.2f} dB"),
+        ("rpm_frequency_map", lambda: rpm_frequency_map(x, FS, rpm),
+         lambda: rpm_frequency_map(x, FS, rpm, resolution=FS / 128),
+         lambda m: f"{m.resolution_hz:.3g} Hz, {m.time.size} frames"),
+    ]
+    load = os.getloadavg()
+    print(f"3. defaults of issue 29 vs the previous ones, {seconds:g} s at 51.2 kHz, "
+          f"600 -> 3000 min-1, orders 1, 2.5, 24; medians of {repeat} interleaved runs; "
+          f"load average {load[0]:.2f} {load[1]:.2f} {load[2]:.2f} on {os.cpu_count()} cores:")
+    print(f"   {'':18}{'new default':>14}{'previous':>12}{'ratio':>8}   new | previous")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the previous defaults' bands overlap (warned)
+        for label, new_fn, old_fn, what in cases:
+            r_new, r_old = new_fn(), old_fn()  # warm-up (compilation, plans)
+            t_new, t_old = [], []
+            for _ in range(repeat):
+                t_new.append(_best(new_fn, 1))
+                t_old.append(_best(old_fn, 1))
+            tn, to = float(np.median(t_new)), float(np.median(t_old))
+            print(f"   {label:18}{tn:12.3f} s{to:10.3f} s{tn / to:7.2f}x   "
+                  f"{what(r_new)} | {what(r_old)}")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--quick", action="store_true", help="short signals")
     parser.add_argument("--baseline", default="4dda194", help="git commit of the baseline")
     parser.add_argument("--only", default="", help="comma-separated functions of part 2")
+    parser.add_argument("--defaults", action="store_true", help="part 3 only")
     args = parser.parse_args()
+    if args.defaults:
+        defaults(5.0 if args.quick else 20.0, 2 if args.quick else 3)
+        return
     with tempfile.TemporaryDirectory() as tmp:
         old = load_baseline(args.baseline, Path(tmp))
         importlib.import_module("analysis_baseline.orders")
@@ -171,6 +234,8 @@ def main() -> None:
         if not only:
             throughput(10.0 if args.quick else 60.0, old)
         functions(1.0 if args.quick else 10.0, old, only or None)
+    if not args.only:
+        defaults(5.0 if args.quick else 20.0, 2 if args.quick else 3)
 
 
 if __name__ == "__main__":

@@ -494,12 +494,12 @@ def analyse_measurement(measurement: Measurement, *, gearset: Any = None,
         osp = ospec.spectrum
         opk = find_peaks(osp, prominence_db=6.0, max_peaks=_PEAKS,
                          min_distance_hz=3 * osp.bin_spacing_hz)
-        opk = _select_peaks(opk, (opk.frequency > 0.5) & (opk.frequency <= max_order))
+        opk = _select_peaks(opk, (opk.order > 0.5) & (opk.order <= max_order))
         olines = ([catalogue_lines(cat, axis="order", speed_uncertainty=2e-3)]
                   if cat is not None else [_shaft_lines(1.0, max_order, "order")])
         ow = peak_half_widths(ospec.order, to_db(ospec.values, ospec.amplitude),
-                              opk.frequency) if len(opk) else None
-        oident = identify_peaks(opk.frequency, olines, resolution=ospec.enbw_orders,
+                              opk.order) if len(opk) else None
+        oident = identify_peaks(opk.order, olines, resolution=ospec.enbw_orders,
                                 peak_widths=ow, band=(0.0, max_order))
     except ValueError as exc:
         notes.append(f"order spectrum not available: {exc}")
@@ -783,8 +783,8 @@ def spectra_figure(mc: MeasuredCase, figsize: tuple[float, float] = (8.0, 6.4)) 
         ax.grid(True, alpha=0.3)
         if mc.order_peaks is not None and len(mc.order_peaks):
             y = to_db(mc.order_peaks.amplitude, os_.spectrum.amplitude)
-            ax.plot(mc.order_peaks.frequency, y, "v", color="C3", ms=4)
-            labelled.append((ax, mc.order_peaks.frequency, y,
+            ax.plot(mc.order_peaks.order, y, "v", color="C3", ms=4)
+            labelled.append((ax, mc.order_peaks.order, y,
                              [_short(mc.order_identification, i, "order")
                               for i in range(len(mc.order_peaks))]))
     fig.suptitle(f"{mc.name}: {mc.channel} ('?' unexplained, '~' ambiguous)", fontsize=10)

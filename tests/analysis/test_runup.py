@@ -59,8 +59,10 @@ def test_order_map_gives_the_same_features():
     for f0 in (800.0, 1500.0):
         b, a = scipy.signal.iirpeak(f0, 60.0, FS)
         x += 3.0 * scipy.signal.lfilter(b, a, rng.normal(size=t.size))
+    # samples_per_rev 2 ceil(fs / 2 / 50 Hz) = 164, the sampling this test was written for
+    # (given max_order alone, the default is now 2 ceil(1.28 max_order) = 154)
     om = rpm_order_map(x, FS, speed, resolution=0.1, window="hann", overlap=0.5,
-                       max_order=60.0)
+                       max_order=60.0, samples_per_rev=164)
     feat = map_features(om.to_dataset())
     assert feat.orders == pytest.approx([10.0, 23.5], abs=0.05)
     assert feat.frequencies == pytest.approx([800.0, 1500.0], abs=8.0)
