@@ -27,6 +27,15 @@ that the orders asked for are resolved, not taken from a fixed fraction of the s
 
 A cut whose band reaches the main lobe of another requested order or of a named catalogue
 line holds both: :func:`check_bands` warns with :class:`OrderBandWarning`, naming both.
+
+References
+----------
+A. Brandt, *Noise and Vibration Analysis*, Wiley 2011: sec. 9.3 (resolution bandwidth,
+ENBW), 10.3 (band levels from spectral lines), ch. 12 (order tracking, order cuts).
+G. Heinzel, A. Rüdiger, R. Schilling, *Spectrum and spectral density estimation by the DFT*,
+2002: ENBW and main-lobe widths of the Hann and flat-top windows.
+The MathWorks documentation of ``rpmordermap`` and ``rpmfreqmap`` for the defaults compared
+in ``docs/analysis-spectra-orders.md``.
 """
 
 from __future__ import annotations
