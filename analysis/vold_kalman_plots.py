@@ -117,9 +117,9 @@ def order_waveform_figure(
     return fig
 
 
-def _frame_rms(v: np.ndarray, frames: int) -> tuple[np.ndarray, np.ndarray]:
+def _frame_rms(v: np.ndarray, length: int) -> tuple[np.ndarray, np.ndarray]:
     n = v.size
-    length = max(1, n // frames)
+    length = max(1, min(length, n))
     k = n // length
     blocks = v[: k * length].reshape(k, length)
     centres = (np.arange(k) + 0.5) * length
@@ -131,10 +131,10 @@ def order_removal_figure(
     *,
     channel: Any = None,
     xaxis: str = "time",
-    frames: int = 400,
+    frame: float | None = None,
     figsize: tuple[float, float] = (8.0, 4.0),
 ) -> Figure:
-    """Running rms of the input, of the signal with the orders removed and of the residual.
+    """Rms in frames of the input, of the signal with the orders removed and of the residual.
 
     Parameters
     ----------
@@ -144,8 +144,9 @@ def order_removal_figure(
         Channel to draw (required for a multi-channel result).
     xaxis : {"time", "rpm"}
         Abscissa: time or the speed of shaft 0.
-    frames : int
-        Number of rms frames along the record.
+    frame : float, optional
+        Frame length [s]; default four periods of the slowest tracked order (its median
+        frequency), at least 1/400 of the record.
     figsize : tuple of float
         Figure size [in].
     """
@@ -158,19 +159,28 @@ def order_removal_figure(
         ex = one
     x, xlabel = _abscissa(ex, xaxis)
     original = ex.without([])
+    if frame is None:
+        slowest = float(np.min(np.median(ex.frequency, axis=1)))
+        frame = 4.0 / slowest if slowest > 0 else x.size / ex.fs / 400
+    length = max(round(float(frame) * ex.fs), x.size // 400, 1)
     fig = _figure(figsize)
     ax = fig.add_subplot()
     removed = ", ".join(f"{ex.orders[k]:g}" for k in rem.removed)
+    removed = f"order{'s' if len(rem.removed) > 1 else ''} {removed}"
     for v, lab in (
         (original, "input"),
-        (signal, f"orders {removed} removed"),
+        (signal, f"{removed} removed"),
         (residual, "residual (every tracked order removed)"),
     ):
-        c, r = _frame_rms(v, frames)
+        c, r = _frame_rms(v, length)
         ax.plot(x[c.astype(int)], r, lw=1.0, label=lab)
     ax.set_xlabel(xlabel)
     ax.set_ylabel(f"rms [{ex.units}]")
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=8)
-    ax.set_title(f"{ex.name}: orders removed by Vold-Kalman filtering", fontsize=10)
+    ax.set_title(
+        f"{ex.name}: orders removed by Vold-Kalman filtering (rms in frames of "
+        f"{length / ex.fs:.3g} s)",
+        fontsize=10,
+    )
     return fig
