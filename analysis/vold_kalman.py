@@ -50,6 +50,8 @@ is cheaper, but an order passing within about a bandwidth leaks into it (beats).
 
 Numerics and memory: :mod:`analysis.vold_kalman_solver` (Givens QR of the banded stacked
 matrix; memory linear in the record, or bounded by checkpoints when ``max_memory`` asks).
+Results: :mod:`analysis.vold_kalman_results`; input checks and speed references:
+:mod:`analysis.vold_kalman_checks`; figures: :mod:`analysis.vold_kalman_plots`.
 
 References
 ----------
@@ -70,29 +72,25 @@ formulation and behavior. SAE Technical Paper 2007-01-2221 (07NVC-254).
 
 from __future__ import annotations
 
-import dataclasses
 import numbers
-from collections.abc import Sequence
-from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
-from analysis.cf import processing_attrs, time_attrs
-from analysis.inputs import (
-    Signal,
-    channel_coords,
-    reference_input,
-    select_channel,
-    signal_input,
+from analysis.inputs import signal_input
+from analysis.vold_kalman_checks import (
+    per_order,
+    positions,
+    real_number,
+    real_numbers,
+    reference_lengths,
+    result_bytes,
+    shaft_list,
+    shaft_positions,
+    speed_references,
 )
-from analysis.speed import from_angle, from_rpm, from_tacho
-from analysis.vold_kalman_plots import order_removal_figure, order_waveform_figure
+from analysis.vold_kalman_results import OrderRemoval, OrderWaveforms
 from analysis.vold_kalman_solver import minimum_working_bytes, plan, solve
-
-if TYPE_CHECKING:
-    import matplotlib.figure
-    import xarray as xr
 
 __all__ = [
     "DEFAULT_MAX_MEMORY",
@@ -161,421 +159,25 @@ def bandwidth_to_weight(bandwidth: Any, fs: float, filter_order: int = 1) -> np.
 
 
 def weight_to_bandwidth(weight: Any, fs: float, filter_order: int = 1) -> np.ndarray:
-    """-3 dB bandwidth [Hz] of the weight ``r`` (inverse of :func:`bandwidth_to_weight`)."""
+    """-3 dB bandwidth [Hz] of the weight ``r`` (inverse of :func:`bandwidth_to_weight`).
+
+    Parameters
+    ----------
+    weight : float or array_like
+        Weight ``r`` of the structural equation (Feldbauer & Höldrich / Tůma convention).
+    fs : float
+        Sample rate [Hz].
+    filter_order : {1, 2}
+        As in :func:`bandwidth_to_weight`.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``B = (2 fs / pi) arcsin(((sqrt(2) - 1) / r^2)^(1 / (2p)) / 2)`` [Hz].
+    """
     p = _difference_order(filter_order)
     r = np.asarray(weight, dtype=float)
     return 2.0 * fs / np.pi * np.arcsin(0.5 * (_HALF_POWER / r**2) ** (1.0 / (2 * p)))
-
-
-# ---------------------------------------------------------------------------- results
-
-
-@dataclass(frozen=True, eq=False)
-class OrderWaveforms:
-    """Orders extracted by the Vold-Kalman filter (MATLAB ``orderwaveform``).
-
-    Attributes
-    ----------
-    orders : numpy.ndarray
-        Tracked orders (cycles per revolution of their shaft).
-    shafts : numpy.ndarray
-        Speed reference (row of ``rpm``) of each order.
-    time : numpy.ndarray
-        Sample instants [s].
-    rpm : numpy.ndarray
-        Speed of each shaft [min-1], shape ``(shaft, time)``.
-    angle : numpy.ndarray
-        Angle of each shaft [rad], shape ``(shaft, time)``; order ``k``'s carrier phase is
-        ``orders[k] * angle[shafts[k]]``.
-    envelope : numpy.ndarray
-        Complex envelope ``a_k`` (peak amplitude and phase), shape ``(*channels, order,
-        time)``.
-    waveform : numpy.ndarray
-        ``Re(a_k exp(i orders[k] angle[shafts[k]]))``, same shape, units of the signal.
-    residual : numpy.ndarray
-        Signal minus the sum of the waveforms, shape ``(*channels, time)``.
-    bandwidth : numpy.ndarray
-        -3 dB bandwidth of each order's filter [Hz] (full width of the half-power band).
-    weight : numpy.ndarray
-        Weight ``r`` of each order (Feldbauer & Höldrich / Tůma convention).
-    filter_order : int
-        1 (second difference) or 2 (third difference).
-    joint : bool
-        Whether the orders were solved in one system.
-    fs : float
-        Sample rate [Hz].
-    units, name : str
-        Units and name of the signal.
-    dims, coords : tuple, dict
-        Names and coordinates of the channel dimensions (empty for one channel).
-    reference : str
-        Speed reference(s) used.
-    notes : tuple of str
-        What was done beyond the request.
-    """
-
-    orders: np.ndarray
-    shafts: np.ndarray
-    time: np.ndarray
-    rpm: np.ndarray
-    angle: np.ndarray
-    envelope: np.ndarray
-    waveform: np.ndarray
-    residual: np.ndarray
-    bandwidth: np.ndarray
-    weight: np.ndarray
-    filter_order: int
-    joint: bool
-    fs: float
-    units: str = "1"
-    name: str = "x"
-    dims: tuple[str, ...] = ()
-    coords: dict[str, np.ndarray] = field(default_factory=dict)
-    reference: str = ""
-    notes: tuple[str, ...] = ()
-
-    @property
-    def amplitude(self) -> np.ndarray:
-        """Peak amplitude ``|a_k|`` (units of the signal); rms is ``amplitude / sqrt(2)``."""
-        return np.abs(self.envelope)
-
-    @property
-    def phase(self) -> np.ndarray:
-        """Phase ``arg a_k`` [rad] relative to the carrier ``orders[k] * angle``."""
-        return np.angle(self.envelope)
-
-    @property
-    def frequency(self) -> np.ndarray:
-        """Instantaneous frequency of each order [Hz], shape ``(order, time)``."""
-        return self.orders[:, None] * self.rpm[self.shafts] / 60.0
-
-    def select(self, channel: Any) -> OrderWaveforms:
-        """The orders of one channel (a label of the channel coordinate, or an index)."""
-        env, dims, coords, label = select_channel(self.envelope, self.dims, self.coords, channel)
-        wave, *_ = select_channel(self.waveform, self.dims, self.coords, channel)
-        res, *_ = select_channel(self.residual, self.dims, self.coords, channel)
-        name = f"{self.name} {label}" if self.name else label
-        return dataclasses.replace(
-            self, envelope=env, waveform=wave, residual=res, dims=dims, coords=coords, name=name
-        )
-
-    def without(self, which: Sequence[int] | None = None) -> np.ndarray:
-        """The signal with the orders at positions ``which`` of :attr:`orders` removed (all
-        when ``None``): the residual plus the waveforms of the other orders."""
-        drop = _positions(which, self.orders.size, "which")
-        keep = [k for k in range(self.orders.size) if k not in drop]
-        out = self.residual.copy()
-        for k in keep:
-            out += self.waveform[..., k, :]
-        return out
-
-    def to_dataset(self) -> xr.Dataset:
-        """CF Dataset: ``waveform``, ``amplitude`` (peak), ``phase`` (degree) along
-        ``(*channels, order, time)``, ``residual``, the speeds and angles of the shafts, the
-        order frequencies, and ``bandwidth``/``weight`` per order."""
-        import xarray as xr
-
-        ch = self.dims
-        what = f"of {self.name}" if self.name else ""
-        attrs: dict[str, Any] = {
-            "Conventions": "CF-1.11",
-            "method": "second-generation Vold-Kalman filter (least squares, real data term)",
-            "filter_order": int(self.filter_order),
-            "difference_order": int(self.filter_order) + 1,
-            "joint": int(self.joint),
-            "sample_rate": float(self.fs),
-            "amplitude": "peak",
-            "envelope_convention": (
-                "waveform = amplitude * cos(order * shaft_angle[shaft] + phase); no factor 2 "
-                "(the analytic envelope of Feldbauer & Hoeldrich is half the amplitude)"
-            ),
-            "history": "Vold-Kalman order tracking by analysis.vold_kalman",
-        }
-        attrs.update(processing_attrs(self.reference, self.notes))
-        units = self.units
-        data = {
-            "waveform": (
-                (*ch, "order", "time"),
-                self.waveform,
-                {"units": units, "long_name": f"order waveform {what}".strip()},
-            ),
-            "amplitude": (
-                (*ch, "order", "time"),
-                self.amplitude,
-                {"units": units, "long_name": f"peak amplitude of the order {what}".strip()},
-            ),
-            "phase": (
-                (*ch, "order", "time"),
-                np.degrees(self.phase),
-                {
-                    "units": "degree",
-                    "long_name": "phase of the order relative to order * shaft angle",
-                },
-            ),
-            "residual": (
-                (*ch, "time"),
-                self.residual,
-                {"units": units, "long_name": f"signal minus the tracked orders {what}".strip()},
-            ),
-            "frequency": (
-                ("order", "time"),
-                self.frequency,
-                {"units": "Hz", "long_name": "instantaneous frequency of the order"},
-            ),
-            "rpm": (
-                ("shaft", "time"),
-                self.rpm,
-                {"units": "min-1", "long_name": "shaft speed (revolutions per minute)"},
-            ),
-            "shaft_angle": (
-                ("shaft", "time"),
-                self.angle,
-                {"units": "rad", "long_name": "shaft rotation angle"},
-            ),
-            "bandwidth": (
-                "order",
-                self.bandwidth,
-                {"units": "Hz", "long_name": "-3 dB bandwidth of the order filter (full width)"},
-            ),
-            "weight": (
-                "order",
-                self.weight,
-                {"units": "1", "long_name": "weight r of the structural equation"},
-            ),
-            "order_shaft": (
-                "order",
-                self.shafts.astype(np.int32),
-                {"units": "1", "long_name": "speed reference (shaft index) of the order"},
-            ),
-        }
-        coords = {
-            "time": ("time", self.time, time_attrs("time since the start of the record")),
-            "order": ("order", self.orders, {"units": "1", "long_name": "tracked order"}),
-            "shaft": (
-                "shaft",
-                np.arange(self.rpm.shape[0], dtype=np.int32),
-                {"units": "1", "long_name": "speed reference index"},
-            ),
-            **channel_coords(self.dims, self.coords),
-        }
-        return xr.Dataset(data, coords=coords, attrs=attrs)
-
-    def plot(self, **kwargs: Any) -> matplotlib.figure.Figure:
-        """Figure (see :func:`analysis.vold_kalman_plots.order_waveform_figure`)."""
-        return order_waveform_figure(self, **kwargs)
-
-
-@dataclass(frozen=True, eq=False)
-class OrderRemoval:
-    """A signal with chosen orders removed (:func:`remove_orders`).
-
-    Attributes
-    ----------
-    signal : numpy.ndarray
-        The input minus the waveforms of the removed orders, shape ``(*channels, time)``.
-    residual : numpy.ndarray
-        The input minus the waveforms of every tracked order (removed and kept).
-    removed : tuple of int
-        Positions in ``extraction.orders`` of the removed orders.
-    extraction : OrderWaveforms
-        The orders tracked (jointly with those kept, when ``joint``).
-    """
-
-    signal: np.ndarray
-    residual: np.ndarray
-    removed: tuple[int, ...]
-    extraction: OrderWaveforms
-
-    def to_dataset(self) -> xr.Dataset:
-        """CF Dataset: ``signal`` (orders removed), ``residual``, and the removed orders'
-        waveforms and amplitudes."""
-        ex = self.extraction
-        ds = ex.to_dataset().isel(order=list(self.removed))
-        ds = ds.drop_vars(["residual"])
-        ch = ex.dims
-        ds["signal"] = (
-            (*ch, "time"),
-            self.signal,
-            {"units": ex.units, "long_name": f"{ex.name} with the removed orders subtracted"},
-        )
-        ds["residual"] = (
-            (*ch, "time"),
-            self.residual,
-            {"units": ex.units, "long_name": f"{ex.name} minus every tracked order"},
-        )
-        ds.attrs["removed_orders"] = [float(ex.orders[k]) for k in self.removed]
-        return ds
-
-    def plot(self, **kwargs: Any) -> matplotlib.figure.Figure:
-        """Figure (see :func:`analysis.vold_kalman_plots.order_removal_figure`)."""
-        return order_removal_figure(self, **kwargs)
-
-
-# ---------------------------------------------------------------------------- checks
-
-
-def _real(value: Any, name: str) -> float:
-    """A real number (not a bool, not a string), as float."""
-    if isinstance(value, bool | np.bool_) or not isinstance(value, numbers.Real):
-        raise TypeError(f"{name} = {value!r} must be a real number, not {type(value).__name__}")
-    v = float(value)
-    if not np.isfinite(v):
-        raise ValueError(f"{name} = {value!r} is not admissible: must be finite")
-    return v
-
-
-def _reals(values: Any, name: str) -> np.ndarray:
-    """A number or a sequence of numbers as a 1-D float array (bools and strings refused)."""
-    if isinstance(values, str | bytes):
-        raise TypeError(f"{name} = {values!r} must be numbers, not a string")
-    arr = np.asarray(values, dtype=object) if not isinstance(values, np.ndarray) else values
-    if arr.dtype == object or arr.dtype.kind in "bUSV":
-        flat = np.ravel(arr) if arr.ndim else [arr.item()]
-        return np.array([_real(v, name) for v in flat], dtype=float)
-    if not np.issubdtype(arr.dtype, np.number) or np.iscomplexobj(arr):
-        raise TypeError(f"{name} must be real numbers; got dtype {arr.dtype}")
-    out = np.asarray(arr, dtype=float).ravel()
-    if not np.all(np.isfinite(out)):
-        raise ValueError(f"{name} = {values!r} is not admissible: must be finite")
-    return out
-
-
-def _per_order(values: np.ndarray, m: int, name: str) -> np.ndarray:
-    if values.size == 1:
-        return np.full(m, values[0])
-    if values.size != m:
-        raise ValueError(f"{name}: {values.size} values for {m} orders; give one or one per order")
-    return values
-
-
-def _items(values: Any) -> list[Any]:
-    """The elements of a scalar, a sequence or an array, as given (bools stay bools)."""
-    if isinstance(values, list | tuple):
-        return list(values)
-    if np.ndim(values) == 0:
-        return [values.item() if isinstance(values, np.ndarray) else values]
-    arr = np.asarray(values)
-    return [bool(v) for v in arr.ravel()] if arr.dtype == bool else list(arr.ravel())
-
-
-def _positions(which: Any, m: int, name: str) -> list[int]:
-    if which is None:
-        return list(range(m))
-    items = _items(which)
-    out = []
-    for v in items:
-        if isinstance(v, bool | np.bool_) or not isinstance(v, numbers.Integral):
-            raise TypeError(f"{name} = {which!r}: positions in orders (integers) are needed")
-        if not 0 <= int(v) < m:
-            raise ValueError(f"{name} = {which!r}: a position must be in [0, {m})")
-        out.append(int(v))
-    return sorted(set(out))
-
-
-def _shaft_list(ref: Any, n: int) -> list[Any]:
-    """The references of one or several shafts as a list (one entry per shaft)."""
-    if isinstance(ref, list | tuple):
-        if not ref:
-            raise ValueError("an empty list of speed references was given")
-        return list(ref)
-    if hasattr(ref, "dims"):  # DataArray: one shaft
-        return [ref]
-    arr = np.asarray(ref)
-    if arr.ndim == 2:
-        if arr.shape[1] == n:
-            return list(arr)
-        if arr.shape[0] == n:
-            return list(arr.T)
-        raise ValueError(
-            f"sample-count mismatch: speed reference of shape {arr.shape} for {n} samples; "
-            "give (shafts, samples) or (samples, shafts)"
-        )
-    return [ref]
-
-
-def _reference_lengths(ref: Any) -> tuple[int, ...]:
-    """Sample counts of a speed reference (they single out the time axis of ``x``): the
-    length of a 1-D reference or of the list's entries, the longer side of a 2-D array."""
-    if ref is None:
-        return ()
-    if isinstance(ref, list | tuple):
-        return tuple(int(np.shape(r)[-1]) for r in ref if np.ndim(r) == 1)
-    shape = np.shape(ref)
-    return (int(max(shape)),) if len(shape) in (1, 2) else ()
-
-
-def _references(
-    sig: Signal,
-    rpm: Any,
-    angle: Any,
-    tacho: Any,
-    pulses_per_rev: Any,
-    missing_teeth: Any,
-    time: np.ndarray,
-) -> tuple[np.ndarray, np.ndarray, str]:
-    """Angles and speeds ``(shaft, time)`` of the speed references, and their description."""
-    given = [k for k, v in (("rpm", rpm), ("angle", angle), ("tacho", tacho)) if v is not None]
-    if len(given) > 1:
-        raise ValueError(f"give one speed reference (rpm=, angle= or tacho=), not {given}")
-    n = sig.n
-    angles, speeds, labels = [], [], []
-    if tacho is not None:
-        for v in pulses_per_rev if isinstance(pulses_per_rev, list | tuple) else [pulses_per_rev]:
-            if isinstance(v, bool | np.bool_) or not isinstance(v, numbers.Integral):
-                raise TypeError(f"pulses_per_rev = {pulses_per_rev!r} must be integers >= 1")
-        pulses = _shaft_list(tacho, n)
-        ppr = list(pulses_per_rev) if isinstance(pulses_per_rev, list | tuple) else None
-        for i, p in enumerate(pulses):
-            arr = np.asarray(p)
-            if arr.ndim != 1 or arr.size != n:
-                raise ValueError(
-                    f"sample-count mismatch (x: {n}, tacho[{i}]: {arr.size}); a tacho must be "
-                    "1-D, sampled with x"
-                )
-            if not np.issubdtype(arr.dtype, np.number) or arr.dtype == bool:
-                raise TypeError(f"tacho[{i}] must be real numbers; got dtype {arr.dtype}")
-            per = ppr[i] if ppr is not None else pulses_per_rev
-            ref = from_tacho(
-                arr, sig.fs, per, missing_teeth=missing_teeth, output_time=time - time[0]
-            )
-            angles.append(ref.angle)
-            speeds.append(ref.rpm)
-            labels.append(f"tacho {i} ({per} pulses/rev)")
-        return np.array(angles), np.array(speeds), ", ".join(labels)
-    kind = "rpm" if rpm is not None else ("angle" if angle is not None else None)
-    items = _shaft_list(rpm if rpm is not None else angle, n) if kind else [None]
-    for i, item in enumerate(items):
-        ref = reference_input(
-            item if kind == "rpm" else None,
-            item if kind == "angle" else None,
-            n,
-            required=True,
-            signal=sig if kind is None else None,
-        )
-        values = np.asarray(ref.values, dtype=float)
-        label = ref.label if len(items) == 1 else f"{ref.label} (shaft {i})"
-        if ref.kind == "rpm":
-            if float(values.min()) < 0.0:
-                j = int(np.argmin(values))
-                raise ValueError(
-                    f"rpm must be >= 0 (rotation in one direction); rpm[{j}] = {values[j]:.6g}"
-                    f"{'' if len(items) == 1 else f' of shaft {i}'}. Negate a reference of "
-                    "reverse rotation"
-                )
-            sr = from_rpm(time, values)
-        else:
-            sr = from_angle(time, values)
-        angles.append(sr.angle)
-        speeds.append(sr.rpm)
-        labels.append(label)
-    return np.array(angles), np.array(speeds), ", ".join(labels)
-
-
-def _result_bytes(nch: int, m: int, n: int, shafts: int) -> int:
-    """Bytes of the result arrays (envelopes, waveforms, residual, angles and speeds, time),
-    of the float copy of the input and of the temporaries of the speed references and of
-    the waveforms (about six arrays of ``n``)."""
-    return 8 * n * (nch * m * 3 + nch * 2 + shafts * 2 + m + 7)
 
 
 # ---------------------------------------------------------------------------- extraction
@@ -684,20 +286,20 @@ def order_waveform(
     if not isinstance(joint, bool):
         raise TypeError(f"joint = {joint!r} must be True or False")
     p = _difference_order(filter_order)
-    budget = _real(max_memory, "max_memory")
+    budget = real_number(max_memory, "max_memory")
     if budget <= 0:
         raise ValueError(f"max_memory = {max_memory!r} is not admissible: must be > 0 bytes")
-    order_values = _reals(orders, "orders")
+    order_values = real_numbers(orders, "orders")
     m = order_values.size
     if m == 0:
         raise ValueError("orders: give at least one order")
     if np.any(order_values <= 0):
         raise ValueError(f"orders = {orders!r} is not admissible: every order must be > 0")
-    ref_len = _reference_lengths(rpm if rpm is not None else angle if angle is not None else tacho)
+    ref_len = reference_lengths(rpm if rpm is not None else angle if angle is not None else tacho)
     sig = signal_input(x, fs, time=time, axis=axis, units=units, name=name, lengths=tuple(ref_len))
     n = sig.n
     fs_v = sig.fs
-    bw = _per_order(_reals(bandwidth, "bandwidth"), m, "bandwidth")
+    bw = per_order(real_numbers(bandwidth, "bandwidth"), m, "bandwidth")
     top = MAX_BANDWIDTH_FRACTION * fs_v
     for b in bw:
         if not 0.0 < b <= top:
@@ -716,11 +318,11 @@ def order_waveform(
             f"{narrowest:.3g} Hz (decimate the signal first, or use filter_order=1)"
         )
     given = next((v for v in (rpm, angle, tacho) if v is not None), None)
-    n_shafts = len(_shaft_list(given, n)) if given is not None else 1
+    n_shafts = len(shaft_list(given, n)) if given is not None else 1
     if shafts is None:
         shaft_idx = np.zeros(m, dtype=np.int64)
     else:
-        shaft_idx = np.array(_positions_of_shafts(shafts, m, n_shafts), dtype=np.int64)
+        shaft_idx = np.array(shaft_positions(shafts, m, n_shafts), dtype=np.int64)
     seen: dict[tuple[float, int], int] = {}
     for k in range(m):
         key = (float(order_values[k]), int(shaft_idx[k]))
@@ -737,7 +339,7 @@ def order_waveform(
         )
     lead = sig.lead
     nch = int(np.prod(lead)) if lead else 1
-    need = _result_bytes(nch, m, n, n_shafts)  # checked before any array of n is made
+    need = result_bytes(nch, m, n, n_shafts)  # checked before any array of n is made
     solve_m = m if joint else 1
     work = plan(n, solve_m, p, nch, budget - need)
     if work is None:
@@ -748,7 +350,7 @@ def order_waveform(
             f"{least:.4g} more; raise max_memory or analyse a shorter record"
         )
     t = sig.time if sig.time is not None else sig.t0 + np.arange(n) / fs_v
-    angles, speeds, reference = _references(
+    angles, speeds, reference = speed_references(
         sig, rpm, angle, tacho, pulses_per_rev, missing_teeth, t
     )
     top_rpm = speeds.max(axis=1)
@@ -830,23 +432,6 @@ def order_waveform(
     )
 
 
-def _positions_of_shafts(shafts: Any, m: int, n_shafts: int) -> list[int]:
-    items = [shafts] * m if np.ndim(shafts) == 0 else _items(shafts)
-    if len(items) != m:
-        raise ValueError(f"shafts: {len(items)} values for {m} orders; give one per order")
-    out = []
-    for v in items:
-        if isinstance(v, bool | np.bool_) or not isinstance(v, numbers.Integral):
-            raise TypeError(f"shafts = {shafts!r}: integers (speed reference indices) needed")
-        if not 0 <= int(v) < n_shafts:
-            raise ValueError(
-                f"shafts = {shafts!r}: an index must be in [0, {n_shafts}) ({n_shafts} speed "
-                "reference(s) given)"
-            )
-        out.append(int(v))
-    return out
-
-
 def remove_orders(
     x: Any,
     fs: Any = None,
@@ -877,5 +462,5 @@ def remove_orders(
         waveforms)``; the extraction.
     """
     ex = order_waveform(x, fs, orders=orders, **kwargs)
-    drop = _positions(remove, ex.orders.size, "remove")
+    drop = positions(remove, ex.orders.size, "remove")
     return OrderRemoval(ex.without(drop), ex.residual, tuple(drop), ex)
