@@ -7,13 +7,13 @@ Leuridan 1993; Vold, Mains & Blough 1997), in its least-squares form (Feldbauer 
 ``order_waveform`` and ``remove_orders``).
 
 Model. Order ``k`` of shaft ``s_k`` has the carrier phase ``theta_k(t) = o_k phi_{s_k}(t)``
-(``phi``: shaft angle [rad], from an rpm trace, an angle trace or a tacho) and the waveform
+(``phi``: shaft angle [rad], from an rpm trace, an angle trace or a tacho) and the waveform::
 
     x_k(n) = Re(a_k(n) exp(i theta_k(n))) = u_k(n) cos theta_k(n) - v_k(n) sin theta_k(n),
 
 where ``a_k = u_k + i v_k`` is the complex envelope: ``|a_k|`` is the **peak** amplitude in
 the signal's units and ``arg a_k`` the phase (no factor 2: a cosine of amplitude A and phase
-phi has ``a_k = A exp(i phi)``). The envelopes minimise
+phi has ``a_k = A exp(i phi)``). The envelopes minimise::
 
     J = sum_n (x(n) - sum_k x_k(n))^2 + sum_k (r_k^2 / 2) sum_n |nabla^p a_k(n)|^2
 
