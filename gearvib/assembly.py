@@ -282,7 +282,10 @@ def assemble(gs: GearSet, *, n_table: int = N_TABLE) -> AssembledModel:
         mass[i] = b.inertia if coords.names[i].endswith(".theta") else b.mass
     gyro = np.zeros((n, n))
     centripetal = np.zeros((n, n))
+    still = _still_frames(gs, bodies)
     for b in gs.bodies:
+        if b.name in still:
+            continue  # coordinates of a stage whose carrier is held: no frame rotation
         c1, c2 = ("zeta", "eta") if b.role == "planet" else ("x", "y")
         i, j = coords.get(b.name, c1), coords.get(b.name, c2)
         gyro[i, j], gyro[j, i] = -2 * b.mass, 2 * b.mass
@@ -541,7 +544,9 @@ def assemble(gs: GearSet, *, n_table: int = N_TABLE) -> AssembledModel:
 
     bearing_vectors = (np.array([u for _, u, _, _ in bearings]) @ tmat if bearings
                        else np.zeros((0, len(kept))))
-    carriers = [b.name for b in gs.bodies if b.role == "carrier"]
+    # the carrier whose speed drives the gyroscopic terms: the first one that turns (a parallel
+    # stage's housing is a carrier at rest)
+    carriers = [b.name for b in gs.bodies if b.role == "carrier" and rotation_dofs[b.name] >= 0]
     meta = {
         "name": gs.name,
         "meshes": mesh_meta,
@@ -588,6 +593,26 @@ def assemble(gs: GearSet, *, n_table: int = N_TABLE) -> AssembledModel:
     if gs.sensors:
         model = model.with_sensors(gs.sensors)
     return model
+
+
+def _still_frames(gs: GearSet, bodies: dict[str, Body]) -> set[str]:
+    """Bodies whose coordinates are those of a stage with a held carrier (a parallel stage).
+
+    A planet belongs to its carrier, a central gear to the carrier of the planets it meshes,
+    a carrier to itself; such a body of a held carrier has its translations in a frame that
+    does not turn, so it gets no gyroscopic or centripetal terms. (Bodies of another turning
+    carrier keep them, with the speed of the first turning carrier, as before.)
+    """
+    frame: dict[str, str] = {}
+    for b in gs.bodies:
+        if b.role == "planet":
+            frame[b.name] = str(b.carrier)
+        elif b.role == "carrier":
+            frame[b.name] = b.name
+    for m in gs.meshes:
+        if bodies[m.gear1].role == "central":
+            frame.setdefault(m.gear1, str(bodies[m.gear2].carrier))
+    return {name for name, c in frame.items() if c in gs.fixed}
 
 
 BACK_LINE_RTOL = 1e-12

@@ -1,9 +1,11 @@
 """Gear-set descriptions in TOML, and the built-in presets.
 
 A description is a TOML file (or the equivalent dict) with a ``type`` that selects a builder:
-``simple``, ``wolfrom``, ``ravigneaux``, ``two-stage`` or ``general`` (bodies, meshes and
-couplings listed one by one; this is also how a literature model given directly by its lumped
-parameters is written). All values are SI (m, kg, kg m^2, N/m, N s/m), angles are in degrees
+``simple``, ``wolfrom``, ``ravigneaux``, ``parallel`` (a parallel-axis gear pair, optionally
+with an idler), ``two-stage``, ``multi-stage`` (``[stage1]`` ... ``[stageN]`` of any of the
+former in series, joined by ``[[shaft]]``) or ``general`` (bodies, meshes and couplings listed
+one by one; this is also how a literature model given directly by its lumped parameters is
+written). All values are SI (m, kg, kg m^2, N/m, N s/m), angles are in degrees
 in keys ending in ``_deg``. A support stiffness may be ``"rigid"`` (the DOF is removed) or
 ``"free"`` (0). Every table is checked: an unknown key is an error that names the key and the
 admissible ones, and every value is type- and range-checked (numbers finite, integers such as
@@ -17,6 +19,7 @@ import copy
 import hashlib
 import json
 import math
+import re
 import tomllib
 from dataclasses import replace
 from importlib import resources
@@ -29,6 +32,7 @@ from gearvib.faults.description import FaultError, faults_from_list
 from gearvib.geometry import Toothing
 from gearvib.paths import exists, is_file
 from gearvib.sensors.description import SensorError, sensors_from_list
+from gearvib.stages import HOUSING, multi_stage, parallel_stage, stage_prefix
 from gearvib.stiffness import stiffness_from_dict
 from gearvib.structure import (
     RIGID,
@@ -103,14 +107,20 @@ MAX_FOURIER = 1_000
 _TOP = {"name", "title", "description", "type", "operation", "geometry", "bodies", "meshes",
         "body", "mesh", "coupling", "stage1", "stage2", "shaft", "simulation", "references",
         "fault", "sensor", "rolling_bearing"}
+MAX_STAGES = 16
+"""Most stages of a ``multi-stage`` description."""
+_STAGE_KEY = re.compile(r"stage([1-9][0-9]?)")
+"""Top-level keys of the stages of a ``multi-stage`` description (``stage1`` ...)."""
 _COMMON_TOP = {"name", "title", "description", "type", "simulation", "references", "body",
                "coupling", "operation", "fault", "sensor", "rolling_bearing"}
 _TYPE_KEYS = {
     "simple": {"geometry", "bodies", "meshes"},
     "wolfrom": {"geometry", "bodies", "meshes"},
     "ravigneaux": {"geometry", "bodies", "meshes"},
+    "parallel": {"geometry", "bodies", "meshes"},
     "general": {"mesh"},
     "two-stage": {"stage1", "stage2", "shaft"},
+    "multi-stage": {"shaft"},
 }
 """Top-level keys per ``type`` besides the common ones (``[[body]]`` and ``[[coupling]]``
 join adjacent drive components to any type; ``[[mesh]]`` is for ``general`` only)."""
@@ -154,6 +164,14 @@ _BODIES = {
     "wolfrom": ("sun", "ring1", "ring2", "carrier", "planet"),
     "ravigneaux": ("sun_small", "sun_large", "ring", "carrier", "planet_short", "planet_long"),
 }
+_PARALLEL_GEOMETRY = {"module", "pressure_angle_deg", "helix_angle_deg", "face_width", "z_pinion",
+                      "z_wheel", "z_idler", "profile_shift_pinion", "profile_shift_wheel",
+                      "profile_shift_idler", "centre_distance", "axis_angle_deg",
+                      "idler_angle_deg"}
+_PARALLEL_BODIES = ("pinion", "wheel", "idler", HOUSING)
+_PARALLEL_MESHES = ("pinion", "wheel")
+"""``[meshes.pinion]``: the pinion's mesh (with the wheel or the idler); ``[meshes.wheel]``: the
+wheel's mesh with the idler (only with an idler; default the pinion's)."""
 _DEFAULT_ROLES = {
     "simple": ("ring", "sun", "carrier"),
     "wolfrom": ("ring1", "sun", "ring2"),
@@ -541,6 +559,156 @@ def _builder_set(kind: str, cfg: dict, base: Path | None) -> GearSet:
         raise ConfigError(str(exc)) from None
 
 
+def _parallel_set(cfg: dict, base: Path | None) -> GearSet:
+    """A ``type = "parallel"`` description: pinion, wheel (optional idler) on fixed axes."""
+    geo = check_keys(_require(cfg, "geometry", "the description"), _PARALLEL_GEOMETRY,
+                     "[geometry]")
+    bodies_t = check_keys(_require(cfg, "bodies", "the description"), set(_PARALLEL_BODIES),
+                          "[bodies]")
+    meshes_t = check_keys(_require(cfg, "meshes", "the description"), set(_PARALLEL_MESHES),
+                          "[meshes]")
+
+    def z(key: str) -> int:
+        return _tooth_number(_require(geo, key, "[geometry]"), f"[geometry].{key}")
+
+    def number(key: str, low: float, high: float, default: float = 0.0) -> float:
+        return _number(geo.get(key, default), f"[geometry].{key}", low=low, high=high)
+
+    z_idler = z("z_idler") if "z_idler" in geo else None
+    if ("idler" in bodies_t) != (z_idler is not None):
+        raise ConfigError("[bodies.idler] and [geometry].z_idler go together: give both (a "
+                          "stage with an idler) or neither")
+    if "wheel" in meshes_t and z_idler is None:
+        raise ConfigError("[meshes.wheel] describes the idler-wheel mesh: admissible only with "
+                          "an idler ([geometry].z_idler); the pinion-wheel mesh is "
+                          "[meshes.pinion]")
+    bodies = {}
+    for bname in _PARALLEL_BODIES:
+        if bname in bodies_t or bname in ("pinion", "wheel"):
+            role = "carrier" if bname == HOUSING else "central"
+            bodies[bname] = _body(bname, _require(bodies_t, bname, "[bodies]"), role,
+                                  f"[bodies.{bname}]")
+    spec = _mesh_spec(_require(meshes_t, "pinion", "[meshes]"), "[meshes.pinion]", base,
+                      deferred=True)
+    spec_w = _mesh_spec(meshes_t["wheel"], "[meshes.wheel]", base, deferred=True) \
+        if "wheel" in meshes_t else None
+    own = set(bodies) | {HOUSING}
+    op = {"fixed": [HOUSING], "input": "pinion", "output": "wheel"}
+    if "operation" in cfg:
+        given = _operation(cfg)
+        for key in ("input", "output"):  # a role naming an added [[body]] is set afterwards
+            if given[key] in own:
+                op[key] = given[key]
+        if "fixed" in cfg["operation"] and all(f in own for f in given["fixed"]):
+            op["fixed"] = given["fixed"]
+    if len(op["fixed"]) != 1:
+        raise ConfigError(f"[operation].fixed must name one member for type = 'parallel', got "
+                          f"{op['fixed']!r}")
+    for key in ("pressure_angle_deg", "helix_angle_deg"):
+        if key in geo:
+            _number(geo[key], f"[geometry].{key}", low=-90.0, high=90.0)
+    kw: dict[str, Any] = {}
+    if "pressure_angle_deg" in geo:
+        kw["pressure_angle"] = math.radians(_number(geo["pressure_angle_deg"],
+                                                    "[geometry].pressure_angle_deg"))
+    if "helix_angle_deg" in geo:
+        kw["helix_angle"] = math.radians(_number(geo["helix_angle_deg"],
+                                                 "[geometry].helix_angle_deg"))
+    if "face_width" in geo:
+        kw["face_width"] = number("face_width", MIN_LENGTH, 10.0)
+    if "centre_distance" in geo:
+        kw["centre_distance"] = number("centre_distance", MIN_LENGTH, 100.0)
+    for key in ("profile_shift_pinion", "profile_shift_wheel", "profile_shift_idler"):
+        if key in geo:
+            kw[key] = number(key, -MAX_SHIFT, MAX_SHIFT)
+    for key in ("axis_angle_deg", "idler_angle_deg"):
+        if key in geo:
+            kw[key[:-4]] = math.radians(number(key, -3600.0, 3600.0))
+    try:
+        return parallel_stage(
+            z_pinion=z("z_pinion"), z_wheel=z("z_wheel"), z_idler=z_idler,
+            module=_number(_require(geo, "module", "[geometry]"), "[geometry].module",
+                           low=MIN_LENGTH, high=1.0),
+            pinion=bodies["pinion"], wheel=bodies["wheel"], idler=bodies.get("idler"),
+            housing=bodies.get(HOUSING), mesh=spec, idler_mesh=spec_w,
+            fixed=op["fixed"][0], input=op["input"], output=op["output"],
+            name=str(cfg.get("name", "parallel")), config=cfg, **kw)
+    except (ValueError, OverflowError) as exc:
+        if isinstance(exc, ConfigError):
+            raise
+        raise ConfigError(str(exc)) from None
+
+
+def _stage_keys(cfg: dict) -> list[str]:
+    """The ``stageN`` keys of a multi-stage description, checked: 2 .. MAX_STAGES, numbered
+    1 .. N without gaps."""
+    numbers = sorted(int(m.group(1)) for k in cfg if (m := _STAGE_KEY.fullmatch(str(k))))
+    if len(numbers) < 2:
+        raise ConfigError("a description of type = 'multi-stage' needs [stage1], [stage2], ... "
+                          f"(at least two stages; found {len(numbers)})")
+    if len(numbers) > MAX_STAGES:
+        raise ConfigError(f"a multi-stage description has {len(numbers)} stages (admissible: "
+                          f"2 .. {MAX_STAGES})")
+    missing = [k for k in range(1, numbers[-1] + 1) if k not in numbers]
+    if missing:
+        raise ConfigError(f"missing key 'stage{missing[0]}' in the description: stages are "
+                          f"numbered stage1 .. stageN without gaps (found "
+                          f"{', '.join(f'stage{k}' for k in numbers)})")
+    return [f"stage{k}" for k in numbers]
+
+
+def _stage_sets(cfg: dict, keys: list[str], base: Path | None,
+                nested: tuple[str, ...]) -> list[GearSet]:
+    """The stage descriptions of a two- or multi-stage description, each built on its own."""
+    stages = []
+    for key in keys:
+        stage = _require(cfg, key, "the description")
+        if not isinstance(stage, dict):
+            raise ConfigError(f"[{key}] must be a table (a gear-set description)")
+        if "simulation" in stage:
+            raise ConfigError(f"[{key}.simulation] is not admissible: give [simulation] once, "
+                              "at the top level")
+        for extra in ("fault", "sensor", "rolling_bearing"):
+            if extra in stage:
+                prefix = stage_prefix(int(key[5:])) if "multi-stage" in nested else \
+                    f"s{key[5:]}."
+                raise ConfigError(f"[[{key}.{extra}]] is not admissible: give [[{extra}]] at "
+                                  f"the top level (members named {prefix}sun, {prefix}planet1, "
+                                  "...)")
+        if stage.get("type", "simple") in nested:
+            raise ConfigError(f"[{key}].type = {stage.get('type')!r} is not admissible: a stage "
+                              "is one gear set (simple, wolfrom, ravigneaux, parallel, general)")
+        try:
+            stages.append(gearset_from_dict({**stage, "name": key}, base=base))
+        except ConfigError as exc:
+            raise ConfigError(f"[{key}]: {exc}") from None
+    return stages
+
+
+def _multi_stage_set(cfg: dict, base: Path | None) -> GearSet:
+    """A ``type = "multi-stage"`` description: ``[stage1]`` ... ``[stageN]`` in series."""
+    keys = _stage_keys(cfg)
+    stages = _stage_sets(cfg, keys, base, ("two-stage", "multi-stage"))
+    table = cfg.get("shaft", [{}] * (len(keys) - 1))
+    if not isinstance(table, list) or len(table) != len(keys) - 1:
+        raise ConfigError(f"[[shaft]] must be an array of {len(keys) - 1} tables (shaft k joins "
+                          "the output of stage k and the input of stage k + 1; omit it for "
+                          "rigid shafts)")
+    shafts = []
+    for i, t in enumerate(table):
+        where = f"[[shaft]] #{i + 1}"
+        check_keys(t, {"stiffness", "damping", "comment"}, where)
+        shafts.append((_stiffness_value(t.get("stiffness", "rigid"), f"{where}.stiffness"),
+                       _number(t.get("damping", 0.0), f"{where}.damping", low=0.0,
+                               high=MAX_DAMPING)))
+    try:
+        gs = multi_stage(stages, shafts=shafts, name=str(cfg.get("name", "multi-stage")),
+                         config=cfg)
+    except (ValueError, OverflowError) as exc:
+        raise ConfigError(str(exc)) from None
+    return _with_extras(gs, cfg, _operation(cfg) if "operation" in cfg else None)
+
+
 def _extra_bodies(cfg: dict, required: bool) -> list[Body]:
     """The ``[[body]]`` list (keys checked; every value type- and range-checked)."""
     table = _require(cfg, "body", "the description") if required else cfg.get("body", [])
@@ -725,7 +893,9 @@ def _gearset_from_dict(cfg: dict, *, base: Path | None = None) -> GearSet:
     if not isinstance(cfg, dict):
         raise ConfigError(f"a description must be a table (dict), got {type(cfg).__name__}")
     cfg = copy.deepcopy(cfg)
-    check_keys(cfg, _TOP, "the description (top level)")
+    stage_keys = {k for k in cfg if _STAGE_KEY.fullmatch(str(k))} \
+        if cfg.get("type") == "multi-stage" else set()
+    check_keys(cfg, _TOP | stage_keys, "the description (top level)")
     if "simulation" in cfg:
         check_keys(cfg["simulation"], _SIMULATION, "[simulation]")
     for key in ("name", "title", "description"):
@@ -736,28 +906,21 @@ def _gearset_from_dict(cfg: dict, *, base: Path | None = None) -> GearSet:
     kind = cfg.get("type", "simple")
     if not isinstance(kind, str) or kind not in _TYPE_KEYS:
         raise ConfigError(f"unknown type {_short(kind)} (admissible: simple, wolfrom, ravigneaux, "
-                          "two-stage, general)")
-    check_keys(cfg, _COMMON_TOP | _TYPE_KEYS[kind], f"a description of type = {kind!r}")
+                          "parallel, two-stage, multi-stage, general)")
+    check_keys(cfg, _COMMON_TOP | _TYPE_KEYS[kind] | stage_keys,
+               f"a description of type = {kind!r}")
     if kind in _GEOMETRY:
         return _with_extras(_builder_set(kind, cfg, base), cfg, _operation(cfg))
+    if kind == "parallel":
+        op = _operation(cfg) if "operation" in cfg else None
+        if op is not None and "fixed" not in cfg["operation"]:
+            op["fixed"] = [HOUSING]  # the housing stands still unless said otherwise
+        return _with_extras(_parallel_set(cfg, base), cfg, op)
     if kind == "general":
         return _general_set(cfg, base)
-    stages = []
-    for key in ("stage1", "stage2"):
-        stage = _require(cfg, key, "the description")
-        if not isinstance(stage, dict):
-            raise ConfigError(f"[{key}] must be a table (a gear-set description)")
-        if "simulation" in stage:
-            raise ConfigError(f"[{key}.simulation] is not admissible: give [simulation] once, "
-                              "at the top level")
-        for extra in ("fault", "sensor", "rolling_bearing"):
-            if extra in stage:
-                raise ConfigError(f"[[{key}.{extra}]] is not admissible: give [[{extra}]] at "
-                                  "the top level (members named s1.sun, s2.planet1, ...)")
-        try:
-            stages.append(gearset_from_dict({**stage, "name": key}, base=base))
-        except ConfigError as exc:
-            raise ConfigError(f"[{key}]: {exc}") from None
+    if kind == "multi-stage":
+        return _multi_stage_set(cfg, base)
+    stages = _stage_sets(cfg, ["stage1", "stage2"], base, ("two-stage", "multi-stage"))
     shaft = check_keys(cfg.get("shaft", {}), {"stiffness", "damping"}, "[shaft]")
     try:
         gs = two_stage(stages[0], stages[1], shaft_stiffness=_stiffness_value(

@@ -383,7 +383,8 @@ class AssembledModel:
         Meshes whose frequencies per speed agree within ``rtol`` form one group; groups are in
         the order of their first mesh (for a two-stage set: stage 1, then stage 2). Meshes
         without tooth numbers (NaN) belong to no group. A group is named after the stage
-        prefix its meshes share (``"s1.sun-planet1"`` ... -> ``"stage 1"``), else after its
+        prefix its meshes share (``"s1.sun-planet1"``, ``"stage1.pinion-wheel"`` ... ->
+        ``"stage 1"``), else after its
         central gears (``"sun, ring1"``, ``"ring2"``), else numbered (``"f_mesh,2"``).
 
         Returns
@@ -732,7 +733,7 @@ def _group_names(model: AssembledModel, members: list[list[int]]) -> list[str]:
         if len(heads) != 1 or any("." not in model.mesh_names[m] for m in g):
             return ""
         head = heads.pop()
-        hit = re.fullmatch(r"s(\d+)", head)
+        hit = re.fullmatch(r"s(?:tage)?(\d+)", head)
         return f"stage {hit.group(1)}" if hit else head
 
     gear1 = {d.get("name"): d.get("gear1") for d in model.meta.get("meshes", [])

@@ -39,6 +39,7 @@ __all__ = [
     "check_ravigneaux_pairs",
     "check_stepped_planet_angles",
     "compose",
+    "prefixed",
     "ravigneaux",
     "simple_planetary",
     "two_stage",
@@ -936,7 +937,11 @@ def check_ravigneaux_pairs(z_sun_small: int, z_sun_large: int, z_ring: int,
             )
 
 
-def _prefixed(gs: GearSet, prefix: str) -> tuple[list[Body], list[Mesh]]:
+def prefixed(gs: GearSet, prefix: str) -> tuple[list[Body], list[Mesh]]:
+    """The bodies and meshes of ``gs`` with ``prefix`` put before every name (and carrier).
+
+    Used to combine stages (:func:`two_stage`, :func:`gearvib.stages.multi_stage`).
+    """
     ren = {b.name: f"{prefix}{b.name}" for b in gs.bodies}
     bodies = [replace(b, name=ren[b.name], carrier=ren.get(b.carrier) if b.carrier else None)
               for b in gs.bodies]
@@ -953,8 +958,8 @@ def two_stage(stage1: GearSet, stage2: GearSet, *, shaft_stiffness: float = RIGI
     Bodies, meshes and the stages' own couplings are renamed with the prefixes ``s1.`` and
     ``s2.``; a torsional shaft (rigid by default) joins ``stage1.output`` and ``stage2.input``.
     """
-    b1, m1 = _prefixed(stage1, "s1.")
-    b2, m2 = _prefixed(stage2, "s2.")
+    b1, m1 = prefixed(stage1, "s1.")
+    b2, m2 = prefixed(stage2, "s2.")
     fixed = tuple(f"s1.{f}" for f in stage1.fixed) + tuple(f"s2.{f}" for f in stage2.fixed)
     coupling = Coupling(f"s1.{stage1.output}", f"s2.{stage2.input}", shaft_stiffness,
                         shaft_damping)

@@ -744,7 +744,11 @@ def _rebuild(caller: dict) -> tuple[AssembledModel | None, str]:
 
 
 def _stage_name(prefix: str) -> str:
-    return f"stage {prefix[1:]}" if prefix[:1] == "s" and prefix[1:].isdigit() else prefix
+    """``"s1"`` (two-stage) and ``"stage1"`` (multi-stage) -> ``"stage 1"``."""
+    for head in ("stage", "s"):
+        if prefix.startswith(head) and prefix[len(head):].isdigit():
+            return f"stage {prefix[len(head):]}"
+    return prefix
 
 
 def _central_of(mesh: str, planets: set[str] | None = None) -> str | None:
