@@ -57,10 +57,15 @@ FAMILIES = {
     "ring_fault": "local fault on a ring (internal central gear): N |n_ring - n_carrier|",
     "planet_fault": "local fault on a planet tooth: |n_planet - n_carrier| = f_mesh / z_p per "
                     "partner (harmonic 2: both flanks, or sun and ring)",
+    "gear_fault": "local fault on a gear turning on a fixed axis (a parallel stage, a carrier "
+                  "at rest): N |n_gear| with N its mates (pinion and wheel: once per "
+                  "revolution; an idler: harmonic 2, both mates)",
     "hunting_tooth": "same tooth pair meets again: f_mesh gcd(z1, z2) / (z1 z2)",
     "assembly_phase": "assembly-phase frequency f_mesh / gcd(z1, z2) (listed when gcd > 1)",
     "sideband": "m f_mesh + s f_c: carrier-order sidebands of mesh harmonic m (s in carrier "
                 "revolutions relative to the sensor; s = k N is m f_mesh + k f_pp)",
+    "shaft_sideband": "m f_mesh ± k |n_gear|: sidebands of a fixed-axis mesh (parallel stage) at "
+                      "the rotation of its gears, k = 1 .. sidebands (local fault, runout)",
     "eccentricity": "m f_mesh ± f_r: first sidebands of mesh harmonic m at the rotation of a "
                     "gear of the mesh relative to the carrier and relative to the sensor "
                     "(eccentricity, runout; the carrier's own ±f_c are sidebands s = ±1)",
@@ -345,7 +350,9 @@ class KinematicCatalogue:
 
     def to_dict(self, *, visible_only: bool = True) -> dict:
         """``{"reference": {...}, "lines": [{family, harmonic, sideband, member,
-        frequency_hz, order}, ...]}`` (the JSON of ``gearvib catalogue --json``).
+        frequency_hz, order, phasing}, ...]}`` (the JSON of ``gearvib catalogue --json``;
+        ``phasing`` is the planet-phasing factor at the sensor, ``null`` where it does not
+        apply).
 
         Parameters
         ----------
@@ -357,7 +364,9 @@ class KinematicCatalogue:
         lines = [{"family": str(cat.family[i]), "harmonic": int(cat.harmonic[i]),
                   "sideband": int(cat.sideband[i]), "member": str(cat.member[i]),
                   "frequency_hz": None if not np.isfinite(f[i]) else float(f[i]),
-                  "order": float(cat.order[i])} for i in range(len(cat))]
+                  "order": float(cat.order[i]),
+                  "phasing": None if not np.isfinite(cat.phasing[i]) else float(cat.phasing[i])}
+                 for i in range(len(cat))]
         return {"reference": {"member": self.reference,
                               "speed_rpm": None if self.speed_rpm is None
                               else float(self.speed_rpm)},
@@ -512,7 +521,8 @@ def kinematic_catalogue(
         Harmonics of shaft, planet-pass, fault and bearing lines.
     sidebands : int
         Sidebands up to ``sidebands`` planet-pass frequencies, i.e. ``|s| <= sidebands N``
-        carrier orders, around every mesh harmonic.
+        carrier orders, around every mesh harmonic; around a fixed-axis mesh up to
+        ``sidebands`` orders of each of its gears.
     name : str
         Name of the gear train (for titles).
 
@@ -531,6 +541,12 @@ def kinematic_catalogue(
     * planet_pass: ``h N |n_carrier - n_sensor|``;
     * sun_fault / ring_fault: ``h N |n_gear - n_carrier|`` for external / internal gears;
     * planet_fault: ``h |n_planet - n_carrier|`` (= ``h f_mesh / |z_planet|``);
+    * gear_fault (gears of a carrier at rest: parallel stages, where the pinion is the central
+      gear and the wheel the "planet"; a star set): ``h N |n_gear|`` for a central gear with
+      ``N`` planets, ``h |n_gear|`` for a gear on a pin of the carrier. These replace sun_fault,
+      ring_fault and planet_fault there;
+    * shaft_sideband (meshes of a carrier at rest): ``m f_mesh ± k |n_gear|`` for every gear of
+      the mesh, ``k = 1 .. sidebands``;
     * eccentricity: ``m f_mesh ± |n_gear - n_carrier|`` and ``m f_mesh ± |n_gear - n_sensor|``
       for every gear of a mesh (central gears and planet groups; rates equal to the carrier
       sidebands ``± |Omega|`` or to each other listed once), sideband index ``±1``;
@@ -639,6 +655,8 @@ def kinematic_catalogue(
                     and abs(k[1] - rate) <= 1e-7 * max(rate, k[1], tiny)), (m.carrier, rate))
         mgroups.setdefault(key, []).append(m)
     central_gears = {m.gear for m in meshes if m.gear not in planet_set}
+    # carriers at rest: their gears turn on fixed axes (a parallel stage's housing, a star set)
+    at_rest = {m.carrier for m in meshes if abs(sp[m.carrier]) <= tiny}
     for (carrier, _), ms in mgroups.items():
         central = [m for m in ms if m.gear in central_gears]
         # the phasing follows one central gear and its planets: the internal one (the ring,
@@ -695,7 +713,8 @@ def kinematic_catalogue(
                 ecc_members.setdefault(group_of.get(g, g), sp[g])
         for gname, n_g in ecc_members.items():
             rates: list[tuple[float, str]] = []
-            for r, txt in ((abs(n_g - sp[carrier]), f"|f_{gname} − f_{carrier}|"),
+            rel_txt = f"f_{gname}" if carrier in at_rest else f"|f_{gname} − f_{carrier}|"
+            for r, txt in ((abs(n_g - sp[carrier]), rel_txt),
                            (abs(n_g - sp[sensor]), f"f_{gname}" if sp[sensor] == 0.0
                             else f"|f_{gname} − f_{sensor}|")):
                 if r > tiny and all(abs(r - q) > 1e-9 * scale for q, _ in rates) \
@@ -709,6 +728,22 @@ def kinematic_catalogue(
                         if rate > tiny:
                             out.add("eccentricity", mh, sgn, gname,
                                     f"{head} {'+' if sgn > 0 else '−'} {txt}", rate)
+        # a fixed-axis mesh: a local fault or runout of a gear modulates it at the gear's
+        # rotation, sidebands k = 1 .. sidebands on either side
+        if carrier in at_rest and sidebands:
+            for gname, n_g in ecc_members.items():
+                if abs(n_g) <= tiny:
+                    continue
+                for mh in range(1, mesh_harmonics + 1):
+                    head = "f_mesh" if mh == 1 else f"{mh} f_mesh"
+                    for k in range(1, sidebands + 1):
+                        for sgn in (-1, 1):
+                            rate = mh * f_mesh + sgn * k * abs(n_g)
+                            if rate > tiny:
+                                out.add("shaft_sideband", mh, sgn * k, gname,
+                                        f"{head} {'+' if sgn > 0 else '−'} "
+                                        f"{k if k > 1 else ''}{' ' if k > 1 else ''}f_{gname}",
+                                        rate)
         # hunting tooth and assembly phase of every distinct tooth pair in the group
         pairs = sorted({(abs(m.z_gear), abs(m.z_planet), _pair_label(
             group_of.get(m.gear, m.gear), group_of[m.planet])) for m in ms})
@@ -729,8 +764,9 @@ def kinematic_catalogue(
             n_pl = len(ps)
             psi = [angles[p] for p in ps if p in angles]
             if abs(omega) <= tiny:
-                notes.append(f"carrier {c} does not turn relative to the sensor on {sensor}: "
-                             f"no planet pass of {gname}")
+                if not (c in at_rest and n_pl == 1):  # not for a gear on a fixed axis
+                    notes.append(f"carrier {c} does not turn relative to the sensor on "
+                                 f"{sensor}: no planet pass of {gname}")
             else:
                 for h in range(1, harmonics + 1):
                     ph = phasing_factor(psi, h * n_pl) if len(psi) == n_pl else float("nan")
@@ -742,6 +778,10 @@ def kinematic_catalogue(
             if abs(rel) > tiny:
                 zs = "/".join(str(z) for z in z_p)
                 for h in range(1, harmonics + 1):
+                    if c in at_rest:
+                        out.add("gear_fault", h, 0, gname, f"{h} f_{gname}" if h > 1
+                                else f"f_{gname}", h * rel)
+                        continue
                     out.add("planet_fault", h, 0, gname,
                             f"{h} f_mesh/z_p (z_p = {zs})" if h > 1
                             else f"f_mesh/z_p (z_p = {zs})", h * rel)
@@ -753,6 +793,12 @@ def kinematic_catalogue(
         n_pl = len({x.planet for x in meshes if x.gear == m.gear and x.carrier == m.carrier})
         rel = sp[m.gear] - sp[m.carrier]
         if abs(rel) <= tiny:
+            continue
+        if m.carrier in at_rest:
+            for h in range(1, harmonics + 1):
+                out.add("gear_fault", h, 0, m.gear, (f"{h * n_pl} " if h * n_pl > 1 else "")
+                        + f"f_{m.gear}" + (f" (N = {n_pl} mates)" if n_pl > 1 else ""),
+                        h * n_pl * rel)
             continue
         fam = "sun_fault" if m.z_gear > 0 else "ring_fault"
         for h in range(1, harmonics + 1):

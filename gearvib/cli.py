@@ -545,10 +545,12 @@ def _parser() -> argparse.ArgumentParser:
 
     c = sub.add_parser("catalogue", help="kinematic frequency catalogue of a gear set",
                        description="Every order-locked frequency of the gear set at one speed: "
-                       "shaft orders, mesh frequencies and harmonics, planet pass, sun/planet/"
-                       "ring fault frequencies, hunting-tooth and assembly-phase frequencies, "
+                       "shaft orders, mesh frequencies and harmonics of every stage, planet "
+                       "pass, sun/planet/ring fault frequencies (gear_fault for gears on fixed "
+                       "axes: parallel stages), hunting-tooth and assembly-phase frequencies, "
                        "planet-pass sidebands (only those the planet phasing lets through to a "
-                       "sensor on the fixed member), and the defect frequencies of the "
+                       "sensor on the fixed member), the shaft-rate sidebands of fixed-axis "
+                       "meshes, and the defect frequencies of the "
                        "description's [[rolling_bearing]] tables (bearing_ftf, bearing_bpfo, "
                        "bearing_bpfi, bearing_bsf). Families: see "
                        "docs/catalogue-identification.md.")
@@ -563,10 +565,12 @@ def _parser() -> argparse.ArgumentParser:
     c.add_argument("--harmonics", type=_positive_int, default=3, metavar="H",
                    help="harmonics of shaft, planet-pass and fault lines (default 3)")
     c.add_argument("--sidebands", type=_non_negative_int, default=2, metavar="K",
-                   help="sidebands up to K planet-pass frequencies (default 2)")
+                   help="sidebands up to K planet-pass frequencies, or K orders of each gear "
+                   "of a fixed-axis mesh (default 2)")
     c.add_argument("--json", action="store_true",
                    help='print {"reference": ..., "lines": [{"family", "harmonic", "sideband", '
-                   '"member", "frequency_hz", "order"}, ...]}')
+                   '"member", "frequency_hz", "order", "phasing"}, ...]} (phasing: the '
+                   'planet-phasing factor at the sensor, null where it does not apply)')
     c.set_defaults(func=_cmd_catalogue)
 
     s = sub.add_parser("simulate", help="simulate a run-up and write it as netCDF",

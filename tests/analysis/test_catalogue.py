@@ -204,9 +204,14 @@ def test_dataset_runup_and_json_shape():
     d = json.loads(cat.to_json())
     assert set(d) == {"reference", "lines"}
     assert d["reference"] == {"member": "sun", "speed_rpm": 1500.0}
-    assert all(set(x) == {"family", "harmonic", "sideband", "member", "frequency_hz", "order"}
-               for x in d["lines"])
+    assert all(set(x) == {"family", "harmonic", "sideband", "member", "frequency_hz", "order",
+                          "phasing"} for x in d["lines"])
     assert len(d["lines"]) == int(cat.visible.sum())
+    # the phasing factor of every visible line, null where it does not apply
+    vis = cat.select(visible_only=True)
+    for x, ph in zip(d["lines"], vis.phasing, strict=True):
+        assert (x["phasing"] is None) == bool(np.isnan(ph))
+        assert x["phasing"] is None or x["phasing"] == pytest.approx(ph)
     assert "family" in cat.table() and "mesh" in str(cat)
     from matplotlib.figure import Figure
 

@@ -187,8 +187,13 @@ def test_cli_catalogue_json_and_table(capsys):
     assert {"shaft", "mesh", "planet_pass", "sun_fault", "planet_fault", "ring_fault",
             "sideband", "hunting_tooth", "assembly_phase"} <= fams
     for x in d["lines"]:
-        assert set(x) == {"family", "harmonic", "sideband", "member", "frequency_hz", "order"}
+        assert set(x) == {"family", "harmonic", "sideband", "member", "frequency_hz", "order",
+                          "phasing"}
         assert x["frequency_hz"] == pytest.approx(x["order"] * 25.0)
+        # the phasing factor the table shows: planet-phased lines (mesh, sidebands, planet
+        # pass) pass with 1 at z_s = 33, N = 3; the other families have none (null)
+        phased = x["family"] in ("mesh", "sideband", "planet_pass")
+        assert x["phasing"] == (1.0 if phased else None), x
     mesh = [x for x in d["lines"] if x["family"] == "mesh" and x["harmonic"] == 1]
     assert mesh[0]["frequency_hz"] == pytest.approx(639.7959, rel=1e-6)
     # only sidebands the phasing lets through (multiples of the planet pass for z_s = 33)
