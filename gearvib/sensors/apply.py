@@ -17,24 +17,34 @@ from gearvib.sensors.description import (
     sensors_from_list,
 )
 
-__all__ = ["add_sensors", "housing_meshes"]
+__all__ = ["add_sensors", "housing_meshes", "members_of"]
 
 
-def housing_meshes(model: AssembledModel, member: str) -> list[int]:
-    """Meshes of the housing member with planets (the forces a housing sensor sees)."""
-    planets = {p["name"] for p in model.meta.get("planets", [])}
+def members_of(member: str | tuple[str, ...]) -> tuple[str, ...]:
+    """A sensor's housing member(s) as a tuple."""
+    return (member,) if isinstance(member, str) else tuple(member)
+
+
+def housing_meshes(model: AssembledModel, member: str | tuple[str, ...]) -> list[int]:
+    """Meshes whose forces a housing sensor on ``member`` sees, in model order.
+
+    A central gear: its meshes with planets. A carrier: the meshes of its planets (a
+    parallel stage's housing holds the wheel's axis; the pinion's mesh with it is seen
+    there). Several members: the union.
+    """
+    planets = {p["name"]: p["carrier"] for p in model.meta.get("planets", [])}
+    wanted = set(members_of(member))
     return [k for k, m in enumerate(model.meta.get("meshes", []))
-            if m["gear1"] == member and m["gear2"] in planets]
+            if m["gear2"] in planets and (m["gear1"] in wanted or planets[m["gear2"]] in wanted)]
 
 
-def _default_housing(model: AssembledModel, name: str) -> str:
+def _default_housing(model: AssembledModel, name: str) -> str | tuple[str, ...]:
     fixed = [f for f in model.fixed_members if housing_meshes(model, f)]
-    if len(fixed) != 1:
+    if not fixed:
         central = sorted({m["gear1"] for m in model.meta.get("meshes", [])})
-        raise SensorError(f"sensor {name!r}: the gear set has {len(fixed)} fixed central gears "
-                          f"with meshes ({', '.join(fixed) or 'none'}); give the housing "
-                          f"member (one of {', '.join(central)})")
-    return fixed[0]
+        raise SensorError(f"sensor {name!r}: the gear set has no fixed member with meshes; "
+                          f"give the housing member (one of {', '.join(central)})")
+    return fixed[0] if len(fixed) == 1 else tuple(fixed)
 
 
 def add_sensors(model: AssembledModel, sensors: Sequence) -> AssembledModel:
@@ -52,11 +62,13 @@ def add_sensors(model: AssembledModel, sensors: Sequence) -> AssembledModel:
             continue
         assert isinstance(s, HousingSensor)
         member = s.member or _default_housing(model, s.name)
-        if member not in bodies:
-            raise SensorError(f"sensor {s.name!r}: member {member!r} is not a body of the set")
-        if not housing_meshes(model, member):
-            raise SensorError(f"sensor {s.name!r}: {member!r} meshes with no planet (a housing "
-                              "sensor sees the mesh forces of a central gear)")
+        for one in members_of(member):
+            if one not in bodies:
+                raise SensorError(f"sensor {s.name!r}: member {one!r} is not a body of the set")
+            if not housing_meshes(model, one):
+                raise SensorError(f"sensor {s.name!r}: {one!r} meshes with no planet (a "
+                                  "housing sensor sees the mesh forces of a central gear, or "
+                                  "those of the planets of a carrier)")
         for b, _ in s.bearings:
             names = (f"{b}.x", f"{b}.y")
             if bodies.get(b) not in ("central", "carrier") or any(

@@ -59,6 +59,8 @@ MAX_MODE_HZ = 1e9
 """Highest housing mode [Hz]."""
 MAX_PULSES_PER_REV = 10_000
 """Most tacho pulses per revolution."""
+MAX_MEMBERS = 64
+"""Most housing members one sensor sees."""
 
 
 def _num(value: Any, where: str, key: str, *, low: float | None = None,
@@ -196,8 +198,12 @@ class HousingSensor:
         Modal housing accelerance; or
     frf : MeasuredFrf
         a measured one.
-    member : str, optional
-        The housing member (default: the fixed central member).
+    member : str or tuple of str, optional
+        The housing member whose meshes the sensor sees: a central gear (its meshes with
+        planets) or a carrier (the meshes of its planets: a parallel stage's housing), or
+        several of them (a list in TOML). Default: the fixed central member if the set has
+        exactly one fixed member with meshes, else every fixed member with meshes (all stages
+        of a multi-stage gearbox).
     bearings : tuple of (str, float)
         Radial bearing forces of central members reaching the sensor, with their gains [1]
         (projected on the sensor's radial direction).
@@ -209,7 +215,7 @@ class HousingSensor:
     width_deg: float = 90.0
     housing_modes: tuple[HousingMode, ...] = ()
     frf: MeasuredFrf | None = None
-    member: str | None = None
+    member: str | tuple[str, ...] | None = None
     bearings: tuple[tuple[str, float], ...] = field(default=())
 
     def __post_init__(self) -> None:
@@ -230,7 +236,15 @@ class HousingSensor:
             raise SensorError(f"{w}: give the housing response as housing_modes (a list of "
                               "{frequency_hz, damping_ratio, gain}) or as a measured frf, one of "
                               "them")
-        if self.member is not None:
+        if isinstance(self.member, list | tuple):
+            if not self.member or len(self.member) > MAX_MEMBERS:
+                raise SensorError(f"{w}: member must name 1 .. {MAX_MEMBERS} members, got "
+                                  f"{len(self.member)}")
+            names = tuple(_name(m, w, "member") for m in self.member)
+            if len(set(names)) != len(names):
+                raise SensorError(f"{w}: member names a member twice ({list(names)})")
+            object.__setattr__(self, "member", names[0] if len(names) == 1 else names)
+        elif self.member is not None:
             _name(self.member, w, "member")
         b = tuple((str(k), _num(v, w, f"bearings.{k}")) for k, v in self.bearings)
         for k, _ in b:
@@ -255,7 +269,7 @@ class HousingSensor:
         if self.frf is not None:
             d["frf"] = self.frf.to_dict()
         if self.member is not None:
-            d["member"] = self.member
+            d["member"] = self.member if isinstance(self.member, str) else list(self.member)
         if self.bearings:
             d["bearings"] = dict(self.bearings)
         return d

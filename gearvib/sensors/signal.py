@@ -10,7 +10,10 @@ the angle between the planet and the sensor::
 (``theta_c`` the carrier angle, ``psi_n`` the planet's angle on the carrier, ``theta_h`` the
 housing member's own rotation, ``wrap`` to (-pi, pi]; the bearing terms project the radial
 bearing force of central member ``b``, whose components are in the carrier frame, on the
-sensor's radial direction). Windows, with ``W`` = ``width_deg``:
+sensor's radial direction). The housing member is a central gear (its meshes with planets)
+or a carrier (the meshes of its planets: a parallel stage's housing, where the wheel's axis
+sits at a fixed angle, so the weight is a constant gain); a sensor of a multi-stage gearbox
+sums over every housing member it names. Windows, with ``W`` = ``width_deg``:
 
 * ``hann``: ``w = (1 + cos(pi d / W)) / 2`` for ``|d| <= W``, else 0;
 * ``rectangular``: ``w = 1`` for ``|d| <= W``, else 0;
@@ -41,7 +44,7 @@ from dataclasses import replace
 import numpy as np
 
 from gearvib.model import AssembledModel
-from gearvib.sensors.apply import housing_meshes
+from gearvib.sensors.apply import housing_meshes, members_of
 from gearvib.sensors.description import HousingSensor, Tacho
 
 __all__ = ["add_sensor_signals", "housing_response", "path_force", "tacho_signal",
@@ -78,14 +81,9 @@ def path_force(result, model: AssembledModel, sensor: HousingSensor) -> np.ndarr
     planets = {p["name"]: p for p in model.meta.get("planets", [])}
     meshes = model.meta["meshes"]
     theta_s = math.radians(sensor.angle_deg)
-    theta_h = _rotation(result, sensor.member)
     p = np.zeros(result.time.size)
-    for k in housing_meshes(model, sensor.member):
-        planet = planets[meshes[k]["gear2"]]
-        theta_c = _rotation(result, planet["carrier"])
-        delta = theta_c + math.radians(planet["angle_deg"]) - theta_h - theta_s
-        force = result.normal_force[k, 0] + result.normal_force[k, 1]
-        p += window_weight(sensor.window, sensor.width_deg, delta) * force
+    for member in members_of(sensor.member):
+        _add_member_forces(p, result, model, sensor, member, planets, meshes, theta_s)
     for b, gain in sensor.bearings:
         fx = result.bearing_force[result.bearing_names.index(f"{b}.x")]
         fy = result.bearing_force[result.bearing_names.index(f"{b}.y")]
@@ -94,6 +92,26 @@ def path_force(result, model: AssembledModel, sensor: HousingSensor) -> np.ndarr
         rel = theta_s - theta_c
         p += gain * (fx * np.cos(rel) + fy * np.sin(rel))
     return p
+
+
+def _add_member_forces(p: np.ndarray, result, model: AssembledModel, sensor: HousingSensor,
+                       member: str, planets: dict, meshes: list, theta_s: float) -> None:
+    """Add the windowed mesh forces that reach the sensor through ``member`` to ``p``.
+
+    A mesh of a central gear is seen through that gear, a mesh of a planet on a carrier
+    member (a parallel stage's housing) through the carrier; with ``theta_h`` the member's
+    rotation, both follow the window of the planet's angle relative to the sensor.
+    """
+    theta_h = _rotation(result, member)
+    wanted = set(members_of(sensor.member))
+    for k in housing_meshes(model, member):
+        planet = planets[meshes[k]["gear2"]]
+        if member != meshes[k]["gear1"] and meshes[k]["gear1"] in wanted:
+            continue  # seen through its central gear already
+        theta_c = _rotation(result, planet["carrier"])
+        delta = theta_c + math.radians(planet["angle_deg"]) - theta_h - theta_s
+        force = result.normal_force[k, 0] + result.normal_force[k, 1]
+        p += window_weight(sensor.window, sensor.width_deg, delta) * force
 
 
 def housing_response(p: np.ndarray, fs: float, sensor: HousingSensor) -> np.ndarray:
