@@ -14,6 +14,7 @@ from gearvib import __version__
 from gearvib import kernels as kn
 from gearvib.cfdata import PlainDataset, PlainVariable, time_attrs
 from gearvib.model import AssembledModel
+from gearvib.phases import mesh_phase_table
 from gearvib.simulation.conditions import RAD_S_PER_RPM, Conditions, DriveCoupling
 from gearvib.simulation.frequencies import elastic_frequencies, undamped_frequencies
 from gearvib.simulation.run_setup import RunSetup
@@ -145,6 +146,9 @@ class RunUpResult:
         Tacho pulse train of a shaft [V].
     tacho_info : dict, optional
         The tacho's description (member, pulses per revolution, level).
+    mesh_phases_json : str
+        The mesh phases of the model (:func:`gearvib.phases.mesh_phase_table`) as JSON, the
+        run attribute ``mesh_phases_json`` (read back by :func:`gearvib.phases.run_mesh_phases`).
     """
 
     time: np.ndarray
@@ -178,6 +182,7 @@ class RunUpResult:
     sensor_info: tuple[dict, ...] = ()
     tacho: np.ndarray | None = None
     tacho_info: dict | None = None
+    mesh_phases_json: str = ""
 
     @property
     def config_sha256(self) -> str:
@@ -360,6 +365,8 @@ class RunUpResult:
             "config_json": self.config_json,
             "config_sha256": self.config_sha256,
         }
+        if self.mesh_phases_json:
+            attrs["mesh_phases_json"] = self.mesh_phases_json
         if self.coupling is not None:
             attrs["drive_coupling_stiffness"] = float(self.coupling.stiffness)
             attrs["drive_coupling_damping"] = float(self.coupling.damping)
@@ -480,4 +487,5 @@ def build_result(
         coupling=setup.coupling,
         title=f"gearvib run-up simulation of {name}" if name else "gearvib run-up simulation",
         wall_time=wall,
+        mesh_phases_json=json.dumps(mesh_phase_table(model)),
     )
