@@ -70,6 +70,7 @@ __all__ = [
     "CommonPeriod",
     "PeriodicGearSystem",
     "common_period",
+    "cycle_budget",
     "first_order_regions",
     "gear_set_candidates",
     "mesh_phasing",
@@ -243,6 +244,30 @@ def common_period(ratios: Sequence[float], *, max_cycles: int = MAX_CYCLES,
     return CommonPeriod("common period" if exact else "commensurate approximation", length,
                         tuple(int(x) for x in n), tuple(float(x) for x in r),
                         tuple(0.0 if exact else float(x) for x in det))
+
+
+def cycle_budget(model: AssembledModel, *, max_detuning: float = MAX_DETUNING,
+                 limit: int = 4 * MAX_CYCLES) -> int:
+    """The smallest budget of mesh cycles (``MAX_CYCLES`` doubled up to ``limit``) at which
+    the mesh frequencies of ``model`` have a common period within ``max_detuning``.
+
+    A train of several stages (a wind-turbine gearbox: mesh ratios 1 : 4.73 : 18.1) needs
+    more cycles than two stages; the cost of a Floquet evaluation grows in proportion.
+    ``MAX_CYCLES`` when it suffices or when none up to ``limit`` does (the analysis then
+    says so).
+    """
+    groups = model.mesh_frequency_groups()
+    if len(groups) < 2:
+        return MAX_CYCLES
+    ratios = [g.frequency_per_rpm / groups[0].frequency_per_rpm for g in groups]
+    budget = MAX_CYCLES
+    while budget <= limit:
+        try:
+            common_period(ratios, max_cycles=budget, max_detuning=max_detuning)
+            return budget
+        except ValueError:
+            budget *= 2
+    return MAX_CYCLES
 
 
 def _varying(model: AssembledModel) -> np.ndarray:

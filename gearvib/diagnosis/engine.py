@@ -12,6 +12,7 @@ from __future__ import annotations
 import functools
 import json
 import os
+import re
 import time as _time
 from dataclasses import dataclass
 from pathlib import Path
@@ -40,7 +41,14 @@ from analysis.diagnosis import (
     with_noise_floor,
 )
 from gearvib.config import ConfigError, gearset_from_dict
-from gearvib.diagnosis.candidates import KINDS, Candidate, candidate_faults, severity_text
+from gearvib.diagnosis.candidates import (
+    KINDS,
+    LOCAL_KINDS,
+    Candidate,
+    candidate_faults,
+    candidate_members,
+    severity_text,
+)
 from gearvib.diagnosis.cases import ProfileSettings, profile_case, profile_path
 
 __all__ = ["ASSUMED_SENSORS", "Record", "diagnose"]
@@ -132,31 +140,137 @@ class Record:
                    str(x.attrs.get("units", "1")), name)
 
 
-def _speed_ratio(cfg: dict, base: Path | None, member: str) -> tuple[float, dict[str, float],
-                                                                      Any]:
-    """Carrier speed per unit speed of ``member``, member speeds in carrier orders, gear set."""
+def order_reference(gs: Any, model: Any) -> str:
+    """The shaft whose orders a diagnosis counts.
+
+    The carrier when exactly one carrier turns (every simple, Wolfrom and Ravigneaux set, and
+    a train with one planetary stage: the fault frequencies of its members are then orders of
+    moderate size); otherwise (several planetary stages, parallel stages only) the slowest
+    turning shaft, so that every fault frequency is an order of at least its own.
+    """
+    r = model.kinematic_ratios
+    carriers = [b.name for b in gs.bodies if b.role == "carrier" and abs(r.get(b.name, 0.0))
+                > 1e-12]
+    if len(carriers) == 1:
+        return carriers[0]
+    on_moving = {b.name for b in gs.bodies if b.role == "planet"
+                 and abs(r.get(str(b.carrier), 0.0)) > 1e-12}
+    shafts = [(abs(r[b.name]), i, b.name) for i, b in enumerate(gs.bodies)
+              if abs(r.get(b.name, 0.0)) > 1e-12 and b.name not in on_moving]
+    return min(shafts)[2]
+
+
+@dataclass(frozen=True)
+class _Kinematics:
+    """The healthy gear set, its assembly, the reference of the orders
+    (:func:`order_reference`), its catalogue in reference orders and the member speeds in
+    reference orders."""
+
+    gs: Any
+    model: Any
+    reference: str
+    cat: Any
+    ms: dict[str, float]
+
+    def ratio(self, member: str) -> float:
+        """Reference speed per unit speed of ``member``."""
+        if member not in self.ms or self.ms[member] == 0:
+            raise ConfigError(f"the speed reference {member!r} is not a rotating member of the "
+                              "gear set (admissible: "
+                              f"{', '.join(k for k, v in self.ms.items() if v)})")
+        return 1.0 / abs(self.ms[member])
+
+
+def _kinematics(cfg: dict, base: Path | None) -> _Kinematics:
+    from gearvib.assembly import assemble
     from gearvib.catalogue import gear_set_catalogue
 
     gs = gearset_from_dict(cfg, base=base)
-    cat = gear_set_catalogue(gs, reference="carrier", speed_rpm=1000.0, mesh_harmonics=4,
-                             harmonics=6, sidebands=3)
-    ms = {k: float(v) for k, v in cat.member_speeds.items()}
-    if member not in ms or ms[member] == 0:
-        raise ConfigError(f"the speed reference {member!r} is not a rotating member of the gear "
-                          f"set (admissible: {', '.join(k for k, v in ms.items() if v)})")
-    return 1.0 / abs(ms[member]), ms, cat
+    model = assemble(gs)
+    reference = order_reference(gs, model)
+    cat = gear_set_catalogue(gs, model=model, reference=reference, speed_rpm=1000.0,
+                             mesh_harmonics=4, harmonics=6, sidebands=3)
+    return _Kinematics(gs, model, reference, cat,
+                       {k: float(v) for k, v in cat.member_speeds.items()})
 
 
-def _fundamentals(cat: Any) -> dict[str, float]:
+_DIGITS = re.compile(r"\d+$")
+
+
+@dataclass(frozen=True)
+class _Lines:
+    """Kinematic lines of a candidate member (orders of the reference shaft).
+
+    ``fault``: the fundamental of a local tooth fault (its catalogue family's first line),
+    ``rotation``: its rotation relative to its carrier (eccentricity), ``carrier``: its
+    carrier's rotation (pin errors), ``mesh``: the mesh frequency its faults modulate; the
+    ``*_family`` names key the family evidence.
+    """
+
+    fault: float | None
+    fault_family: str
+    rotation: float
+    rotation_family: str
+    carrier: float
+    carrier_family: str
+    mesh: float
+
+
+def _member_lines(cat: Any, ms: dict[str, float], members: list[Any],
+                  model: Any) -> dict[str, _Lines]:
+    """Lines of every candidate member from the catalogue (reference orders).
+
+    The fault fundamental is the catalogue's first line of the member's fault family
+    (``sun_fault``, ``ring_fault``, ``planet_fault`` or ``gear_fault``); the mesh order the
+    catalogue's mesh line nearest to the member's own mesh frequency. Family keys are the
+    catalogue family names where one member has them (``sun_fault``, ``planet_rotation``,
+    ``carrier``: a simple set), else qualified by the member (``gear_fault stage2.pinion``).
+    """
     fam = np.asarray(cat.family)
     order = np.asarray(cat.order, float)
-    harm = np.asarray(cat.harmonic)
-    side = np.asarray(cat.sideband)
+    first = (np.asarray(cat.harmonic) == 1) & (np.asarray(cat.sideband) == 0)
+    member_col = np.asarray(cat.member).astype(str)
+    mesh_lines = np.sort(order[(fam == "mesh") & first])
+    # the mesh rate |z_1 (n_1 - n_c)| of every mesh a member's teeth take part in
+    rates: dict[str, list[float]] = {}
+    planets = {p["name"]: p["carrier"] for p in model.meta.get("planets", [])}
+    for d in model.meta.get("meshes", []):
+        if d.get("z1") is None:
+            continue
+        rate = abs(int(d["z1"]) * (ms[d["gear1"]] - ms[planets[d["gear2"]]]))
+        for g in (d["gear1"], d["gear2"]):
+            rates.setdefault(str(g), []).append(rate)
+    found: dict[str, tuple[str, str, float | None]] = {}
+    for m in members:
+        cat_name = m.name if not m.planets else (_DIGITS.sub("", m.target) or m.target)
+        fault = None
+        fault_fam = ""
+        for family in ("sun_fault", "ring_fault", "planet_fault", "gear_fault"):
+            sel = (fam == family) & first & (member_col == cat_name)
+            if sel.any():
+                fault, fault_fam = float(order[sel][0]), family
+                break
+        found[m.name] = (cat_name, fault_fam, fault)
+    names_of: dict[str, set[str]] = {}
+    for cat_name, family, _ in found.values():
+        names_of.setdefault(family, set()).add(cat_name)
+    count = {family: len(names) for family, names in names_of.items()}
+    turning = sorted({m.carrier for m in members if abs(ms.get(m.carrier, 0.0)) > 0})
     out = {}
-    for name in ("sun_fault", "planet_fault", "ring_fault", "mesh"):
-        sel = (fam == name) & (harm == 1) & (side == 0)
-        if sel.any():
-            out[name] = float(order[sel][0])
+    for m in members:
+        cat_name, family, fault = found[m.name]
+        # the member's own (first) mesh frequency, snapped to the catalogue's line
+        own = rates.get(m.target, [])
+        if not mesh_lines.size:
+            mesh = 0.0
+        elif own:
+            mesh = float(mesh_lines[np.argmin(np.abs(mesh_lines - own[0]))])
+        else:
+            mesh = float(mesh_lines[-1])
+        key = family if count.get(family, 0) == 1 else f"{family} {cat_name}"
+        c_key = "carrier" if len(turning) <= 1 else f"carrier {m.carrier}"
+        out[m.name] = _Lines(fault, key, abs(ms.get(m.target, 0.0) - ms.get(m.carrier, 0.0)),
+                             f"{cat_name}_rotation", abs(ms.get(m.carrier, 0.0)), c_key, mesh)
     return out
 
 
@@ -210,39 +324,38 @@ def _fit_ramp(t: np.ndarray, rpm: np.ndarray) -> tuple[float, float]:
     return float(b), float(b + a * t[-1])
 
 
-def _family_table(fund: dict[str, float], ms: dict[str, float], n_planets: int, mesh: float,
-                  max_order: float) -> dict[str, tuple[float, np.ndarray]]:
-    sun_rel = abs(ms.get("sun", 0.0) - ms.get("carrier", 1.0))
-    planet_rel = abs(ms.get("planet1", 0.0) - ms.get("carrier", 1.0))
-    base = {"sun_fault": fund.get("sun_fault", n_planets * sun_rel),
-            "planet_fault": fund.get("planet_fault", planet_rel),
-            "ring_fault": fund.get("ring_fault", float(n_planets)),
-            "sun_rotation": sun_rel, "planet_rotation": planet_rel, "carrier": 1.0}
+def _family_table(lines: dict[str, _Lines], members: list[Any], max_order: float
+                  ) -> dict[str, tuple[float, np.ndarray]]:
+    """Catalogue families of the candidate members: their fault lines, rotations (turning
+    members) and carriers, each with harmonics and sidebands of the member's mesh."""
+    base: dict[str, tuple[float, float]] = {}
+    for m in members:
+        ln = lines[m.name]
+        if ln.fault is not None:
+            base.setdefault(ln.fault_family, (ln.fault, ln.mesh))
+    for m in members:
+        ln = lines[m.name]
+        if m.turns:
+            base.setdefault(ln.rotation_family, (ln.rotation, ln.mesh))
+    for m in members:
+        ln = lines[m.name]
+        base.setdefault(ln.carrier_family, (ln.carrier, ln.mesh))
     out = {}
-    for name, f in base.items():
+    for name, (f, mesh) in base.items():
         if f > 0:
             out[name] = (f, family_lines(f, mesh_order=mesh, mesh_harmonics=6, harmonics=10,
                                          sidebands=10, max_order=max_order))
     return out
 
 
-_CAUSE_FAMILY = {("crack", "sun"): "sun_fault", ("pitting", "sun"): "sun_fault",
-                 ("broken_tooth", "sun"): "sun_fault", ("crack", "ring"): "ring_fault",
-                 ("pitting", "ring"): "ring_fault", ("broken_tooth", "ring"): "ring_fault",
-                 ("eccentricity", "sun"): "sun_rotation"}
+def _cause_family(cause: str, lines: _Lines) -> str:
+    """The family whose lines a cause raises: its member's fault, rotation or carrier."""
+    if cause in LOCAL_KINDS:
+        return lines.fault_family
+    if cause == "eccentricity":
+        return lines.rotation_family
+    return lines.carrier_family
 
-
-def _cause_family(cause: str, member: str) -> str:
-    if (cause, member) in _CAUSE_FAMILY:
-        return _CAUSE_FAMILY[(cause, member)]
-    if member.startswith("planet"):
-        if cause == "pin_error":
-            return "carrier"
-        return "planet_rotation" if cause == "eccentricity" else "planet_fault"
-    return "carrier"
-
-
-LOCAL_KINDS = ("crack", "pitting", "broken_tooth")
 
 KIND_WEIGHT = 0.1
 """Score per dB of impulse mismatch (:func:`analysis.diagnosis.impulse_mismatch_db`) by which
@@ -250,19 +363,9 @@ a local tooth-fault kind falls behind the best-matching kind of its member
 (``docs/diagnosis.md``)."""
 
 
-def _member_fault_order(member: str, fund: dict[str, float]) -> float | None:
-    if member == "sun":
-        return fund.get("sun_fault")
-    if member == "ring":
-        return fund.get("ring_fault")
-    if member.startswith("planet"):
-        return fund.get("planet_fault")
-    return None
-
-
 def _local_kind_scores(best: dict[tuple[str, str], tuple[float, Candidate]],
                        candidates: list[Candidate], profiles: list[list[OrderProfile]],
-                       meas: OrderProfile, fund: dict[str, float], mesh: float
+                       meas: OrderProfile, lines: dict[str, _Lines]
                        ) -> tuple[dict[tuple[str, str], float], dict[tuple[str, str], float]]:
     """Scores of the local tooth-fault kinds of each member, ranked by their impulse.
 
@@ -283,9 +386,11 @@ def _local_kind_scores(best: dict[tuple[str, str], tuple[float, Candidate]],
     for c in candidates:
         if c.cause not in LOCAL_KINDS:
             continue
-        f = _member_fault_order(c.member, fund)
-        if f is None:
+        ln = lines.get(c.member)
+        f = ln.fault if ln is not None else None
+        if f is None or not ln.mesh > 0:
             continue
+        mesh = ln.mesh
         if c.member not in meas_cache:
             meas_cache[c.member] = sideband_ratios(meas, f, mesh)
         rm, rn = meas_cache[c.member]
@@ -356,14 +461,18 @@ def diagnose(measured: Record, config: str, *, baseline: Record | None = None,
         raise ValueError(f"threshold = {threshold!r} is not admissible (admissible: 0 < "
                          "threshold < 1)")
     cfg, base = load_config(config)
-    candidates = candidate_faults(cfg, kinds)
-    input_member = cfg.get("operation", {}).get("input", "sun")
+    candidates = candidate_faults(cfg, kinds, base=base)
+    kin = _kinematics(cfg, base)
+    ms = kin.ms
+    input_member = kin.gs.input
     member = measured.member or input_member
-    ratio, ms, cat = _speed_ratio(cfg, base, member)
-    fund = _fundamentals(cat)
-    mesh = fund.get("mesh")
-    if mesh is None:
-        raise ConfigError("diagnosis: the gear set has no planet meshes")
+    ratio = kin.ratio(member)
+    members = candidate_members(kin.gs, kin.model)
+    lines = _member_lines(kin.cat, ms, members, kin.model)
+    meshes = [ln.mesh for ln in lines.values() if ln.mesh > 0]
+    if not meshes:
+        raise ConfigError("diagnosis: the gear set has no meshes with tooth numbers")
+    mesh = max(meshes)  # the band reaches MESH_HARMONICS harmonics of the fastest mesh
     max_order = MESH_HARMONICS * mesh
     c_rpm = np.abs(measured.speed_rpm) * ratio
     meas = order_profile(measured.signal, measured.fs, c_rpm, max_order=max_order,
@@ -391,8 +500,7 @@ def diagnose(measured: Record, config: str, *, baseline: Record | None = None,
                                                      progress)
     sim_time = _time.perf_counter() - sim_t0
     if baseline is not None:
-        b_ratio = ratio if (baseline.member or input_member) == member else \
-            _speed_ratio(cfg, base, baseline.member or input_member)[0]
+        b_ratio = kin.ratio(baseline.member or input_member)
         base_prof = order_profile(baseline.signal, baseline.fs,
                                   np.abs(baseline.speed_rpm) * b_ratio, max_order=max_order,
                                   revolutions=revolutions, name="baseline",
@@ -425,8 +533,7 @@ def diagnose(measured: Record, config: str, *, baseline: Record | None = None,
     signatures = {c.label: envelope(ps) - p_h
                   for c, ps in zip(candidates, profiles[1:], strict=True)}
     scores = {lab: signature_score(d_meas, sig, deadband=dead) for lab, sig in signatures.items()}
-    n_pl = len(cfg.get("geometry", {}).get("planet_angles_deg", []))
-    fams = _family_table(fund, ms, n_pl, mesh, max_order)
+    fams = _family_table(lines, members, max_order)
     fam_ev = family_evidence(order, d_meas, dead, fams)
     fam_by = {f.family: f for f in fam_ev}
     peaks = rising_peaks(order, d_meas, dead)
@@ -446,7 +553,8 @@ def diagnose(measured: Record, config: str, *, baseline: Record | None = None,
         if key not in best or s > best[key][0]:
             best[key] = (s, c)
     kind_scores, mismatch = _local_kind_scores(
-        best, candidates, [[cut(p) for p in ps] for ps in profiles[1:]], cut(meas), fund, mesh)
+        best, candidates, [[cut(p) for p in ps] for ps in profiles[1:]], cut(meas), lines)
+    groups = {m.name for m in members if m.interchangeable}
     causes = []
     for (cause, mem), (s, c) in best.items():
         s = kind_scores.get((cause, mem), s)
@@ -462,10 +570,10 @@ def diagnose(measured: Record, config: str, *, baseline: Record | None = None,
             ev.append(f"sideband pattern of the fault impulse (sidebands over their mesh "
                       f"harmonic, shape): {mismatch[(cause, mem)]:.1f} dB from the measured one "
                       f"(cosine score {best[(cause, mem)][0]:.2f})")
-        fe = fam_by.get(_cause_family(cause, mem))
+        fe = fam_by.get(_cause_family(cause, lines[mem])) if mem in lines else None
         if fe is not None:
             ev.append(fe.text())
-        if mem == "planet":
+        if mem in groups:
             ev.append("the planets are interchangeable (equally spaced): which planet cannot "
                       "be told without a carrier phase reference")
         causes.append(Cause(cause, mem, float(s), tuple(ev), c.label))
@@ -486,16 +594,16 @@ def diagnose(measured: Record, config: str, *, baseline: Record | None = None,
                        "(gear faults) from resonances")
         if meas.segments < 4:
             nxt.append(f"a longer record: {meas.segments} averaged segments of {revolutions} "
-                       "carrier revolutions; 8 or more halve the noise deadband")
+                       f"{kin.reference} revolutions; 8 or more halve the noise deadband")
         if baseline is None:
             nxt.append("the same sensor on the gearbox in a known healthy state (--baseline): "
                        "removes the difference between the real and the assumed transfer path")
         if dead > 6.0:
             nxt.append(f"a quieter signal (noise deadband {dead:.1f} dB): a sensor closer to "
                        "the ring gear, more averaging or a higher load")
-        if causes[0].cause != "none" and any(c.member == "planet" for c in causes[:2]):
+        if causes[0].cause != "none" and any(c.member in groups for c in causes[:2]):
             nxt.append("a once-per-revolution carrier tacho to tell which planet")
-    local = ("crack", "pitting", "broken_tooth")
+    local = LOCAL_KINDS
     if (len(causes) > 1 and causes[0].cause in local and causes[1].cause in local
             and causes[0].member == causes[1].member
             and causes[0].score - causes[1].score < 0.1):
@@ -506,19 +614,24 @@ def diagnose(measured: Record, config: str, *, baseline: Record | None = None,
             nxt.append("a second sensor position and another load: the leading causes differ "
                        "little on this record")
     notes = [f"order locking: {locking}", *mode_notes,
-             f"resolution {1 / revolutions:.4g} carrier orders, {meas.segments} segments, "
-             f"band up to order {max_order:.0f} ({max_order / mesh:.1f} mesh harmonics)",
+             f"resolution {1 / revolutions:.4g} {kin.reference} orders, {meas.segments} "
+             f"segments, band up to order {max_order:.0f} ({max_order / mesh:.1f} mesh "
+             "harmonics" + (" of the fastest mesh)" if len(set(meshes)) > 1 else ")"),
              f"{len(candidates)} candidate faults and the healthy set simulated over "
              f"{run['duration']:g} s at {run['speed_start_rpm']:g} -> "
              f"{run['speed_end_rpm']:g} min-1 (input)"]
-    attrs = {"gear_set": str(config), "speed_member": member, "mesh_order": float(mesh),
+    top = next((c for c in causes if c.cause != "none"), None)
+    # the mesh the report's spectrum zooms into: that of the leading cause's member
+    shown = lines[top.member].mesh if top is not None and top.member in lines else mesh
+    attrs = {"gear_set": str(config), "speed_member": member, "mesh_order": float(shown),
+             "mesh_orders_json": json.dumps(sorted(set(meshes))),
              "simulated_speed_rpm": f"{run['speed_start_rpm']} -> {run['speed_end_rpm']}",
              "simulated_duration_s": run["duration"],
              "assumed_sensors_json": json.dumps(sensors),
              "baseline": "measured" if baseline is not None else "simulated healthy gear set",
              "candidates_json": json.dumps([c.fault for c in candidates])}
     d = Diagnosis(causes, float(threshold), order, cut(meas), cut(base_prof), d_meas, dead,
-                  signatures, fam_ev, nxt, notes, "carrier", attrs)
+                  signatures, fam_ev, nxt, notes, kin.reference, attrs)
     # timing: not part of the report or the Dataset (same input, same output)
     d.timing = {"simulation_s": sim_time, "total_s": _time.perf_counter() - t0,
                 "simulated": len(sweep_result.simulated), "reused": len(sweep_result.reused)}

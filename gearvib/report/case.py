@@ -63,6 +63,7 @@ from gearvib.report.wording import count
 from gearvib.stability import (
     ATTRIBUTION_N_MAX,
     CHART_ACCURACY,
+    cycle_budget,
     first_order_regions,
     gear_set_candidates,
     mesh_phasing,
@@ -1086,7 +1087,7 @@ def _stability(model: AssembledModel, modal: ModalResult, candidates: Candidates
         chart = stability_over_speed(
             model, speeds, n_max=settings.n_max, refine=True, candidates=candidates,
             modal=modal, floquet_options=dict(mode["floquet"]), workers=None,
-            progress=progress, xtol_rel=mode["xtol_rel"])
+            progress=progress, xtol_rel=mode["xtol_rel"], max_cycles=cycle_budget(model))
     except (ValueError, ArithmeticError, np.linalg.LinAlgError) as exc:
         return None, f"Floquet stability chart failed: {exc}", time.perf_counter() - t0
     return chart, "", time.perf_counter() - t0
