@@ -136,6 +136,8 @@ def catalogue_lines(catalogue: Any, *, speed_rpm: float | None = None, axis: str
     Returns
     -------
     CandidateLines
+        With several mesh frequencies (stages, stepped planets) an expression that does not
+        name its member gets it in brackets: ``"2 f_mesh [stage2.pinion-wheel]"``.
     """
     axis = _axis(axis)
     u = require_positive(speed_uncertainty, "speed_uncertainty", allow_zero=True)
@@ -148,8 +150,15 @@ def catalogue_lines(catalogue: Any, *, speed_rpm: float | None = None, axis: str
     else:
         value = cat.order.copy()
     n = len(cat)
+    expression = cat.formula.astype(object).copy()
+    if len(set(catalogue.member[catalogue.family == "mesh"])) > 1:
+        # several mesh frequencies (stages, stepped planets): say whose line it is where the
+        # formula does not (f_mesh, sidebands, planet pass, planet faults)
+        expression = np.asarray([f if str(m) in str(f) else f"{f} [{m}]"
+                                 for f, m in zip(cat.formula, cat.member, strict=True)],
+                                dtype=object)
     return CandidateLines(value=value, family=cat.family.astype(object).copy(),
-                          expression=cat.formula.astype(object).copy(),
+                          expression=expression,
                           uncertainty=np.full(n, u), locked=np.full(n, "order", dtype=object),
                           axis=axis)
 

@@ -893,8 +893,7 @@ def _gearset_from_dict(cfg: dict, *, base: Path | None = None) -> GearSet:
     if not isinstance(cfg, dict):
         raise ConfigError(f"a description must be a table (dict), got {type(cfg).__name__}")
     cfg = copy.deepcopy(cfg)
-    stage_keys = {k for k in cfg if _STAGE_KEY.fullmatch(str(k))} \
-        if cfg.get("type") == "multi-stage" else set()
+    stage_keys = {k for k in cfg if _STAGE_KEY.fullmatch(str(k))}
     check_keys(cfg, _TOP | stage_keys, "the description (top level)")
     if "simulation" in cfg:
         check_keys(cfg["simulation"], _SIMULATION, "[simulation]")
@@ -907,7 +906,8 @@ def _gearset_from_dict(cfg: dict, *, base: Path | None = None) -> GearSet:
     if not isinstance(kind, str) or kind not in _TYPE_KEYS:
         raise ConfigError(f"unknown type {_short(kind)} (admissible: simple, wolfrom, ravigneaux, "
                           "parallel, two-stage, multi-stage, general)")
-    check_keys(cfg, _COMMON_TOP | _TYPE_KEYS[kind] | stage_keys,
+    check_keys(cfg, _COMMON_TOP | _TYPE_KEYS[kind] | (stage_keys if kind == "multi-stage"
+                                                      else set()),
                f"a description of type = {kind!r}")
     if kind in _GEOMETRY:
         return _with_extras(_builder_set(kind, cfg, base), cfg, _operation(cfg))
