@@ -199,3 +199,88 @@ def wind_lumped(cfg: dict, k_mesh: dict[str, float], bearings: dict[str, float])
     model.spring(cfg["shaft"][0]["stiffness"], {sun: 1.0, w2: -1.0})
     model.spring(cfg["coupling"][0]["stiffness"], {p3: 1.0, "generator": -1.0})
     return model
+
+
+PLANETARY_AND_PAIR = """
+# paper-case1 as stage 1, a parallel reduction stage on the carrier shaft as stage 2
+name = "planetary-and-pair"
+type = "multi-stage"
+
+[stage1]
+type = "simple"
+[stage1.operation]
+fixed = "ring"
+input = "sun"
+output = "carrier"
+[stage1.geometry]
+module = 2.5e-3
+pressure_angle_deg = 20.0
+face_width = 0.02
+z_sun = 33
+z_ring = -114
+z_planet = 40
+planet_angles_deg = [0.0, 120.0, 240.0]
+[stage1.bodies.sun]
+mass = 1.6
+inertia = 1.70e-3
+[stage1.bodies.ring]
+mass = 6.0
+inertia = 0.2
+[stage1.bodies.carrier]
+mass = 4.0
+inertia = 4.0e-2
+[stage1.bodies.planet]
+mass = 1.15
+inertia = 1.46e-3
+[stage1.meshes.sun]
+stiffness = { model = "rectangular", k_min = 2.6667e7, k_max = 4.3333e7 }
+backlash = 40e-6
+damping_ratio = 0.005
+[stage1.meshes.ring]
+stiffness = { model = "rectangular", k_min = 3.0e7, k_max = 5.0e7 }
+backlash = 40e-6
+damping_ratio = 0.005
+
+[stage2]
+type = "parallel"
+[stage2.geometry]
+module = 2.5e-3
+pressure_angle_deg = 20.0
+face_width = 0.02
+z_pinion = 25
+z_wheel = 41
+axis_angle_deg = 180.0
+[stage2.bodies.pinion]
+mass = 1.0
+inertia = 1.5e-3
+[stage2.bodies.wheel]
+mass = 2.5
+inertia = 6.0e-3
+[stage2.meshes.pinion]
+stiffness = { model = "rectangular", k_min = 1.2e8, k_max = 1.8e8 }
+backlash = 40e-6
+damping_ratio = 0.005
+
+[simulation]
+speed_start_rpm = 0.0
+speed_end_rpm = 3000.0
+duration = 1.0
+input_torque = 60.0
+fs_out = 25000.0
+"""
+"""A planetary stage (``paper-case1``) and a parallel pair (25/41, wheel axis at 180 deg)."""
+
+
+def heavy_wolfrom() -> str:
+    """``wolfrom-example`` with heavier sun (1e-3 kg m^2) and planets (2e-3 kg m^2) and 100 N m
+    at the sun: its highest natural frequency falls from 14 to 6.8 kHz (twice the step)."""
+    import re
+
+    from gearvib.config import preset_text
+
+    text = preset_text("wolfrom-example").replace('name = "wolfrom-example"',
+                                                  'name = "wolfrom-heavy"')
+    text = re.sub(r"\[bodies.sun\][^\[]*", "[bodies.sun]\nmass = 0.8\ninertia = 1.0e-3\n\n", text)
+    text = re.sub(r"\[bodies.planet\][^\[]*", "[bodies.planet]\nmass = 1.0\ninertia = 2.0e-3\n\n",
+                  text)
+    return text.replace("input_torque = 20.0 ", "input_torque = 100.0 ")
