@@ -437,7 +437,7 @@ class KinematicCatalogue:
         ax.set_xlabel("frequency [Hz]")
         sp = self.speed_rpm if speed_rpm is None else speed_rpm
         title = f"kinematic catalogue{' of ' + self.name if self.name else ''}"
-        ax.set_title(f"{title}: {self.reference} at {sp:g} min⁻¹ (dotted grey: cancelled by "
+        ax.set_title(f"{title}: {self.reference} at {sp:g} min⁻¹\n(dotted grey: cancelled by "
                      f"the planet phasing at a sensor on the {self.sensor})", fontsize=9)
         ax.grid(True, axis="x", alpha=0.3)
         return fig

@@ -601,7 +601,8 @@ def _still_frames(gs: GearSet, bodies: dict[str, Body]) -> set[str]:
     A planet belongs to its carrier, a central gear to the carrier of the planets it meshes,
     a carrier to itself; such a body of a held carrier has its translations in a frame that
     does not turn, so it gets no gyroscopic or centripetal terms. (Bodies of another turning
-    carrier keep them, with the speed of the first turning carrier, as before.)
+    carrier keep them, with the speed of the first turning carrier, as before; a set in which
+    no carrier turns keeps its matrices, which no run uses.)
     """
     frame: dict[str, str] = {}
     for b in gs.bodies:
@@ -612,6 +613,8 @@ def _still_frames(gs: GearSet, bodies: dict[str, Body]) -> set[str]:
     for m in gs.meshes:
         if bodies[m.gear1].role == "central":
             frame.setdefault(m.gear1, str(bodies[m.gear2].carrier))
+    if all(b.name in gs.fixed for b in gs.bodies if b.role == "carrier"):
+        return set()  # no carrier turns: the terms are never used (a star set keeps its G)
     return {name for name, c in frame.items() if c in gs.fixed}
 
 

@@ -629,7 +629,8 @@ def _parser() -> argparse.ArgumentParser:
 
     g = sub.add_parser("diagnose", help="fault-cause diagnosis of a measurement (simulation "
                        "in the loop)", description="Rank the candidate causes (tooth faults of "
-                       "sun, planets and ring, eccentricity, pin position errors) of what a "
+                       "every member of every stage: suns, planets, rings, the pinions and "
+                       "wheels of parallel stages; eccentricity, pin position errors) of what a "
                        "measurement shows beyond a healthy baseline: every candidate is "
                        "simulated on the gear set (sweep machinery, all cores) and scored by "
                        "how well its change explains the measured one. Writes report.html, "
@@ -650,8 +651,9 @@ def _parser() -> argparse.ArgumentParser:
                    metavar="S", help="score above which a cause is likely, 0 < S < 1 "
                    "(default 0.4)")
     g.add_argument("--revolutions", type=_revolutions, default=16, metavar="N",
-                   help="carrier revolutions per averaged segment, 4..256 (resolution 1/N "
-                   "orders; default 16)")
+                   help="revolutions of the reference shaft (the carrier of a planetary set; "
+                   "docs/diagnosis.md) per averaged segment, 4..256 (resolution 1/N orders; "
+                   "default 16)")
     g.add_argument("--json", action="store_true", help='print {"threshold": ..., "causes": '
                    '[{"cause", "member", "score", "evidence"}, ...]}, best first')
     g.set_defaults(func=_cmd_diagnose)

@@ -39,11 +39,12 @@ class ProfileSettings:
     sensors : tuple of str
         Names of the virtual sensors to order-track.
     carrier_per_input : float
-        Carrier speed per unit input speed (the reference of the orders).
+        Speed of the reference shaft of the orders (the carrier of a planetary set,
+        :func:`gearvib.diagnosis.engine.order_reference`) per unit input speed.
     max_order : float
-        Highest carrier order.
+        Highest order of the reference shaft.
     revolutions : int
-        Carrier revolutions per segment.
+        Reference-shaft revolutions per segment.
     skip_s : float
         Start-up transient left out [s].
     """

@@ -1,10 +1,12 @@
 """Simulation in the loop: simulate every candidate fault and score it against a measurement.
 
 :func:`diagnose` takes a measured housing signal with the speed of a shaft, the healthy gear set
-and optionally a measured healthy baseline, simulates the healthy gear set and every candidate
-fault (:mod:`gearvib.diagnosis.candidates`) through the sweep machinery (one case per
-candidate, all cores, run files reused when the same diagnosis runs again) and ranks the
-candidates with :mod:`analysis.diagnosis`.
+(of any type: planetary sets, parallel stages, trains) and optionally a measured healthy
+baseline, simulates the healthy gear set and every candidate fault
+(:mod:`gearvib.diagnosis.candidates`) through the sweep machinery (one case per candidate, all
+cores, run files reused when the same diagnosis runs again) and ranks the candidates with
+:mod:`analysis.diagnosis`. The orders are counted on :func:`order_reference`; every member's
+fault lines, rotation and mesh come from the kinematic catalogue in those orders.
 """
 
 from __future__ import annotations
@@ -51,7 +53,7 @@ from gearvib.diagnosis.candidates import (
 )
 from gearvib.diagnosis.cases import ProfileSettings, profile_case, profile_path
 
-__all__ = ["ASSUMED_SENSORS", "Record", "diagnose"]
+__all__ = ["ASSUMED_SENSORS", "Record", "diagnose", "order_reference"]
 
 _FLAT = [{"frequency_hz": 5.0, "damping_ratio": 0.7, "gain": 1.0}]
 ASSUMED_SENSORS = (
