@@ -255,6 +255,20 @@ def cycle_budget(model: AssembledModel, *, max_detuning: float = MAX_DETUNING,
     more cycles than two stages; the cost of a Floquet evaluation grows in proportion.
     ``MAX_CYCLES`` when it suffices or when none up to ``limit`` does (the analysis then
     says so).
+
+    Parameters
+    ----------
+    model : AssembledModel
+        The gear set (its mesh-frequency groups).
+    max_detuning : float
+        Largest relative detuning admitted (:func:`common_period`).
+    limit : int
+        Largest budget tried.
+
+    Returns
+    -------
+    int
+        The budget to pass as ``max_cycles``.
     """
     groups = model.mesh_frequency_groups()
     if len(groups) < 2:

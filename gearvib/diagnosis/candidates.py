@@ -177,6 +177,13 @@ def candidate_members(gs, model) -> list[CandidateMember]:
         The healthy gear set.
     model : AssembledModel
         Its assembly (planet angles, kinematics).
+
+    Returns
+    -------
+    list of CandidateMember
+        Planets of one carrier with one name stem (``planet1``, ``planet2``, ...) that are
+        equally spaced form one member named by the stem; unequally spaced ones are members
+        each.
     """
     bodies = {b.name: b for b in gs.bodies}
     angles = {p["name"]: float(p["angle_deg"]) for p in model.meta.get("planets", [])}

@@ -149,6 +149,18 @@ def order_reference(gs: Any, model: Any) -> str:
     a train with one planetary stage: the fault frequencies of its members are then orders of
     moderate size); otherwise (several planetary stages, parallel stages only) the slowest
     turning shaft, so that every fault frequency is an order of at least its own.
+
+    Parameters
+    ----------
+    gs : GearSet
+        The gear set.
+    model : AssembledModel
+        Its assembly (kinematic ratios).
+
+    Returns
+    -------
+    str
+        The member's name (``"carrier"`` for every simple set with a turning carrier).
     """
     r = model.kinematic_ratios
     carriers = [b.name for b in gs.bodies if b.role == "carrier" and abs(r.get(b.name, 0.0))
