@@ -950,10 +950,11 @@ def _geometry_rows(gs: dict, model: AssembledModel | None) -> list[tuple[str, st
     for prefix, geo in _tables(gs, "geometry"):
         text = ", ".join(f"{k} = {_fmt(v)}" for k, v in geo.items())
         rows.append((f"geometry{' [' + prefix.rstrip('.') + ']' if prefix else ''}", text))
-    for key in ("body", "mesh", "coupling"):  # [[body]], [[mesh]], [[coupling]] lists
-        for item in gs.get(key, []) if isinstance(gs.get(key), list) else []:
+    for key in ("body", "mesh", "coupling", "shaft"):  # [[body]], [[mesh]], ... lists
+        for i, item in enumerate(gs.get(key, []) if isinstance(gs.get(key), list) else []):
             if isinstance(item, dict):
-                rows.append((f"{key} {item.get('name', '')}".strip(),
+                label = str(item.get("name", "")) or (f"{i + 1}" if key == "shaft" else "")
+                rows.append((f"{key} {label}".strip(),
                              ", ".join(f"{k} = {_fmt(v)}" for k, v in item.items()
                                        if k != "name")))
     handled = {"geometry", "operation", "meshes", "bodies", "simulation", "body", "mesh",
