@@ -942,9 +942,10 @@ MAX_MESSAGE = 1000
 
 
 def _cut(word: str) -> str:
+    """A long word's start and end (a path keeps its file name) and its length."""
     if len(word) <= MAX_WORD:
         return word
-    return f"{word[:MAX_WORD - 24]}...[{len(word)} characters]{word[-6:]}"
+    return f"{word[:24]}...[{len(word)} characters]...{word[-40:]}"
 
 
 def _one_line(exc: BaseException | Warning | str) -> str:

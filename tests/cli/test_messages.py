@@ -50,6 +50,15 @@ def test_a_5000_digit_integer_names_the_file_line_and_key(tmp_path, capsys):
     assert "set_int_max_str_digits" not in err
 
 
+def test_a_long_path_keeps_its_file_name(tmp_path, capsys):
+    deep = tmp_path / ("d" * 120)
+    deep.mkdir()
+    f = deep / "my-gear-set.toml"
+    f.write_text(PRESET + "x = " + "[" * 70 + "]" * 70 + "\n")
+    err = _error(["modes", str(f)], capsys)
+    assert "my-gear-set.toml" in err and "characters]" in err
+
+
 def test_long_values_are_cut_in_messages(tmp_path, capsys):
     f = tmp_path / "long.toml"
     f.write_text(PRESET + '\n[[fault]]\nkind = "' + "c" * 100_000 + '"\nmember = "sun"\n')
