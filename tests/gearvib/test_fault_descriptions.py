@@ -225,7 +225,9 @@ def test_bad_sensor_tables(table, match) -> None:
 def test_sensors_that_do_not_fit_the_model(model) -> None:
     modes = {"housing_modes": [{"frequency_hz": 1000, "damping_ratio": 0.1, "gain": 1}]}
     with pytest.raises(SensorError, match="meshes with no planet"):
-        model.with_sensors([{"name": "a", "angle_deg": 0, "member": "carrier", **modes}])
+        model.with_sensors([{"name": "a", "angle_deg": 0, "member": "planet1", **modes}])
+    # a carrier sees the meshes of its planets (the housing of a parallel stage)
+    model.with_sensors([{"name": "a", "angle_deg": 0, "member": "carrier", **modes}])
     with pytest.raises(SensorError, match="no elastic radial bearing"):
         model.with_sensors([{"name": "a", "angle_deg": 0, "bearings": {"ring": 1.0}, **modes}])
     with pytest.raises(SensorError, match="used twice"):
