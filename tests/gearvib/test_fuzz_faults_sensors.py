@@ -212,7 +212,8 @@ def test_fault_sensor_and_bearing_tables_give_only_documented_errors(changes):
     ("fault", 0, "tooth", 10**320, r"crack fault on 'sun': tooth = 1000.* \(admissible: 0 \.\. "
                                    r"32; 'sun' has 33 teeth\)"),
     ("sensor", 2, "pulses_per_rev", 10**9, r"pulses_per_rev"),
-])
+], ids=["fault-binary", "fault-big", "fault-cut", "fault-long-name", "frf-binary", "frf-big",
+        "frf-cut", "frf-dev-zero", "frf-nul", "tooth-huge", "pulses-huge"])
 def test_bad_files_and_values_are_refused_with_the_key(table, index, key, value, match):
     cfg = copy.deepcopy(BASE)
     cfg[table][index][key] = value
