@@ -67,20 +67,27 @@ MAX_SIDEBAND_LINES = 20_000
 
 def _cmd_catalogue(args: argparse.Namespace) -> int:
     from gearvib.catalogue import gear_set_catalogue
-    from gearvib.config import load_gearset
+    from gearvib.config import load_description
+    from gearvib.structure import GearSet
 
     combos = args.mesh_harmonics * (2 * args.sidebands + 1)
     if combos > MAX_SIDEBAND_LINES:
         raise CliError(f"--mesh-harmonics {args.mesh_harmonics} with --sidebands "
                        f"{args.sidebands} asks for {combos} sideband lines per mesh frequency; "
                        f"admissible: mesh harmonics x (2 sidebands + 1) <= {MAX_SIDEBAND_LINES}")
-    cat = gear_set_catalogue(load_gearset(args.config), reference=args.reference,
-                             speed_rpm=args.speed, mesh_harmonics=args.mesh_harmonics,
-                             harmonics=args.harmonics, sidebands=args.sidebands)
+    described = load_description(args.config)
+    if isinstance(described, GearSet):
+        cat = gear_set_catalogue(described, reference=args.reference,
+                                 speed_rpm=args.speed, mesh_harmonics=args.mesh_harmonics,
+                                 harmonics=args.harmonics, sidebands=args.sidebands)
+    else:  # shafts and bearings without gears: no meshes, no sidebands
+        cat = described.catalogue(reference=args.reference, speed_rpm=args.speed,
+                                  harmonics=args.harmonics)
     if args.json:
         print(cat.to_json(visible_only=True))
     else:
-        print(f"gear set: {cat.name}; lines a sensor on {cat.sensor} can see "
+        kind = "gear set" if isinstance(described, GearSet) else "machine (shafts, bearings)"
+        print(f"{kind}: {cat.name}; lines a sensor on {cat.sensor} can see "
               f"({int(cat.visible.sum())} of {len(cat)})")
         print(cat.table(visible_only=True))
     return 0
@@ -215,13 +222,19 @@ def _report_removed(removed: Sequence) -> None:
 
 
 def _cmd_preset(args: argparse.Namespace) -> int:
-    from gearvib.config import preset_text, preset_titles
+    from gearvib.config import preset_text, preset_titles, rig_titles
 
     if args.name is None:
         titles = preset_titles()
-        width = max(len(n) for n in titles)
+        rigs = rig_titles()
+        width = max(len(n) for n in [*titles, *rigs])
         for name, title in titles.items():
             print(f"{name:<{width}}  {title}")
+        if rigs:
+            print("\nmachines without gears (shafts and rolling bearings, for measured "
+                  "reports):")
+            for name, title in rigs.items():
+                print(f"{name:<{width}}  {title}")
         print("\n`gearvib preset NAME > my-set.toml` writes one to start your own file from.")
         return 0
     sys.stdout.write(preset_text(args.name))
@@ -355,9 +368,9 @@ def _measured_report(args: argparse.Namespace, inputs: Sequence, out, files: lis
     if args.duration is not None:
         raise CliError("--duration applies to a study .toml, not to a measurement")
     if args.gearset is not None:  # inputs first: the description, then the file
-        from gearvib.config import load_gearset
+        from gearvib.config import load_description
 
-        gearset = load_gearset(args.gearset)
+        gearset = load_description(args.gearset)  # a gear set, or shafts and bearings
     else:
         gearset = None
     m = load_measurement(inputs[0], channel=args.channel, **_speed_options(args))
@@ -679,7 +692,8 @@ def _parser() -> argparse.ArgumentParser:
     r.add_argument("inputs", nargs="+", help="a study .toml, one or more run .nc files, or "
                    "one measurement file")
     r.add_argument("--gearset", metavar="CONFIG", help="gear set of a measurement (TOML file "
-                   "or preset name)")
+                   "or preset name), or a machine without gears (type = \"shafts\": shafts "
+                   "and rolling bearings, e.g. the preset cwru-drive-end)")
     _add_speed_options(r)
     _add_output_options(r, "output folder (default ./gearvib-report)",
                         default="gearvib-report")
