@@ -290,7 +290,8 @@ def line_evidence_figure(
     Level: ``10 log10(P / median P)`` over the axis shown [dB over the median]. Harmonics
     dashed in the family's colour (the fundamental labelled with the family's name), lines
     found (>= the threshold over their local floor) marked with a triangle at their level,
-    sidebands found with a dot; the legend gives every family's status and harmonics found.
+    sidebands found with a dot; the legend (below the axes) gives every family's status,
+    harmonics found and, for a family whose lines were found, its chance of a coincidence.
     """
     fig, ax = _axes(ax, figsize)
     x = evidence.axis
@@ -313,9 +314,13 @@ def line_evidence_figure(
     for j, c in enumerate(evidence.checks):
         colour = _FAMILY_COLOURS[j % len(_FAMILY_COLOURS)]
         harm = c.sideband == 0
-        _, _, st, found, _, _, chance = rows[j]
-        ax.plot([], [], color=colour, ls="--", label=f"{c.family.name}: {st} ({found}"
-                + (f", chance {chance}" if chance != "–" else "") + ")")
+        _, _, st, found, _, _, _ = rows[j]
+        ch = float(evidence.chance[j])
+        shown = (np.isfinite(ch) and status[j] in ("detected", "possible", "explained"))
+        chance = ("" if not shown else ", chance < 1e-4" if ch < 1e-4 else
+                  f", chance {ch:.2g}")
+        ax.plot([], [], color=colour, ls="--", label=f"{c.family.name}: {st} "
+                f"({found} harmonics{chance})")
         for h, p in zip(c.harmonic[harm], c.expected[harm], strict=True):
             if p <= axis_max:
                 ax.axvline(p, color=colour, lw=0.8, ls="--", alpha=0.55)
@@ -335,6 +340,7 @@ def line_evidence_figure(
     ax.set_ylabel("level [dB over the median]")
     ax.set_title(title or evidence.name, fontsize=10)
     ax.grid(True, alpha=0.3)
-    if evidence.checks:
-        ax.legend(fontsize=7, loc="upper right", framealpha=0.85)
+    if evidence.checks:  # below the axes: the spectrum and the families' names stay clear
+        ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(0.0, -0.16), frameon=False,
+                  ncol=1)
     return fig

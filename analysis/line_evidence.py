@@ -72,6 +72,8 @@ __all__ = [
     "MAX_CHANCE",
     "STATUSES",
     "LineEvidence",
+    "claim_tolerance",
+    "explained_positions",
     "family_chance",
     "line_evidence",
     "prominent_lines",
@@ -219,9 +221,24 @@ def family_chance(axis: Any, check: LineCheck, lines: np.ndarray,
     return float(q1 * _at_least(qh, need))
 
 
-def _lattice(check: LineCheck, top: float) -> np.ndarray:
+def explained_positions(check: LineCheck, top: float) -> np.ndarray:
     """Positions a detected family explains: ``h f_1`` (the harmonics, at multiples of the
-    fundamental found) and, with a sideband spacing ``d``, ``|h f_1 + k d|`` up to ``top``."""
+    fundamental found) and, with a sideband spacing ``d``, ``|h f_1 + k d|`` up to ``top``
+    (the lattice of a fault modulated at ``d``; e.g. BPFO = |BPFI - Z f_r| of a ball
+    bearing).
+
+    Parameters
+    ----------
+    check : LineCheck
+        A family's check whose fundamental was found.
+    top : float
+        Highest position [axis units].
+
+    Returns
+    -------
+    numpy.ndarray
+        Sorted positions.
+    """
     first = (check.harmonic == 1) & (check.sideband == 0)
     f1 = float(check.position[first][0])
     h = np.arange(1, check.family.harmonics + 1, dtype=float)
@@ -233,15 +250,35 @@ def _lattice(check: LineCheck, top: float) -> np.ndarray:
     return np.unique(v[(v > 0) & (v <= top)])
 
 
+def claim_tolerance(harmonic: Any, spacing: float) -> np.ndarray:
+    """Distance [axis units] within which a found line of harmonic ``h`` is taken as a known
+    line (or one of a stronger family): ``(h/2 + 1.5)`` line spacings (the fundamental's
+    search window grows with ``h`` at exact multiples of the fundamental found).
+
+    Parameters
+    ----------
+    harmonic : array_like of int
+        Harmonic numbers.
+    spacing : float
+        The spectrum's line spacing [axis units].
+
+    Returns
+    -------
+    numpy.ndarray
+        The tolerances.
+    """
+    return (0.5 * np.asarray(harmonic, dtype=float) + 1.5) * float(spacing)
+
+
 def _taken(check: LineCheck, claims: list[tuple[str, np.ndarray]], spacing: float
            ) -> tuple[np.ndarray, list[str]]:
     """Per line of ``check``: found and within ``(h/2 + 1.5)`` line spacings of a position a
     claim explains; and the names of the claims concerned."""
     taken = np.zeros(check.position.size, dtype=bool)
     by: list[str] = []
-    tol = (0.5 * check.harmonic + 1.5) * spacing
+    tol = claim_tolerance(check.harmonic, spacing)
     for name, pos in claims:
-        if pos.size == 0:
+        if pos.size == 0 or name == check.family.name:  # a family does not explain itself
             continue
         near = np.zeros(check.position.size, dtype=bool)
         ok = check.found & np.isfinite(check.position)
@@ -425,7 +462,7 @@ class LineEvidence:
 
 
 def line_evidence(axis: Any, power: Any, families: LineFamily | Sequence[LineFamily], *,
-                  known: Sequence[LineFamily] = (),
+                  known: Sequence[LineFamily | tuple[str, Any]] = (),
                   tolerance: float = TOLERANCE, threshold_db: float = THRESHOLD_DB,
                   min_harmonics: int = 2, max_chance: float = MAX_CHANCE,
                   local_width: float = 0.1, axis_units: str = "Hz",
@@ -439,11 +476,13 @@ def line_evidence(axis: Any, power: Any, families: LineFamily | Sequence[LineFam
         e.g. ``es.frequency``, ``es.power()`` of an envelope spectrum up to its band width.
     families : LineFamily or sequence of LineFamily
         Families to check (:func:`analysis.lines.bearing_families`, ...).
-    known : sequence of LineFamily
+    known : sequence of LineFamily or (str, array_like)
         Lines whose cause is known (e.g. the shaft harmonics ``LineFamily("shaft", f_r,
-        harmonics=N)``, mesh orders): a family whose detection rests on them is
-        ``explained`` by them. Their harmonics (and sidebands) are taken at their nominal
-        positions; they are not checked themselves.
+        harmonics=N)``, mesh orders), or ``(name, positions)`` (e.g. the
+        :func:`explained_positions` of a family detected in another spectrum): a family
+        whose detection rests on them is ``explained`` by them (a family is not explained by
+        positions given under its own name). A LineFamily's harmonics (and sidebands) are
+        taken at their nominal positions; known lines are not checked themselves.
     tolerance, threshold_db, min_harmonics
         As in :func:`analysis.lines.check_lines`.
     max_chance : float
@@ -482,11 +521,16 @@ def line_evidence(axis: Any, power: Any, families: LineFamily | Sequence[LineFam
         n_lines = max(n_lines, int(pos.size))
         checks.append(c)
         chances.append(family_chance(ax, c, pos, prom, local_width=local_width))
-    kn = list(known)
-    if not all(isinstance(f, LineFamily) for f in kn):
-        raise ValueError("known must be LineFamily objects")
+    claims: list[tuple[str, np.ndarray]] = []
+    for f in known:
+        if isinstance(f, LineFamily):
+            claims.append((f.name, np.sort(f.lines()[2])))
+        elif isinstance(f, tuple) and len(f) == 2 and isinstance(f[0], str):
+            claims.append((f[0], np.sort(require_finite(np.ravel(f[1]), f"known {f[0]!r}")
+                                         if np.size(f[1]) else np.zeros(0))))
+        else:
+            raise ValueError("known must be LineFamily objects or (name, positions) pairs")
     top = float(ax[-1])
-    claims: list[tuple[str, np.ndarray]] = [(f.name, np.sort(f.lines()[2])) for f in kn]
     by = [""] * len(checks)
     for i in sorted((i for i, c in enumerate(checks) if c.detected),
                     key=lambda i: -strength(checks[i])):
@@ -495,7 +539,7 @@ def line_evidence(axis: Any, power: Any, families: LineFamily | Sequence[LineFam
         if not _detected_with(c, c.found & ~taken):
             by[i] = ", ".join(names)
         elif chances[i] <= mc:  # a family reported detected explains its lattice
-            claims.append((c.family.name, _lattice(c, top)))
+            claims.append((c.family.name, explained_positions(c, top)))
     return LineEvidence(checks=tuple(checks), chance=np.asarray(chances, dtype=float),
                         max_chance=mc, axis=ax, power=pw, axis_units=axis_units,
                         n_lines=n_lines, name=name, explained_by=tuple(by))

@@ -378,7 +378,7 @@ def _measured_report(args: argparse.Namespace, inputs: Sequence, out, files: lis
     with removed_if_left_empty(out):
         paths = build_measured_report(m, out, gearset=gearset, channel=args.channel,
                                       reference=args.reference)
-    if paths.case.model is None:
+    if paths.case.model is None and paths.case.rig is None:
         print("gearvib: no --gearset: the report shows the maps, spectra and orders of the "
               "reference shaft only", file=sys.stderr)
     print(f"report: {paths.html}")
