@@ -63,6 +63,7 @@ if TYPE_CHECKING:
     from analysis.orders import OrderSpectrum
 
 __all__ = [
+    "COMB_DIVISORS",
     "FAULT_KINDS",
     "KNOWN_HARMONICS",
     "KNOWN_MARGIN_DB",
@@ -358,6 +359,46 @@ def _explaining(known: Sequence[LineFamily], scale: float, axis: np.ndarray,
     return kept, dense
 
 
+COMB_DIVISORS = (2, 3, 4)
+"""A family found in the envelope spectrum is *explained by a comb* when the comb's
+fundamental ``f_1 / k`` (``k`` one of these) and the lines ``j f_1 / k`` between the family's
+harmonics (``j`` not a multiple of ``k``, up to its highest harmonic) are found as well, at
+least two and two thirds of them: its lines are then every ``k``-th line of impacts at
+``f_1 / k`` from another source."""
+
+
+_ORDINAL = {2: "2nd", 3: "3rd", 4: "4th"}
+
+
+def _combs(ev: LineEvidence, axis: np.ndarray, power: np.ndarray, units: str
+           ) -> list[tuple[str, np.ndarray]]:
+    """Combs of another source whose every ``k``-th line a found family sits on
+    (:data:`COMB_DIVISORS`), as ``(name, positions)`` known lines."""
+    spacing, top = float(axis[1] - axis[0]), float(axis[-1])
+    out: list[tuple[str, np.ndarray]] = []
+    for c, st in zip(ev.checks, ev.status, strict=True):
+        if st not in ("detected", "possible"):
+            continue
+        first = (c.harmonic == 1) & (c.sideband == 0)
+        f1 = float(c.position[first][0])
+        h_max = int(c.harmonic[c.sideband == 0].max())
+        for k in COMB_DIVISORS:
+            sub = f1 / k
+            n = k * h_max
+            if sub < 4 * spacing or n * sub > top:
+                continue
+            cc = check_lines(axis, power, LineFamily("comb", sub, n))
+            between = (cc.harmonic % k) != 0
+            found = int(np.count_nonzero(cc.found & between))
+            if cc.found[0] and found >= max(2, int(np.ceil(2 * np.count_nonzero(between)
+                                                           / 3))):
+                unit = " Hz" if units == "Hz" else ""
+                out.append((f"a comb at {sub:.4g}{unit} (every {_ORDINAL[k]} line: another source)",
+                            sub * np.arange(1, int(top / sub) + 1)))
+                break
+    return out
+
+
 def _band_of(band: Any) -> Any:
     if band is None:
         return None
@@ -370,7 +411,7 @@ def check_fault_lines(measurement: Measurement, families: Sequence[FaultFamily],
                       known: Sequence[LineFamily] = (), channel: str | None = None,
                       band: Any = None, min_bandwidth: float | None = None,
                       order_spectrum: OrderSpectrum | bool = True,
-                      max_chance: float = MAX_CHANCE) -> FaultLines:
+                      max_chance: float = MAX_CHANCE, min_harmonics: int = 2) -> FaultLines:
     """Check every fault family at its own position in the envelope and order spectra.
 
     Parameters
@@ -395,6 +436,13 @@ def check_fault_lines(measurement: Measurement, families: Sequence[FaultFamily],
         window, up to 1.3 times the highest line checked; ``False``: not checked.
     max_chance : float
         Largest chance of a coincidence for a family to be reported detected.
+    min_harmonics : int
+        Harmonics found (the fundamental among them) for a family to count as found
+        (default 2). With 3, fewer false detections on random envelope lines (one strong
+        line in a fundamental's window brings its own second harmonic: the squared envelope
+        of a modulation at ``f`` holds ``2 f``), but in a dense envelope spectrum (the
+        shaft-modulation lattice of an inner-race fault) a chance-level coincidence of any one
+        of the three lines costs the detection (``docs/measurements.md``).
 
     Returns
     -------
@@ -444,9 +492,14 @@ def check_fault_lines(measurement: Measurement, families: Sequence[FaultFamily],
                      f"windows cover more than {100 * KNOWN_MAX_COVER:g} % of the axis): "
                      + ", ".join(dense))
     b = env.band
+    ev_name = f"{x.name}: {what} of {b.low:.5g}-{b.high:.5g} Hz"
     env_ev = line_evidence(axis, power, line_fams, known=kn, axis_units=units,
-                           max_chance=max_chance,
-                           name=f"{x.name}: {what} of {b.low:.5g}-{b.high:.5g} Hz")
+                           max_chance=max_chance, min_harmonics=min_harmonics, name=ev_name)
+    combs = _combs(env_ev, axis, power, units)
+    if combs:  # a family on every k-th line of a comb of another source: explained by it
+        env_ev = line_evidence(axis, power, line_fams, known=[*kn, *combs], axis_units=units,
+                               max_chance=max_chance, min_harmonics=min_harmonics,
+                               name=ev_name)
     outside = [f.name for f, s in zip(fams, env_ev.status, strict=True) if s == "outside"]
     if outside:
         notes.append(f"above the demodulated band's width ({b.width:.4g} Hz) or the spectrum: "
@@ -484,6 +537,7 @@ def check_fault_lines(measurement: Measurement, families: Sequence[FaultFamily],
                              explained_positions(c, float(o_axis[-1]) * scale) / scale))
         order_ev = line_evidence(o_axis, o_pow, [f.line_family(1.0) for f in fams],
                                  known=kn_o, axis_units="1", max_chance=max_chance,
+                                 min_harmonics=min_harmonics,
                                  name=f"{x.name}: order spectrum")
     return FaultLines(families=fams, envelope=env, envelope_evidence=env_ev,
                       order_evidence=order_ev, order_spectrum=order_spectrum,

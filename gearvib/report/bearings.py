@@ -205,12 +205,21 @@ def _band_text(fl: FaultLines, name: str) -> str:
             f"spectrum {dom}, {res}. Each line of a family is sought where the catalogue puts "
             "it (the fundamental within 1 % plus one line, the other lines at exact multiples "
             "of the fundamental found); its prominence is its level over the median of the "
-            "lines around it. A family is detected when its fundamental and another harmonic "
+            f"lines around it. A family is detected when {_needed(fl)} "
             "stand 6 dB or more over their floor and a family of its shape placed at random "
             f"in the same spectrum would be detected so strongly at most "
             f"{100 * fl.envelope_evidence.max_chance:g} % of the time ('chance'); a family "
-            "whose detection rests on lines that a stronger detected family or the shaft "
-            "harmonics explain is 'explained' by them, not detected.")
+            "whose detection rests on lines that a stronger detected family, the shaft "
+            "harmonics or a comb of another source (lines between the family's harmonics at "
+            "a fraction of its rate) explain is 'explained' by them, not detected.")
+
+
+def _needed(fl: FaultLines) -> str:
+    """'its fundamental and 2 more harmonics' (the harmonics a detection needs)."""
+    checks = fl.envelope_evidence.checks
+    need = int(checks[0].min_harmonics) if checks else 2
+    return ("its fundamental" if need <= 1 else "its fundamental and another harmonic"
+            if need == 2 else f"its fundamental and {need - 1} more harmonics")
 
 
 def envelope_rows(fl: FaultLines) -> list[tuple[str, ...]]:
