@@ -42,7 +42,7 @@ import numpy as np
 import xarray as xr
 
 from analysis.cf import cf_dataset, elapsed_seconds, labels_from_cf
-from analysis.checks import uniform_rate
+from analysis.checks import require_finite_blocks, uniform_rate
 from analysis.inputs import ANGLE_UNITS, find_reference
 from analysis.readers import FORMATS, ReaderError, read
 from analysis.readers.cdf3 import check_cdf3, is_cdf3
@@ -624,6 +624,10 @@ def load_measurement(
         signals = _channels_of_layout(ds, t)
         extra = {"kind": "file" if prov.get("reader") != "in-memory Dataset" else "dataset"}
     prov.update(extra)
+    for name in signals.data_vars:  # a NaN sample (a netCDF gap) names channel and sample
+        if signals[name].dtype.kind in "fc" and "time" in signals[name].dims:
+            require_finite_blocks(np.asarray(signals[name].transpose(..., "time").values),
+                                  f"{where}: channel {name!r}")
     angle_da = None
     accuracy: dict = {}
     if rpm is not None:

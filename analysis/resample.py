@@ -55,6 +55,7 @@ from analysis.checks import (
     require_finite_blocks,
     require_monotonic,
     require_same_length,
+    require_size,
     time_or_rate,
 )
 from analysis.inputs import (
@@ -84,6 +85,12 @@ __all__ = [
 ]
 
 _MAX_OVERSAMPLING = 64
+#: Largest number of fine-grid angle samples per time sample of the record (plus
+#: :data:`MIN_ANGLE_LIMIT`): a finer angle grid holds no information the record has, so a
+#: larger one means a speed, ``fs`` or ``samples_per_rev`` in the wrong units.
+MAX_ANGLE_PER_TIME_SAMPLE = 1024
+#: Angle samples always admissible, however short the record.
+MIN_ANGLE_LIMIT = 1 << 20
 _MIN_INTERVAL = 256  # smallest spacing of the time-domain checkpoints [samples]
 
 
@@ -478,7 +485,18 @@ class AngleResampler:
         self.oversampling = over
         fine = spr * over
         self.dphi = 2.0 * np.pi / fine
-        self.n_fine = int(np.floor((track.last - track.first) / self.dphi)) + 1
+        n_fine = np.floor((track.last - track.first) / self.dphi) + 1.0
+        limit = MIN_ANGLE_LIMIT + MAX_ANGLE_PER_TIME_SAMPLE * track.n
+        if not n_fine <= limit:  # also catches inf and NaN
+            raise ValueError(
+                f"rpm/angle, fs, samples_per_rev: {track.n} time samples turning "
+                f"{(track.last - track.first) / (2 * np.pi):.6g} revolutions at "
+                f"{spr} x {over} (oversampling) samples per revolution need {n_fine:.6g} angle "
+                f"samples; admissible: at most {MAX_ANGLE_PER_TIME_SAMPLE} per time sample "
+                f"(+ {MIN_ANGLE_LIMIT}); check the units of the speed reference and fs, or "
+                "lower samples_per_rev"
+            )
+        self.n_fine = int(n_fine)
         self.t_first = float(track.time(0, 1)[0])
         # 3) angle-domain anti-alias FIR for the decimation by `over`
         self.fir: np.ndarray | None = None
@@ -752,6 +770,10 @@ def resample_to_angle(
     block = require_block_size(block_size)
     tr = tracking(sig, ref, samples_per_rev, max_order, block, min_rpm)
     res = tr.resampler
+    require_size(
+        8.0 * res.n_out * (np.prod(sig.lead, dtype=float) + 2),
+        f"the resampled signal ({res.n_out} angle samples)", "rpm/angle, fs, samples_per_rev",
+    )
     values = np.empty((*sig.lead, res.n_out))
     times = np.empty(res.n_out)
     for j0 in range(0, res.n_out, block):
