@@ -9,8 +9,11 @@ One set of rules for every function of :mod:`analysis.spectrum`, :mod:`analysis.
   coordinate. A 1-D array is one channel. An array with more dimensions needs ``axis=`` (its
   time axis) unless the length of ``rpm``/``angle``/``time`` singles out one axis: a
   ``(samples, channels)`` array is never analysed along the wrong axis. The other axis of a
-  2-D array becomes the ``channel`` dimension of the result.
+  2-D array becomes the ``channel`` dimension of the result. Samples must be finite and at
+  most :data:`MAX_SAMPLE` in magnitude (the error names the channel and the time sample).
 * **Sampling**: ``fs`` [Hz] or ``time`` [s] (uniform; they must agree when both are given).
+  ``fs`` is a real number (a bool or a string is a :class:`TypeError`), > 0, with a finite
+  record duration ``n / fs``.
 * **Speed reference**: ``rpm`` [min-1] or ``angle`` [rad] per sample, exactly one of them
   for order analysis. A tacho's angle is more accurate than the rpm derived from it, so give
   the angle when you have it. For a Dataset or DataArray the reference can be named

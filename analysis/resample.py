@@ -54,6 +54,7 @@ from analysis.checks import (
     require_finite,
     require_finite_blocks,
     require_monotonic,
+    require_positive,
     require_same_length,
     require_size,
     time_or_rate,
@@ -576,7 +577,12 @@ def check_sampling(samples_per_rev: Any, max_order: float | None) -> tuple[int, 
 
 def default_samples_per_rev(fs: float, rpm_max: float) -> tuple[int, float]:
     """Angular sampling matching ``fs`` at the top speed, and its max order ``spr / 2.56``."""
-    spr = int(2 * np.ceil(0.5 * fs / (rpm_max / 60.0)))
+    fs, rpm_max = require_positive(fs, "fs"), require_positive(rpm_max, "rpm_max")
+    spr = 2.0 * np.ceil(0.5 * fs / (rpm_max / 60.0))
+    if not spr <= 2**62:
+        raise ValueError(f"fs / rpm_max = {fs:g} Hz / {rpm_max:g} min-1 give {spr:g} samples per "
+                         "revolution; admissible: at most 2**62 (check their units)")
+    spr = int(spr)
     return max(spr, 8), max(spr, 8) / 2.56
 
 

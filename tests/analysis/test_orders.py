@@ -298,7 +298,7 @@ def test_order_cuts_refuse_an_order_never_analysed():
     _t, rpm, _, x = _runup()
     with pytest.raises(ValueError, match=r"orders: \[40\.0\] lie above the highest analysed"):
         order_cuts(x, FS, rpm, [3, 40])
-    with pytest.raises(ValueError, match="orders: .*at the slowest frame"):
+    with pytest.raises(ValueError, match=r"orders: .*at the slowest frame"):
         order_cuts(x, FS, rpm, [3, 1e9], bandwidth_hz=50.0)
 
 
