@@ -454,3 +454,65 @@ def test_tally():
           f"{COUNTS['calls']}: {COUNTS['result']} results, {COUNTS['refused']} documented "
           f"errors, {COUNTS['other']} other")
     assert COUNTS["other"] == 0
+
+
+def _issue_case(kind: str) -> None:
+    from analysis.maps import rpm_order_map
+    from analysis.orders import order_cuts, order_spectrum
+    from analysis.spectrum import spectrum
+
+    x, rpm = cases.x(), cases.rpm()
+    fs = cases.FS
+    calls = {
+        "fs=1e-300": lambda: order_spectrum(x, fs=1e-300, rpm=rpm),
+        "rpm*1e9": lambda: order_spectrum(x, fs=fs, rpm=rpm * 1e9),
+        "map rpm*1e9": lambda: rpm_order_map(x, fs=fs, rpm=rpm * 1e9),
+        "cuts rpm*1e9": lambda: order_cuts(x, fs=fs, rpm=rpm * 1e9, orders=[1, 2]),
+        "map samples_per_rev=1e9": lambda: rpm_order_map(x, fs=fs, rpm=rpm,
+                                                         samples_per_rev=10**9),
+        "nfft=2**40": lambda: spectrum(x, fs=fs, nfft=2**40),
+        "fs=True": lambda: spectrum(x, fs=True),
+        "fs='10000'": lambda: spectrum(x, fs="10000"),
+        "x*1e300": lambda: spectrum(x * 1e300, fs=fs),
+        "orders=[1e9]": lambda: order_cuts(x, fs=fs, rpm=rpm, orders=[1e9]),
+    }
+    calls[kind]()
+
+
+@pytest.mark.parametrize(
+    ("kind", "error", "match"),
+    [
+        ("fs=1e-300", ValueError, r"rpm/angle, fs, samples_per_rev: .* angle samples"),
+        ("rpm*1e9", ValueError, r"rpm/angle, fs, samples_per_rev"),
+        ("map rpm*1e9", ValueError, r"rpm/angle, fs, samples_per_rev"),
+        ("cuts rpm*1e9", ValueError, r"rpm/angle, fs, samples_per_rev"),
+        ("map samples_per_rev=1e9", ValueError, r"samples_per_rev"),
+        ("nfft=2**40", ValueError, r"^nfft, .* needs 32 TiB"),
+        ("fs=True", TypeError, r"^fs = True is not admissible"),
+        ("fs='10000'", TypeError, r"^fs = '10000' is not admissible"),
+        ("x*1e300", ValueError, r"^x: a magnitude above 1e\+100 at time sample"),
+        ("orders=[1e9]", ValueError, r"^orders: \[1000000000\.0\] lie above"),
+    ],
+)
+def test_issue_26_inputs_are_refused_at_once(kind, error, match):
+    """The issue's hangs, MemoryErrors and silent coercions (items 1-3): one-line errors that
+    name the parameter, before any work (each was > 60 s, a MemoryError or a result)."""
+    with pytest.raises(error, match=match) as info:
+        _issue_case(kind)
+    assert "\n" not in str(info.value)
+
+
+def test_nan_sample_in_a_netcdf_file_is_refused(tmp_path):
+    """A netCDF measurement with a NaN sample (a gap) names the channel and the sample, in the
+    reader and in load_measurement; the other readers already refused it."""
+    from analysis.measurement import load_measurement
+    from analysis.readers import ReaderError, read
+
+    ds = cases.dataset().copy(deep=True)
+    ds["acc"].values[123] = np.nan
+    path = tmp_path / "gap.nc"
+    ds.to_netcdf(path)  # written without the layout's checks, as another tool would
+    with pytest.raises(ReaderError, match=r"channel 'acc': non-finite .* at time sample 123"):
+        read(path)
+    with pytest.raises(ValueError, match=r"channel 'acc': non-finite .* at time sample 123"):
+        load_measurement(ds, speed="speed")
