@@ -42,7 +42,7 @@ import numpy as np
 import xarray as xr
 
 from analysis.cf import cf_dataset, elapsed_seconds, labels_from_cf
-from analysis.checks import uniform_rate
+from analysis.checks import require_finite_blocks, uniform_rate
 from analysis.inputs import ANGLE_UNITS, find_reference
 from analysis.measurement_options import (
     apply_calibration,
@@ -673,6 +673,10 @@ def load_measurement(
         signals = _channels_of_layout(ds, t)
         extra = {"kind": "file" if prov.get("reader") != "in-memory Dataset" else "dataset"}
     prov.update(extra)
+    for name in signals.data_vars:  # a NaN sample (a netCDF gap) names channel and sample
+        if signals[name].dtype.kind in "fc" and "time" in signals[name].dims:
+            require_finite_blocks(np.asarray(signals[name].transpose(..., "time").values),
+                                  f"{where}: channel {name!r}")
     signals = apply_calibration(signals, calibration, units)
     stated = {k: v for k, v in (("fs", fs), ("time_column", time_column),
                                 ("calibration", calibration), ("units", units),
