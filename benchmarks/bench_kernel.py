@@ -60,6 +60,17 @@ CFLAGS = ["-O2", "-shared", "-fPIC"]
 CFLAGS_NATIVE = ["-O2", "-march=native", "-ffp-contract=off", "-shared", "-fPIC"]
 I64 = ctypes.POINTER(ctypes.c_int64)
 F64 = ctypes.POINTER(ctypes.c_double)
+#: The constants of gearvib.kernels the C file mirrors, in the order of its ``GV_LAYOUT``.
+HEADER_NAMES = (
+    "H_N", "H_NMESH", "H_IPAR", "IP_MODE", "IP_INPUT", "IP_OUTPUT", "IP_CARRIER", "IP_GYRO",
+    "N_IPAR", "FP_KC", "FP_CC", "FP_OUTDIR", "FP_T0", "FP_C1", "FP_C2", "FP_SPEED_LIMIT",
+    "H_LP", "H_LI", "H_CP", "H_CI", "H_GP", "H_GI", "H_II", "H_OI", "H_VP", "H_VI", "H_FP",
+    "H_FI", "H_PP", "H_PI", "H_BP", "H_RFLAG", "H_RVP", "H_RVI", "H_RFP", "H_RFI", "H_FREC",
+    "H_FINT", "H_ACC0", "H_LV", "H_CV", "H_GV", "H_IV", "H_OV", "H_VV", "H_FV", "H_PV", "H_S0",
+    "H_BL", "H_MC", "H_FPAR", "H_LIMIT", "H_BV", "H_RVV", "H_RFV", "H_FVAL", "H_NI", "H_NO",
+    "H_FPASS", "N_HEADER", "DRIVE_NONE", "DRIVE_SPEED", "DRIVE_TORQUE", "DRIVE_MOTOR",
+    "MESH_OUT_COLUMNS",
+)
 
 
 def build_c(tmp: str, flags: list[str], name: str) -> ctypes.CDLL:
@@ -71,8 +82,17 @@ def build_c(tmp: str, flags: list[str], name: str) -> ctypes.CDLL:
     subprocess.run([gcc, *flags, "-o", lib, C_SOURCE, "-lm"], check=True)
     c = ctypes.CDLL(lib)
     c.gv_header_size.restype = ctypes.c_int64
-    if c.gv_header_size() != kn.N_HEADER:
-        raise SystemExit("benchmarks/c/rk4_kernel.c is out of date with gearvib.kernels' header")
+    c.gv_header_layout.restype = ctypes.c_int64
+    c.gv_header_layout.argtypes = [I64, ctypes.c_int64]
+    layout = np.zeros(len(HEADER_NAMES) + 1, dtype=np.int64)
+    n_layout = c.gv_header_layout(ptr(layout, I64), layout.size)
+    expected = [getattr(kn, name) for name in HEADER_NAMES]
+    if c.gv_header_size() != kn.N_HEADER or n_layout != len(HEADER_NAMES) or list(
+            layout[:n_layout]) != expected:
+        wrong = [name for name, a, b in zip(HEADER_NAMES, layout, expected, strict=False)
+                 if a != b]
+        raise SystemExit("benchmarks/c/rk4_kernel.c is out of date with gearvib.kernels' header"
+                         f" (entries that differ: {wrong or 'their number'})")
     c.gv_integrate_chunk.restype = ctypes.c_int64
     c.gv_integrate_chunk.argtypes = [
         I64, F64, F64, ctypes.c_int64, F64, ctypes.c_int64, F64, ctypes.c_int64, F64,

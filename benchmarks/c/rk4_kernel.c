@@ -23,13 +23,32 @@ enum {
     H_LP = H_IPAR + N_IPAR, H_LI, H_CP, H_CI, H_GP, H_GI, H_II, H_OI, H_VP, H_VI, H_FP, H_FI,
     H_PP, H_PI, H_BP, H_RFLAG, H_RVP, H_RVI, H_RFP, H_RFI, H_FREC, H_FINT,
     H_ACC0, H_LV, H_CV, H_GV, H_IV, H_OV, H_VV, H_FV, H_PV, H_S0, H_BL, H_MC, H_FPAR, H_LIMIT,
-    H_BV, H_RVV, H_RFV, H_FVAL, H_NI, H_NO, N_HEADER
+    H_BV, H_RVV, H_RFV, H_FVAL, H_NI, H_NO, H_FPASS, N_HEADER
 };
 enum { DRIVE_NONE = 0, DRIVE_SPEED = 1, DRIVE_TORQUE = 2, DRIVE_MOTOR = 3 };
 enum { STATUS_OK = 0, STATUS_NONFINITE = 1, STATUS_DEFLECTION = 2, STATUS_SPEED = 3 };
-#define MESH_OUT_COLUMNS 18
+#define MESH_OUT_COLUMNS 31 /* gearvib.kernels.MESH_OUT_COLUMNS (the first 7 are used) */
 
 int64_t gv_header_size(void) { return N_HEADER; }
+
+/* The header layout as this file sees it, in the order of HEADER_NAMES in
+ * benchmarks/bench_kernel.py, which compares it with gearvib.kernels' constants. */
+#define GV_LAYOUT                                                                               \
+    H_N, H_NMESH, H_IPAR, IP_MODE, IP_INPUT, IP_OUTPUT, IP_CARRIER, IP_GYRO, N_IPAR, FP_KC,     \
+        FP_CC, FP_OUTDIR, FP_T0, FP_C1, FP_C2, FP_SPEED_LIMIT, H_LP, H_LI, H_CP, H_CI, H_GP,    \
+        H_GI, H_II, H_OI, H_VP, H_VI, H_FP, H_FI, H_PP, H_PI, H_BP, H_RFLAG, H_RVP, H_RVI,      \
+        H_RFP, H_RFI, H_FREC, H_FINT, H_ACC0, H_LV, H_CV, H_GV, H_IV, H_OV, H_VV, H_FV, H_PV,   \
+        H_S0, H_BL, H_MC, H_FPAR, H_LIMIT, H_BV, H_RVV, H_RFV, H_FVAL, H_NI, H_NO, H_FPASS,     \
+        N_HEADER, DRIVE_NONE, DRIVE_SPEED, DRIVE_TORQUE, DRIVE_MOTOR, MESH_OUT_COLUMNS
+static const int64_t gv_layout[] = {GV_LAYOUT};
+
+int64_t gv_header_layout(int64_t *out, int64_t cap)
+{
+    int64_t n = (int64_t)(sizeof gv_layout / sizeof gv_layout[0]);
+    for (int64_t k = 0; k < n && k < cap; k++)
+        out[k] = gv_layout[k];
+    return n;
+}
 
 typedef struct {
     const int64_t *ints;
