@@ -2,7 +2,8 @@
 
 Run ``python3 benchmarks/bench_kernel.py [--quick]``. For ``paper-case1`` and
 ``paper-case1-elastic`` (1 s run-up 0 -> 4000 min^-1 at 60 N m input torque, the automatic
-step), it prints side by side:
+step; in the C comparison also both with every mesh under the always-on ``viscous``
+damping law), it prints side by side:
 
 * **ns per right-hand-side evaluation**, numba kernel against a plain C loop of the same
   algorithm (``benchmarks/c/rk4_kernel.c``, compiled here with ``gcc -O2`` and, second, with
@@ -66,10 +67,10 @@ HEADER_NAMES = (
     "N_IPAR", "FP_KC", "FP_CC", "FP_OUTDIR", "FP_T0", "FP_C1", "FP_C2", "FP_SPEED_LIMIT",
     "H_LP", "H_LI", "H_CP", "H_CI", "H_GP", "H_GI", "H_II", "H_OI", "H_VP", "H_VI", "H_FP",
     "H_FI", "H_PP", "H_PI", "H_BP", "H_RFLAG", "H_RVP", "H_RVI", "H_RFP", "H_RFI", "H_FREC",
-    "H_FINT", "H_ACC0", "H_LV", "H_CV", "H_GV", "H_IV", "H_OV", "H_VV", "H_FV", "H_PV", "H_S0",
-    "H_BL", "H_MC", "H_FPAR", "H_LIMIT", "H_BV", "H_RVV", "H_RFV", "H_FVAL", "H_NI", "H_NO",
-    "H_FPASS", "N_HEADER", "DRIVE_NONE", "DRIVE_SPEED", "DRIVE_TORQUE", "DRIVE_MOTOR",
-    "MESH_OUT_COLUMNS",
+    "H_FINT", "H_MLAW", "H_ACC0", "H_LV", "H_CV", "H_GV", "H_IV", "H_OV", "H_VV", "H_FV",
+    "H_PV", "H_S0", "H_BL", "H_MC", "H_FPAR", "H_LIMIT", "H_BV", "H_RVV", "H_RFV", "H_FVAL",
+    "H_NI", "H_NO", "H_FPASS", "N_HEADER", "DRIVE_NONE", "DRIVE_SPEED", "DRIVE_TORQUE",
+    "DRIVE_MOTOR", "MESH_OUT_COLUMNS",
 )
 
 
@@ -105,6 +106,23 @@ def build_c(tmp: str, flags: list[str], name: str) -> ctypes.CDLL:
         ctypes.c_int64, ctypes.c_double, ctypes.c_double, ctypes.c_int64, F64, F64,
     ]
     return c
+
+
+#: The models of the C comparison; ``viscous``: every mesh under the always-on damping law
+#: (its records bit-identical too, so the C file's viscous branch is checked as well).
+C_CASES = ("paper-case1", "paper-case1-elastic", "paper-case1 viscous",
+           "paper-case1-elastic viscous")
+
+
+def c_case_model(name: str):
+    """The assembled model of an entry of :data:`C_CASES`."""
+    preset, _, law = name.partition(" ")
+    if not law:
+        return assemble(load_gearset(preset))
+    cfg, base = load_config(preset)
+    for family in ("sun", "ring"):
+        cfg = set_path(cfg, f"meshes.{family}.damping_law", law)
+    return assemble(gearset_from_dict(cfg, base=base))
 
 
 def ptr(a: np.ndarray, kind=F64):
@@ -332,15 +350,15 @@ def main() -> None:
             print(f"\nC baseline: gcc {' '.join(flags)} {os.path.relpath(C_SOURCE)}")
             print("ns per right-hand-side evaluation (CPU time, best of "
                   f"{repeat}; window {window} s of the run-up from t = 0.4 s, ~1600 min^-1)")
-            print(f"{'model':22s} {'RHS evals':>10s} {'RK4 loop numba':>15s} {'C':>8s} "
+            print(f"{'model':28s} {'RHS evals':>10s} {'RK4 loop numba':>15s} {'C':>8s} "
                   f"{'ratio':>6s} {'RHS alone numba':>16s} {'C':>8s} {'ratio':>6s}")
-            for preset in ("paper-case1", "paper-case1-elastic"):
+            for preset in C_CASES:
                 if preset not in cases:
-                    cases[preset] = Case(assemble(load_gearset(preset)), cond, 0.4)
+                    cases[preset] = Case(c_case_model(preset), cond, 0.4)
                 case = cases[preset]
                 n_steps = round(window / case.dt)
                 r = rhs_per_eval(case, c, n_steps, repeat)
-                print(f"{preset:22s} {r['n_rhs']:10d} {r['loop_numba']:15.1f} "
+                print(f"{preset:28s} {r['n_rhs']:10d} {r['loop_numba']:15.1f} "
                       f"{r['loop_c']:8.1f} {r['loop_numba'] / r['loop_c']:6.2f} "
                       f"{r['rhs_numba']:16.1f} {r['rhs_c']:8.1f} "
                       f"{r['rhs_numba'] / r['rhs_c']:6.2f}")

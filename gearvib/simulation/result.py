@@ -57,6 +57,9 @@ def model_sha256(model: AssembledModel) -> str:
         h.update(b"mesh_back_vectors")
         h.update(str(a.shape).encode())
         h.update(a.tobytes())
+    if "viscous" in model.mesh_damping_laws:  # the damping laws (all gated: as before)
+        h.update(b"mesh_damping_laws")
+        h.update(json.dumps(list(model.mesh_damping_laws)).encode())
     if model.faults:  # local tooth faults and manufacturing errors (healthy: as before)
         h.update(b"faults")
         h.update(json.dumps([f.to_dict() for f in model.faults], sort_keys=True).encode())
@@ -398,8 +401,13 @@ def build_result(
     time = np.arange(n_out) * (step.decimation * step.dt)
     q = out[:, :n]
     qd = out[:, n : 2 * n]
-    f_left = np.clip(out[:, 2 * n : 2 * n + nm].T, 0.0, None)
-    f_right = np.clip(out[:, 2 * n + nm : 2 * n + 2 * nm].T, 0.0, None)
+    f_left = out[:, 2 * n : 2 * n + nm].T
+    f_right = out[:, 2 * n + nm : 2 * n + 2 * nm].T
+    # gated law: a flank never pulls, values below 0 are filter ringing (clipped); the viscous
+    # law's forces carry the damping force, which may pull (kept)
+    gated = ~model.viscous_meshes[:, None]
+    f_left = np.where(gated, np.clip(f_left, 0.0, None), f_left)
+    f_right = np.where(gated, np.clip(f_right, 0.0, None), f_right)
     k_eff = np.clip(out[:, 2 * n + 2 * nm :].T, 0.0, None)
     normal_force = np.ascontiguousarray(np.stack([f_left, f_right], axis=1))
     deflection = system.mesh_vectors @ q.T

@@ -286,6 +286,8 @@ def prepare_run(
         torque_table=torque_tab,
         deflection_limit=np.full(model.n_mesh, np.inf),
         mesh_back_vectors=model.mesh_back_vectors,
+        mesh_damping_law=np.where(model.viscous_meshes, kn.DAMPING_VISCOUS, kn.DAMPING_GATED)
+        if model.mesh_damping_laws else None,
         **fault_arrays,
     )
     return RunSetup(
