@@ -37,6 +37,7 @@ from __future__ import annotations
 
 import argparse
 import ctypes
+import dataclasses
 import os
 import shutil
 import subprocess
@@ -48,9 +49,16 @@ import numpy as np
 from gearvib import kernels as kn
 from gearvib import kernels_batch as kb
 from gearvib.assembly import assemble
-from gearvib.config import gearset_from_dict, load_config, load_gearset
-from gearvib.simulate import SpeedRamp, choose_step, prepare_run, static_equilibrium
+from gearvib.config import gearset_from_dict, load_config
+from gearvib.simulate import (
+    SpeedRamp,
+    choose_step,
+    prepare_run,
+    static_equilibrium,
+    with_coupling,
+)
 from gearvib.simulation.frequencies import stiffest_matrix, undamped_frequencies
+from gearvib.simulation.settings import conditions_from_settings, read_run_settings
 from gearvib.sweep.keys import set_path
 
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -67,10 +75,10 @@ HEADER_NAMES = (
     "N_IPAR", "FP_KC", "FP_CC", "FP_OUTDIR", "FP_T0", "FP_C1", "FP_C2", "FP_SPEED_LIMIT",
     "H_LP", "H_LI", "H_CP", "H_CI", "H_GP", "H_GI", "H_II", "H_OI", "H_VP", "H_VI", "H_FP",
     "H_FI", "H_PP", "H_PI", "H_BP", "H_RFLAG", "H_RVP", "H_RVI", "H_RFP", "H_RFI", "H_FREC",
-    "H_FINT", "H_MLAW", "H_ACC0", "H_LV", "H_CV", "H_GV", "H_IV", "H_OV", "H_VV", "H_FV",
-    "H_PV", "H_S0", "H_BL", "H_MC", "H_FPAR", "H_LIMIT", "H_BV", "H_RVV", "H_RFV", "H_FVAL",
-    "H_NI", "H_NO", "H_FPASS", "N_HEADER", "DRIVE_NONE", "DRIVE_SPEED", "DRIVE_TORQUE",
-    "DRIVE_MOTOR", "MESH_OUT_COLUMNS",
+    "H_FINT", "H_MLAW", "H_DI", "H_ACC0", "H_LV", "H_CV", "H_GV", "H_IV", "H_OV", "H_VV",
+    "H_FV", "H_PV", "H_S0", "H_BL", "H_MC", "H_FPAR", "H_LIMIT", "H_BV", "H_RVV", "H_RFV",
+    "H_FVAL", "H_DV", "H_NI", "H_NO", "H_FPASS", "H_ND", "N_HEADER", "DRIVE_NONE",
+    "DRIVE_SPEED", "DRIVE_TORQUE", "DRIVE_MOTOR", "MESH_OUT_COLUMNS",
 )
 
 
@@ -108,21 +116,25 @@ def build_c(tmp: str, flags: list[str], name: str) -> ctypes.CDLL:
     return c
 
 
-#: The models of the C comparison; ``viscous``: every mesh under the always-on damping law
-#: (its records bit-identical too, so the C file's viscous branch is checked as well).
-C_CASES = ("paper-case1", "paper-case1-elastic", "paper-case1 viscous",
-           "paper-case1-elastic viscous")
+#: The runs of the C comparison (their records bit-identical too, so every branch of the C
+#: file is checked): the default drive (a controller on the rigid-body mode); ``coupling``:
+#: the preset's own drive, a spring-damper on the sun; ``viscous``: every mesh under the
+#: always-on damping law.
+C_CASES = ("paper-case1", "paper-case1-elastic", "paper-case1 coupling",
+           "paper-case1 viscous", "paper-case1-elastic viscous")
 
 
-def c_case_model(name: str):
-    """The assembled model of an entry of :data:`C_CASES`."""
-    preset, _, law = name.partition(" ")
-    if not law:
-        return assemble(load_gearset(preset))
+def c_case(name: str, cond: SpeedRamp) -> Case:
+    """The packed run of an entry of :data:`C_CASES` (``cond`` with its drive), at 0.4 s."""
+    preset, _, variant = name.partition(" ")
     cfg, base = load_config(preset)
-    for family in ("sun", "ring"):
-        cfg = set_path(cfg, f"meshes.{family}.damping_law", law)
-    return assemble(gearset_from_dict(cfg, base=base))
+    if variant == "viscous":
+        for family in ("sun", "ring"):
+            cfg = set_path(cfg, f"meshes.{family}.damping_law", variant)
+    elif variant == "coupling":
+        run = read_run_settings(cfg.get("simulation", {}))
+        cond = dataclasses.replace(cond, coupling=conditions_from_settings(run).coupling)
+    return Case(assemble(gearset_from_dict(cfg, base=base)), cond, 0.4)
 
 
 def ptr(a: np.ndarray, kind=F64):
@@ -135,9 +147,8 @@ class Case:
     def __init__(self, model, cond, t_start: float):
         setup = prepare_run(model, cond, False)
         system = setup.system
-        k_max = stiffest_matrix(model, setup.torque_sign).copy()
-        k_in = system.ipar[kn.IP_INPUT]
-        k_max[k_in, k_in] += setup.coupling.stiffness
+        k_max = with_coupling(stiffest_matrix(model, setup.torque_sign), setup.mass,
+                              setup.rigid, int(system.ipar[kn.IP_INPUT]), setup.coupling)
         f_nat = float(undamped_frequencies(setup.mass, k_max).max())
         f_mesh = float(np.nanmax(model.mesh_frequencies_per_rpm)) * setup.speed_max * 30 / np.pi
         self.step = choose_step(f_nat, f_mesh, speed_max_rpm=setup.speed_max * 30 / np.pi)
@@ -354,7 +365,7 @@ def main() -> None:
                   f"{'ratio':>6s} {'RHS alone numba':>16s} {'C':>8s} {'ratio':>6s}")
             for preset in C_CASES:
                 if preset not in cases:
-                    cases[preset] = Case(c_case_model(preset), cond, 0.4)
+                    cases[preset] = c_case(preset, cond)
                 case = cases[preset]
                 n_steps = round(window / case.dt)
                 r = rhs_per_eval(case, c, n_steps, repeat)

@@ -40,9 +40,12 @@ record reads and law dispatch. A packed system without that address takes the ge
 Drive (``ipar[IP_MODE]``):
 
 * ``DRIVE_NONE``: no drive; only ``f_const`` and the load act.
-* ``DRIVE_SPEED``: torsional spring-damper between the prescribed input angle ``phi(t)`` and the
-  input coordinate, ``k_c (phi - q_in) + c_c (omega - qdot_in)``; ``phi`` is the exact integral of
-  the piecewise-linear speed table.
+* ``DRIVE_SPEED``: torque ``k_c (phi - theta) + c_c (omega - theta')`` on the input coordinate,
+  ``phi`` the exact integral of the piecewise-linear speed table. ``theta = q_in`` (a torsional
+  spring-damper between the prescribed angle and the input coordinate), or, with a drive
+  sensing row ``p`` (``KernelSystem.drive_sensing``, the packed blocks ``di``/``dv``),
+  ``theta = p . q``: the rigid-body coordinate of a speed controller on the rigid-body mode
+  (:class:`gearvib.simulate.DriveCoupling`).
 * ``DRIVE_TORQUE``: input torque from a piecewise-linear table of time (constant outside).
 * ``DRIVE_MOTOR``: input torque from the motor's torque-speed characteristic, a
   piecewise-linear table of the input speed [rad/s] (constant outside), evaluated at the
@@ -208,6 +211,9 @@ class KernelSystem:
     mesh_damping_law : ndarray of int64, shape (n_mesh,), optional
         :data:`DAMPING_GATED` (damping only on a flank in contact, the default) or
         :data:`DAMPING_VISCOUS` (always on) per mesh; None: gated everywhere.
+    drive_sensing : ndarray, shape (n,), optional
+        ``DRIVE_SPEED``: the row ``p`` whose product with ``q`` (``qdot``) is the angle
+        (speed) the drive controls (rigid-body sensing); None: the input coordinate.
     """
 
     minv: np.ndarray
@@ -234,6 +240,7 @@ class KernelSystem:
     fault_vals: np.ndarray | None = None
     fault_jumps: dict | None = None
     mesh_damping_law: np.ndarray | None = None
+    drive_sensing: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         for f in fields(self):
@@ -256,6 +263,9 @@ class KernelSystem:
                 (law == DAMPING_GATED) | (law == DAMPING_VISCOUS))):
             raise ValueError(f"mesh_damping_law must hold {n_mesh} values "
                              f"{DAMPING_GATED} (gated) or {DAMPING_VISCOUS} (viscous)")
+        if self.drive_sensing is not None and (self.drive_sensing.shape != (n,) or not np.all(
+                np.isfinite(self.drive_sensing)) or not np.any(self.drive_sensing)):
+            raise ValueError(f"drive_sensing must be a finite, non-zero row of {n} values")
 
     @property
     def n_dof(self) -> int:
@@ -290,27 +300,29 @@ H_NMESH = 1
 H_IPAR = 2
 _INT_BLOCKS = (
     "lp", "li", "cp", "ci", "gp", "gi", "ii", "oi", "vp", "vi", "fp", "fi", "pp", "pi", "bp",
-    "rflag", "rvp", "rvi", "rfp", "rfi", "frec", "fint", "mlaw",
+    "rflag", "rvp", "rvi", "rfp", "rfi", "frec", "fint", "mlaw", "di",
 )
 _FLOAT_BLOCKS = (
     "acc0", "lv", "cv", "gv", "iv", "ov", "vv", "fv", "pv", "s0", "bl", "mc", "fpar", "limit",
-    "bv", "rvv", "rfv", "fval",
+    "bv", "rvv", "rfv", "fval", "dv",
 )
 (
     H_LP, H_LI, H_CP, H_CI, H_GP, H_GI, H_II, H_OI, H_VP, H_VI, H_FP, H_FI, H_PP, H_PI, H_BP,
-    H_RFLAG, H_RVP, H_RVI, H_RFP, H_RFI, H_FREC, H_FINT, H_MLAW,
+    H_RFLAG, H_RVP, H_RVI, H_RFP, H_RFI, H_FREC, H_FINT, H_MLAW, H_DI,
 ) = range(H_IPAR + N_IPAR, H_IPAR + N_IPAR + len(_INT_BLOCKS))
 (
     H_ACC0, H_LV, H_CV, H_GV, H_IV, H_OV, H_VV, H_FV, H_PV, H_S0, H_BL, H_MC, H_FPAR, H_LIMIT,
-    H_BV, H_RVV, H_RFV, H_FVAL,
+    H_BV, H_RVV, H_RFV, H_FVAL, H_DV,
 ) = range(H_LP + len(_INT_BLOCKS), H_LP + len(_INT_BLOCKS) + len(_FLOAT_BLOCKS))
-H_NI = H_FVAL + 1  # number of entries of the sparse input column
-H_NO = H_FVAL + 2  # ... and of the output column
+H_NI = H_DV + 1  # number of entries of the sparse input column
+H_NO = H_DV + 2  # ... and of the output column
 #: Address of the faulty-mesh pass compiled for this system (:mod:`gearvib.fault_pass`), 0:
 #: the generic pass. Set only in the process that runs the kernel (an address is no value
 #: to pickle): :func:`pack` writes 0.
-H_FPASS = H_FVAL + 3
-N_HEADER = H_FVAL + 4
+H_FPASS = H_DV + 3
+#: Number of entries of the drive sensing row (0: the drive acts on the input coordinate).
+H_ND = H_DV + 4
+N_HEADER = H_DV + 5
 
 # record of a faulty mesh in the fault integer block (gearvib.faults.law.FaultLaw.pack); int
 # entries that are offsets point into the fault int block or (``*V``) the fault float block
@@ -397,8 +409,9 @@ def operators(system: KernelSystem) -> list[np.ndarray]:
 
     ``lin = -M^-1 [K C]``, ``cent = M^-1 K_Omega``, ``gyro = -M^-1 G``, the columns ``M^-1 e``
     of the input and output coordinates (as ``(1, n)`` rows; empty without such a
-    coordinate), ``v_m``, ``(M^-1 v_m)^T``, ``w_m``, and the back-flank ``u_m`` and
-    ``(M^-1 u_m)^T`` (zero rows for meshes without a distinct back line).
+    coordinate), ``v_m``, ``(M^-1 v_m)^T``, ``w_m``, the back-flank ``u_m`` and
+    ``(M^-1 u_m)^T`` (zero rows for meshes without a distinct back line), and the drive
+    sensing row (``(1, n)``; zeros without one).
     """
     minv = system.minv
 
@@ -418,6 +431,8 @@ def operators(system: KernelSystem) -> list[np.ndarray]:
         system.mesh_position_vectors,
         back,
         (minv @ back.T).T,
+        np.zeros((1, minv.shape[0])) if system.drive_sensing is None
+        else system.drive_sensing[None, :],
     ]
 
 
@@ -440,11 +455,13 @@ def pack(system: KernelSystem, patterns: list[np.ndarray] | None = None,
         the rows ``(M^-1 v_m)^T``, the mesh-position vectors ``w_m``, the jump counts, a flag
         per mesh (1: distinct back line), the back-flank vectors ``u_m`` and rows
         ``(M^-1 u_m)^T`` (empty rows for the meshes without a distinct back line), the fault
-        record of every mesh (-1: healthy), the fault integer data and the mesh-damping law
-        of every mesh (:data:`DAMPING_GATED`, :data:`DAMPING_VISCOUS`).
+        record of every mesh (-1: healthy), the fault integer data, the mesh-damping law
+        of every mesh (:data:`DAMPING_GATED`, :data:`DAMPING_VISCOUS`) and the coordinates of
+        the drive sensing row.
     floats : ndarray
         ``M^-1 f_const``, the CSR data of the operators above, ``s0``, backlash, mesh damping,
-        ``fpar``, the deflection limits, the jump positions and the fault float data.
+        ``fpar``, the deflection limits, the jump positions, the fault float data and the
+        drive sensing row's values.
     tables : ndarray, shape (2, n_mesh, n_table)
         Left and right flank stiffness tables.
     speed_table, torque_table : ndarray
@@ -461,7 +478,7 @@ def pack(system: KernelSystem, patterns: list[np.ndarray] | None = None,
     ops = operators(system)
     pat = [None] * len(ops) if patterns is None else patterns
     (lp, li, lv), (cp, ci, cv), (gp, gi, gv), (_, ii, iv), (_, oi, ov), (vp, vi, vv), (
-        fp, fi, fv), (pp, pi, pv), (rvp, rvi, rvv), (rfp, rfi, rfv) = (
+        fp, fi, fv), (pp, pi, pv), (rvp, rvi, rvv), (rfp, rfi, rfv), (_, di, dv) = (
         csr(a, q) for a, q in zip(ops, pat, strict=True))
     jumps = jump_positions(system.left_tables, system.right_tables)
     for m, extra in (system.fault_jumps or {}).items():
@@ -476,11 +493,11 @@ def pack(system: KernelSystem, patterns: list[np.ndarray] | None = None,
     mlaw = (np.zeros(n_mesh, dtype=np.int64) if system.mesh_damping_law is None
             else system.mesh_damping_law)
     int_blocks = [lp, li, cp, ci, gp, gi, ii, oi, vp, vi, fp, fi, pp, pi, bp,
-                  rflag, rvp, rvi, rfp, rfi, frec, fint, mlaw]
+                  rflag, rvp, rvi, rfp, rfi, frec, fint, mlaw, di]
     float_blocks = [
         system.minv @ system.f_const, lv, cv, gv, iv, ov, vv, fv, pv, system.mesh_position_offsets,
         system.backlash, system.mesh_damping, system.fpar, system.deflection_limit, bv,
-        rvv, rfv, fval,
+        rvv, rfv, fval, dv,
     ]
     header = np.zeros(N_HEADER, dtype=np.int64)
     header[H_N] = n
@@ -496,6 +513,7 @@ def pack(system: KernelSystem, patterns: list[np.ndarray] | None = None,
         pos += block.size
     header[H_NI] = ii.size
     header[H_NO] = oi.size
+    header[H_ND] = di.size
     ints = np.concatenate([header, *int_blocks]).astype(np.int64)
     floats = np.concatenate([np.asarray(b, dtype=np.float64).ravel() for b in float_blocks])
     tables = np.ascontiguousarray(np.stack([system.left_tables, system.right_tables]))
@@ -1469,8 +1487,21 @@ def _rhs(t, y, dy, mesh_out, ints, vals, tables, speed_tab, torque_tab):
     torque = 0.0
     if mode == DRIVE_SPEED:
         phi, w = _speed_at(speed_tab, t)
-        torque = vals[fpar + _U(FP_KC)] * (phi - y[k_in]) + vals[fpar + _U(FP_CC)] * (
-            w - y[n + k_in])
+        nd = _U(ints[H_ND])
+        if nd == 0:  # a coupling on the input coordinate
+            torque = vals[fpar + _U(FP_KC)] * (phi - y[k_in]) + vals[fpar + _U(FP_CC)] * (
+                w - y[n + k_in])
+        else:  # a controller on the rigid-body coordinate p . q
+            di = _U(ints[H_DI])
+            dv = _U(ints[H_DV])
+            ang = 0.0
+            rate = 0.0
+            for p in range(nd):
+                j = _U(ints[di + p])
+                ang += vals[dv + p] * y[j]
+                rate += vals[dv + p] * y[n + j]
+            torque = vals[fpar + _U(FP_KC)] * (phi - ang) + vals[fpar + _U(FP_CC)] * (
+                w - rate)
     elif mode == DRIVE_TORQUE:
         torque = _table_at(torque_tab, t)
     elif mode == DRIVE_MOTOR:

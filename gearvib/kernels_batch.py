@@ -93,6 +93,8 @@ from gearvib.kernels import (
     H_CI,
     H_CP,
     H_CV,
+    H_DI,
+    H_DV,
     H_FI,
     H_FP,
     H_FPAR,
@@ -110,6 +112,7 @@ from gearvib.kernels import (
     H_MC,
     H_MLAW,
     H_N,
+    H_ND,
     H_NI,
     H_NMESH,
     H_NO,
@@ -362,9 +365,22 @@ def _torque8(y, scr, ints, vals, speed_tab, torque_tab):
                 scr[_R_W, b] = w
             phi_v = lanes_load(scr, _R_PHI * WIDTH)
             w_v = lanes_load(scr, _R_W * WIDTH)
-        torque = lanes_load(vals, (fpar + _U(FP_KC)) * _UW) * (
-            phi_v - lanes_load(y, k_in * _UW)) + lanes_load(
-            vals, (fpar + _U(FP_CC)) * _UW) * (w_v - lanes_load(y, (n + k_in) * _UW))
+        nd = _U(ints[H_ND])
+        if nd == 0:  # a coupling on the input coordinate
+            ang = lanes_load(y, k_in * _UW)
+            rate = lanes_load(y, (n + k_in) * _UW)
+        else:  # a controller on the rigid-body coordinate (a stored zero masked out)
+            di = _U(ints[H_DI])
+            dv = _U(ints[H_DV])
+            ang = lanes_splat(0.0)
+            rate = lanes_splat(0.0)
+            for p in range(nd):
+                j = _U(ints[di + p])
+                v = lanes_load(vals, (dv + p) * _UW)
+                ang = lanes_madd_nz(ang, v, lanes_load(y, j * _UW))
+                rate = lanes_madd_nz(rate, v, lanes_load(y, (n + j) * _UW))
+        torque = lanes_load(vals, (fpar + _U(FP_KC)) * _UW) * (phi_v - ang) + lanes_load(
+            vals, (fpar + _U(FP_CC)) * _UW) * (w_v - rate)
     elif mode in (DRIVE_TORQUE, DRIVE_MOTOR):
         for b in range(WIDTH):
             x = scr[_R_T, b] if mode == DRIVE_TORQUE else y[n + k_in, b]
@@ -869,6 +885,7 @@ _BLOCK_NAMES = {
     "rfi": "sparsity of the back-flank force vectors",
     "frec": "local faults or manufacturing errors", "fint": "local faults or manufacturing errors",
     "mlaw": "mesh-damping laws (gated or viscous)",
+    "di": "drive coupling (on the input member or on the rigid-body mode)",
 }
 _INT_BLOCKS = tuple(_BLOCK_NAMES)
 
@@ -943,6 +960,11 @@ def pack_batch(systems: list) -> BatchSystem:
             raise ValueError(f"variant {k} does not share the topology of variant 0: its "
                              f"number of coordinates / meshes ({s.n_dof} / {s.n_mesh}) differs "
                              f"({s0.n_dof} / {s0.n_mesh})")
+        if k and s.ipar[IP_MODE] == s0.ipar[IP_MODE] and (
+                (s.drive_sensing is None) != (s0.drive_sensing is None)):
+            raise ValueError(f"variant {k} does not share the topology of variant 0: its "
+                             "drive coupling (on the input member or on the rigid-body mode) "
+                             "differs")
         if k and s.left_tables.shape != s0.left_tables.shape:
             raise ValueError(f"variant {k} does not share the topology of variant 0: its "
                              f"stiffness table length ({s.left_tables.shape[1]} samples per "

@@ -373,7 +373,19 @@ class RunUpResult:
         if self.coupling is not None:
             attrs["drive_coupling_stiffness"] = float(self.coupling.stiffness)
             attrs["drive_coupling_damping"] = float(self.coupling.damping)
+            if self.coupling.sensing != "input":  # (input couplings' files as before)
+                attrs["drive_coupling_sensing"] = self.coupling.sensing
         return PlainDataset(data, coords, attrs)
+
+
+def _conditions_dict(conditions: Conditions) -> dict:
+    """The fields of the conditions, a drive coupling as :meth:`DriveCoupling.to_dict` gives
+    it (an input coupling's text as before the sensing existed)."""
+    out = asdict(conditions)
+    coupling = getattr(conditions, "coupling", None)
+    if coupling is not None:
+        out["coupling"] = coupling.to_dict()
+    return out
 
 
 def build_result(
@@ -426,8 +438,12 @@ def build_result(
         angle = np.empty(n_out)
         w = np.empty(n_out)
         kn.speed_profile(system.speed_table, time, angle, w)
-        drive_torque = system.fpar[kn.FP_KC] * (angle - q[:, k_in]) + system.fpar[kn.FP_CC] * (
-            w - qd[:, k_in]
+        if system.drive_sensing is None:  # a coupling on the input member
+            theta, rate = q[:, k_in], qd[:, k_in]
+        else:  # a controller on the rigid-body coordinate
+            theta, rate = q @ system.drive_sensing, qd @ system.drive_sensing
+        drive_torque = system.fpar[kn.FP_KC] * (angle - theta) + system.fpar[kn.FP_CC] * (
+            w - rate
         )
         input_speed = w / RAD_S_PER_RPM
     else:
@@ -450,7 +466,7 @@ def build_result(
         "gearvib_version": __version__,
         "model": cfg_model,
         "model_sha256": model_sha256(model),
-        "conditions": {"type": type(conditions).__name__, **asdict(conditions)},
+        "conditions": {"type": type(conditions).__name__, **_conditions_dict(conditions)},
         "simulation": {
             "dt": step.dt,
             "fs_out": step.fs_out,
@@ -458,7 +474,7 @@ def build_result(
             "duration": duration,
             "gyroscopic": bool(gyroscopic),
             "integrator": INTEGRATOR,
-            "drive_coupling": None if setup.coupling is None else asdict(setup.coupling),
+            "drive_coupling": None if setup.coupling is None else setup.coupling.to_dict(),
             "load_torque": list(setup.load),
         },
     }
