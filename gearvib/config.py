@@ -44,6 +44,7 @@ from gearvib.structure import (
     GearSet,
     Mesh,
     Support,
+    check_damping_law,
     ravigneaux,
     simple_planetary,
     two_stage,
@@ -137,7 +138,8 @@ _SUPPORT = {"radial", "tangential", "axial", "torsional", "radial_damping",
             "tangential_damping", "axial_damping", "torsional_damping"}
 _BODY = {"mass", "inertia", "support", "comment"}
 _BODY_GENERAL = _BODY | {"name", "role", "carrier", "angle_deg", "radius"}
-_MESH_SPEC = {"stiffness", "back_stiffness", "backlash", "damping", "damping_ratio", "comment"}
+_MESH_SPEC = {"stiffness", "back_stiffness", "backlash", "damping", "damping_ratio",
+              "damping_law", "comment"}
 _MESH_GENERAL = _MESH_SPEC | {"name", "gear1", "gear2", "toothing1", "toothing2",
                               "base_radius1", "base_radius2", "pressure_angle_deg",
                               "helix_angle_deg", "z1", "z2", "phase", "centre_distance",
@@ -344,11 +346,20 @@ def _mesh_spec(table: dict, where: str, base: Path | None,
             damping_ratio=_number(table["damping_ratio"], f"{where}.damping_ratio", low=0.0,
                                   high=MAX_DAMPING_RATIO)
             if "damping_ratio" in table else None,
+            damping_law=_damping_law(table.get("damping_law", "gated"), f"{where}.damping_law"),
         )
     except ValueError as exc:
         if isinstance(exc, ConfigError):
             raise
         raise ConfigError(f"{where}: {exc}") from None
+
+
+def _damping_law(value: Any, where: str) -> str:
+    """A mesh-damping law name (``"gated"`` or ``"viscous"``)."""
+    try:
+        return check_damping_law(value, where)
+    except ValueError as exc:
+        raise ConfigError(str(exc)) from None
 
 
 def _toothing(table: dict, where: str) -> Toothing:
@@ -839,7 +850,8 @@ def _general_set(cfg: dict, base: Path | None) -> GearSet:
             meshes.append(Mesh(
                 **names, stiffness=spec.stiffness,
                 back_stiffness=spec.back_stiffness, backlash=spec.backlash,
-                damping=spec.damping, damping_ratio=spec.damping_ratio, **kw))
+                damping=spec.damping, damping_ratio=spec.damping_ratio,
+                damping_law=spec.damping_law, **kw))
         except (ValueError, OverflowError, ZeroDivisionError) as exc:
             raise ConfigError(f"{where}: {exc}") from None
     couplings = _couplings(cfg)
