@@ -34,7 +34,7 @@ import numpy as np
 
 from analysis.cf import cf_dataset, processing_attrs
 from analysis.checks import require_choice, require_finite, require_size
-from analysis.frames import frame_coords, frequency_plan, order_plan, stft_into
+from analysis.frames import BLOCK_ELEMENTS, frame_coords, frequency_plan, order_plan, stft_into
 from analysis.inputs import channel_coords, dataset_reference, dataset_variable, select_channel
 from analysis.levels import power_of, to_db
 from analysis.plots import (
@@ -56,6 +56,7 @@ __all__ = [
     "RpmOrderMap",
     "campbell",
     "overall_level",
+    "overall_level_from_map",
     "rpm_frequency_map",
     "rpm_frequency_map_ds",
     "rpm_order_map",
@@ -632,13 +633,55 @@ def overall_level(
         units=units,
         name=name,
     )
+    return overall_level_from_map(m, frequency_range=frequency_range, scale=scale)
+
+
+def overall_level_from_map(
+    m: RpmFrequencyMap,
+    *,
+    frequency_range: tuple[float, float] | None = None,
+    scale: Literal["linear", "dB"] = "linear",
+) -> OverallLevel:
+    """Overall rms level vs rpm from the lines of an existing rpm-frequency map.
+
+    The same quantity as :func:`overall_level` (``sqrt(sum_k G_k / ENBW_bins)`` over the
+    lines in ``frequency_range``), read from a map of any amplitude and scale, so that a map
+    already computed for a sonogram or a waterfall need not be computed again.
+
+    Parameters
+    ----------
+    m : RpmFrequencyMap
+        The map (converted back to power per line, a block of frames at a time).
+    frequency_range : (float, float), optional
+        Band [Hz] whose lines are summed (default: every line, DC included).
+    scale : {"linear", "dB"}, default "linear"
+        dB re 1 unit.
+
+    Returns
+    -------
+    OverallLevel
+        Level per frame of the map, with its speed.
+    """
+    if not isinstance(m, RpmFrequencyMap):
+        raise TypeError(f"m must be an RpmFrequencyMap, got {type(m).__name__}")
+    require_choice(scale, _SCALES, "scale")
     lo, hi = (0.0, m.frequency[-1]) if frequency_range is None else map(float, frequency_range)
     if not 0 <= lo < hi:
         raise ValueError(f"frequency_range = {frequency_range!r} must satisfy 0 <= low < high")
     sel = (m.frequency >= lo) & (m.frequency <= hi)
     if not sel.any():
         raise ValueError(f"frequency_range = {frequency_range!r} holds no line of the map")
-    vals = np.sqrt(m.values[..., sel].sum(axis=-1) / m.enbw_bins)
+    if m.amplitude == "power" and m.scale == "linear":
+        total = m.values[..., sel].sum(axis=-1)
+    else:
+        n_frames = m.values.shape[-2]
+        total = np.empty(m.values.shape[:-1])
+        rows = max(1, BLOCK_ELEMENTS // max(1, m.values.shape[-1]))
+        for r0 in range(0, n_frames, rows):  # power per line, a block of frames at a time
+            power = power_of(m.values[..., r0:r0 + rows, :], m.amplitude, m.scale,
+                             m.segment_length)
+            total[..., r0:r0 + rows] = power[..., sel].sum(axis=-1)
+    vals = np.sqrt(total / m.enbw_bins)
     ref = ""
     out_units = m.signal_units
     if scale == "dB":

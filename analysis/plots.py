@@ -79,6 +79,16 @@ def _one_channel(m: Any, channel: Any) -> Any:
     return m.select(channel)
 
 
+def _speed_limits(rpm: np.ndarray) -> tuple[float, float]:
+    """Axis limits of a speed axis; a constant speed gets a margin of 2 % (at least 1 min-1)
+    around it instead of an empty (singular) range."""
+    lo, hi = float(np.nanmin(rpm)), float(np.nanmax(rpm))
+    if hi - lo <= 1e-9 * max(1.0, abs(hi)):
+        pad = max(1.0, 0.02 * abs(hi))
+        return lo - pad, hi + pad
+    return lo, hi
+
+
 def _value_label(scaling: str, units: str, db: bool) -> str:
     name = {"peak": "peak amplitude", "rms": "rms amplitude", "power": "power",
             "density": "PSD"}.get(scaling, scaling)  # fmt: skip
@@ -267,7 +277,7 @@ def rpm_frequency_map_figure(
     for fn in natural_frequencies_hz:
         ax.axvline(fn, color="C1", lw=0.9, ls=":")
     ax.set_xlim(0, frequency_max if frequency_max is not None else m.frequency[-1])
-    ax.set_ylim(m.rpm.min(), m.rpm.max())
+    ax.set_ylim(*_speed_limits(m.rpm))
     ax.set_xlabel("frequency [Hz]")
     ax.set_ylabel("speed [min⁻¹]")
     ax.set_title(f"{m.name}: {m.window}, RBW = {m.resolution_hz:.4g} Hz")

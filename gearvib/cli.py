@@ -507,17 +507,21 @@ def _cmd_demo(args: argparse.Namespace) -> int:
 
     from gearvib.outputs import check_output_folder, removed_if_left_empty
     from gearvib.report import Study, run_study
+    from gearvib.report.runner import check_study
 
     out = Path(args.output)
     study = Study.for_presets(["paper-case1", "paper-case2"],
                               title="gearvib demo: the paper's cases 1 and 2")
+    if args.duration is not None:
+        study = study.with_duration(args.duration)
+    check_study(study)  # a run too short for the report is refused before any work
     _report_removed(check_output_folder(
         out, [f"{c.name}.nc" for c in study.cases] + ["report.html", "report.pdf"],
         overwrite=args.overwrite)[1])
     print(f"gearvib demo: simulating the paper's run-ups (0 -> 4000 min-1 in "
           f"{args.duration or 1.0:g} s, cases 1 and 2) into {out}/ ...")
     with removed_if_left_empty(out):
-        result = run_study(study, out, progress=not args.quiet, duration=args.duration)
+        result = run_study(study, out, progress=not args.quiet)
     for name, path in result.runs.items():
         print(f"  run {name}: {path}")
     print(f"  report: {result.report.html}")

@@ -191,19 +191,26 @@ class Resonances:
         return float(np.mean(self.mechanism == UNEXPLAINED)) if len(self) else 0.0
 
     def summary(self) -> str:
-        """One sentence: counts, unexplained fraction, mean coincidence of the explanations."""
+        """One sentence: counts, unexplained fraction and, when a rise is explained, the mean
+        coincidence of the explanations (over the explained rises only)."""
         c = self.counts()
         expl = self.mechanism != UNEXPLAINED
         chance = float(np.mean(self.coincidence[expl])) if expl.any() else 0.0
         def n(k: int, one: str, many: str) -> str:
             return f"{k} {one if k == 1 else many}"
 
-        return (f"{n(len(self), 'rise', 'rises')}: "
+        head = (f"{n(len(self), 'rise', 'rises')}: "
                 f"{n(c[FORCED], 'forced resonance', 'forced resonances')}, "
                 f"{n(c[PARAMETRIC], 'parametric instability', 'parametric instabilities')}, "
                 f"{c[UNEXPLAINED]} unexplained "
-                f"({100 * self.unexplained_fraction:.0f} %); a random rise would get its "
-                f"explanation with a chance of {100 * chance:.0f} % on average")
+                f"({100 * self.unexplained_fraction:.0f} %)")
+        k = int(expl.sum())
+        if not k:  # no explanation: no chance of a coincidence to state
+            return head
+        return (head + f"; a random rise would get such an explanation with a chance of "
+                f"{100 * chance:.0f} %"
+                + (f" on average over the {k} explained rises" if k > 1
+                   else " (the explained rise)"))
 
     def evidence(self) -> list[tuple[str, str, int, float]]:
         """Per explaining cause family: ``(mechanism, mode, rises, joint chance)``.

@@ -55,11 +55,14 @@ from analysis.maps import RpmFrequencyMap, RpmOrderMap, rpm_frequency_map, rpm_o
 from analysis.runup import MapFeatures, map_features
 from analysis.spectrum import Peaks, Spectrum, find_peaks, spectrum, to_db
 from gearvib.assembly import assemble
+from gearvib.catalogue import gear_set_catalogue
 from gearvib.config import config_hash, gearset_from_dict
 from gearvib.modal import ModalResult, modal_analysis
 from gearvib.model import AssembledModel
+from gearvib.report.nvh import SignalLevels, signal_levels
 from gearvib.report.study import AnalysisSettings
-from gearvib.report.wording import count
+from gearvib.report.verdict import settings_rows
+from gearvib.report.wording import count, span
 from gearvib.simulation.conditions import DriveCoupling
 from gearvib.stability import (
     ATTRIBUTION_N_MAX,
@@ -76,6 +79,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     "MARKER_BUDGET",
+    "MAX_SENSORS",
     "PAPER_SPEEDS_RPM",
     "PLANET_SIGNAL_GROWTH_DB",
     "REGION_HEADER",
@@ -89,6 +93,7 @@ __all__ = [
     "analyse_case",
     "crossing_table_rows",
     "key_speed_rows",
+    "merged_modes",
     "resonance_regions",
     "rise_table_rows",
     "run_description",
@@ -130,6 +135,8 @@ _MIN_SPOT_FRACTION = 0.15  # spots below 0.15 x the lowest natural frequency: ne
 _REGION_GAP = 0.03  # spots closer than 3 % of the top speed belong to one resonance region
 _RPM_MIN_FRACTION = 0.02  # order tracking needs rpm > 0: skip the first 2 % of the speed range
 _MAX_PANELS = 4  # spectra and stiffness panels per case
+MAX_SENSORS = 2
+"""Housing sensors of a run that get the NVH pages (order cuts, overall level, ...)."""
 
 
 # --------------------------------------------------------------------------- data containers
@@ -281,7 +288,7 @@ class ResonanceRegion:
 
     def table_row(self) -> tuple[str, ...]:
         """The region as a row of a region table (:data:`REGION_HEADER`)."""
-        return (f"{self.rpm_low:.0f}–{self.rpm_high:.0f}", f"{self.rpm_peak:.0f}",
+        return (span(self.rpm_low, self.rpm_high), f"{self.rpm_peak:.0f}",
                 f"{self.frequency_hz:.0f}", f"{self.strength_db:.1f}", str(self.n_spots),
                 self.summary)
 
@@ -306,7 +313,9 @@ def rise_table_rows(res: Resonances, on_order: Callable[[int], str]) -> list[tup
                      f"{res.strength_db[i]:.1f}",
                      str(res.mechanism[i]).split()[0]
                      + (f": {res.cause[i]}" if res.cause[i] else ""),
-                     f"{100 * res.coincidence[i]:.0f} %", str(res.note[i])))
+                     # the chance of an explanation; an unexplained rise has none
+                     "–" if str(res.mechanism[i]) == UNEXPLAINED
+                     else f"{100 * res.coincidence[i]:.0f} %", str(res.note[i])))
     return rows
 
 
@@ -478,6 +487,10 @@ class CaseAnalysis:
         apply.
     stability_time_s : float
         Wall time of the Floquet chart [s] (0 without one).
+    levels : list of SignalLevels
+        Order cuts, overall level, waterfall and Campbell data of the housing acceleration of
+        every ``[[sensor]]`` (at most :data:`MAX_SENSORS`, the first one primary) and of the
+        tooth force of ``force_mesh`` (primary when there is no sensor).
     """
 
     name: str
@@ -512,6 +525,7 @@ class CaseAnalysis:
     features: MapFeatures | None = None
     paper_set: bool = False
     stability_time_s: float = 0.0
+    levels: list[SignalLevels] = field(default_factory=list)
 
     # ------------------------------------------------------------------ basic quantities
 
@@ -600,7 +614,7 @@ class CaseAnalysis:
         g = self.resonances.growth
         if g is None:
             return []
-        return [(f"{g.lower_rpm[i]:.0f}–{g.upper_rpm[i]:.0f}", str(g.label[i]) or "unattributed",
+        return [(span(g.lower_rpm[i], g.upper_rpm[i]), str(g.label[i]) or "unattributed",
                  f"{1e3 * g.time_in_band[i]:.1f}", f"{g.peak_growth_rate[i]:.3g}",
                  f"{g.growth_db[i]:.1f}",
                  "develops" if g.can_grow[i] else f"too fast: {g.advice[i]}")
@@ -1401,6 +1415,10 @@ def analyse_case(ds: xr.Dataset, *, name: str | None = None,
                                  name=f"tooth force {sun[0]} - {sun[1]}")
         planet_res = detect(dmap.to_dataset().sel(frequency=slice(0.0, fmax)), None)
 
+    # (g') order cuts, overall level, waterfall, Campbell: the housing sensors and the force
+    levels = _case_levels(ds, case, groups, model, settings, fn, names, fmap, x, t, fs, fmax,
+                          force_mesh)
+
     # (h) provenance (no dates in the text: same input, same report; the analysis times are
     # measured, so they are stated only in the log and the result)
     gs_cfg = caller.get("gearset")
@@ -1416,11 +1434,18 @@ def analyse_case(ds: xr.Dataset, *, name: str | None = None,
         ("gear-set description SHA-256",
          config_hash(gs_cfg) if isinstance(gs_cfg, dict) else "(not stored)"),
         ("model SHA-256", str(cfg.get("model_sha256", ""))),
-        ("analysis settings", json.dumps(settings.to_dict(), sort_keys=True)),
+        *settings_rows(settings),
         ("map", f"{fmap.window}, RBW {fmap.resolution_hz:.3g} Hz, overlap "
                 f"{fmap.overlap:g}, {fmap.time.size} frames"),
         ("mesh orders", ", ".join(f"{g.name}: 1–{g.orders}" for g in groups)),
     ]
+    for sl in levels:
+        if sl.levels is not None:
+            c = sl.levels.cuts
+            prov.append((f"order cuts ({sl.signal})",
+                         f"{c.window}, resolution {sl.levels.resolution:.3g} orders, band "
+                         f"{c.bandwidth:.3g} orders, overlap {c.overlap:g}, {c.time.size} "
+                         f"frames, {c.samples_per_rev} samples per revolution"))
     if chart is not None:
         prov.append(("Floquet chart", f"{chart.mesh_frequencies_hz.size} speeds "
                      f"({settings.stability}), boundaries refined; regions attributed to "
@@ -1434,8 +1459,61 @@ def analyse_case(ds: xr.Dataset, *, name: str | None = None,
         resonances=resonances, regions=regions, candidates=candidates, chart=chart, run=run,
         settings=settings, notes=notes, provenance=prov, first_order=first_order,
         planet_resonances=planet_res, features=features, paper_set=paper,
-        stability_time_s=t_stab,
+        stability_time_s=t_stab, levels=levels,
     )
+
+
+def merged_modes(fn: np.ndarray, names: Sequence[str], rtol: float = 1e-3
+                 ) -> tuple[np.ndarray, list[str]]:
+    """Natural frequencies with repeated ones merged (``"f3=f4"``), as the rise tables name
+    them."""
+    out_f: list[float] = []
+    out_n: list[str] = []
+    for f, n in sorted(zip(np.asarray(fn, dtype=float), names, strict=True)):
+        if out_f and abs(f - out_f[-1]) <= rtol * max(f, 1e-300):
+            out_n[-1] = f"{out_n[-1]}={n}"
+            continue
+        out_f.append(float(f))
+        out_n.append(str(n))
+    return np.asarray(out_f), out_n
+
+
+def _case_levels(ds: xr.Dataset, case: str, groups: Sequence[MeshGroup],
+                 model: AssembledModel | None, settings: AnalysisSettings, fn: np.ndarray,
+                 names: list[str], fmap: RpmFrequencyMap, force: np.ndarray, t: np.ndarray,
+                 fs: float, fmax: float, force_mesh: str) -> list[SignalLevels]:
+    """NVH levels of the housing sensors (primary: the first) and of the tooth force."""
+    angle = np.asarray(ds["input_angle"].values, dtype=float)
+    if angle[-1] < angle[0]:
+        angle = -angle
+    cat, member = None, ""
+    if model is not None:
+        member = str(model.input_member)
+        try:
+            cat = gear_set_catalogue(model, reference=member, mesh_harmonics=1, harmonics=1,
+                                     sidebands=1)
+        except ValueError:  # e.g. a description without tooth numbers
+            cat = None
+    mesh_orders = [(g.name, g.order) for g in groups]
+    f_modes, n_modes = merged_modes(fn, names)
+    band = (2.0 * float(fmap.resolution_hz), fmax)
+    common = {"fs": fs, "case": case, "mesh_orders": mesh_orders, "settings": settings,
+              "catalogue": cat, "reference_member": member, "angle": angle,
+              "natural_frequencies_hz": f_modes, "natural_names": n_modes,
+              "frequency_range": band,
+              "reference": f"input shaft{f' ({member})' if member else ''}"}
+    out = []
+    sensors = ([str(s) for s in ds["sensor"].values][:MAX_SENSORS]
+               if "sensor_acceleration" in ds.variables else [])
+    for k, name in enumerate(sensors):
+        acc = np.asarray(ds["sensor_acceleration"].sel(sensor=name).values, dtype=float)
+        out.append(signal_levels(acc - acc.mean(), signal=f"housing acceleration {name}",
+                                 units=str(ds["sensor_acceleration"].attrs.get("units",
+                                                                               "m s-2")),
+                                 primary=k == 0, **common))
+    out.append(signal_levels(force - force.mean(), signal=f"tooth force {force_mesh}",
+                             units="N", primary=not sensors, frequency_map=fmap, **common))
+    return out
 
 
 def key_speed_rows(ca: CaseAnalysis) -> list[tuple[str, str, str]]:

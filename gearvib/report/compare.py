@@ -27,7 +27,7 @@ from typing import Any
 import numpy as np
 
 from gearvib.report.case import CaseAnalysis, ResonanceRegion
-from gearvib.report.wording import count
+from gearvib.report.wording import count, span
 
 __all__ = ["Comparison", "FloquetChange", "RegionChange", "compare_cases"]
 
@@ -68,8 +68,8 @@ class RegionChange:
 
     def row(self) -> tuple[str, ...]:
         """Formatted table row."""
-        def span(r: ResonanceRegion | None) -> str:
-            return "–" if r is None else f"{r.rpm_low:.0f}–{r.rpm_high:.0f}"
+        def speeds(r: ResonanceRegion | None) -> str:
+            return "–" if r is None else span(r.rpm_low, r.rpm_high)
 
         def strength(r: ResonanceRegion | None) -> str:
             return "–" if r is None else f"{r.strength_db:.1f} ({r.n_spots})"
@@ -80,8 +80,8 @@ class RegionChange:
         if self.reference is None or self.other is None:
             mech = texts[0]
         d = "–" if math.isnan(self.delta_db) else f"{self.delta_db:+.1f}"
-        return (self.status, span(self.reference), strength(self.reference), span(self.other),
-                strength(self.other), d, mech)
+        return (self.status, speeds(self.reference), strength(self.reference),
+                speeds(self.other), strength(self.other), d, mech)
 
 
 @dataclass(frozen=True)
@@ -236,7 +236,7 @@ def _match_floquet(ref: list[tuple[float, float, str]], oth: list[tuple[float, f
 
 
 def _fmt_region(r: ResonanceRegion) -> str:
-    return (f"{r.rpm_low:.0f}–{r.rpm_high:.0f} min⁻¹ (strongest {r.strength_db:.1f} dB at "
+    return (f"{span(r.rpm_low, r.rpm_high, 'min⁻¹')} (strongest {r.strength_db:.1f} dB at "
             f"{r.frequency_hz:.0f} Hz; {r.summary})")
 
 

@@ -10,7 +10,17 @@ what a careful reader would:
 * the counts in the text equal the rows of the tables they summarise (rises and their
   mechanisms, resonance regions, the regions of each case in the comparison), and each
   resonance region's summary matches the rises inside it;
-* a peak label carries at most two expressions.
+* a peak label carries at most two expressions;
+* a stated average chance of the explanations equals the mean of the rise table's 'chance'
+  column over the explained rises (and no chance is stated when none is explained; an
+  unexplained rise has no chance of its explanation);
+* no range has equal ends ("between 1500 and 1500", "1500–1500 min⁻¹");
+* at most one cause is called "likely" (in a table column, or in one paragraph): the others
+  are ranked as "possible";
+* the summary page agrees with the pages it summarises: each row of a "Strongest resonances"
+  table is the row of the same rank of the cut-resonance table of its signal, its explanation
+  is a row of the rise table, the text's strongest resonance is rank 1, and the counts of the
+  key numbers equal the rows of the tables they count.
 
 It returns the disagreements as sentences (an empty list: the report is consistent), so a test
 or a user can run it on any report: ``cross_check(Path("out/report.html").read_text())``.
@@ -109,8 +119,12 @@ def _find(tables: list[ReportTable], prefix: str) -> ReportTable | None:
 
 
 def _span(text: str) -> tuple[float, float] | None:
+    """``"1347–1407"`` -> (1347, 1407); a single speed ``"1676"`` -> (1676, 1676)."""
     m = re.match(r"\s*(?:≤ )?(\d+(?:\.\d+)?)\s*–\s*(\d+(?:\.\d+)?)", text)
-    return (float(m.group(1)), float(m.group(2))) if m else None
+    if m:
+        return float(m.group(1)), float(m.group(2))
+    m = re.fullmatch(r"\s*(\d+(?:\.\d+)?)\s*", text)
+    return (float(m.group(1)), float(m.group(1))) if m else None
 
 
 def _number(text: str) -> float:
@@ -240,7 +254,174 @@ def cross_check(html: str) -> list[str]:
                 if lab.split("(+")[0].count("≈") > 2:
                     problems.append(f"{t.caption}: peak label with more than two expressions: "
                                     f"{lab!r}")
+    problems += _check_chance(tables, paragraphs)
+    problems += _check_ranges(tables, paragraphs)
+    problems += _check_likely(tables, paragraphs)
+    problems += _check_summary(tables, paragraphs)
     return problems
+
+
+_CHANCE = re.compile(r"^(?P<case>\S+): (?P<n>\d+) rises?: .*?with a chance of (?P<pct>\d+) %"
+                     r"(?: on average over the (?P<k>\d+) explained rises| \(the explained "
+                     r"rise\))?")
+
+
+def _percent(text: str) -> float | None:
+    m = re.fullmatch(r"\s*(\d+(?:\.\d+)?)\s*%\s*", text)
+    return float(m.group(1)) if m else None
+
+
+def _check_chance(tables: list[ReportTable], paragraphs: list[tuple[str, str]]) -> list[str]:
+    """A stated (average) chance against the 'chance' column of the explained rises."""
+    out = []
+    for t in tables:
+        if not t.caption.startswith(("Rises of ", "Planet-mode rises of ")) or \
+                "chance" not in t.header:
+            continue
+        for row, chance in zip(t.rows, t.column("chance"), strict=True):
+            mech = row[t.header.index("mechanism: cause")]
+            if mech.startswith("unexplained") and _percent(chance) is not None:
+                out.append(f"{t.caption}: the unexplained rise at {row[0]} min⁻¹ states a "
+                           f"chance of its explanation ({chance})")
+    for _, text in paragraphs:
+        if "with a chance of" not in text:
+            continue
+        m = _CHANCE.match(text)
+        if not m:
+            continue
+        case = m.group("case")
+        rises = _find(tables, f"Rises of {case}")
+        if rises is None or "chance" not in rises.header:
+            continue
+        mech = rises.column("mechanism: cause")
+        values = [_percent(c) for c, x in zip(rises.column("chance"), mech, strict=True)
+                  if not x.startswith("unexplained")]
+        values = [v for v in values if v is not None]
+        stated = float(m.group("pct"))
+        if not values:
+            out.append(f"{case}: the text states a chance of {stated:.0f} % although the rise "
+                       "table explains no rise")
+            continue
+        if m.group("k") is not None and int(m.group("k")) != len(values):
+            out.append(f"{case}: the text averages the chance over {m.group('k')} explained "
+                       f"rises, the rise table explains {len(values)}")
+        mean = sum(values) / len(values)
+        if abs(mean - stated) > 1.0:
+            out.append(f"{case}: the text states a chance of {stated:.0f} % on average, the "
+                       f"rise table's explained rises average {mean:.1f} % "
+                       f"({', '.join(f'{v:.0f} %' for v in values)})")
+    return out
+
+
+_NUM = r"(-?\d+(?:\.\d+)?)"
+_BETWEEN = re.compile(rf"between {_NUM} and {_NUM}")
+_RANGE_UNIT = re.compile(rf"(?<![\d.]){_NUM}\s*–\s*{_NUM}\s*(?:min⁻¹|min-1|Hz|orders|s\b)")
+_RANGE_CELL = re.compile(rf"(?:≤ )?{_NUM}–{_NUM}(?: ≥)?")
+
+
+def _check_ranges(tables: list[ReportTable], paragraphs: list[tuple[str, str]]) -> list[str]:
+    """Ranges whose two ends are printed alike ("between 1500 and 1500")."""
+    out = []
+    texts = [(f"text of section {sid!r}", t) for sid, t in paragraphs]
+    texts += [(t.caption, c) for t in tables for r in t.rows for c in r]
+    for where, text in texts:
+        for m in (*_BETWEEN.finditer(text), *_RANGE_UNIT.finditer(text)):
+            if float(m.group(1)) == float(m.group(2)):
+                out.append(f"{where}: a range with equal ends: {m.group(0)!r}")
+    for t in tables:
+        for r in t.rows:
+            for c in r:
+                m = _RANGE_CELL.fullmatch(c.strip())
+                if m and float(m.group(1)) == float(m.group(2)):
+                    out.append(f"{t.caption}: a range with equal ends: {c!r}")
+    return sorted(set(out), key=out.index)
+
+
+def _check_likely(tables: list[ReportTable], paragraphs: list[tuple[str, str]]) -> list[str]:
+    """At most one cause called "likely" per table column and per paragraph."""
+    out = []
+    for t in tables:
+        for j, h in enumerate(t.header):
+            cells = [r[j] for r in t.rows if j < len(r)]
+            n = sum(c.strip().lower().startswith("likely") for c in cells)
+            if n > 1:
+                out.append(f"{t.caption}: {n} causes called likely in column {h!r} (rank "
+                           "them: one likely, the others possible)")
+    for _, text in paragraphs:
+        n = len(re.findall(r"\blikely\b", text, flags=re.I))
+        if n > 1:
+            out.append(f"a paragraph calls {n} causes likely: {text[:90]!r}")
+    return out
+
+
+def _check_summary(tables: list[ReportTable], paragraphs: list[tuple[str, str]]) -> list[str]:
+    """The summary page against the pages it summarises."""
+    out = []
+    for t in tables:
+        m = re.match(r"Strongest resonances of (.+?), (.+) \(rank 1", t.caption)
+        if not m:
+            continue
+        case, signal = m.group(1), m.group(2)
+        cut = _find(tables, f"Resonances of the order cuts of {case}, {signal}")
+        if cut is None:
+            out.append(f"{t.caption}: no cut-resonance table of {case}, {signal}")
+            continue
+        by_rank = {r[0]: r for r in cut.rows}
+        for r in t.rows:
+            c = by_rank.get(r[0])
+            if c is None:
+                out.append(f"{t.caption}: rank {r[0]} is not in {cut.caption}")
+                continue
+            if tuple(r[:7]) != tuple(c[:7]) or r[7] != c[8]:
+                out.append(f"{t.caption}: rank {r[0]} reads {r[:8]!r}, {cut.caption} "
+                           f"{(*c[:7], c[8])!r}")
+            expl = r[t.header.index("explanation")] if "explanation" in t.header else "–"
+            if expl != "–":
+                out += _check_explanation(t.caption, r[0], expl, _find(tables, f"Rises of {case}"))
+        first = next((x for _, x in paragraphs
+                      if x.startswith(f"{case}: strongest resonance of the {signal}: ")), None)
+        if first is not None and t.rows:
+            r1 = t.rows[0]
+            head = f"{r1[1]} at {r1[3]} min⁻¹ ({r1[4]} Hz)"
+            if head not in first:
+                out.append(f"{case}: the text's strongest resonance is not rank 1 of "
+                           f"{t.caption} ({head})")
+    for t in tables:
+        if not t.caption.startswith("Key numbers of "):
+            continue
+        case = t.caption[len("Key numbers of "):]
+        for q, v in t.rows:
+            m = re.fullmatch(r"resonances of the order cuts \((.+)\)", q)
+            if m:
+                cut = _find(tables, f"Resonances of the order cuts of {case}, {m.group(1)}")
+                n = int(_number(v.split()[0]))
+                if cut is not None and n != len(cut.rows):
+                    out.append(f"{case}: the key numbers count {n} cut resonances of "
+                               f"{m.group(1)}, the table lists {len(cut.rows)}")
+            m = re.fullmatch(r"(\d+) rises? in (\d+) speed regions?", v)
+            if q.startswith("rises of the") and m:
+                rises = _find(tables, f"Rises of {case}")
+                regions = _find(tables, f"Resonance regions of {case} ")
+                if rises is not None and int(m.group(1)) != len(rises.rows):
+                    out.append(f"{case}: the key numbers count {m.group(1)} rises, the rise "
+                               f"table lists {len(rises.rows)}")
+                if regions is not None and int(m.group(2)) != len(regions.rows):
+                    out.append(f"{case}: the key numbers count {m.group(2)} speed regions, the "
+                               f"region table lists {len(regions.rows)}")
+    return out
+
+
+def _check_explanation(where: str, rank: str, expl: str, rises: ReportTable | None
+                       ) -> list[str]:
+    m = re.fullmatch(r"(.+) at (\d+) min⁻¹", expl)
+    if rises is None or m is None:
+        return [f"{where}: rank {rank}: explanation {expl!r} names no row of a rise table"]
+    speeds = rises.column("speed")
+    mech = rises.column("mechanism: cause")
+    if not any(sp == m.group(2) and mc == m.group(1) for sp, mc in zip(speeds, mech,
+                                                                       strict=True)):
+        return [f"{where}: rank {rank}: explanation {expl!r} is not a row of {rises.caption}"]
+    return []
 
 
 def _check_regions(case: str, rises: ReportTable, regions: ReportTable) -> list[str]:

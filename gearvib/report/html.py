@@ -4,9 +4,9 @@ The page is built with :class:`string.Template` and :func:`html.escape` (no temp
 from the sections of :func:`gearvib.report.figures.report_sections` -- the same list the PDF
 writer (:mod:`gearvib.report.pdf`) renders, with the same figure images
 (:class:`~gearvib.report.document.FigureImages`). Every section has a stable ``id``
-(``parameters``, ``modes``, ``tooth-forces``, ``spectra``, ``mesh-stiffness``, ``sonograms``,
-``resonances``, ``stability``, ``comparison``, ``provenance``), which is also the PDF's named
-destination of that section. PNGs are written without the ``Software`` tag, so the same input
+(``summary``, ``order-cuts``, ``parameters``, ``modes``, ...), which is also the PDF's named
+destination of that section. Front sections (the summary, a verdict) stand above the table of
+contents. PNGs are written without the ``Software`` tag, so the same input
 gives the same bytes.
 """
 
@@ -26,7 +26,7 @@ from gearvib.report.document import (
     is_emphasised,
     missing_figure_text,
 )
-from gearvib.report.sections import Block, Section
+from gearvib.report.blocks import Block, Section
 
 __all__ = ["render_html"]
 
@@ -56,6 +56,7 @@ p.verdict { font-weight: 600; }
 <body>
 <h1>$title</h1>
 <p>$subtitle</p>
+$front
 <nav><ol>
 $toc
 </ol></nav>
@@ -117,10 +118,11 @@ def render_html(sections: Sequence[Section], *, title: str, subtitle: str = "",
     """
     images = images if images is not None else FigureImages((HTML_DPI,))
     toc = "\n".join(f'<li><a href="#{s.id}">{escape(s.title)}</a></li>' for s in sections)
-    parts = []
+    front, parts = [], []
     for s in sections:
         inner = "\n".join(_block(b, s.id, images) for b in s.blocks)
-        parts.append(f'<section id="{s.id}">\n<h2>{escape(s.title)}</h2>\n{inner}\n</section>')
+        (front if s.front else parts).append(
+            f'<section id="{s.id}">\n<h2>{escape(s.title)}</h2>\n{inner}\n</section>')
     return _PAGE.substitute(title=escape(title), subtitle=escape(subtitle), toc=toc,
-                            sections="\n".join(parts), version=escape(__version__),
-                            footer=escape(footer_text()))
+                            front="\n".join(front), sections="\n".join(parts),
+                            version=escape(__version__), footer=escape(footer_text()))

@@ -4,8 +4,9 @@ The PDF renders the same :class:`~gearvib.report.figures.Section` list as the HT
 (:mod:`gearvib.report.html`), block by block, with the same figure images
 (:class:`~gearvib.report.document.FigureImages`):
 
-* a title page head with the subtitle and a contents list with page numbers (built in as many
-  passes as the page numbers need), then the sections flowing one after the other;
+* a title page head with the subtitle, the front sections (the summary or verdict), a
+  contents list with page numbers (built in as many passes as the page numbers need), then the
+  sections flowing one after the other;
 * every section title is a named destination with the section's HTML id (``report.pdf#modes``
   opens the modes section) and an outline entry; the case headings below it are outline
   entries too;
@@ -67,7 +68,7 @@ from gearvib.report.document import (
     is_emphasised,
     missing_figure_text,
 )
-from gearvib.report.sections import Block, Section
+from gearvib.report.blocks import Block, Section
 
 __all__ = ["PAGE", "PageLayout", "column_widths", "write_pdf"]
 
@@ -475,37 +476,46 @@ def _story(sections: Sequence[Section], title: str, subtitle: str, images: Figur
     story: list[Flowable] = [Paragraph(_text(title), styles.title)]
     if subtitle:
         story.append(Paragraph(_text(subtitle), styles.subtitle))
+    for s in [s for s in sections if s.front]:
+        story += _section_story(s, images, styles)
     story += [Paragraph("Contents", styles.contents), toc, Spacer(1, 4)]
-    for s in sections:
-        pending: list[Flowable] = [_Heading(s.title, styles.h2, key=s.id, level=0)]
-        for k, b in enumerate(s.blocks):
-            if b.kind == "heading":
-                pending.append(_Heading(b.text, styles.h3, key=f"{s.id}.{k}", level=1))
-                continue
-            if b.kind == "text":
-                para = Paragraph(_text(b.text), styles.verdict if is_emphasised(b, s.id)
-                                 else styles.body)
-                # text after a heading introduces what follows: kept with both
-                (pending if pending else story).append(para)
-                continue
-            if b.kind == "table":
-                unit, keep = _table(b, styles)
-            elif b.kind == "figure":
-                unit, keep = _figure(b, images, styles), True
-            else:
-                raise ValueError(f"unknown block kind {b.kind!r}")
-            unit = pending + unit
-            pending = []
-            pictures = [f for f in unit if isinstance(f, _Picture)]
-            if pictures:
-                story.append(_KeepFigure(unit, pictures[0]))
-            elif keep:
-                story.append(KeepTogether(unit))
-            else:  # a long table: headings, caption and a few rows at least, then it runs on
-                story += [CondPageBreak(0.22 * PAGE.text_height), *unit]
-        if pending:
-            story.append(KeepTogether(pending))
+    for s in [s for s in sections if not s.front]:
+        story += _section_story(s, images, styles)
     story += [Paragraph(_text(footer_text()), styles.closing), page_count]
+    return story
+
+
+def _section_story(s: Section, images: FigureImages, styles: _Styles) -> list[Flowable]:
+    """The flowables of one section: heading, blocks, headings kept with what follows."""
+    story: list[Flowable] = []
+    pending: list[Flowable] = [_Heading(s.title, styles.h2, key=s.id, level=0)]
+    for k, b in enumerate(s.blocks):
+        if b.kind == "heading":
+            pending.append(_Heading(b.text, styles.h3, key=f"{s.id}.{k}", level=1))
+            continue
+        if b.kind == "text":
+            para = Paragraph(_text(b.text), styles.verdict if is_emphasised(b, s.id)
+                             else styles.body)
+            # text after a heading introduces what follows: kept with both
+            (pending if pending else story).append(para)
+            continue
+        if b.kind == "table":
+            unit, keep = _table(b, styles)
+        elif b.kind == "figure":
+            unit, keep = _figure(b, images, styles), True
+        else:
+            raise ValueError(f"unknown block kind {b.kind!r}")
+        unit = pending + unit
+        pending = []
+        pictures = [f for f in unit if isinstance(f, _Picture)]
+        if pictures:
+            story.append(_KeepFigure(unit, pictures[0]))
+        elif keep:
+            story.append(KeepTogether(unit))
+        else:  # a long table: headings, caption and a few rows at least, then it runs on
+            story += [CondPageBreak(0.22 * PAGE.text_height), *unit]
+    if pending:
+        story.append(KeepTogether(pending))
     return story
 
 

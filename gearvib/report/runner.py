@@ -40,11 +40,18 @@ from gearvib.report.document import FigureImages
 from gearvib.report.html import render_html
 from gearvib.report.pdf import write_pdf
 from gearvib.report.sections import report_sections
-from gearvib.report.study import AnalysisSettings, Study, check_report_size, resolve_run
+from gearvib.report.study import (
+    AnalysisSettings,
+    Study,
+    check_report_duration,
+    check_report_size,
+    resolve_run,
+)
 from gearvib.simulate import SimulationError, simulate
 from gearvib.simulation.settings import conditions_from_settings
 
-__all__ = ["ReportPaths", "StudyResult", "build_report", "check_output_dir", "run_study"]
+__all__ = ["ReportPaths", "StudyResult", "build_report", "check_output_dir", "check_study",
+           "run_study"]
 
 log = logging.getLogger("gearvib.report")
 
@@ -282,6 +289,7 @@ def build_report(paths_or_datasets: Sequence[RunInput] | RunInput, out_dir: str 
         settings = analysis or (AnalysisSettings.from_dict(stored) if isinstance(stored, dict)
                                 else AnalysisSettings())
         check_report_size(t.size, fs, settings, f"run {name!r}")
+        check_report_duration(t.size, fs, settings, f"run {name!r}")
     with _OutputFolder(check_output_dir(out_dir)) as folder:
         return _build(runs, folder, title=title, analysis=analysis, reference=reference,
                       progress=progress)
@@ -320,6 +328,38 @@ def _build(runs: list[tuple[str, xr.Dataset]], folder: _OutputFolder, *, title: 
                        comparisons=comparisons)
 
 
+def check_study(study: Study) -> list[tuple[Any, dict, Any, Any, dict]]:
+    """Check every case of a study before the first (long) simulation.
+
+    Every gear-set description is loaded and checked, every run resolved, and the report's
+    maps are checked against the free memory (:func:`~gearvib.report.study.check_report_size`)
+    and the run's duration (:func:`~gearvib.report.study.check_report_duration`).
+
+    Returns
+    -------
+    list of tuple
+        ``(case, description dict, base folder, GearSet, run settings)`` per case.
+
+    Raises
+    ------
+    gearvib.config.ConfigError, ValueError
+        The first case that cannot be run or reported, named.
+    """
+    prepared = []
+    for case in study.cases:
+        cfg, base = case.load()
+        gs = gearset_from_dict(cfg, base=base)
+        try:
+            run = resolve_run(study.run, cfg)
+        except ValueError as exc:
+            raise type(exc)(f"case {case.name!r}: {exc}") from None
+        n_out = math.floor(run["duration"] * run["fs_out"]) + 1
+        check_report_size(n_out, run["fs_out"], study.analysis, f"case {case.name!r}")
+        check_report_duration(n_out, run["fs_out"], study.analysis, f"case {case.name!r}")
+        prepared.append((case, cfg, base, gs, run))
+    return prepared
+
+
 def run_study(study: Study, out_dir: str | os.PathLike, *, progress: bool = True,
               duration: float | None = None) -> StudyResult:
     """Simulate every case of a study, write the runs and the report.
@@ -353,17 +393,7 @@ def run_study(study: Study, out_dir: str | os.PathLike, *, progress: bool = True
     if duration is not None:
         study = study.with_duration(duration)
     out = check_output_dir(out_dir)
-    prepared = []
-    for case in study.cases:  # check every description before the first (long) simulation
-        cfg, base = case.load()
-        gs = gearset_from_dict(cfg, base=base)
-        try:
-            run = resolve_run(study.run, cfg)
-        except ValueError as exc:
-            raise type(exc)(f"case {case.name!r}: {exc}") from None
-        check_report_size(math.floor(run["duration"] * run["fs_out"]) + 1, run["fs_out"],
-                          study.analysis, f"case {case.name!r}")
-        prepared.append((case, cfg, base, gs, run))
+    prepared = check_study(study)
     runs: dict[str, Path] = {}
     sim_time: dict[str, float] = {}
     n_steps = len(prepared) + 1

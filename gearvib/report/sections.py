@@ -23,6 +23,7 @@ from gearvib.report.case import (
     SPOT_RANGE_DB,
     CaseAnalysis,
     key_speed_rows,
+    merged_modes,
 )
 from gearvib.report.figures import (
     force_limit,
@@ -35,50 +36,29 @@ from gearvib.report.figures import (
     stability_figure,
     tooth_force_figure,
 )
-from gearvib.report.wording import count
+from gearvib.report.blocks import Block, Section
+from gearvib.report.nvh import LEVELS_SECTION_ID, LEVELS_TITLE, levels_blocks
+from gearvib.report.verdict import (
+    SUMMARY_ID,
+    SUMMARY_TITLE,
+    CaseSummary,
+    RiseMatch,
+    mode_descriptions,
+    rise_explanation,
+    settings_summary,
+    summary_blocks,
+)
+from gearvib.report.wording import count, span
 
-__all__ = ["SECTION_IDS", "Block", "Section", "report_sections"]
-
-
-@dataclass(frozen=True)
-class Block:
-    """One element of a report section.
-
-    Attributes
-    ----------
-    kind : str
-        ``"heading"``, ``"text"``, ``"table"`` or ``"figure"``.
-    text : str
-        Heading or paragraph text, table or figure caption.
-    header : tuple of str
-        Table header.
-    rows : tuple of tuple of str
-        Table rows.
-    figure : callable or None
-        ``figure() -> Figure | None`` building the figure on demand.
-    """
-
-    kind: str
-    text: str = ""
-    header: tuple[str, ...] = ()
-    rows: tuple[tuple[str, ...], ...] = ()
-    figure: Any = None
+__all__ = ["SECTION_IDS", "Block", "Section", "case_summary", "inputs_rows", "report_sections"]
 
 
-@dataclass(frozen=True)
-class Section:
-    """A report section with a stable id (the HTML anchor)."""
-
-    id: str
-    title: str
-    blocks: tuple[Block, ...]
-
-
-SECTION_IDS = ("parameters", "modes", "tooth-forces", "spectra", "mesh-stiffness", "sonograms",
+SECTION_IDS = (SUMMARY_ID, LEVELS_SECTION_ID, "parameters", "modes", "tooth-forces", "spectra", "mesh-stiffness", "sonograms",
                "resonances", "stability", "comparison", "provenance")
 """Section ids in report order (``comparison`` only with two or more cases)."""
 
-TITLES = {"parameters": "Gear-set parameters", "modes": "Natural frequencies and modes",
+TITLES = {SUMMARY_ID: SUMMARY_TITLE, LEVELS_SECTION_ID: LEVELS_TITLE,
+          "parameters": "Gear-set parameters", "modes": "Natural frequencies and modes",
           "tooth-forces": "Tooth forces over the run (cf. paper Fig. 7)",
           "spectra": "Spectra of the tooth forces (cf. paper Fig. 8)",
           "mesh-stiffness": "Summed mesh stiffness (cf. paper Figs. 9 and 10)",
@@ -337,5 +317,61 @@ def report_sections(cases: Sequence[CaseAnalysis], comparisons: Sequence[Any] = 
                                            "change"),
                    [(n, f"{a:.1f}", f"{b:.1f}", f"{100 * (b - a) / a:+.1f} %")
                     for n, a, b in cmp.natural_frequencies])]
-    return [Section(k, TITLES[k], tuple(s[k])) for k in SECTION_IDS
+    for i, ca in enumerate(cases):
+        s[LEVELS_SECTION_ID] += levels_blocks(ca.levels, heading=several_cases,
+                                              explain_resonances=i == 0)
+    s[SUMMARY_ID] = summary_blocks([case_summary(ca) for ca in cases],
+                                   inputs=inputs_rows(cases))
+    return [Section(k, TITLES[k], tuple(s[k]), front=k == SUMMARY_ID) for k in SECTION_IDS
             if k != "comparison" or (len(cases) >= 2 and s[k])]
+
+
+def case_summary(ca: CaseAnalysis) -> CaseSummary:
+    """The summary of one simulated case: key numbers, its signals' levels, and the tooth-force
+    rise table as the explanation of the strongest cut resonances."""
+    lo, hi = ca.speed_range
+    fmax = ca.frequency_max_hz
+    key = [("run", ca.run_text())]
+    for g in ca.groups:
+        key.append((f"mesh frequency{'' if len(ca.groups) == 1 else f' ({g.name})'}",
+                    f"{span(g.frequency_per_rpm * lo, g.frequency_per_rpm * hi, 'Hz')} (order "
+                    f"{g.order:.4g} of the input shaft)"))
+    f_m, n_m = merged_modes(ca.natural_frequencies_hz, ca.mode_names)
+    fn = [(n, f) for n, f in zip(n_m, f_m, strict=True) if f <= fmax]
+    key.append((f"natural frequencies up to {fmax:.0f} Hz",
+                ", ".join(f"{n} {f:.0f} Hz" for n, f in fn[:8])
+                + (f" and {len(fn) - 8} more" if len(fn) > 8 else "") or "none"))
+    key.append((f"rises of the sonogram (tooth force {ca.force_mesh})",
+                f"{count(len(ca.resonances), 'rise')} in "
+                f"{count(len(ca.regions), 'speed region')}"))
+    key.append(("Floquet-unstable speed intervals",
+                str(len(ca.floquet_regions())) if ca.chart is not None else "not computed"))
+    primary = next((sl for sl in ca.levels if sl.primary and sl.levels is not None), None)
+
+    def explain(rank: int) -> RiseMatch | None:
+        if primary is None:
+            return None
+        return rise_explanation(ca.resonances, primary, rank, rpm_tolerance=0.03 * hi,
+                                source=f"tooth force {ca.force_mesh}")
+
+    return CaseSummary(ca.name, key, list(ca.levels), explain, mode_descriptions(ca.modes))
+
+
+def inputs_rows(cases: Sequence[CaseAnalysis]) -> list[tuple[str, str]]:
+    """Version, inputs (each case with its run) and the analysis settings, readable."""
+    from gearvib import __version__
+
+    rows = [("gearvib version (report)", __version__)]
+    versions = {str(ca.dataset.attrs.get("gearvib_version", "")) for ca in cases} - {""}
+    if versions:
+        rows.append(("gearvib version (runs)", ", ".join(sorted(versions))))
+    for ca in cases:
+        label = "" if ca.label in ("", ca.name) else f" ({ca.label})"
+        rows.append((f"case {ca.name}", f"{ca.name}{label}: {ca.run_text()}"))
+    if len({repr(ca.settings) for ca in cases}) == 1:
+        rows.append(("analysis settings", settings_summary(cases[0].settings)))
+    else:
+        rows += [(f"analysis settings of {ca.name}", settings_summary(ca.settings))
+                 for ca in cases]
+    rows.append(("details", "every setting, hash and sample rate: section Provenance"))
+    return rows

@@ -42,11 +42,15 @@ from gearvib.simulation.settings import MAX_DURATION, MAX_SPEED_RPM, MAX_TORQUE,
 
 __all__ = [
     "ANALYSIS_LIMITS",
+    "MAX_CUT_ORDERS",
     "DEFAULT_RUN",
     "AnalysisSettings",
     "Case",
     "RunSettings",
     "Study",
+    "check_cut_orders",
+    "check_order_resolution",
+    "check_report_duration",
     "check_report_size",
     "load_study",
     "resolve_run",
@@ -62,7 +66,7 @@ _CASE = {"name", "config", "label"}
 _RUN = set(DEFAULT_RUN)
 _ANALYSIS = {"n_max", "stability_points", "map_resolution_hz", "map_overlap", "orders",
              "threshold_db", "tolerance", "frequency_max_hz", "force_mesh", "spectrum_peaks",
-             "stability"}
+             "stability", "cut_orders", "order_resolution"}
 _NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,99}$")
 ANALYSIS_LIMITS: dict[str, tuple[float, float]] = {
     "n_max": (1, 20),
@@ -73,15 +77,24 @@ ANALYSIS_LIMITS: dict[str, tuple[float, float]] = {
     "tolerance": (0.0, 0.5),
     "threshold_db": (0.0, 200.0),
     "frequency_max_hz": (0.0, 1e9),
+    "cut_orders": (0.0, 1e4),
+    "order_resolution": (0.01, 10.0),
 }
 """Admissible ranges of the ``[analysis]`` keys (integers: inclusive; ``stability_points``
-bounds the Floquet chart's computing time, about 1-5 ms per point)."""
+bounds the Floquet chart's computing time, about 1-5 ms per point; ``cut_orders``: each order
+> 0 and at most 1e4, at most :data:`MAX_CUT_ORDERS` of them; ``order_resolution``: 0 for the
+automatic resolution, else 0.01..10 orders)."""
+MAX_CUT_ORDERS = 20
+"""Most orders a report cuts on request (``cut_orders``, ``gearvib report --orders``)."""
 _RUN_LIMITS = {"speed_start_rpm": (0.0, MAX_SPEED_RPM), "speed_end_rpm": (0.0, MAX_SPEED_RPM),
                "duration": (MIN_DURATION, MAX_DURATION), "input_torque": (-MAX_TORQUE, MAX_TORQUE),
                "fs_out": (0.0, 1e12)}
 """Ranges of the run settings (as ``[simulation]``, :mod:`gearvib.simulation.settings`)."""
 MAX_CASES = 100
 """Most cases of one study."""
+MIN_MAP_FRAMES = 8
+"""A report needs at least this many frames of its rpm-frequency map (shorter runs are refused
+before they are simulated: :func:`check_report_duration`)."""
 MAP_COPIES = 4
 """Peak memory of a map as multiples of its frames x bins (map, dB, Dataset, image)."""
 STABILITY = ("full", "coarse", "off")
@@ -192,6 +205,14 @@ class AnalysisSettings:
         Mesh whose tooth force is order-analysed (default: the first sun mesh).
     spectrum_peaks : int
         Peaks labelled in each tooth-force spectrum.
+    cut_orders : tuple of float
+        Orders of the order cuts, as multiples of the reference (input) shaft, cut besides
+        the 1st to 3rd mesh harmonics (``gearvib report --orders``); the catalogue's named
+        fault and sideband orders are added where the resolution separates them.
+    order_resolution : float
+        Resolution bandwidth of the order cuts [orders]; 0 (default): automatic, the finest
+        that leaves 8 frames in the run and at most 1/4 order
+        (:func:`analysis.runup_levels.runup_levels`).
     """
 
     n_max: int = 4
@@ -205,15 +226,22 @@ class AnalysisSettings:
     force_mesh: str = ""
     spectrum_peaks: int = 10
     stability: str = "full"
+    cut_orders: tuple[float, ...] = ()
+    order_resolution: float = 0.0
 
     def __post_init__(self) -> None:
         if self.stability not in STABILITY:
             raise ConfigError(f"[analysis].stability = {self.stability!r}; admissible: "
                               + ", ".join(repr(x) for x in STABILITY))
+        object.__setattr__(self, "cut_orders", check_cut_orders(self.cut_orders))
+        object.__setattr__(self, "order_resolution", check_order_resolution(
+            self.order_resolution))
 
     def to_dict(self) -> dict[str, Any]:
-        """All settings as a plain dict."""
-        return asdict(self)
+        """All settings as a plain dict (``cut_orders`` as a list)."""
+        d = asdict(self)
+        d["cut_orders"] = list(self.cut_orders)
+        return d
 
     @classmethod
     def from_dict(cls, table: dict, where: str = "[analysis]") -> AnalysisSettings:
@@ -250,7 +278,47 @@ class AnalysisSettings:
             if not isinstance(table["force_mesh"], str) or len(table["force_mesh"]) > 200:
                 raise ConfigError(f"{where}.force_mesh must be a mesh name (string)")
             kw["force_mesh"] = table["force_mesh"]
+        if "cut_orders" in table:
+            kw["cut_orders"] = check_cut_orders(table["cut_orders"], f"{where}.cut_orders")
+        if "order_resolution" in table:
+            kw["order_resolution"] = check_order_resolution(table["order_resolution"],
+                                                            f"{where}.order_resolution")
         return cls(**kw)
+
+
+def check_cut_orders(value: Any, where: str = "cut_orders") -> tuple[float, ...]:
+    """Orders of the order cuts: a list of at most :data:`MAX_CUT_ORDERS` numbers in
+    (0, 1e4] (bools and strings refused), as a tuple of floats.
+
+    Raises
+    ------
+    ConfigError
+        Naming ``where`` and the admissible range.
+    """
+    if isinstance(value, str | bytes) or not isinstance(value, list | tuple):
+        raise ConfigError(f"{where} = {_short(value)}: expected a list of orders, e.g. "
+                          "[1, 2, 24]")
+    if len(value) > MAX_CUT_ORDERS:
+        raise ConfigError(f"{where}: {len(value)} orders; admissible: at most "
+                          f"{MAX_CUT_ORDERS}")
+    hi = ANALYSIS_LIMITS["cut_orders"][1]
+    return tuple(check_number(v, f"{where}[{i}]", low=0.0, low_open=True, high=hi,
+                              error=ConfigError, wording=RECIPE) for i, v in enumerate(value))
+
+
+def check_order_resolution(value: Any, where: str = "order_resolution") -> float:
+    """Resolution of the order cuts: 0 (automatic) or a number in 0.01..10 orders.
+
+    Raises
+    ------
+    ConfigError
+        Naming ``where`` and the admissible range.
+    """
+    lo, hi = ANALYSIS_LIMITS["order_resolution"]
+    if not isinstance(value, bool) and isinstance(value, int | float) and value == 0:
+        return 0.0
+    v = check_number(value, where, low=lo, high=hi, error=ConfigError, wording=RECIPE)
+    return float(v)
 
 
 @dataclass(frozen=True)
@@ -490,3 +558,37 @@ def check_report_size(n_samples: int, fs: float, settings: AnalysisSettings,
                    f"{settings.map_resolution_hz:g} over {n} samples at {fs:g} Hz)",
                    "lower [analysis].map_overlap (0.9 gives a smooth map) or coarsen "
                    "map_resolution_hz")
+
+
+def _map_frames(n: int, fs: float, settings: AnalysisSettings) -> tuple[int, int, int]:
+    """Frames, segment and hop [samples] of the report's rpm-frequency map."""
+    seg_f = 1.5 * fs / settings.map_resolution_hz
+    seg = max(4, round(seg_f) if math.isfinite(seg_f) else n)
+    hop = max(1, round(seg * (1.0 - settings.map_overlap)))
+    frames = (n - seg) // hop + 1 if n >= seg else 0
+    return frames, seg, hop
+
+
+def check_report_duration(n_samples: int, fs: float, settings: AnalysisSettings,
+                          where: str = "the run") -> None:
+    """Refuse a run too short for the report's maps, before it is simulated or analysed.
+
+    The rpm-frequency map (Hann, ``1.5 fs / map_resolution_hz`` samples per frame, hop
+    ``(1 - map_overlap)`` of a frame) needs :data:`MIN_MAP_FRAMES` frames; the resonance
+    detection, the waterfall and the overall level read them.
+
+    Raises
+    ------
+    ConfigError
+        Naming the duration, the minimum and ``--duration``.
+    """
+    n = max(int(n_samples), 1)
+    frames, seg, hop = _map_frames(n, fs, settings)
+    if frames >= MIN_MAP_FRAMES:
+        return
+    need = (seg + (MIN_MAP_FRAMES - 1) * hop) / fs
+    raise ConfigError(
+        f"{where} lasts {(n - 1) / fs:.4g} s, too short for the report's maps: they need at least "
+        f"{MIN_MAP_FRAMES} frames of {seg / fs:.4g} s (map_resolution_hz = "
+        f"{settings.map_resolution_hz:g}, map_overlap = {settings.map_overlap:g}), a duration "
+        f"of at least {math.ceil(need * 1000) / 1000:g} s (--duration)")
