@@ -716,7 +716,7 @@ def runup_levels(
     if not float(speed.max()) > 0:
         raise ValueError("the reference shaft does not turn (speed 0 everywhere)")
     revs = _revolutions(speed, fs)
-    enbw, h = _enbw_and_lobe()
+    enbw, _ = _enbw_and_lobe()
     items, notes = _order_list(orders, order_names, optional_orders)
     required = np.asarray([o for o, _, r in items if r])
     given = optional_positive(order_resolution, "order_resolution", "orders")

@@ -18,6 +18,7 @@ from html import escape
 from string import Template
 
 from gearvib import __version__
+from gearvib.report.blocks import Block, Section
 from gearvib.report.document import (
     EMPTY_TABLE,
     HTML_DPI,
@@ -26,7 +27,6 @@ from gearvib.report.document import (
     is_emphasised,
     missing_figure_text,
 )
-from gearvib.report.blocks import Block, Section
 
 __all__ = ["render_html"]
 

@@ -19,7 +19,6 @@ report's sections (the HTML and PDF writers of :mod:`gearvib.report`), and
 
 from __future__ import annotations
 
-import json
 import math
 import os
 import re
@@ -74,11 +73,13 @@ from gearvib.report.case import (
 from gearvib.report.document import FigureImages
 from gearvib.report.figures import Label, natural_frequency_lines, place_labels
 from gearvib.report.html import render_html
+from gearvib.report.measured_nvh import measured_levels, with_level_pages
 from gearvib.report.pdf import write_pdf
 from gearvib.report.runner import check_output_dir
 from gearvib.report.sections import Block, Section
 from gearvib.report.study import AnalysisSettings, check_report_size
-from gearvib.report.wording import count
+from gearvib.report.verdict import readable, settings_rows
+from gearvib.report.wording import count, span
 from gearvib.rig import ShaftRig
 from gearvib.stability import gear_set_candidates
 
@@ -253,7 +254,7 @@ class MeasuredCase:
                 ("record", f"{t.size} samples at {m.fs:g} Hz, {t[-1] - t[0] + 1 / m.fs:.4g} s"),
                 ("analysed channel", f"{self.channel} [{self.units}]"),
                 ("speed reference", m.reference),
-                ("reference speed", f"{lo:.0f}–{hi:.0f} min⁻¹"
+                ("reference speed", span(lo, hi, "min⁻¹")
                  + ("" if self.varying_speed else " (constant speed: no rpm maps)"))]
         if m.accuracy.get("rms_angle_error_rad"):
             rows.append(("speed accuracy", f"rms angle error "
@@ -588,9 +589,9 @@ def analyse_measurement(measurement: Measurement, *, gearset: Any = None,
         resonances = _resonances(map_ds, features, fn, names, groups, t, rpm, st, fmax, notes,
                                  model, modal, (lo, hi), in_per_ref)
     else:
-        notes.append(f"the speed varies only between {lo:.0f} and {hi:.0f} min⁻¹ (less than "
-                     f"× {MIN_SPEED_RATIO:g}): no rpm maps and no resonance classification; "
-                     "the spectra show the record")
+        notes.append(f"the reference speed is {span(lo, hi, 'min⁻¹')}, its highest less than "
+                     f"{MIN_SPEED_RATIO:g} times its lowest: no rpm maps and no resonance "
+                     "classification; the spectra show the record")
     lines: list[CandidateLines] = []
     if fn.size:
         lines.append(modal_lines(fn, names=names, kinds=("natural",),
@@ -626,11 +627,9 @@ def analyse_measurement(measurement: Measurement, *, gearset: Any = None,
              (f"{(model or rig).meta.get('name', '')}"
               + (f" ({gearset})" if isinstance(gearset, str | os.PathLike) else "")
               if model is not None or rig is not None else "(none)")),
-            ("analysis settings", json.dumps({k: v for k, v in st.to_dict().items()
-                                              if k in ("map_resolution_hz", "map_overlap",
-                                                       "threshold_db", "tolerance", "n_max",
-                                                       "orders", "frequency_max_hz")},
-                                             sort_keys=True)),
+            *settings_rows(st, ("map_resolution_hz", "map_overlap", "threshold_db",
+                                "tolerance", "n_max", "orders", "frequency_max_hz",
+                                "cut_orders", "order_resolution")),
             ("spectrum", f"Hann, RBW {sp.enbw_hz:.3g} Hz, {sp.n_averages} averages, rms")]
     if fmap is not None:
         prov.append(("map", f"{fmap.window}, RBW {fmap.resolution_hz:.3g} Hz, overlap "
@@ -638,7 +637,7 @@ def analyse_measurement(measurement: Measurement, *, gearset: Any = None,
     if m.source.get("kind") == "simulation":
         prov.append(("simulated run", str(m.source.get("title", ""))))
     if m.source.get("stated"):
-        prov.append(("stated by the user", json.dumps(m.source["stated"], sort_keys=True)))
+        prov.append(("stated by the user", readable(dict(sorted(m.source["stated"].items())))))
     if fault is not None:
         b = fault.envelope.band
         prov.append(("envelope analysis", f"band {b.low:.6g}-{b.high:.6g} Hz ("
@@ -1082,9 +1081,8 @@ def measured_sections(mc: MeasuredCase) -> list[Section]:
                     f"{f:.0f} Hz" for f in mc.features.frequencies) or "none") + ".")]
     else:
         s["sonograms"] += [Block("text", f"{n}: no rpm maps: the reference speed is "
-                                 f"{mc.speed_range[0]:.0f}–{mc.speed_range[1]:.0f} min⁻¹, too "
-                                 "narrow a range to tell order-locked from frequency-locked "
-                                 "content.")]
+                                 f"{span(*mc.speed_range, 'min⁻¹')}, too narrow a range to "
+                                 "tell order-locked from frequency-locked content.")]
     res = mc.resonances
     if res is not None:
         s["resonances"] += [
@@ -1123,6 +1121,7 @@ class MeasuredReportPaths:
     pdf_pages: int
     sections: tuple[str, ...]
     case: MeasuredCase = field(repr=False)
+    levels: Any = field(default=None, repr=False)  # gearvib.report.nvh.SignalLevels
 
 
 def build_measured_report(source: Measurement | str | os.PathLike | xr.Dataset,
@@ -1157,7 +1156,8 @@ def build_measured_report(source: Measurement | str | os.PathLike | xr.Dataset,
     mc = analyse_measurement(m, gearset=gearset, channel=channel, reference=reference,
                              settings=settings, envelope_band=envelope_band,
                              min_bandwidth=min_bandwidth)
-    sections = measured_sections(mc)
+    levels = measured_levels(mc, min_speed_ratio=MIN_SPEED_RATIO)  # order cuts, Campbell, ...
+    sections = with_level_pages(measured_sections(mc), mc, levels)  # summary first
     title = title or (f"Order-analysis report of the measurement {mc.name}"
                       + (f" ({mc.gearset_name})" if mc.gearset_name else ""))
     subtitle = (f"Channel {mc.channel}; speed reference: {m.reference}; "
@@ -1171,7 +1171,7 @@ def build_measured_report(source: Measurement | str | os.PathLike | xr.Dataset,
                                                     subtitle=subtitle, images=images))
     atomic_write(html_path, lambda tmp: tmp.write_text(text, encoding="utf-8"))
     return MeasuredReportPaths(html=html_path, pdf=pdf_path, pdf_pages=int(pages),
-                               sections=tuple(s.id for s in sections), case=mc)
+                               sections=tuple(s.id for s in sections), case=mc, levels=levels)
 
 
 def is_simulated_run(path: str | os.PathLike) -> bool:

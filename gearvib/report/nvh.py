@@ -199,7 +199,8 @@ def signal_levels(x: Any, fs: float, *, case: str, signal: str, mesh_orders: Seq
                   natural_frequencies_hz: Any = (), natural_names: Sequence[str] = (),
                   frequency_map: Any = None, frequency_range: tuple[float, float] | None = None,
                   units: str = "1", primary: bool = True, reference: str = "input shaft",
-                  min_speed_ratio: float = 1.3) -> SignalLevels:
+                  min_speed_ratio: float = 1.3,
+                  named_orders: Sequence[tuple[str, float]] = ()) -> SignalLevels:
     """Levels of one signal for the NVH pages.
 
     Parameters
@@ -236,6 +237,9 @@ def signal_levels(x: Any, fs: float, *, case: str, signal: str, mesh_orders: Seq
         The reference shaft, for captions.
     min_speed_ratio : float
         Speed ratio below which the record counts as constant speed.
+    named_orders : sequence of (str, float)
+        Further orders always cut, with their names (e.g. the order rays a map shows when
+        there is no gear set).
 
     Returns
     -------
@@ -248,6 +252,12 @@ def signal_levels(x: Any, fs: float, *, case: str, signal: str, mesh_orders: Seq
         admissible); other failures become :attr:`SignalLevels.note`.
     """
     orders, names = cut_orders(mesh_orders, settings.cut_orders)
+    for n, o in named_orders:
+        if not any(abs(o - v) <= 1e-6 * max(1.0, o) for v in orders):
+            orders.append(float(o))
+            names.append(str(n))
+    if not orders:
+        raise ValueError("no order to cut: give mesh orders, named orders or cut_orders")
     optional = catalogue_orders(catalogue, reference_member=reference_member)
     try:
         lv = runup_levels(
@@ -376,12 +386,13 @@ def levels_blocks(items: Sequence[SignalLevels], *, heading: bool = True,
         out.append(Block("text", text))
         out += [Block("text", f"{sl.case}, {sl.signal}: note: {n}") for n in lv.notes]
         marks = min(MARKED_RESONANCES, len(lv.peaks)) if sl.primary else 0
+        panels = _panels(sl)
         out.append(Block(
             "figure", f"{sl.case}: order cuts of the {sl.signal} [{sl.level_unit}] over the "
             f"{sl.reference} speed; black: overall level {lo_f:.3g}–{hi_f:.4g} Hz"
             + (f"; circles numbered 1–{marks}: the strongest resonances (table below)"
                if marks else "") + ".",
-            figure=lambda lv=lv, p=_panels(sl), m=marks: order_cuts_levels_figure(
+            figure=lambda lv=lv, p=panels, m=marks: order_cuts_levels_figure(
                 lv, panels=p, marks=m)))
         out.append(Block("table", cut_level_caption(sl), cut_level_header(sl),
                          tuple(cut_level_rows(sl))))

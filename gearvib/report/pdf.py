@@ -60,6 +60,7 @@ from reportlab.platypus import (
 from reportlab.platypus.tableofcontents import TableOfContents
 
 from gearvib import __version__
+from gearvib.report.blocks import Block, Section
 from gearvib.report.document import (
     EMPTY_TABLE,
     PDF_DPI,
@@ -68,7 +69,6 @@ from gearvib.report.document import (
     is_emphasised,
     missing_figure_text,
 )
-from gearvib.report.blocks import Block, Section
 
 __all__ = ["PAGE", "PageLayout", "column_widths", "write_pdf"]
 

@@ -12,9 +12,9 @@ rendered report for exactly that.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
 from typing import Any
 
+from gearvib.report.blocks import Block, Section
 from gearvib.report.case import (
     MARKER_BUDGET,
     PLANET_SIGNAL_GROWTH_DB,
@@ -36,7 +36,6 @@ from gearvib.report.figures import (
     stability_figure,
     tooth_force_figure,
 )
-from gearvib.report.blocks import Block, Section
 from gearvib.report.nvh import LEVELS_SECTION_ID, LEVELS_TITLE, levels_blocks
 from gearvib.report.verdict import (
     SUMMARY_ID,
@@ -53,8 +52,9 @@ from gearvib.report.wording import count, span
 __all__ = ["SECTION_IDS", "Block", "Section", "case_summary", "inputs_rows", "report_sections"]
 
 
-SECTION_IDS = (SUMMARY_ID, LEVELS_SECTION_ID, "parameters", "modes", "tooth-forces", "spectra", "mesh-stiffness", "sonograms",
-               "resonances", "stability", "comparison", "provenance")
+SECTION_IDS = (SUMMARY_ID, LEVELS_SECTION_ID, "parameters", "modes", "tooth-forces", "spectra",
+               "mesh-stiffness", "sonograms", "resonances", "stability", "comparison",
+               "provenance")
 """Section ids in report order (``comparison`` only with two or more cases)."""
 
 TITLES = {SUMMARY_ID: SUMMARY_TITLE, LEVELS_SECTION_ID: LEVELS_TITLE,

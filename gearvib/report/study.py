@@ -42,8 +42,8 @@ from gearvib.simulation.settings import MAX_DURATION, MAX_SPEED_RPM, MAX_TORQUE,
 
 __all__ = [
     "ANALYSIS_LIMITS",
-    "MAX_CUT_ORDERS",
     "DEFAULT_RUN",
+    "MAX_CUT_ORDERS",
     "AnalysisSettings",
     "Case",
     "RunSettings",
