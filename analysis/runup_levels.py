@@ -54,6 +54,17 @@ import numpy as np
 
 from analysis.cf import cf_dataset
 from analysis.checks import require_finite, uniform_rate
+from analysis.cut_plan import (
+    CUT_FRAMES,
+    CUT_WINDOW,
+    MIN_CUT_FRAMES,
+    cut_order_list,
+    default_cut_resolution,
+    enbw_and_lobe,
+    select_cut_orders,
+    separation_orders,
+)
+from analysis.cut_resonances import CutPeaks, cut_resonances
 from analysis.maps import (
     Campbell,
     OverallLevel,
@@ -63,22 +74,18 @@ from analysis.maps import (
     rpm_frequency_map,
 )
 from analysis.order_resolution import (
-    DEFAULT_ORDER_RESOLUTION,
-    RESOLUTIONS_BETWEEN_ORDERS,
     OrderBandWarning,
     default_order_resolution,
     optional_positive,
-    requested_orders,
-    smallest_spacing,
 )
 from analysis.orders import OrderCut, order_cuts
-from analysis.windows import main_lobe_half_width, window_info
+from analysis.waterfall import Waterfall, waterfall_from_map
 
 if TYPE_CHECKING:
     import xarray as xr
     from matplotlib.figure import Figure
 
-__all__ = [
+__all__ = [  # CUT_* and separation_orders: from analysis.cut_plan
     "CUT_FRAMES",
     "CUT_WINDOW",
     "MIN_CUT_FRAMES",
@@ -90,123 +97,13 @@ __all__ = [
     "separation_orders",
 ]
 
-CUT_WINDOW = "flattop"
-"""Window of the order-cut frames (reads a level within 0.01 dB without correction)."""
-
-CUT_FRAMES = 32
-"""A default cut frame spans at most ``1 / CUT_FRAMES`` of the revolutions of the record where
-the required orders stay separated (speed resolution of a fast run-up)."""
-
-MIN_CUT_FRAMES = 8
-"""A default cut frame never spans more than ``1 / MIN_CUT_FRAMES`` of the revolutions."""
-
 MIN_GIVEN_FRAMES = 4
 """A given ``order_resolution`` must leave at least this many independent frames."""
 
 _STANDSTILL = 0.02  # samples below 2 % of the top speed are standstill (as order_cuts)
 
 
-def _enbw_and_lobe(window: str = CUT_WINDOW) -> tuple[float, float]:
-    return float(window_info(window, 4096).enbw_bins), float(main_lobe_half_width(window))
-
-
-def separation_orders(resolution: float, window: str = CUT_WINDOW) -> float:
-    """Smallest distance [orders] of two cut orders whose bands do not reach each other's
-    main lobe: ``2 h / ENBW_lines * resolution`` (band half width plus main-lobe half width;
-    2.65 resolutions for the flat-top window)."""
-    enbw, h = _enbw_and_lobe(window)
-    return 2.0 * h / enbw * float(resolution)
-
-
 # --------------------------------------------------------------------------- results
-
-
-@dataclass(frozen=True)
-class Waterfall:
-    """Spectra of an rpm-frequency map at evenly spaced speeds (a waterfall plot's traces).
-
-    Attributes
-    ----------
-    rpm, time : ndarray
-        Speed [min-1] and time [s] of each trace (frame centres), by increasing speed.
-    frequency : ndarray
-        Line frequencies [Hz].
-    level_db : ndarray, shape (trace, frequency)
-        Level of each line [dB re :attr:`level_reference`].
-    amplitude : str
-        Convention of the level (``"rms"``).
-    level_reference : str
-        Reference of the dB levels, e.g. ``"1 m s-2"``.
-    resolution_hz : float
-        Resolution bandwidth of the spectra [Hz].
-    window : str
-        Their window.
-    name : str
-        Signal name.
-    """
-
-    rpm: np.ndarray
-    time: np.ndarray
-    frequency: np.ndarray
-    level_db: np.ndarray
-    amplitude: str
-    level_reference: str
-    resolution_hz: float
-    window: str
-    name: str = "x"
-
-    def __len__(self) -> int:
-        return int(self.rpm.size)
-
-
-@dataclass(frozen=True)
-class CutPeaks:
-    """Resonances of order cuts: local maxima that rise at least ``min_rise_db`` above their
-    surroundings, strongest level first.
-
-    Attributes
-    ----------
-    order : ndarray
-        Order of the cut.
-    name : ndarray of str
-        Name of the cut (e.g. ``"2× mesh"``).
-    rpm, time : ndarray
-        Speed [min-1] and time [s] of the maximum (frame centre).
-    frequency_hz : ndarray
-        ``order * rpm / 60`` [Hz]: the frequency that resonates.
-    level_db : ndarray
-        Level of the maximum [dB re the cut's reference].
-    rise_db : ndarray
-        Prominence of the maximum: its rise above the higher of the two minima that separate
-        it from a higher level or the ends of the cut [dB].
-    width_rpm : ndarray
-        Speed span where the cut is within 3 dB of the maximum [min-1].
-    mode : ndarray of str
-        Name of the natural frequency the order crosses there ("" when none does).
-    mode_frequency_hz : ndarray
-        That natural frequency [Hz] (NaN when none).
-    """
-
-    order: np.ndarray
-    name: np.ndarray
-    rpm: np.ndarray
-    time: np.ndarray
-    frequency_hz: np.ndarray
-    level_db: np.ndarray
-    rise_db: np.ndarray
-    width_rpm: np.ndarray
-    mode: np.ndarray
-    mode_frequency_hz: np.ndarray
-
-    def __len__(self) -> int:
-        return int(self.order.size)
-
-    @classmethod
-    def empty(cls) -> CutPeaks:
-        """No resonance."""
-        z = np.zeros(0)
-        e = np.zeros(0, dtype=object)
-        return cls(z, e, z, z, z, z, z, z, e, z)
 
 
 @dataclass(frozen=True)
@@ -354,13 +251,14 @@ class RunupLevels:
                                     {"units": "min-1", "long_name": "-3 dB speed span of the "
                                      "cut maximum"}),
                 "resonance_mode": ("resonance", np.asarray(p.mode, dtype=str),
-                                   {"long_name": "natural frequency the order crosses there"}),
+                                   {"units": "1", "long_name": "natural frequency the order "
+                                    "crosses there"}),
             },
             coords={
                 "order": ("order", np.asarray(c.orders, dtype=float),
                           {"units": "1", "long_name": "cut order (cycles per revolution)"}),
                 "order_name": ("order", np.asarray(self.order_names, dtype=str),
-                               {"long_name": "name of the cut order"}),
+                               {"units": "1", "long_name": "name of the cut order"}),
                 "time": ("time", np.asarray(c.time, dtype=float),
                          {"units": "s", "long_name": "cut frame centre time"}),
                 "rpm": ("time", np.asarray(c.rpm, dtype=float),
@@ -379,7 +277,7 @@ class RunupLevels:
                 "mode": ("mode", np.arange(self.campbell.natural_frequencies_hz.size),
                          {"units": "1", "long_name": "mode index"}),
                 "mode_name": ("mode", np.asarray(self.natural_names, dtype=str),
-                              {"long_name": "name of the natural frequency"}),
+                              {"units": "1", "long_name": "name of the natural frequency"}),
                 "resonance": ("resonance", np.arange(len(p)),
                               {"units": "1", "long_name": "cut resonance, strongest first"}),
             },
@@ -434,154 +332,10 @@ def _speed_per_sample(fs: float, rpm: Any, angle: Any, n: int) -> np.ndarray:
     return np.abs(np.gradient(ref)) * fs * 60.0 / (2.0 * np.pi)
 
 
-def _default_resolution(required: np.ndarray, revolutions: float, enbw: float) -> float:
-    """``max(min(1/4, d/4), min(d/4, ENBW CUT_FRAMES / R), ENBW MIN_CUT_FRAMES / R)``.
-
-    ``d/4`` (``d`` the smallest distance of the required orders and from order 0) is the
-    coarsest resolution that still separates them; a frame of ``ENBW / res`` revolutions
-    spans at most ``1/CUT_FRAMES`` of the ``R`` revolutions where ``d/4`` allows it (shorter
-    frames: a finer speed resolution on a fast run-up), never more than ``1/MIN_CUT_FRAMES``,
-    and the resolution is at most 1/4 order finer than needed.
-    """
-    sep = smallest_spacing(required) / RESOLUTIONS_BETWEEN_ORDERS
-    r = max(revolutions, 1e-300)
-    return max(min(DEFAULT_ORDER_RESOLUTION, sep), min(sep, enbw * CUT_FRAMES / r),
-               enbw * MIN_CUT_FRAMES / r)
-
-
 def _revolutions(speed: np.ndarray, fs: float) -> float:
     """Revolutions while the shaft turns above 2 % of its top speed."""
     moving = speed > _STANDSTILL * float(speed.max())
     return float(np.sum(speed[moving]) / fs / 60.0)
-
-
-def _order_list(orders: Any, names: Sequence[str] | None, optional: Mapping[str, float] | None
-                ) -> tuple[list[tuple[float, list[str], bool]], list[str]]:
-    """Required orders (with names) and optional ones, coinciding orders merged.
-
-    Returns ``[(order, names, required)]`` (required first, then optional in their order) and
-    notes.
-    """
-    req = requested_orders(orders)
-    if req is None or not req.size:
-        raise ValueError("orders (the orders to cut, > 0) are required")
-    if names is not None and len(names) != req.size:
-        raise ValueError(f"order_names: {len(names)} names for {req.size} orders")
-    names = [str(n) for n in names] if names is not None else [f"order {o:g}" for o in req]
-    items: list[tuple[float, list[str], bool]] = []
-
-    def add(o: float, n: str, required: bool) -> None:
-        for k, (v, ns, r) in enumerate(items):
-            if abs(v - o) <= 1e-6 * max(1.0, abs(o)):
-                if n not in ns:
-                    ns.append(n)
-                items[k] = (v, ns, r or required)
-                return
-        items.append((o, [n], required))
-
-    for o, n in zip(req, names, strict=True):
-        add(float(o), n, True)
-    if optional:
-        for n, o in optional.items():
-            v = requested_orders(o, f"optional_orders[{n!r}]")
-            assert v is not None
-            add(float(v[0]), str(n), False)
-    return items, []
-
-
-def _select_orders(items: list[tuple[float, list[str], bool]], reach: float, top_order: float
-                   ) -> tuple[list[tuple[float, str, bool]], list[tuple[str, float, str]]]:
-    """Required orders, and optional ones that keep ``reach`` from every other kept order."""
-    kept: list[tuple[float, str, bool]] = []
-    dropped: list[tuple[str, float, str]] = []
-    for o, ns, required in sorted(items, key=lambda it: not it[2]):  # required first
-        name = " = ".join(ns)
-        if o > top_order:
-            dropped.append((name, o, f"above order {top_order:.4g}, the highest analysable at "
-                                     "the top speed"))
-            continue
-        if required:
-            kept.append((o, name, True))
-            continue
-        if o < reach:
-            dropped.append((name, o, f"closer than {reach:.3g} orders to order 0"))
-            continue
-        near = min(kept, key=lambda k: abs(k[0] - o)) if kept else None
-        if near is not None and abs(near[0] - o) < reach:
-            dropped.append((name, o, f"{abs(near[0] - o):.3g} orders from {near[1]}"))
-            continue
-        kept.append((o, name, False))
-    kept.sort(key=lambda k: k[0])
-    return kept, dropped
-
-
-def _waterfall(m: RpmFrequencyMap, fmax: float, traces: int) -> Waterfall:
-    """Evenly spaced frames (by speed) of the map, in dB, up to ``fmax``."""
-    power = m.power()
-    band = m.frequency <= fmax
-    idx = np.argsort(m.rpm, kind="stable")
-    if m.rpm.size <= traces:
-        pick = idx
-    else:
-        targets = np.linspace(float(m.rpm[idx[0]]), float(m.rpm[idx[-1]]), traces)
-        pick = np.unique(idx[np.clip(np.searchsorted(m.rpm[idx], targets), 0, idx.size - 1)])
-        pick = pick[np.argsort(m.rpm[pick], kind="stable")]
-    level = 10.0 * np.log10(np.maximum(power[pick][:, band], 1e-300))
-    units = m.signal_units
-    return Waterfall(rpm=np.asarray(m.rpm[pick], dtype=float),
-                     time=np.asarray(m.time[pick], dtype=float),
-                     frequency=np.asarray(m.frequency[band], dtype=float), level_db=level,
-                     amplitude="rms", level_reference=f"1 {units}",
-                     resolution_hz=float(m.resolution_hz), window=m.window, name=m.name)
-
-
-def _cut_peaks(cut: OrderCut, names: Sequence[str], fn: np.ndarray, fn_names: Sequence[str],
-               min_rise_db: float, tolerance: float, dynamic_range_db: float) -> CutPeaks:
-    """Local maxima of every cut with a prominence of at least ``min_rise_db`` and a level
-    within ``dynamic_range_db`` of the highest level of all cuts."""
-    from scipy.signal import find_peaks, peak_widths
-
-    values = np.asarray(cut.values, dtype=float)
-    if not np.isfinite(values).any():
-        return CutPeaks.empty()
-    floor = float(np.nanmax(values)) - dynamic_range_db
-    rows: list[tuple] = []
-    order_idx = np.argsort(cut.rpm, kind="stable")
-    for i, o in enumerate(cut.orders):
-        y_all = np.asarray(cut.values[i], dtype=float)[order_idx]
-        ok = np.isfinite(y_all)
-        if ok.sum() < 3:
-            continue
-        y = y_all[ok]
-        rpm = np.asarray(cut.rpm, dtype=float)[order_idx][ok]
-        tim = np.asarray(cut.time, dtype=float)[order_idx][ok]
-        pk, props = find_peaks(y, prominence=min_rise_db, height=floor)
-        for j, prom in zip(pk, props["prominences"], strict=True):
-            rel = min(1.0, 3.0 / float(prom))
-            _, _, left, right = peak_widths(y, [j], rel_height=rel)
-            grid = np.arange(y.size)
-            lo_r = float(np.interp(left[0], grid, rpm))
-            hi_r = float(np.interp(right[0], grid, rpm))
-            f = float(o) * float(rpm[j]) / 60.0
-            mode, f_mode = "", np.nan
-            best = np.inf
-            for fk, nk in zip(fn, fn_names, strict=True):
-                crit = 60.0 * float(fk) / float(o)
-                slack = tolerance * crit + 0.5 * (hi_r - lo_r)
-                err = abs(crit - float(rpm[j]))
-                if err <= slack and err < best:
-                    best, mode, f_mode = err, str(nk), float(fk)
-            rows.append((float(o), names[i], float(rpm[j]), float(tim[j]), f, float(y[j]),
-                         float(prom), hi_r - lo_r, mode, f_mode))
-    if not rows:
-        return CutPeaks.empty()
-    rows.sort(key=lambda r: (-r[5], r[0], r[2]))
-    cols = list(zip(*rows, strict=True))
-    return CutPeaks(order=np.asarray(cols[0]), name=np.asarray(cols[1], dtype=object),
-                    rpm=np.asarray(cols[2]), time=np.asarray(cols[3]),
-                    frequency_hz=np.asarray(cols[4]), level_db=np.asarray(cols[5]),
-                    rise_db=np.asarray(cols[6]), width_rpm=np.asarray(cols[7]),
-                    mode=np.asarray(cols[8], dtype=object), mode_frequency_hz=np.asarray(cols[9]))
 
 
 def runup_levels(
@@ -716,8 +470,8 @@ def runup_levels(
     if not float(speed.max()) > 0:
         raise ValueError("the reference shaft does not turn (speed 0 everywhere)")
     revs = _revolutions(speed, fs)
-    enbw, _ = _enbw_and_lobe()
-    items, notes = _order_list(orders, order_names, optional_orders)
+    enbw, _ = enbw_and_lobe()
+    items, notes = cut_order_list(orders, order_names, optional_orders)
     required = np.asarray([o for o, _, r in items if r])
     given = optional_positive(order_resolution, "order_resolution", "orders")
     if given is not None:
@@ -729,7 +483,7 @@ def runup_levels(
                 f"(at least {MIN_GIVEN_FRAMES} frames)")
         res = given
     else:
-        res = _default_resolution(required, revs, enbw)
+        res = default_cut_resolution(required, revs, enbw)
         if res > default_order_resolution(required, None):
             notes.append(f"order resolution {res:.3g} orders: the record holds {revs:.4g} "
                          f"revolutions; a cut frame ({enbw / res:.3g} revolutions) spans at "
@@ -737,7 +491,7 @@ def runup_levels(
                          f"never more than 1/{MIN_CUT_FRAMES}")
     reach = separation_orders(res)
     top_order = 0.5 * fs * 60.0 / float(speed.max()) / 1.25 - 0.5 * reach
-    kept, dropped = _select_orders(items, reach, top_order)
+    kept, dropped = select_cut_orders(items, reach, top_order)
     if not kept:
         raise ValueError(f"no order to cut: every order lies above the highest order "
                          f"analysable at the top speed ({top_order:.4g})")
@@ -773,14 +527,17 @@ def runup_levels(
     band = (0.0, f_hi) if frequency_range is None else (float(frequency_range[0]),
                                                         min(float(frequency_range[1]), f_hi))
     overall = overall_level_from_map(m, frequency_range=band, scale="dB")
-    waterfall = _waterfall(m, band[1], waterfall_traces)
+    waterfall = waterfall_from_map(m, band[1], waterfall_traces)
     r = np.asarray(cut.rpm, dtype=float)
     lo, hi = float(np.nanmin(r)), float(np.nanmax(r))
     varying = hi >= min_speed_ratio * max(lo, 1e-300)
     crange = (lo, hi) if varying else (0.0, 1.25 * hi)
     camp = campbell(fn[fn > 0], cut.orders, crange)
-    peaks = (_cut_peaks(cut, names, fn, fn_names, float(min_rise_db), float(natural_tolerance),
-                        float(dynamic_range_db)) if varying else CutPeaks.empty())
+    keep_fn = [i for i in range(fn.size) if fn[i] > 0]
+    peaks = (cut_resonances(cut, names, fn[keep_fn], [fn_names[i] for i in keep_fn],
+                            min_rise_db=float(min_rise_db), tolerance=float(natural_tolerance),
+                            dynamic_range_db=float(dynamic_range_db))
+             if varying else CutPeaks.empty())
     return RunupLevels(
         name=name, units=units, cuts=cut, order_names=tuple(names),
         required=tuple(bool(r) for r in required_cut), overall=overall,
