@@ -98,9 +98,11 @@ def order_cuts_levels_figure(
             ax.plot(ox[oo], np.asarray(ov.values, dtype=float)[oo], color="k", lw=1.6,
                     label=f"overall {lo_f:.3g}–{hi_f:.4g} Hz")
         for i in idx:
-            ax.plot(x[order], np.asarray(lv.cuts.values[i], dtype=float)[order],
-                    color=colour[i], lw=1.0,
-                    label=f"{lv.order_names[i]} ({lv.cuts.orders[i]:.4g})")
+            y = np.asarray(lv.cuts.values[i], dtype=float)[order]
+            below = _finite_max(y) < top - dynamic_range_db if np.isfinite(y).any() else True
+            ax.plot(x[order], y, color=colour[i], lw=1.0,
+                    label=f"{lv.order_names[i]} ({lv.cuts.orders[i]:.4g})"
+                    + (f": below the {dynamic_range_db:g} dB shown" if below else ""))
         ax.set_ylim(top - dynamic_range_db, top + 4.0)
         ax.set_ylabel(f"rms level\n[dB re {lv.level_reference}]")
         ax.grid(True, alpha=0.3)

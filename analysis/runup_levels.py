@@ -79,7 +79,7 @@ from analysis.order_resolution import (
     optional_positive,
 )
 from analysis.orders import OrderCut, order_cuts
-from analysis.waterfall import Waterfall, waterfall_from_map
+from analysis.waterfall import Waterfall, level_reference, waterfall_from_map
 
 if TYPE_CHECKING:
     import xarray as xr
@@ -93,6 +93,7 @@ __all__ = [  # CUT_* and separation_orders: from analysis.cut_plan
     "CutPeaks",
     "RunupLevels",
     "Waterfall",
+    "finest_order_resolution",
     "runup_levels",
     "separation_orders",
 ]
@@ -101,6 +102,24 @@ MIN_GIVEN_FRAMES = 4
 """A given ``order_resolution`` must leave at least this many independent frames."""
 
 _STANDSTILL = 0.02  # samples below 2 % of the top speed are standstill (as order_cuts)
+
+
+def finest_order_resolution(revolutions: float) -> float:
+    """Finest ``order_resolution`` [orders] a record of ``revolutions`` admits:
+    ``ENBW_lines * MIN_GIVEN_FRAMES / revolutions`` (frames of ``ENBW / resolution``
+    revolutions, at least :data:`MIN_GIVEN_FRAMES` of them; flat-top window).
+
+    Parameters
+    ----------
+    revolutions : float
+        Revolutions of the reference shaft while it turns.
+
+    Returns
+    -------
+    float
+    """
+    enbw, _ = enbw_and_lobe()
+    return enbw * MIN_GIVEN_FRAMES / max(float(revolutions), 1e-300)
 
 
 # --------------------------------------------------------------------------- results
@@ -150,6 +169,8 @@ class RunupLevels:
         Cut maxima more than this below the highest cut level are not resonances [dB].
     natural_tolerance : float
         Relative tolerance of the natural-frequency match of a resonance.
+    min_speed_ratio : float
+        Highest over lowest frame speed from which on the record counts as a run-up.
     """
 
     name: str
@@ -171,6 +192,7 @@ class RunupLevels:
     min_rise_db: float = 6.0
     dynamic_range_db: float = 40.0
     natural_tolerance: float = 0.05
+    min_speed_ratio: float = 1.3
 
     @property
     def orders(self) -> np.ndarray:
@@ -185,8 +207,8 @@ class RunupLevels:
 
     @property
     def level_reference(self) -> str:
-        """Reference of the dB levels, e.g. ``"1 N"``."""
-        return f"1 {self.units}"
+        """Reference of the dB levels, e.g. ``"1 N"`` (``"1"`` for a dimensionless signal)."""
+        return level_reference(self.units)
 
     def order_statistics(self) -> list[tuple[float, str, float, float, float]]:
         """Per cut: ``(order, name, max level [dB], speed of the max [min-1], median [dB])``
@@ -293,6 +315,7 @@ class RunupLevels:
                 "dynamic_range_db": float(self.dynamic_range_db),
                 "natural_tolerance": float(self.natural_tolerance),
                 "varying_speed": int(self.varying_speed),
+                "min_speed_ratio": float(self.min_speed_ratio),
                 "dropped_orders": "; ".join(f"{n} ({o:.6g}): {why}"
                                             for n, o, why in self.dropped),
                 "comment": " ".join(self.notes),
@@ -475,7 +498,7 @@ def runup_levels(
     required = np.asarray([o for o, _, r in items if r])
     given = optional_positive(order_resolution, "order_resolution", "orders")
     if given is not None:
-        finest = enbw * MIN_GIVEN_FRAMES / max(revs, 1e-300)
+        finest = finest_order_resolution(revs)
         if given < finest:
             raise ValueError(
                 f"order_resolution = {given:g} orders needs frames of {enbw / given:.4g} "
@@ -546,4 +569,4 @@ def runup_levels(
         peaks=peaks, resolution=float(res), revolutions=revs, speed_range=(lo, hi),
         varying_speed=bool(varying), dropped=tuple(dropped), notes=tuple(notes),
         min_rise_db=float(min_rise_db), dynamic_range_db=float(dynamic_range_db),
-        natural_tolerance=float(natural_tolerance))
+        natural_tolerance=float(natural_tolerance), min_speed_ratio=float(min_speed_ratio))

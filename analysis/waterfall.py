@@ -17,7 +17,14 @@ import numpy as np
 
 from analysis.maps import RpmFrequencyMap
 
-__all__ = ["Waterfall", "waterfall_from_map"]
+__all__ = ["Waterfall", "level_reference", "waterfall_from_map"]
+
+
+def level_reference(units: str) -> str:
+    """Reference of levels in dB of a signal in ``units``: ``"1 N"``; ``"1"`` when the signal
+    is dimensionless (``""`` or ``"1"``), never ``"1 1"``."""
+    u = str(units).strip()
+    return "1" if u in ("", "1") else f"1 {u}"
 
 
 @dataclass(frozen=True)
@@ -97,6 +104,6 @@ def waterfall_from_map(m: RpmFrequencyMap, fmax: float | None = None, traces: in
     return Waterfall(rpm=np.asarray(m.rpm[pick], dtype=float),
                      time=np.asarray(m.time[pick], dtype=float),
                      frequency=np.asarray(m.frequency[band], dtype=float), level_db=level,
-                     amplitude="rms", level_reference=f"1 {units}",
+                     amplitude="rms", level_reference=level_reference(units),
                      resolution_hz=float(m.resolution_hz), window=m.window, name=m.name)
 

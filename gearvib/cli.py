@@ -158,6 +158,31 @@ def _limits(low: float = -math.inf, high: float = math.inf, *, strict: bool = Fa
     return parse
 
 
+def _order_list(text: str) -> list[float]:
+    """An argparse type: ``"1,2,24"``, orders > 0 and <= 1e4, at most MAX_CUT_ORDERS."""
+    from gearvib.report.study import ANALYSIS_LIMITS, MAX_CUT_ORDERS
+
+    parts = [p.strip() for p in text.split(",")]
+    if not text.strip() or any(not p for p in parts):
+        raise argparse.ArgumentTypeError(f"{text[:40]!r} is not a list of orders (e.g. "
+                                         "1,2,24)")
+    if len(parts) > MAX_CUT_ORDERS:
+        raise argparse.ArgumentTypeError(f"{len(parts)} orders; admissible: at most "
+                                         f"{MAX_CUT_ORDERS}")
+    return [_number(p, 0.0, ANALYSIS_LIMITS["cut_orders"][1], strict=True) for p in parts]
+
+
+def _order_resolution(text: str) -> float:
+    """An argparse type: 0 (automatic) or 0.01..10 orders."""
+    from gearvib.report.study import ANALYSIS_LIMITS
+
+    v = _number(text, 0.0, ANALYSIS_LIMITS["order_resolution"][1])
+    if 0 < v < ANALYSIS_LIMITS["order_resolution"][0]:
+        raise argparse.ArgumentTypeError(f"{text[:40]!r} is not admissible (admissible: 0 for "
+                                         "automatic, or 0.01..10)")
+    return v
+
+
 def _steps(text: str) -> int:
     try:
         v = int(text)
@@ -257,6 +282,7 @@ def _cmd_example(args: argparse.Namespace) -> int:
 
 
 def _cmd_report(args: argparse.Namespace) -> int:
+    from dataclasses import replace
     from pathlib import Path
 
     from gearvib.outputs import check_output_folder, removed_if_left_empty
@@ -271,6 +297,8 @@ def _cmd_report(args: argparse.Namespace) -> int:
         study = load_study(inputs[0])
         if args.duration is not None:
             study = study.with_duration(args.duration)
+        study = replace(study, analysis=study.analysis.with_cuts(args.orders,
+                                                                 args.order_resolution))
         _report_removed(check_output_folder(
             out, [f"{c.name}.nc" for c in study.cases] + report_files,
             overwrite=args.overwrite)[1])
@@ -284,7 +312,8 @@ def _cmd_report(args: argparse.Namespace) -> int:
             raise CliError("--duration applies to a study .toml, not to existing runs")
         _report_removed(check_output_folder(out, report_files, overwrite=args.overwrite)[1])
         with removed_if_left_empty(out):
-            paths = build_report(inputs, out)
+            paths = build_report(inputs, out, cut_orders=args.orders,
+                                 order_resolution=args.order_resolution)
     print(f"report: {paths.html}")
     print(f"        {paths.pdf}")
     return 0
@@ -373,11 +402,14 @@ def _measured_report(args: argparse.Namespace, inputs: Sequence, out, files: lis
         gearset = load_description(args.gearset)  # a gear set, or shafts and bearings
     else:
         gearset = None
+    from gearvib.report.study import AnalysisSettings
+
+    settings = AnalysisSettings().with_cuts(args.orders, args.order_resolution)
     m = load_measurement(inputs[0], channel=args.channel, **_speed_options(args))
     _report_removed(check_output_folder(out, files, overwrite=args.overwrite)[1])
     with removed_if_left_empty(out):
         paths = build_measured_report(m, out, gearset=gearset, channel=args.channel,
-                                      reference=args.reference)
+                                      reference=args.reference, settings=settings)
     if paths.case.model is None and paths.case.rig is None:
         print("gearvib: no --gearset: the report shows the maps, spectra and orders of the "
               "reference shaft only", file=sys.stderr)
@@ -703,6 +735,13 @@ def _parser() -> argparse.ArgumentParser:
                         default="gearvib-report")
     r.add_argument("--duration", type=_limits(1e-6, 1e7), metavar="S",
                    help="override the run-up duration of a study [s]")
+    r.add_argument("--orders", type=_order_list, metavar="O1,O2,...",
+                   help="orders of the reference shaft to cut besides the 1x-3x mesh "
+                   "orders, e.g. 1,2,24 (each > 0 and <= 1e4, at most 20); see "
+                   "docs/reports.md")
+    r.add_argument("--order-resolution", type=_order_resolution, metavar="R",
+                   help="resolution of the order cuts [orders], 0.01..10 (default: "
+                   "automatic, 1/4 order or finer where orders are closer)")
     r.set_defaults(func=_cmd_report)
 
     g = sub.add_parser("diagnose", help="fault-cause diagnosis of a measurement (simulation "

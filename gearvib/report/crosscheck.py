@@ -398,6 +398,9 @@ def _check_summary(tables: list[ReportTable], paragraphs: list[tuple[str, str]])
                 if cut is not None and n != len(cut.rows):
                     out.append(f"{case}: the key numbers count {n} cut resonances of "
                                f"{m.group(1)}, the table lists {len(cut.rows)}")
+            m = re.fullmatch(r"highest order-cut level \((.+)\)", q)
+            if m:
+                out += _check_highest_cut(case, m.group(1), v, tables)
             m = re.fullmatch(r"(\d+) rises? in (\d+) speed regions?", v)
             if q.startswith("rises of the") and m:
                 rises = _find(tables, f"Rises of {case}")
@@ -409,6 +412,27 @@ def _check_summary(tables: list[ReportTable], paragraphs: list[tuple[str, str]])
                     out.append(f"{case}: the key numbers count {m.group(2)} speed regions, the "
                                f"region table lists {len(regions.rows)}")
     return out
+
+
+def _check_highest_cut(case: str, signal: str, value: str, tables: list[ReportTable]
+                       ) -> list[str]:
+    """A key number ``"2× mesh (51.18): 52.3 dB re 1 N at 2498 min⁻¹"`` against the highest
+    row of the cut-level table of that signal."""
+    cut = _find(tables, f"Order-cut levels of {case}, {signal}")
+    m = re.fullmatch(r"(.+) \(([\d.]+)\): (-?[\d.]+) .* at (\d+) min⁻¹", value)
+    if cut is None or m is None:
+        return [f"{case}: the highest order-cut level of {signal} ({value!r}) has no "
+                "cut-level table to agree with"]
+    col = next(j for j, h in enumerate(cut.header) if h.startswith("max level"))
+    rows = [r for r in cut.rows if r[col] != "–"]
+    if not rows:
+        return [f"{case}: the key numbers state a highest cut level of {signal}, its table "
+                "has none"]
+    top = max(rows, key=lambda r: float(r[col]))
+    if (top[1], top[0], top[col], top[3]) != m.groups():
+        return [f"{case}: the key numbers' highest order-cut level of {signal} reads "
+                f"{value!r}, the cut-level table's highest row {top!r}"]
+    return []
 
 
 def _check_explanation(where: str, rank: str, expl: str, rises: ReportTable | None

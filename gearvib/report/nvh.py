@@ -35,8 +35,10 @@ from analysis.runup_level_plots import (
     waterfall_figure,
 )
 from analysis.runup_levels import RunupLevels, runup_levels
+from analysis.waterfall import level_reference
 from gearvib.report.blocks import Block
 from gearvib.report.study import AnalysisSettings
+from gearvib.report.wording import span
 
 __all__ = [
     "LEVELS_SECTION_ID",
@@ -45,10 +47,12 @@ __all__ = [
     "MESH_HARMONICS",
     "SignalLevels",
     "catalogue_orders",
+    "constant_speed_text",
     "cut_level_rows",
     "cut_orders",
     "cut_resonance_rows",
     "levels_blocks",
+    "report_note",
     "signal_levels",
 ]
 
@@ -103,7 +107,7 @@ class SignalLevels:
     @property
     def level_unit(self) -> str:
         """``"dB re 1 N"``."""
-        return f"dB re 1 {self.units}"
+        return f"dB re {level_reference(self.units)}"
 
 
 # --------------------------------------------------------------------------- orders
@@ -339,6 +343,29 @@ def cut_resonance_header(sl: SignalLevels) -> tuple[str, ...]:
 # --------------------------------------------------------------------------- blocks
 
 
+def report_note(note: str) -> str:
+    """A note of :func:`analysis.runup_levels.runup_levels` in the report's words (the CLI
+    option instead of the keyword)."""
+    return note.replace("give a finer resolution= (orders four resolutions apart are "
+                        "separated) or a narrower band",
+                        "a longer run or a finer --order-resolution separates them (orders "
+                        "four resolutions apart are separated)")
+
+
+def constant_speed_text(sl: SignalLevels) -> str:
+    """What a record without a run-up shows: levels over time, no resonances over speed."""
+    lv = sl.levels
+    assert lv is not None
+    lo, hi = lv.speed_range
+    return (f"{sl.case}, {sl.signal}: no run-up: the {sl.reference} turns at "
+            f"{span(lo, hi, 'min⁻¹')} (less than {lv.min_speed_ratio:g} times from lowest to "
+            "highest), so an order cut over speed would be a single point. The cuts and the "
+            "overall level are shown over time (they tell whether the levels are steady), the "
+            "waterfall holds spectra over time and the Campbell diagram marks the operating "
+            "speed; no resonance over speed can be ranked. The spectra show the orders' "
+            "levels at this speed.")
+
+
 def _panels(sl: SignalLevels) -> list[list[int]]:
     lv = sl.levels
     assert lv is not None
@@ -384,7 +411,10 @@ def levels_blocks(items: Sequence[SignalLevels], *, heading: bool = True,
                      "--order-resolution separates more): "
                      + "; ".join(f"{n} ({o:.4g}: {why})" for n, o, why in lv.dropped) + ".")
         out.append(Block("text", text))
-        out += [Block("text", f"{sl.case}, {sl.signal}: note: {n}") for n in lv.notes]
+        if not lv.varying_speed:
+            out.append(Block("text", constant_speed_text(sl)))
+        out += [Block("text", f"{sl.case}, {sl.signal}: note: {report_note(n)}")
+                for n in lv.notes]
         marks = min(MARKED_RESONANCES, len(lv.peaks)) if sl.primary else 0
         panels = _panels(sl)
         out.append(Block(

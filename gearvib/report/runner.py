@@ -43,6 +43,7 @@ from gearvib.report.sections import report_sections
 from gearvib.report.study import (
     AnalysisSettings,
     Study,
+    check_cut_resolution,
     check_report_duration,
     check_report_size,
     resolve_run,
@@ -251,7 +252,9 @@ def _subtitle(cases: Sequence[CaseAnalysis]) -> str:
 
 def build_report(paths_or_datasets: Sequence[RunInput] | RunInput, out_dir: str | os.PathLike,
                  *, title: str | None = None, analysis: AnalysisSettings | None = None,
-                 reference: str | None = None, progress: bool | None = False) -> ReportPaths:
+                 reference: str | None = None, progress: bool | None = False,
+                 cut_orders: Sequence[float] | None = None,
+                 order_resolution: float | None = None) -> ReportPaths:
     """Build ``report.html`` and ``report.pdf`` from run-up files or Datasets.
 
     Parameters
@@ -269,6 +272,12 @@ def build_report(paths_or_datasets: Sequence[RunInput] | RunInput, out_dir: str 
         first case).
     progress : bool or None
         Progress bar of the Floquet charts (None: on a terminal only).
+    cut_orders : sequence of float, optional
+        Orders cut besides the 1st to 3rd mesh harmonics (``--orders``), replacing the
+        settings' ``cut_orders`` of every run.
+    order_resolution : float, optional
+        Resolution of the order cuts [orders] (``--order-resolution``; 0: automatic),
+        replacing the settings' of every run.
 
     Returns
     -------
@@ -281,7 +290,9 @@ def build_report(paths_or_datasets: Sequence[RunInput] | RunInput, out_dir: str 
     ValueError, PermissionError
         The output folder is not usable (before any computation).
     """
+    AnalysisSettings().with_cuts(cut_orders, order_resolution)  # checked before any file
     runs = _load_inputs(paths_or_datasets)  # type: ignore[arg-type]
+    settings_of: dict[str, AnalysisSettings | None] = {}
     for name, ds in runs:  # before any analysis: the maps must fit into memory
         t = ds["time"].values
         fs = float(1.0 / (t[1] - t[0])) if t.size > 1 and t[1] > t[0] else 1.0
@@ -290,14 +301,21 @@ def build_report(paths_or_datasets: Sequence[RunInput] | RunInput, out_dir: str 
                                 else AnalysisSettings())
         check_report_size(t.size, fs, settings, f"run {name!r}")
         check_report_duration(t.size, fs, settings, f"run {name!r}")
+        overridden = cut_orders is not None or order_resolution is not None
+        settings_of[name] = (settings.with_cuts(cut_orders, order_resolution) if overridden
+                             else analysis)
+        if "input_angle" in ds.variables:
+            a = ds["input_angle"].values
+            check_cut_resolution(abs(float(a[-1]) - float(a[0])) / (2 * math.pi),
+                                 settings_of[name] or settings, f"run {name!r}")
     with _OutputFolder(check_output_dir(out_dir)) as folder:
-        return _build(runs, folder, title=title, analysis=analysis, reference=reference,
+        return _build(runs, folder, title=title, analysis=settings_of, reference=reference,
                       progress=progress)
 
 
 def _build(runs: list[tuple[str, xr.Dataset]], folder: _OutputFolder, *, title: str | None,
-           analysis: AnalysisSettings | None, reference: str | None,
-           progress: bool | None) -> ReportPaths:
+           analysis: AnalysisSettings | dict[str, AnalysisSettings | None] | None,
+           reference: str | None, progress: bool | None) -> ReportPaths:
     first = _caller(runs[0][1])
     study = first.get("study", {}) if isinstance(first.get("study"), dict) else {}
     names = [n for n, _ in runs]
@@ -308,7 +326,8 @@ def _build(runs: list[tuple[str, xr.Dataset]], folder: _OutputFolder, *, title: 
     cases: list[CaseAnalysis] = []
     for n, ds in runs:
         t0 = time.perf_counter()
-        cases.append(analyse_case(ds, name=n, settings=analysis, progress=progress))
+        st = analysis.get(n) if isinstance(analysis, dict) else analysis
+        cases.append(analyse_case(ds, name=n, settings=st, progress=progress))
         log.info("analysed %s in %.1f s (Floquet chart %.1f s)", n, time.perf_counter() - t0,
                  cases[-1].stability_time_s)
     ref_case = next(c for c in cases if c.name == ref)
@@ -356,6 +375,8 @@ def check_study(study: Study) -> list[tuple[Any, dict, Any, Any, dict]]:
         n_out = math.floor(run["duration"] * run["fs_out"]) + 1
         check_report_size(n_out, run["fs_out"], study.analysis, f"case {case.name!r}")
         check_report_duration(n_out, run["fs_out"], study.analysis, f"case {case.name!r}")
+        revs = 0.5 * (run["speed_start_rpm"] + run["speed_end_rpm"]) * run["duration"] / 60.0
+        check_cut_resolution(revs, study.analysis, f"case {case.name!r}")
         prepared.append((case, cfg, base, gs, run))
     return prepared
 

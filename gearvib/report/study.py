@@ -49,6 +49,7 @@ __all__ = [
     "RunSettings",
     "Study",
     "check_cut_orders",
+    "check_cut_resolution",
     "check_order_resolution",
     "check_report_duration",
     "check_report_size",
@@ -236,6 +237,29 @@ class AnalysisSettings:
         object.__setattr__(self, "cut_orders", check_cut_orders(self.cut_orders))
         object.__setattr__(self, "order_resolution", check_order_resolution(
             self.order_resolution))
+
+    def with_cuts(self, orders: Any = None, resolution: float | None = None
+                  ) -> AnalysisSettings:
+        """A copy with the order cuts asked for (``gearvib report --orders``,
+        ``--order-resolution``); None keeps the setting.
+
+        Parameters
+        ----------
+        orders : sequence of float, optional
+            ``cut_orders`` (checked by :func:`check_cut_orders`).
+        resolution : float, optional
+            ``order_resolution`` [orders] (0: automatic; :func:`check_order_resolution`).
+
+        Returns
+        -------
+        AnalysisSettings
+        """
+        kw: dict[str, Any] = {}
+        if orders is not None:
+            kw["cut_orders"] = check_cut_orders(list(orders), "--orders")
+        if resolution is not None:
+            kw["order_resolution"] = check_order_resolution(resolution, "--order-resolution")
+        return replace(self, **kw) if kw else self
 
     def to_dict(self) -> dict[str, Any]:
         """All settings as a plain dict (``cut_orders`` as a list)."""
@@ -558,6 +582,29 @@ def check_report_size(n_samples: int, fs: float, settings: AnalysisSettings,
                    f"{settings.map_resolution_hz:g} over {n} samples at {fs:g} Hz)",
                    "lower [analysis].map_overlap (0.9 gives a smooth map) or coarsen "
                    "map_resolution_hz")
+
+
+def check_cut_resolution(revolutions: float, settings: AnalysisSettings,
+                         where: str = "the run") -> None:
+    """Refuse an ``order_resolution`` finer than a run of ``revolutions`` admits (before it is
+    simulated or analysed; :func:`analysis.runup_levels.finest_order_resolution`).
+
+    Raises
+    ------
+    ConfigError
+        Naming the resolution, the finest admissible and ``--order-resolution``.
+    """
+    from analysis.runup_levels import finest_order_resolution
+
+    res = settings.order_resolution
+    if not res:
+        return
+    finest = finest_order_resolution(revolutions)
+    if res < finest:
+        raise ConfigError(
+            f"{where}: order_resolution = {res:g} orders needs a longer run: the input shaft "
+            f"turns {revolutions:.4g} revolutions, admissible >= "
+            f"{math.ceil(finest * 1000) / 1000:g} orders (--order-resolution; 0 for automatic)")
 
 
 def _map_frames(n: int, fs: float, settings: AnalysisSettings) -> tuple[int, int, int]:

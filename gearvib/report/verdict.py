@@ -199,9 +199,10 @@ def summary_blocks(cases: Sequence[CaseSummary], *, inputs: Sequence[tuple[str, 
             out.append(Block("text", f"{cs.case}: no order cuts, so no resonance ranking "
                              "(see the notes of the order-cut section)."))
         elif not sl.levels.varying_speed:  # type: ignore[union-attr]
-            out.append(Block("text", f"{cs.case}: constant speed "
-                             f"({span(*sl.levels.speed_range, 'min⁻¹')}): "  # type: ignore[union-attr]
-                             "levels over time, no resonance over speed to rank."))
+            out.append(Block("text", f"{cs.case}: no run-up: constant speed "
+                             f"({span(*sl.levels.speed_range, 'min⁻¹')}), so the order cuts "  # type: ignore[union-attr]
+                             "are levels over time and there is no resonance over speed to "
+                             "rank; the key numbers give the levels at this speed."))
         elif not rows:
             out.append(Block("text", f"{cs.case}: no order cut of the {sl.signal} rises "
                              f"{sl.levels.min_rise_db:g} dB or more above its surroundings "  # type: ignore[union-attr]
@@ -300,7 +301,9 @@ def settings_summary(settings: AnalysisSettings) -> str:
     """The analysis settings in one readable line (the full list: :func:`settings_rows`)."""
     st = settings
     parts = [f"maps Hann, RBW {st.map_resolution_hz:g} Hz, overlap {st.map_overlap:g}",
-             "order cuts " + _SETTING_TEXT["cut_orders"](st.cut_orders).split(",")[0]
+             "order cuts 1×–3× mesh" + (" and orders " + ", ".join(f"{o:g}" for o in
+                                                                  st.cut_orders)
+                                        if st.cut_orders else "")
              + (f", resolution {st.order_resolution:g} orders" if st.order_resolution
                 else ", automatic resolution"),
              f"rises >= {st.threshold_db:g} dB", f"natural-frequency tolerance "
