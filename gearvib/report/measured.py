@@ -74,11 +74,12 @@ from gearvib.report.document import FigureImages
 from gearvib.report.figures import Label, natural_frequency_lines, place_labels
 from gearvib.report.html import render_html
 from gearvib.report.measured_nvh import measured_levels, with_level_pages
+from gearvib.report.nvh import LEVELS_SECTION_ID
 from gearvib.report.pdf import write_pdf
 from gearvib.report.runner import check_output_dir
 from gearvib.report.sections import Block, Section
 from gearvib.report.study import AnalysisSettings, check_report_size
-from gearvib.report.verdict import readable, settings_rows
+from gearvib.report.verdict import SUMMARY_ID, readable, settings_rows
 from gearvib.report.wording import count, span
 from gearvib.rig import ShaftRig
 from gearvib.stability import gear_set_candidates
@@ -99,9 +100,10 @@ __all__ = [
     "measured_sections",
 ]
 
-MEASURED_SECTION_IDS = ("measurement", "gear-set", "spectra", FAULT_SECTION_ID, "sonograms",
-                        "resonances", "provenance")
-"""Section ids of a measured report, in order."""
+MEASURED_SECTION_IDS = (SUMMARY_ID, LEVELS_SECTION_ID, "measurement", "gear-set", "spectra",
+                        FAULT_SECTION_ID, "sonograms", "resonances", "provenance")
+"""Section ids of a measured report, in order (the summary and the NVH pages first:
+:func:`gearvib.report.measured_nvh.with_level_pages`)."""
 
 TITLES = {"measurement": "Measurement and speed reference",
           "gear-set": "Gear set: kinematics and natural frequencies",
