@@ -104,6 +104,7 @@ MEASURED_SECTION_IDS = (SUMMARY_ID, LEVELS_SECTION_ID, "measurement", "gear-set"
                         FAULT_SECTION_ID, "sonograms", "resonances", "provenance")
 """Section ids of a measured report, in order (the summary and the NVH pages first:
 :func:`gearvib.report.measured_nvh.with_level_pages`)."""
+_OWN_SECTION_IDS = MEASURED_SECTION_IDS[2:]  # those measured_sections writes
 
 TITLES = {"measurement": "Measurement and speed reference",
           "gear-set": "Gear set: kinematics and natural frequencies",
@@ -1003,7 +1004,7 @@ def _table(caption: str, header: Sequence[str], rows: Sequence[Sequence[Any]]) -
 def measured_sections(mc: MeasuredCase) -> list[Section]:
     """The measured report as sections (rendered by the HTML and PDF writers)."""
     n = mc.name
-    s: dict[str, list[Block]] = {k: [] for k in MEASURED_SECTION_IDS}
+    s: dict[str, list[Block]] = {k: [] for k in _OWN_SECTION_IDS}
     s["measurement"] += [
         _table(f"Record of {n}", ("item", "value"), mc.measurement_rows()),
         _table(f"Channels of {n}", ("channel", "units", "description", "role"),
@@ -1108,7 +1109,7 @@ def measured_sections(mc: MeasuredCase) -> list[Section]:
             "constant speed" if not mc.varying_speed else
             "no natural frequency or vertical line to classify against") + ").")]
     s["provenance"] += [_table(f"Provenance of {n}", ("item", "value"), mc.provenance)]
-    return [Section(k, TITLES[k], tuple(s[k])) for k in MEASURED_SECTION_IDS]
+    return [Section(k, TITLES[k], tuple(s[k])) for k in _OWN_SECTION_IDS]
 
 
 # --------------------------------------------------------------------------- build

@@ -305,7 +305,7 @@ def test_interrupted_report_leaves_no_folder(demo_study, tmp_path, monkeypatch):
     assert not (tmp_path / "new").exists()
     monkeypatch.setattr(runner, "simulate", interrupt)
     with pytest.raises(KeyboardInterrupt):
-        run_study(Study.for_presets(["paper-case1"], duration=0.1), target, progress=False)
+        run_study(Study.for_presets(["paper-case1"], duration=0.15), target, progress=False)
     assert sorted(p.name for p in tmp_path.iterdir()) == []
 
 

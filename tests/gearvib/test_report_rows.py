@@ -35,7 +35,7 @@ RISES = _Rises(
     crossings=(Crossing(2, "f5", 500.0, 1000.0, "rise", 12.3, "sun"),
                Crossing(3, "f7", 800.4, 1600.6, "no rise", 0.0, "ring")))
 REST = [("2501", "1201", "f_i", "8.0", "parametric", "50 %", ""),
-        ("1234", "42", "spot", "3.3", "unexplained", "100 %", "n3")]
+        ("1234", "42", "spot", "3.3", "unexplained", "–", "n3")]  # no chance: unexplained
 
 
 def test_rise_rows_write_every_column():
