@@ -113,6 +113,9 @@ def cut_order_list(orders: Any, names: Sequence[str] | None,
     notes : list of str
         What was decided (empty: kept for callers that collect notes).
     """
+    if optional is not None and not isinstance(optional, Mapping):
+        raise TypeError(f"optional_orders must be a mapping of names to orders, got "
+                        f"{type(optional).__name__}")
     req = requested_orders(orders)
     if req is None or not req.size:
         raise ValueError("orders (the orders to cut, > 0) are required")

@@ -111,6 +111,8 @@ def cut_resonances(cut: OrderCut, names: Sequence[str], fn: Any = (),
     ``tolerance`` of itself plus half the -3 dB span of the maximum's speed (the nearest such
     ``f_i``).
     """
+    if not isinstance(cut, OrderCut):
+        raise TypeError(f"cut must be an analysis.orders.OrderCut, got {type(cut).__name__}")
     fn = np.atleast_1d(np.asarray(fn, dtype=float))
     if len(fn_names) != fn.size:
         raise ValueError(f"fn_names: {len(fn_names)} names for {fn.size} frequencies")

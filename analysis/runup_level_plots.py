@@ -14,6 +14,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from analysis.checks import require_int, require_positive, require_real
+
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
@@ -23,6 +25,26 @@ __all__ = ["campbell_levels_figure", "order_cuts_levels_figure", "waterfall_figu
 
 MAX_CURVES = 5
 """Most order cuts drawn in one panel by default."""
+
+
+def _check(lv: Any, marks: Any = 0, frequency_max: Any = None,
+           figsize: Any = (8.0, 4.0), **positive: Any) -> None:
+    """The result type and the figure options (one-line errors naming the option)."""
+    from analysis.runup_levels import RunupLevels
+
+    if not isinstance(lv, RunupLevels):
+        raise TypeError(f"lv must be an analysis.runup_levels.RunupLevels, got "
+                        f"{type(lv).__name__}")
+    require_int(marks, "marks", 0)
+    if frequency_max is not None:
+        require_positive(require_real(frequency_max, "frequency_max"), "frequency_max")
+    for name, value in positive.items():
+        require_positive(require_real(value, name), name)
+    if not isinstance(figsize, tuple | list) or len(figsize) != 2:
+        raise ValueError(f"figsize = {figsize!r} must be (width, height) in inches")
+    for k, v in enumerate(figsize):
+        if not 0.5 <= require_real(v, f"figsize[{k}]") <= 100.0:
+            raise ValueError(f"figsize[{k}] = {v!r} must lie in 0.5..100 inches")
 
 
 def _figure(figsize: tuple[float, float]) -> Figure:
@@ -82,6 +104,8 @@ def order_cuts_levels_figure(
     width : float
         Figure width [in]; the height follows the panels.
     """
+    _check(lv, marks, figsize=(width, 4.0), dynamic_range_db=dynamic_range_db)
+    require_int(max_curves, "max_curves", 1)
     groups = _panels(lv, panels, max(1, int(max_curves)))
     fig = _figure((width, 1.6 + 2.2 * len(groups)))
     axes = fig.subplots(len(groups), 1, squeeze=False, sharex=True)[:, 0]
@@ -139,6 +163,8 @@ def waterfall_figure(
     ``spacings_per_range`` trace spacings (a scale bar shows 20 dB). Traces in front (lower
     speed) hide those behind. Dashed: the cut orders; dotted: the natural frequencies.
     """
+    _check(lv, 0, frequency_max, figsize, dynamic_range_db=dynamic_range_db,
+           spacings_per_range=spacings_per_range)
     w = lv.waterfall
     fig = _figure(figsize)
     ax = fig.add_subplot()
@@ -215,6 +241,7 @@ def campbell_levels_figure(
     crossing a natural frequency) as open circles, the ``marks`` strongest cut resonances
     numbered ``1, 2, ...``. At constant speed the rays run from 0 to 1.25 times the speed and
     the operating speed is shaded."""
+    _check(lv, marks, frequency_max, figsize, dynamic_range_db=dynamic_range_db)
     fig = _figure(figsize)
     ax = fig.add_subplot()
     c = lv.campbell

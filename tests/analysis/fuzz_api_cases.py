@@ -120,6 +120,10 @@ def objects() -> dict[str, Any]:
     o["envelope_spectrum"] = envelope_spectrum(r["x"], FS, band=(200.0, 600.0))
     o["candidates"] = instability_candidates([100.0, 250.0], mesh_frequency_per_rpm=0.5)
     o["map_ds"] = o["rpm_frequency_map"].to_dataset()
+    from analysis.runup_levels import runup_levels
+
+    o["runup_levels"] = runup_levels(r["x"], FS, rpm=r["rpm"], orders=[3.0, 7.0],
+                                     natural_frequencies_hz=[100.0], map_resolution=8.0)
     return o
 
 
@@ -558,6 +562,7 @@ BASELINES: dict[str, Callable[[], A]] = {
     # maps
     "analysis.maps.campbell": _c(lambda: [100.0, 250.0], lambda: [1, 3], (600.0, 1500.0)),
     "analysis.maps.overall_level": _c(x, FS, rpm),
+    "analysis.maps.overall_level_from_map": _c(_o("rpm_frequency_map")),
     "analysis.maps.rpm_frequency_map": _c(x, FS, rpm, resolution=8.0),
     "analysis.maps.rpm_frequency_map_ds": _c(dataset, "acc", "speed", resolution=8.0),
     "analysis.maps.rpm_order_map": _c(x, FS, rpm, max_order=10.0, resolution=0.5),
@@ -651,6 +656,22 @@ BASELINES: dict[str, Callable[[], A]] = {
     "analysis.resample.resample_to_angle": _c(x, FS, samples_per_rev=32, rpm=rpm),
     "analysis.resample.tracking": lambda: (_tracking_args(), {}),
     # runup
+    "analysis.cut_plan.cut_order_list": _c(lambda: [3.0, 7.0], None, lambda: {"a": 5.0}),
+    "analysis.cut_plan.default_cut_resolution": _c(lambda: np.array([3.0, 7.0]), 30.0, 3.77),
+    "analysis.cut_plan.enbw_and_lobe": _c("flattop"),
+    "analysis.cut_plan.select_cut_orders": _c(lambda: [(3.0, ["a"], True), (5.0, ["b"], False)],
+                                              1.0, 20.0),
+    "analysis.cut_plan.separation_orders": _c(0.25),
+    "analysis.cut_resonances.cut_resonances": _c(lambda: objects()["runup_levels"].cuts,
+                                                 lambda: ["a", "b"]),
+    "analysis.runup_level_plots.campbell_levels_figure": _c(_o("runup_levels")),
+    "analysis.runup_level_plots.order_cuts_levels_figure": _c(_o("runup_levels")),
+    "analysis.runup_level_plots.waterfall_figure": _c(_o("runup_levels")),
+    "analysis.runup_levels.finest_order_resolution": _c(30.0),
+    "analysis.runup_levels.runup_levels": _c(x, FS, rpm, lambda: [3.0, 7.0],
+                                             map_resolution=8.0),
+    "analysis.waterfall.level_reference": _c("N"),
+    "analysis.waterfall.waterfall_from_map": _c(_o("rpm_frequency_map")),
     "analysis.runup.map_features": _c(_o("map_ds")),
     "analysis.runup.map_levels": _c(_o("map_ds")),
     # sinc
