@@ -71,13 +71,18 @@ def reported(member: str) -> str:
     return "planet" if member.startswith("planet") else member
 
 
-def accuracy(args: argparse.Namespace, work: Path) -> None:
-    rng = np.random.default_rng(args.seed)
+def draw_cases(rng: np.random.Generator, faulty: int, healthy: int) -> list[tuple]:
+    """``(fault or None, speed profile, noise, seed)`` of the benchmark's measurements."""
     cases = [(random_fault(rng), PROFILES[rng.integers(len(PROFILES))],
               float(rng.uniform(0.01, 0.05)), int(rng.integers(1 << 31)))
-             for _ in range(args.faulty)]
+             for _ in range(faulty)]
     cases += [(None, PROFILES[rng.integers(len(PROFILES))], float(rng.uniform(0.01, 0.05)),
-               int(rng.integers(1 << 31))) for _ in range(args.healthy)]
+               int(rng.integers(1 << 31))) for _ in range(healthy)]
+    return cases
+
+
+def accuracy(args: argparse.Namespace, work: Path) -> None:
+    cases = draw_cases(np.random.default_rng(args.seed), args.faulty, args.healthy)
     exact = klass = missed = alarms = n_f = n_h = 0
     rows = []
     margins = []  # local tooth faults: true kind's score minus the best other kind, same member
