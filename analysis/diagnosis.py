@@ -279,8 +279,8 @@ def signature_score(measured_diff: np.ndarray, signature: np.ndarray, *,
 
 def sideband_ratios(profile: OrderProfile, fundamental: float, mesh_order: float, *,
                     sidebands: int = 10, mesh_harmonics: int = 5,
-                    floor_percentile: float = 20.0,
-                    width: float = 6.0) -> tuple[np.ndarray, np.ndarray]:
+                    floor_percentile: float = 20.0, width: float = 6.0,
+                    with_noise: bool = True) -> tuple[np.ndarray, np.ndarray]:
     """Sidebands of a local fault relative to their mesh harmonic, and the noise there.
 
     A local tooth fault modulates the mesh once per fault period: sidebands
@@ -305,6 +305,9 @@ def sideband_ratios(profile: OrderProfile, fundamental: float, mesh_order: float
         Mesh harmonics used (fewer if the band ends before).
     floor_percentile, width : float
         Noise floor: the running percentile over ``±width`` orders (:func:`dynamic_range_db`).
+    with_noise : bool
+        Compute the noise floor (False: ``noise`` is empty, the ratios are the same; a noise-free
+        simulation needs none, and the running percentile is the costly part).
 
     Returns
     -------
@@ -324,8 +327,9 @@ def sideband_ratios(profile: OrderProfile, fundamental: float, mesh_order: float
     if k_max < 1:
         return np.empty(0), np.empty(0)
     ks = np.concatenate((np.arange(-k_max, 0), np.arange(1, k_max + 1)))
-    floor = ndimage.percentile_filter(amp, float(floor_percentile),
-                                      size=_window(width, profile.revolutions), mode="nearest")
+    floor = (ndimage.percentile_filter(amp, float(floor_percentile),
+                                       size=_window(width, profile.revolutions), mode="nearest")
+             if with_noise else None)
 
     def index(o: float) -> int:
         return int(np.rint((o - order[0]) / step))
@@ -345,7 +349,8 @@ def sideband_ratios(profile: OrderProfile, fundamental: float, mesh_order: float
         for k in ks:
             o = centre + k * f
             ratios.append(at(o) / ref)
-            noise.append(float(floor[index(o)]) / ref)
+            if floor is not None:
+                noise.append(float(floor[index(o)]) / ref)
     return np.asarray(ratios, float), np.asarray(noise, float)
 
 

@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import argparse
 import importlib.util
+import inspect
 import json
 import os
 import sys
@@ -44,6 +45,13 @@ def _load(name: str, path: Path):
     sys.modules[name] = mod
     spec.loader.exec_module(mod)
     return mod
+
+
+def _where(diagnose, folder: Path) -> dict:
+    """Where the candidates go: the library of this code, the run folder of older code."""
+    if "library" in inspect.signature(diagnose).parameters:
+        return {"library": folder}
+    return {"work_dir": folder}
 
 
 def kind_class(cause: str) -> str:
@@ -90,8 +98,8 @@ def independent(args: argparse.Namespace, work: Path) -> list[dict]:
             ps.write_record(spec, path)
         rec = Record.from_measurement(load_measurement(str(path)), name=spec.name)
         t0 = time.perf_counter()
-        d = diagnose(rec, spec.gear_set.config, work_dir=work / spec.gear_set.name,
-                     workers=args.workers)
+        d = diagnose(rec, spec.gear_set.config, workers=args.workers,
+                     **_where(diagnose, work / spec.gear_set.name))
         dt = time.perf_counter() - t0
         kind, member = ps.truth(spec)
         row = row_of(d, kind, member, spec.name)
@@ -118,8 +126,8 @@ def gearvib_made(args: argparse.Namespace, work: Path) -> list[dict]:
     for i, (fault, prof, noise, seed) in enumerate(cases):
         ds = synthetic_measurement("paper-case1", [fault] if fault else [], speed_rpm=prof,
                                    duration=bd.DURATION, noise=noise, seed=seed)
-        d = diagnose(record_from_run(ds), "paper-case1", work_dir=work / f"p{prof}",
-                     workers=args.workers)
+        d = diagnose(record_from_run(ds), "paper-case1", workers=args.workers,
+                     **_where(diagnose, work / f"p{prof}"))
         if fault is None:
             kind, member, exact = "none", "", ""
         else:

@@ -518,7 +518,7 @@ def _local_kind_scores(best: dict[tuple[str, str], tuple[float, Candidate]],
         rm, rn = meas_cache[c.member]
         if rm.size == 0:
             continue
-        sims = [sideband_ratios(p, f, mesh)[0] for p in by_label[c.label]]
+        sims = [sideband_ratios(p, f, mesh, with_noise=False)[0] for p in by_label[c.label]]
         if any(x.shape != rm.shape for x in sims):
             continue
         v = impulse_mismatch_db(rm, rn, sims)

@@ -48,7 +48,7 @@ from analysis.jit import private_folder
 from gearvib import tempfiles
 
 __all__ = ["ENV_VARIABLE", "code_digest", "default_library", "entry_key", "library_folder",
-           "load_entry", "save_entry"]
+           "load_entry", "save_entry", "source_digest"]
 
 ENV_VARIABLE = "GEARVIB_DIAGNOSIS_LIBRARY"
 """Environment variable naming the library folder."""
@@ -56,13 +56,29 @@ ENV_VARIABLE = "GEARVIB_DIAGNOSIS_LIBRARY"
 _FIELDS = ("order", "amplitude", "segments", "natural_frequency")
 
 
+def source_digest(roots: list[Path], h: Any = None) -> Any:
+    """SHA-256 (a ``hashlib`` object) of the ``*.py`` source files under ``roots``: each
+    file's path relative to its root's parent and its bytes, sorted; files in
+    ``__pycache__`` folders (modules generated into numba's cache) are not code and left
+    out."""
+    h = hashlib.sha256() if h is None else h
+    for root in roots:
+        root = Path(root).resolve()
+        for p in sorted(root.rglob("*.py")):
+            if "__pycache__" in p.relative_to(root).parts:
+                continue
+            h.update(str(p.relative_to(root.parent)).encode())
+            h.update(p.read_bytes())
+    return h
+
+
 @functools.cache
 def code_digest() -> str:
     """Short SHA-256 of the code and libraries the simulated profiles depend on.
 
-    gearvib's version, the relative path and bytes of every ``*.py`` file of the ``gearvib``
-    and ``analysis`` packages (sorted), and the versions of numpy, scipy, numba and xarray.
-    Computed once per process (about 20 ms).
+    gearvib's version, the versions of numpy, scipy, numba and xarray and the source files
+    of the ``gearvib`` and ``analysis`` packages (:func:`source_digest`). Computed once per
+    process (about 20 ms).
     """
     import numba
     import scipy
@@ -74,12 +90,8 @@ def code_digest() -> str:
     h = hashlib.sha256()
     h.update(json.dumps([gearvib.__version__, np.__version__, scipy.__version__,
                          numba.__version__, xarray.__version__]).encode())
-    for pkg in (gearvib, analysis):
-        root = Path(pkg.__file__).resolve().parent
-        for p in sorted(root.rglob("*.py")):
-            h.update(str(p.relative_to(root.parent)).encode())
-            h.update(p.read_bytes())
-    return h.hexdigest()[:20]
+    roots = [Path(pkg.__file__).resolve().parent for pkg in (gearvib, analysis)]
+    return source_digest(roots, h).hexdigest()[:20]
 
 
 def default_library() -> Path:

@@ -209,6 +209,9 @@ def test_sideband_ratios_against_the_fourier_series_of_a_pulse():
         big = exact > 0.01 * exact.max()  # the sinc's zeros only show the window's leakage
         np.testing.assert_allclose(r[big], exact[big], rtol=0.03)
         assert np.all(n < 1e-3)  # no noise
+        # without the noise floor (simulated profiles): the same ratios, bit for bit
+        r2, n2 = sideband_ratios(p, 2.5, 40.0, mesh_harmonics=1, with_noise=False)
+        assert np.array_equal(r, r2) and n2.size == 0
     with pytest.raises(ValueError, match="fundamental"):
         sideband_ratios(p, 0.0, 40.0)
     # a fault order above half the mesh order has no sidebands of its own

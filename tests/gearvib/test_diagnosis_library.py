@@ -19,6 +19,7 @@ from gearvib.diagnosis.library import (
     library_folder,
     load_entry,
     save_entry,
+    source_digest,
 )
 
 
@@ -72,6 +73,20 @@ def test_a_folder_others_can_write_is_refused(tmp_path):
         library_folder(shared)
     made = library_folder(tmp_path / "new")
     assert stat.S_IMODE(made.stat().st_mode) == 0o700
+
+
+def test_the_digest_follows_the_source_not_the_generated_modules(tmp_path):
+    pkg = tmp_path / "pkg"
+    (pkg / "__pycache__" / "specialised").mkdir(parents=True)
+    (pkg / "a.py").write_text("x = 1\n")
+    d0 = source_digest([pkg]).hexdigest()
+    (pkg / "__pycache__" / "specialised" / "fault_pass_1.py").write_text("y = 2\n")
+    assert source_digest([pkg]).hexdigest() == d0
+    (pkg / "a.py").write_text("x = 2\n")
+    assert source_digest([pkg]).hexdigest() != d0
+    (pkg / "a.py").write_text("x = 1\n")
+    (pkg / "b.py").write_text("")
+    assert source_digest([pkg]).hexdigest() != d0
 
 
 def test_default_folder(monkeypatch, tmp_path):
