@@ -555,6 +555,10 @@ class Cause:
         Why.
     variant : str
         The simulated fault that scored best (its description), ``""`` for ``none``.
+    verdict : str
+        ``"likely"`` (score at or above the threshold), ``"possible"`` (near it, or carried
+        by the family evidence), ``"unlikely"``; ``""`` for ``none`` (see
+        ``docs/diagnosis.md``).
     """
 
     cause: str
@@ -562,11 +566,13 @@ class Cause:
     score: float
     evidence: tuple[str, ...] = ()
     variant: str = ""
+    verdict: str = ""
 
     def to_dict(self) -> dict[str, Any]:
-        """``{"cause", "member", "score", "evidence"}`` (the JSON of ``gearvib diagnose``)."""
+        """``{"cause", "member", "score", "verdict", "evidence"}`` (the JSON of
+        ``gearvib diagnose``)."""
         return {"cause": self.cause, "member": self.member, "score": round(self.score, 4),
-                "evidence": list(self.evidence)}
+                "verdict": self.verdict, "evidence": list(self.evidence)}
 
 
 @dataclass
@@ -576,7 +582,8 @@ class Diagnosis:
     Attributes
     ----------
     causes : list of Cause
-        Best first. ``none`` leads when no candidate reaches ``threshold``.
+        Best first. ``none`` leads when no cause is likely or possible
+        (:mod:`gearvib.diagnosis.verdict`).
     threshold : float
         Score above which a cause is likely.
     order : numpy.ndarray
@@ -622,6 +629,12 @@ class Diagnosis:
         """Causes (not ``none``) at or above the threshold."""
         return [c for c in self.causes if c.cause != "none" and c.score >= self.threshold]
 
+    @property
+    def possible(self) -> list[Cause]:
+        """Causes whose verdict is ``possible`` (below the threshold, but near it or carried
+        by their family's lines)."""
+        return [c for c in self.causes if c.verdict == "possible"]
+
     def to_dict(self) -> dict[str, Any]:
         """``{"threshold": ..., "causes": [...]}``, best first."""
         return {"threshold": self.threshold, "causes": [c.to_dict() for c in self.causes]}
@@ -664,7 +677,9 @@ class Diagnosis:
                     "cause": ("rank", np.array([c.cause for c in self.causes], dtype=str),
                               {"long_name": "fault kind"}),
                     "member": ("rank", np.array([c.member for c in self.causes], dtype=str),
-                               {"long_name": "faulty member"})},
+                               {"long_name": "faulty member"}),
+                    "verdict": ("rank", np.array([c.verdict for c in self.causes], dtype=str),
+                                {"long_name": "verdict: likely, possible or unlikely"})},
             attrs={"title": "gearvib fault-cause diagnosis", "Conventions": "CF-1.11",
                    "threshold": self.threshold, "deadband_db": self.deadband,
                    "reference_shaft": self.reference,
@@ -683,7 +698,9 @@ class Diagnosis:
         from matplotlib.figure import Figure
 
         fig = Figure(figsize=figsize, layout="constrained")
-        shown = [c for c in self.causes if c.cause != "none"][:top]
+        seen: set[str] = set()
+        shown = [c for c in self.causes if c.cause != "none"
+                 and not (c.variant in seen or seen.add(c.variant))][:top]
         axes = fig.subplots(1 + len(shown), 1, sharex=True, squeeze=False)[:, 0]
         ax = axes[0]
         ax.plot(self.order, self.measured_diff, lw=0.7, color="k")
@@ -699,6 +716,6 @@ class Diagnosis:
                 axc.plot(self.order, sig, lw=0.7, color="tab:blue")
             axc.set_ylabel("ΔP [dB]")
             axc.set_title(f"simulated {c.variant}: score {c.score:.2f}"
-                          f"{' (likely)' if c.score >= self.threshold else ''}", fontsize=9)
+                          f"{f' ({c.verdict})' if c.verdict else ''}", fontsize=9)
         axes[-1].set_xlabel(f"order of the {self.reference}")
         return fig

@@ -387,8 +387,8 @@ def _cmd_diagnose(args: argparse.Namespace) -> int:
         print(d.to_json())
         return 0
     for c in d.causes[:5]:
-        flag = "likely" if c.cause != "none" and c.score >= d.threshold else ""
-        print(f"  {c.score:5.2f}  {c.cause:<13s} {c.member or '-':<9s} {flag}")
+        flag = "" if c.verdict == "unlikely" else c.verdict
+        print(f"  {c.score:5.2f}  {c.cause:<17s} {c.member or '-':<9s} {flag}")
     print(f"report: {paths.html}")
     print(f"        {paths.pdf}")
     print(f"        {paths.dataset}")

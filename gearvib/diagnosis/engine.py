@@ -58,6 +58,7 @@ from gearvib.diagnosis.candidates import (
 )
 from gearvib.diagnosis.cases import ProfileJob, ProfileSettings, profile_case
 from gearvib.diagnosis.library import default_library, entry_key, library_folder, load_entry
+from gearvib.diagnosis.verdict import LOCAL_FAULT, rank_causes
 
 __all__ = ["ASSUMED_SENSORS", "Record", "diagnose", "order_reference"]
 
@@ -702,6 +703,7 @@ def diagnose(measured: Record, config: str, *, baseline: Record | None = None,
         best, candidates, [[cut(p) for p in ps] for ps in profiles[1:]], cut(meas), lines)
     groups = {m.name for m in members if m.interchangeable}
     causes = []
+    cause_fams: dict[tuple[str, str], Any] = {}
     for (cause, mem), (s, c) in best.items():
         s = kind_scores.get((cause, mem), s)
         sig = signatures[c.label]
@@ -717,23 +719,24 @@ def diagnose(measured: Record, config: str, *, baseline: Record | None = None,
                       f"harmonic, shape): {mismatch[(cause, mem)]:.1f} dB from the measured one "
                       f"(cosine score {best[(cause, mem)][0]:.2f})")
         fe = fam_by.get(_cause_family(cause, lines[mem])) if mem in lines else None
+        cause_fams[(cause, mem)] = fe
         if fe is not None:
             ev.append(fe.text())
         if mem in groups:
             ev.append("the planets are interchangeable (equally spaced): which planet cannot "
                       "be told without a carrier phase reference")
         causes.append(Cause(cause, mem, float(s), tuple(ev), c.label))
-    causes.sort(key=lambda c: (-c.score, c.cause, c.member))
-    best_score = causes[0].score if causes else 0.0
-    if best_score < threshold:
-        causes.insert(0, Cause("none", "", 1.0 - best_score, (
-            f"no candidate explains the measured differences (best score {best_score:.2f} < "
-            f"threshold {threshold:.2f})", f"{peaks.size} rising peaks above the noise "
-            f"deadband of {dead:.1f} dB"), ""))
+    causes = rank_causes(causes, float(threshold), families=cause_fams, mismatch=mismatch,
+                         local_kinds=LOCAL_KINDS, none_evidence=(
+                             f"{peaks.size} rising peaks above the noise deadband of "
+                             f"{dead:.1f} dB",))
+    lead = causes[0]
+    weak = lead.verdict != "likely"
+    close = (len(causes) > 1 and causes[1].cause != "none" and lead.cause != "none"
+             and lead.score - causes[1].score < 0.05)
     # what to measure next
     nxt = []
-    if best_score < threshold or (len(causes) > 1 and causes[0].cause != "none"
-                                  and causes[0].score - causes[1].score < 0.05):
+    if weak or close:
         lo, mean, hi = meas.speed_rpm
         if (hi - lo) / mean < 0.03:
             nxt.append("a run-up over the operating range: it tells order-locked features "
@@ -747,18 +750,18 @@ def diagnose(measured: Record, config: str, *, baseline: Record | None = None,
         if dead > 6.0:
             nxt.append(f"a quieter signal (noise deadband {dead:.1f} dB): a sensor closer to "
                        "the ring gear, more averaging or a higher load")
-        if causes[0].cause != "none" and any(c.member in groups for c in causes[:2]):
+        if lead.cause != "none" and any(c.member in groups for c in causes[:2]):
             nxt.append("a once-per-revolution carrier tacho to tell which planet")
-    local = LOCAL_KINDS
-    if (len(causes) > 1 and causes[0].cause in local and causes[1].cause in local
-            and causes[0].member == causes[1].member
-            and causes[0].score - causes[1].score < 0.1):
-        nxt.append(f"an inspection of {causes[0].member} (borescope, oil debris): the kind of "
-                   f"local tooth fault ({causes[0].cause} or {causes[1].cause}) differs in "
-                   "the spectrum mainly by its size, which an unknown transfer path hides")
-        if not nxt:
-            nxt.append("a second sensor position and another load: the leading causes differ "
-                       "little on this record")
+    kinds = [c for c in causes if c.member == lead.member and c.cause in LOCAL_KINDS]
+    if ((lead.cause in LOCAL_KINDS or lead.cause == LOCAL_FAULT) and len(kinds) > 1
+            and (lead.cause == LOCAL_FAULT or kinds[0].score - kinds[1].score < 0.1)):
+        nxt.append(f"an inspection of {lead.member} (borescope, oil debris): the kind of "
+                   f"local tooth fault ({kinds[0].cause} or {kinds[1].cause}) differs in "
+                   "the spectrum mainly by its size and impulse shape, which an unknown "
+                   "transfer path hides")
+    if close and not nxt:
+        nxt.append("a second sensor position and another load: the leading causes differ "
+                   "little on this record")
     notes = [f"order locking: {locking}", *mode_notes,
              f"resolution {1 / revolutions:.4g} {kin.reference} orders, {meas.segments} "
              f"segments, band up to order {max_order:.0f} ({max_order / mesh:.1f} mesh "
