@@ -5,11 +5,13 @@ ranked list a user reads:
 
 * **likely**: the cause's score (how well its simulated signature explains the measured
   rises) is at or above the threshold;
-* **possible**: below the threshold, but within :data:`POSSIBLE_MARGIN` of it, or the lines of
-  the cause's kinematic family carry many of the measured rises with a coincidence chance
-  below :data:`FAMILY_CHANCE` (:func:`analysis.diagnosis.family_evidence`): the measurement
-  shows the member's fault frequencies even where the simulated signature (its assumed
-  transfer path and fault model) does not match them well;
+* **possible**: below the threshold, but within :data:`POSSIBLE_MARGIN` of it; or within
+  :data:`SUPPORTED_MARGIN` of it with its kinematic family's lines carrying the measured rises
+  at a coincidence chance of at most :data:`SUPPORT_CHANCE`; or, at any score, with at least
+  :data:`FAMILY_HITS` rising peaks on its family's lines at a coincidence chance of at most
+  :data:`FAMILY_CHANCE` (:func:`analysis.diagnosis.family_evidence`): the measurement shows
+  the member's fault frequencies even where the simulated signature (its assumed transfer
+  path and fault model) does not match them well;
 * **unlikely**: neither.
 
 Likely causes come first, then possible ones, then the others, each by score. ``none`` leads
@@ -28,13 +30,22 @@ from dataclasses import replace
 from analysis.diagnosis import Cause, FamilyEvidence
 
 __all__ = ["FAMILY_CHANCE", "FAMILY_HITS", "KIND_MARGIN", "KIND_MAX_MISMATCH_DB",
-           "LOCAL_FAULT", "POSSIBLE_MARGIN", "rank_causes"]
+           "LOCAL_FAULT", "POSSIBLE_MARGIN", "SUPPORTED_MARGIN", "SUPPORT_CHANCE",
+           "rank_causes"]
 
 POSSIBLE_MARGIN = 0.05
 """A cause scoring within this of the threshold (below it) is *possible*."""
 
-FAMILY_CHANCE = 1e-9
-"""Coincidence chance of a family's hits below which its causes are at least *possible*."""
+SUPPORTED_MARGIN = 0.1
+"""A cause scoring within this of the threshold is *possible* when its family supports it
+(coincidence chance at most :data:`SUPPORT_CHANCE`)."""
+
+SUPPORT_CHANCE = 1e-2
+"""Coincidence chance of a family's hits that supports a cause near the threshold."""
+
+FAMILY_CHANCE = 1e-3
+"""Coincidence chance of a family's hits (with at least :data:`FAMILY_HITS` of them) at or
+below which its causes are at least *possible*, whatever their score."""
 
 FAMILY_HITS = 10
 """Fewest rising peaks on a family's lines for the family evidence to count."""
@@ -58,10 +69,18 @@ def _verdict(c: Cause, threshold: float, fam: FamilyEvidence | None) -> tuple[st
     if c.score >= threshold - POSSIBLE_MARGIN:
         return "possible", (f"possible: score {c.score:.2f} near the threshold "
                             f"{threshold:.2f}")
-    if fam is not None and fam.hits >= FAMILY_HITS and fam.chance <= FAMILY_CHANCE:
-        return "possible", (f"possible: the measured rises fall on its lines ({fam.hits} of "
-                            f"{fam.rising}, coincidence chance {fam.chance:.2g}) though the "
-                            f"simulated signature explains them poorly (score {c.score:.2f})")
+    if fam is None or fam.hits == 0:
+        return "unlikely", ""
+    lines = (f"{fam.hits} of {fam.rising} rising peaks on its lines, coincidence chance "
+             f"{fam.chance:.2g}")
+    if c.score >= threshold - SUPPORTED_MARGIN and fam.chance <= SUPPORT_CHANCE:
+        return "possible", (f"possible: score {c.score:.2f} near the threshold "
+                            f"{threshold:.2f} and the measured rises fall on its family's "
+                            f"lines ({lines})")
+    if fam.hits >= FAMILY_HITS and fam.chance <= FAMILY_CHANCE:
+        return "possible", (f"possible: the measured rises fall on its family's lines "
+                            f"({lines}) though the simulated signature explains them poorly "
+                            f"(score {c.score:.2f})")
     return "unlikely", ""
 
 
@@ -97,12 +116,14 @@ def rank_causes(causes: Sequence[Cause], threshold: float, *,
 
     Notes
     -----
-    The family rule keeps the verdict on all the evidence: the cosine score compares the
+    The family rules keep the verdict on all the evidence: the cosine score compares the
     measured rises with one simulated fault seen through assumed transfer paths, the family
     evidence only asks whether the rises stand at the member's fault frequencies. With
-    ``FAMILY_CHANCE = 1e-9`` and a handful of families per gear set, random rises pass it with
-    a chance of the order of 1e-8 (binomial tail, :func:`analysis.diagnosis.family_evidence`);
-    the false-alarm rate on healthy records is measured in ``docs/diagnosis.md``.
+    ``FAMILY_CHANCE = 1e-3`` and a handful of families per gear set, random rises make a
+    cause possible in well under 1 % of records (binomial tail,
+    :func:`analysis.diagnosis.family_evidence`; measured in
+    ``tests/gearvib/test_diagnosis_verdict.py``); the rate on healthy records is stated in
+    ``docs/diagnosis.md``.
     """
     ranked = []
     for c in causes:

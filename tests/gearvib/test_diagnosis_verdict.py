@@ -12,6 +12,8 @@ from gearvib.diagnosis.verdict import (
     FAMILY_HITS,
     KIND_MAX_MISMATCH_DB,
     LOCAL_FAULT,
+    SUPPORT_CHANCE,
+    SUPPORTED_MARGIN,
     rank_causes,
 )
 
@@ -69,6 +71,17 @@ def test_weak_family_evidence_leaves_none_first(hits, chance):
     assert [c.verdict for c in out[1:]] == ["unlikely", "unlikely"]
 
 
+def test_a_score_near_the_threshold_with_its_family_behind_it_is_possible():
+    s = T - SUPPORTED_MARGIN + 0.01
+    causes = [Cause("crack", "ring", s, (), "crack ring"), Cause("crack", "sun", 0.1, (), "s")]
+    out = _rank(causes, {("crack", "ring"): _fam(21, 515, SUPPORT_CHANCE / 2, "ring_fault")})
+    assert (out[0].cause, out[0].member, out[0].verdict) == ("crack", "ring", "possible")
+    assert "21 of 515" in out[0].evidence[-1]
+    # the same score without its family behind it: nothing stands out
+    out = _rank(causes, {("crack", "ring"): _fam(21, 515, SUPPORT_CHANCE * 2, "ring_fault")})
+    assert out[0].cause == "none"
+
+
 def test_likely_before_possible_before_unlikely():
     causes = [Cause("crack", "sun", 0.36, (), "a"), Cause("eccentricity", "sun", 0.7, (), "b"),
               Cause("pin_error", "planet", 0.2, (), "c"),
@@ -115,19 +128,24 @@ def test_the_kind_is_named_when_it_is_told():
 
 
 def test_family_rule_false_positive_rate_on_random_rises():
-    """Random rises (40 of 2000 bins, band 0..125 carrier orders at 1/16) against the fault
-    families of paper-case1: the family rule (>= FAMILY_HITS hits, chance <= FAMILY_CHANCE)
-    fires in none of 300 trials (binomial: expected < 1e-6)."""
+    """Random rises (40 of 2000 bins, band 0..125 carrier orders at 1/16) against the five
+    fault families of paper-case1: the family rule (>= FAMILY_HITS hits at a chance <=
+    FAMILY_CHANCE) makes a cause possible in at most 1 % of 400 records (nominal: 5 families
+    x 1e-3; measured 0 of 400), the support rule (chance <= SUPPORT_CHANCE) fires in at most
+    6 % (nominal 5 x 1 %)."""
     rng = np.random.default_rng(5)
     order = np.arange(2000) / 16
     fams = {name: (f, family_lines(f, mesh_order=114.0, mesh_harmonics=6, harmonics=10,
                                    sidebands=10, max_order=order[-1]))
             for name, f in (("sun_fault", 10.36), ("planet_fault", 2.85), ("ring_fault", 3.0),
                             ("sun_rotation", 3.4545), ("carrier", 1.0))}
-    fired = 0
-    for _ in range(300):
+    fired = supported = 0
+    trials = 400
+    for _ in range(trials):
         d = np.zeros(order.size)
         d[rng.choice(order.size, 40, replace=False)] = 10.0
-        for ev in family_evidence(order, d, 3.0, fams):
-            fired += ev.hits >= FAMILY_HITS and ev.chance <= FAMILY_CHANCE
-    assert fired == 0
+        ev = family_evidence(order, d, 3.0, fams)
+        fired += any(e.hits >= FAMILY_HITS and e.chance <= FAMILY_CHANCE for e in ev)
+        supported += any(e.hits > 0 and e.chance <= SUPPORT_CHANCE for e in ev)
+    assert fired / trials <= 0.01
+    assert supported / trials <= 0.06
