@@ -263,8 +263,10 @@ def test_cli_json_report_and_output_rule(tmp_path, work):
     js = json.loads(r.stdout)
     assert list(js) == ["threshold", "causes"]
     assert js["causes"][0]["cause"] == "pin_error" and js["causes"][0]["member"] == "planet"
-    scores = [c["score"] for c in js["causes"]]
-    assert scores == sorted(scores, reverse=True) and all(0 <= s <= 1 for s in scores)
+    # likely, then possible, then unlikely causes, each by score
+    rank = {"likely": 0, "possible": 1, "unlikely": 2}
+    keys = [(rank[c["verdict"]], -c["score"]) for c in js["causes"]]
+    assert keys == sorted(keys) and all(0 <= c["score"] <= 1 for c in js["causes"])
     for f in ("report.html", "report.pdf", "diagnosis.nc"):
         assert (out / f).stat().st_size > 1000
     html = (out / "report.html").read_text()
