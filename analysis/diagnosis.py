@@ -279,8 +279,8 @@ def signature_score(measured_diff: np.ndarray, signature: np.ndarray, *,
 
 def sideband_ratios(profile: OrderProfile, fundamental: float, mesh_order: float, *,
                     sidebands: int = 10, mesh_harmonics: int = 5,
-                    floor_percentile: float = 20.0,
-                    width: float = 6.0) -> tuple[np.ndarray, np.ndarray]:
+                    floor_percentile: float = 20.0, width: float = 6.0,
+                    with_noise: bool = True) -> tuple[np.ndarray, np.ndarray]:
     """Sidebands of a local fault relative to their mesh harmonic, and the noise there.
 
     A local tooth fault modulates the mesh once per fault period: sidebands
@@ -305,6 +305,9 @@ def sideband_ratios(profile: OrderProfile, fundamental: float, mesh_order: float
         Mesh harmonics used (fewer if the band ends before).
     floor_percentile, width : float
         Noise floor: the running percentile over ``±width`` orders (:func:`dynamic_range_db`).
+    with_noise : bool
+        Compute the noise floor (False: ``noise`` is empty, the ratios are the same; a noise-free
+        simulation needs none, and the running percentile is the costly part).
 
     Returns
     -------
@@ -324,8 +327,9 @@ def sideband_ratios(profile: OrderProfile, fundamental: float, mesh_order: float
     if k_max < 1:
         return np.empty(0), np.empty(0)
     ks = np.concatenate((np.arange(-k_max, 0), np.arange(1, k_max + 1)))
-    floor = ndimage.percentile_filter(amp, float(floor_percentile),
-                                      size=_window(width, profile.revolutions), mode="nearest")
+    floor = (ndimage.percentile_filter(amp, float(floor_percentile),
+                                       size=_window(width, profile.revolutions), mode="nearest")
+             if with_noise else None)
 
     def index(o: float) -> int:
         return int(np.rint((o - order[0]) / step))
@@ -345,7 +349,8 @@ def sideband_ratios(profile: OrderProfile, fundamental: float, mesh_order: float
         for k in ks:
             o = centre + k * f
             ratios.append(at(o) / ref)
-            noise.append(float(floor[index(o)]) / ref)
+            if floor is not None:
+                noise.append(float(floor[index(o)]) / ref)
     return np.asarray(ratios, float), np.asarray(noise, float)
 
 
@@ -550,6 +555,10 @@ class Cause:
         Why.
     variant : str
         The simulated fault that scored best (its description), ``""`` for ``none``.
+    verdict : str
+        ``"likely"`` (score at or above the threshold), ``"possible"`` (near it, or carried
+        by the family evidence), ``"unlikely"``; ``""`` for ``none`` (see
+        ``docs/diagnosis.md``).
     """
 
     cause: str
@@ -557,11 +566,13 @@ class Cause:
     score: float
     evidence: tuple[str, ...] = ()
     variant: str = ""
+    verdict: str = ""
 
     def to_dict(self) -> dict[str, Any]:
-        """``{"cause", "member", "score", "evidence"}`` (the JSON of ``gearvib diagnose``)."""
+        """``{"cause", "member", "score", "verdict", "evidence"}`` (the JSON of
+        ``gearvib diagnose``)."""
         return {"cause": self.cause, "member": self.member, "score": round(self.score, 4),
-                "evidence": list(self.evidence)}
+                "verdict": self.verdict, "evidence": list(self.evidence)}
 
 
 @dataclass
@@ -571,7 +582,8 @@ class Diagnosis:
     Attributes
     ----------
     causes : list of Cause
-        Best first. ``none`` leads when no candidate reaches ``threshold``.
+        Best first. ``none`` leads when no cause is likely or possible
+        (:mod:`gearvib.diagnosis.verdict`).
     threshold : float
         Score above which a cause is likely.
     order : numpy.ndarray
@@ -617,6 +629,12 @@ class Diagnosis:
         """Causes (not ``none``) at or above the threshold."""
         return [c for c in self.causes if c.cause != "none" and c.score >= self.threshold]
 
+    @property
+    def possible(self) -> list[Cause]:
+        """Causes whose verdict is ``possible`` (below the threshold, but near it or carried
+        by their family's lines)."""
+        return [c for c in self.causes if c.verdict == "possible"]
+
     def to_dict(self) -> dict[str, Any]:
         """``{"threshold": ..., "causes": [...]}``, best first."""
         return {"threshold": self.threshold, "causes": [c.to_dict() for c in self.causes]}
@@ -659,7 +677,9 @@ class Diagnosis:
                     "cause": ("rank", np.array([c.cause for c in self.causes], dtype=str),
                               {"long_name": "fault kind"}),
                     "member": ("rank", np.array([c.member for c in self.causes], dtype=str),
-                               {"long_name": "faulty member"})},
+                               {"long_name": "faulty member"}),
+                    "verdict": ("rank", np.array([c.verdict for c in self.causes], dtype=str),
+                                {"long_name": "verdict: likely, possible or unlikely"})},
             attrs={"title": "gearvib fault-cause diagnosis", "Conventions": "CF-1.11",
                    "threshold": self.threshold, "deadband_db": self.deadband,
                    "reference_shaft": self.reference,
@@ -678,7 +698,9 @@ class Diagnosis:
         from matplotlib.figure import Figure
 
         fig = Figure(figsize=figsize, layout="constrained")
-        shown = [c for c in self.causes if c.cause != "none"][:top]
+        seen: set[str] = set()
+        shown = [c for c in self.causes if c.cause != "none"
+                 and not (c.variant in seen or seen.add(c.variant))][:top]
         axes = fig.subplots(1 + len(shown), 1, sharex=True, squeeze=False)[:, 0]
         ax = axes[0]
         ax.plot(self.order, self.measured_diff, lw=0.7, color="k")
@@ -694,6 +716,6 @@ class Diagnosis:
                 axc.plot(self.order, sig, lw=0.7, color="tab:blue")
             axc.set_ylabel("ΔP [dB]")
             axc.set_title(f"simulated {c.variant}: score {c.score:.2f}"
-                          f"{' (likely)' if c.score >= self.threshold else ''}", fontsize=9)
+                          f"{f' ({c.verdict})' if c.verdict else ''}", fontsize=9)
         axes[-1].set_xlabel(f"order of the {self.reference}")
         return fig

@@ -477,8 +477,10 @@ def _cmd_diagnose(args: argparse.Namespace) -> int:
     out = Path(args.output)
     _report_removed(check_output_folder(out, REPORT_FILES, overwrite=args.overwrite)[1])
     with removed_if_left_empty(out):
-        d = diagnose(rec, args.gearset, baseline=base, work_dir=out / "candidates",
-                     workers=args.workers,
+        d = diagnose(rec, args.gearset, baseline=base,
+                     library=False if args.no_library else args.library,
+                     work_dir=out / "candidates" if args.keep_runs else None,
+                     keep_runs=args.keep_runs, workers=args.workers,
                      threshold=DEFAULT_THRESHOLD if args.threshold is None else args.threshold,
                      revolutions=args.revolutions,
                      progress=not (args.quiet or args.json))
@@ -490,8 +492,8 @@ def _cmd_diagnose(args: argparse.Namespace) -> int:
         print(d.to_json())
         return 0
     for c in d.causes[:5]:
-        flag = "likely" if c.cause != "none" and c.score >= d.threshold else ""
-        print(f"  {c.score:5.2f}  {c.cause:<13s} {c.member or '-':<9s} {flag}")
+        flag = "" if c.verdict == "unlikely" else c.verdict
+        print(f"  {c.score:5.2f}  {c.cause:<17s} {c.member or '-':<9s} {flag}")
     print(f"report: {paths.html}")
     print(f"        {paths.pdf}")
     print(f"        {paths.dataset}")
@@ -751,8 +753,9 @@ def _parser() -> argparse.ArgumentParser:
                        "measurement shows beyond a healthy baseline: every candidate is "
                        "simulated on the gear set (sweep machinery, all cores) and scored by "
                        "how well its change explains the measured one. Writes report.html, "
-                       "report.pdf and diagnosis.nc (candidate runs in DIR/candidates, reused). "
-                       "See docs/diagnosis.md.")
+                       "report.pdf and diagnosis.nc. The candidates' order profiles are kept in "
+                       "a library and reused by the next diagnosis at the same operating "
+                       "point. See docs/diagnosis.md.")
     g.add_argument("measured", metavar="MEASURED", help="measurement file (any readable "
                    "format) or a gearvib run .nc")
     g.add_argument("--gearset", metavar="CONFIG", required=True, help="the healthy gear set "
@@ -771,6 +774,14 @@ def _parser() -> argparse.ArgumentParser:
                    help="revolutions of the reference shaft (the carrier of a planetary set; "
                    "docs/diagnosis.md) per averaged segment, 4..256 (resolution 1/N orders; "
                    "default 16)")
+    lib = g.add_mutually_exclusive_group()
+    lib.add_argument("--library", metavar="DIR", help="folder of the candidate library, private "
+                     "to the user (default: $GEARVIB_DIAGNOSIS_LIBRARY, else "
+                     "~/.cache/gearvib/diagnosis)")
+    lib.add_argument("--no-library", action="store_true", help="simulate every candidate and "
+                     "keep nothing")
+    g.add_argument("--keep-runs", action="store_true", help="also write the simulated "
+                   "candidate runs to DIR/candidates/runs")
     g.add_argument("--json", action="store_true", help='print {"threshold": ..., "causes": '
                    '[{"cause", "member", "score", "evidence"}, ...]}, best first')
     g.set_defaults(func=_cmd_diagnose)

@@ -1,21 +1,18 @@
-"""The sweep case of a diagnosis: simulate (or reuse) one candidate and order-track it.
+"""The sweep case of a diagnosis: simulate one candidate and keep its order profiles.
 
 :func:`profile_case` has the signature of :func:`gearvib.sweep.case.run_case` (with its
-settings bound by :func:`functools.partial`), so :func:`gearvib.sweep.run_sweep` runs it on
-its executors. Instead of the sweep's summary it returns the order profiles of the run's
-virtual sensors (:func:`analysis.diagnosis.order_profile`): the analysis runs on the workers
-too. The profiles go to a small file beside the run file (``<run>.profile-<key>.npz``, the
-key a hash of the settings), the sweep's summary holds only a scalar: a candidate analysed
-before with the same settings is neither simulated nor read again.
+:class:`ProfileJob` bound by :func:`functools.partial`), so :func:`gearvib.sweep.run_sweep`
+runs it on its executors. Instead of the sweep's summary it computes the order profiles of
+the run's virtual sensors (:func:`analysis.diagnosis.order_profile`) in the worker and writes
+them into the candidate library (:mod:`gearvib.diagnosis.library`); the run itself is written
+to the sweep's run file only when asked (``keep_runs``). The sweep's summary holds a scalar.
 """
 
 from __future__ import annotations
 
-import hashlib
-import json
-import os
 import time
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 import xarray as xr
@@ -23,11 +20,12 @@ import xarray as xr
 from analysis.diagnosis import order_profile
 from analysis.threads import one_blas_thread
 from gearvib.config import ConfigError
+from gearvib.diagnosis.library import load_entry, save_entry
 from gearvib.io import write_netcdf
 from gearvib.simulate import SimulationError, simulate
 from gearvib.sweep.case import CaseOutcome, CaseTask, build_case, conditions_for, finished_run
 
-__all__ = ["ProfileSettings", "profile_case", "profile_path", "profiles_of_run"]
+__all__ = ["ProfileJob", "ProfileSettings", "profile_case", "profiles_of_run"]
 
 
 @dataclass(frozen=True)
@@ -55,17 +53,32 @@ class ProfileSettings:
     revolutions: int
     skip_s: float
 
-    @property
-    def key(self) -> str:
-        """Short hash of the settings."""
-        text = json.dumps([list(self.sensors), repr(self.carrier_per_input),
-                           repr(self.max_order), self.revolutions, repr(self.skip_s)])
-        return hashlib.sha256(text.encode()).hexdigest()[:16]
+    def describe(self) -> dict:
+        """The settings as a JSON-able dict (part of a library entry's key)."""
+        return {"sensors": list(self.sensors), "carrier_per_input": repr(self.carrier_per_input),
+                "max_order": repr(self.max_order), "revolutions": int(self.revolutions),
+                "skip_s": repr(self.skip_s)}
 
 
-def profile_path(run_path: str, settings: ProfileSettings) -> str:
-    """The profile file of a run file."""
-    return f"{run_path}.profile-{settings.key}.npz"
+@dataclass(frozen=True)
+class ProfileJob:
+    """A diagnosis's sweep: profile settings, where the profiles go, whether runs are kept.
+
+    Attributes
+    ----------
+    settings : ProfileSettings
+    library : str
+        Folder of the library entries (:func:`gearvib.diagnosis.library.library_folder`).
+    entries : tuple of (str, str)
+        ``(key, canonical JSON)`` of the library entry of every case, by case index.
+    keep_runs : bool
+        Also write every run to its sweep run file (and reuse run files found there).
+    """
+
+    settings: ProfileSettings
+    library: str
+    entries: tuple[tuple[str, str], ...]
+    keep_runs: bool = False
 
 
 def profiles_of_run(ds: xr.Dataset, s: ProfileSettings) -> dict[str, np.ndarray]:
@@ -83,28 +96,25 @@ def profiles_of_run(ds: xr.Dataset, s: ProfileSettings) -> dict[str, np.ndarray]
             "segments": np.array(profs[0].segments), "natural_frequency": np.asarray(nf, float)}
 
 
-def _save(path: str, arrays: dict[str, np.ndarray]) -> None:
-    tmp = f"{path}.{os.getpid()}.tmp.npz"
-    np.savez(tmp, **arrays)
-    os.replace(tmp, path)
+def profile_case(job: ProfileJob, task: CaseTask) -> CaseOutcome:
+    """Simulate one candidate and write its order profiles into the library.
 
-
-def profile_case(settings: ProfileSettings, task: CaseTask) -> CaseOutcome:
-    """Simulate (or reuse) one candidate's run and return its order profiles as the summary.
-
-    Failures (an invalid combination, a blow-up, a record too short for the profile) are
-    returned as ``status = "failed"`` with the message, as by the sweep's own runner.
+    An entry already in the library is kept (``status = "reused"``); with ``keep_runs`` a
+    finished run file is reused instead of a simulation. Failures (an invalid combination, a
+    blow-up, a run too short for the profile) are returned as ``status = "failed"`` with the
+    message, as by the sweep's own runner.
     """
     t0 = time.perf_counter()
     case = task.case
+    key, text = job.entries[case.index]
+    folder = Path(job.library)
     try:
         with one_blas_thread():
-            model = build_case(case)
-            prof = profile_path(task.run_path, settings)
-            if os.path.isfile(prof) and finished_run_exists(task.run_path):
+            if load_entry(folder, key, text) is not None:
                 return CaseOutcome(case.index, "reused", "", _summary(),
                                    time.perf_counter() - t0)
-            ds = finished_run(task.run_path, case.sha256)
+            model = build_case(case)
+            ds = finished_run(task.run_path, case.sha256) if job.keep_runs else None
             status = "reused"
             if ds is None:
                 status = "simulated"
@@ -113,22 +123,20 @@ def profile_case(settings: ProfileSettings, task: CaseTask) -> CaseOutcome:
                                config={"gearset": case.description,
                                        "gearset_dir": case.base_dir, "run": case.run})
                 ds = res.to_dataset()
-                ds.attrs["sweep_case_sha256"] = case.sha256
-                write_netcdf(ds, task.run_path)
-            _save(prof, profiles_of_run(ds, settings))
-            summary = _summary()
+                if job.keep_runs:
+                    ds.attrs["sweep_case_sha256"] = case.sha256
+                    write_netcdf(ds, task.run_path)
+            save_entry(folder, key, text, profiles_of_run(ds, job.settings))
     except (ConfigError, SimulationError, ValueError) as exc:
-        text = str(exc).strip().splitlines()
-        return CaseOutcome(case.index, "failed", text[0] if text else type(exc).__name__, None,
-                           time.perf_counter() - t0)
-    return CaseOutcome(case.index, status, "", summary, time.perf_counter() - t0)
+        text_ = str(exc).strip().splitlines()
+        return CaseOutcome(case.index, "failed", text_[0] if text_ else type(exc).__name__,
+                           None, time.perf_counter() - t0)
+    return CaseOutcome(case.index, status, "", _summary(), time.perf_counter() - t0)
 
 
-def finished_run_exists(run_path: str) -> bool:
-    """A run file is there (its name is the case's hash; files are written atomically)."""
-    return os.path.isfile(run_path)
 
 
 def _summary() -> xr.Dataset:
     return xr.Dataset({"profiled": ((), 1, {"units": "1", "long_name":
-                                             "order profiles written beside the run file"})})
+                                             "order profiles written to the candidate "
+                                             "library"})})

@@ -11,11 +11,15 @@ fault lines, rotation and mesh come from the kinematic catalogue in those orders
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import json
+import math
 import os
 import re
+import tempfile
 import time as _time
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -42,6 +46,7 @@ from analysis.diagnosis import (
     signature_score,
     with_noise_floor,
 )
+from gearvib import tempfiles
 from gearvib.config import ConfigError, gearset_from_dict
 from gearvib.diagnosis.candidates import (
     KINDS,
@@ -51,7 +56,9 @@ from gearvib.diagnosis.candidates import (
     candidate_members,
     severity_text,
 )
-from gearvib.diagnosis.cases import ProfileSettings, profile_case, profile_path
+from gearvib.diagnosis.cases import ProfileJob, ProfileSettings, profile_case
+from gearvib.diagnosis.library import default_library, entry_key, library_folder, load_entry
+from gearvib.diagnosis.verdict import LOCAL_FAULT, rank_causes
 
 __all__ = ["ASSUMED_SENSORS", "Record", "diagnose", "order_reference"]
 
@@ -76,6 +83,59 @@ MESH_HARMONICS = 5.5
 
 SKIP_S = 0.2
 """Start-up transient left out of every simulation [s]."""
+
+SIM_SEGMENTS = 3
+"""Averaged segments of every simulated profile: a candidate is simulated over
+``revolutions * (SIM_SEGMENTS + 1) / 2`` carrier revolutions (50 % overlap) plus one of
+margin and the start-up, whatever the record's length (``docs/diagnosis.md``)."""
+
+SPEED_STEP = 0.005
+"""Relative grid of the simulated mean speed: records within +-0.25 % share candidates."""
+
+SPAN_STEP = 0.01
+"""Grid of the simulated speed span (end - start) relative to the mean speed: a record whose
+fitted ramp spans less than 0.5 % of its speed is simulated at constant speed."""
+
+
+def operating_point(start_rpm: float, end_rpm: float) -> tuple[float, float]:
+    """The simulated input speeds (start, end) [min-1] of a measured ramp.
+
+    The mean speed is rounded to the nearest point of a geometric grid of step
+    :data:`SPEED_STEP` (0.5 %), the span ``(end - start) / mean`` to a multiple of
+    :data:`SPAN_STEP`: records of one operating point share their candidates (the library
+    key), however long they are and within +-0.25 % of speed. The results are exact
+    functions of the two grid indices, rounded to 0.001 min-1.
+
+    Raises
+    ------
+    ValueError
+        A speed that is not finite or not > 0 (at either end, also after rounding).
+    """
+    lo = min(start_rpm, end_rpm)
+    if not (math.isfinite(start_rpm) and math.isfinite(end_rpm) and lo > 0):
+        raise ValueError("diagnosis: the measured speed profile reaches standstill; give a "
+                         "record at speed")
+    mean = 0.5 * (start_rpm + end_rpm)
+    step = math.log1p(SPEED_STEP)
+    k = round(math.log(mean) / step)
+    j = round((end_rpm - start_rpm) / mean / SPAN_STEP)
+    m = math.exp(k * step)
+    start, end = round(m * (1 - j * SPAN_STEP / 2), 3), round(m * (1 + j * SPAN_STEP / 2), 3)
+    if min(start, end) <= 0:
+        raise ValueError("diagnosis: the measured speed profile reaches standstill; give a "
+                         "record at speed")
+    return start, end
+
+
+def simulated_duration(start_rpm: float, end_rpm: float, input_per_carrier: float,
+                       revolutions: int) -> float:
+    """Length [s] of a candidate run: :data:`SIM_SEGMENTS` profile segments of
+    ``revolutions`` carrier revolutions (50 % overlap), one revolution of margin and the
+    start-up :data:`SKIP_S`, on the ramp ``start -> end`` (input speeds, min-1), rounded up
+    to 0.01 s."""
+    revs = revolutions * (SIM_SEGMENTS + 1) / 2 + 1
+    fc_mean = 0.5 * (start_rpm + end_rpm) / input_per_carrier / 60.0
+    return math.ceil(100.0 * revs / fc_mean) / 100.0 + SKIP_S
 
 
 @dataclass(frozen=True)
@@ -288,45 +348,94 @@ def _member_lines(cat: Any, ms: dict[str, float], members: list[Any],
     return out
 
 
-def _sweep_runs(config: str, candidates: list[Candidate], run: dict, sensors: list[dict],
-                settings: ProfileSettings, work_dir: Path, workers: int | None,
-                progress: bool) -> tuple[list[list[OrderProfile]], np.ndarray, Any]:
-    """Simulate the healthy set and every candidate through :func:`gearvib.sweep.run_sweep`.
+def _library(library: str | os.PathLike | bool | None,
+             stack: contextlib.ExitStack) -> Path:
+    """The folder of this code's library entries (a temporary one for ``library=False``)."""
+    if library is False:
+        return library_folder(stack.enter_context(tempfile.TemporaryDirectory(
+            prefix="gearvib-diagnosis-")))
+    if library is None or library is True:
+        try:
+            return library_folder(default_library())
+        except PermissionError as exc:
+            warnings.warn(f"{exc}; the candidates are simulated without a library",
+                          RuntimeWarning, stacklevel=3)
+            return _library(False, stack)
+    return library_folder(library)
 
-    One case per candidate (parameter ``fault``; the assumed sensors replace the
-    description's ``[[sensor]]`` tables); each worker returns the order profiles of its run
-    (:func:`gearvib.diagnosis.cases.profile_case`). Run files are kept in ``work_dir/runs``
-    and reused by the next diagnosis at the same operating point.
 
-    Returns the profiles (per case, per sensor), the healthy model's natural frequencies
-    [Hz] and the sweep result.
+def entry_description(cfg: dict, base: Path | None, fault: list[dict], sensors: list[dict],
+                      run: dict, settings: ProfileSettings) -> dict:
+    """What the order profiles of one simulated candidate depend on (a library entry's key):
+    the healthy gear-set description (its ``[[sensor]]`` tables replaced by the assumed
+    ones) and its folder, the fault, the assumed sensors, the run and profile settings."""
+    desc = {k: v for k, v in cfg.items() if k != "sensor"}
+    return {"what": "gearvib diagnosis candidate profiles", "gearset": desc,
+            "gearset_dir": str(base.resolve()) if base is not None else "",
+            "fault": fault, "sensors": sensors, "run": run, "profile": settings.describe()}
+
+
+def _candidate_profiles(config: str, cfg: dict, base: Path | None,
+                        candidates: list[Candidate], run: dict, sensors: list[dict],
+                        settings: ProfileSettings, folder: Path, work_dir: Path | None,
+                        keep_runs: bool, workers: int | None, progress: bool
+                        ) -> tuple[list[list[OrderProfile]], np.ndarray, dict[str, int]]:
+    """Order profiles of the healthy set and every candidate, from the library or simulated.
+
+    Entries found in the library ``folder`` are read; the others are simulated through
+    :func:`gearvib.sweep.run_sweep` (one case per missing candidate; the assumed sensors
+    replace the description's ``[[sensor]]`` tables), each worker computing the profiles of
+    its run and writing them into the library (:func:`gearvib.diagnosis.cases.profile_case`).
+    Either way the profiles come from the stored entries, so a diagnosis that finds them
+    gives the same numbers, bit for bit, as the one that simulated them.
+
+    Returns the profiles (per case, per sensor), the healthy model's natural frequencies [Hz]
+    and the counts ``{"simulated", "reused"}``.
     """
     from gearvib.sweep import Parameter, Sweep, run_sweep
 
-    values = [[]] + [[c.fault] for c in candidates]
+    faults = [[]] + [[c.fault] for c in candidates]
     labels = ["healthy"] + [c.label for c in candidates]
-    sweep = Sweep(base=config, parameters=(
-        Parameter("fault", tuple(values), tuple(labels)),
-        Parameter("sensor", (list(sensors),), ("assumed sensors",))),
-        simulation=dict(run), title="gearvib diagnosis: candidate faults", max_cases=10_000)
-    result = run_sweep(sweep, work_dir, workers=workers, progress=progress, report=False,
-                       runner=functools.partial(profile_case, settings))
-    ds = result.dataset
-    if result.failed:
-        i = result.failed[0]
-        raise RuntimeError(f"diagnosis: the simulation of {labels[i]!r} failed: "
-                           f"{ds['failure'].values[i]}")
-    data = []
-    for f in ds["run_file"].values:
-        with np.load(profile_path(str(work_dir / str(f)), settings)) as z:
-            data.append({k: z[k] for k in z.files})
+    entries = [entry_key(entry_description(cfg, base, f, sensors, run, settings))
+               for f in faults]
+    data = [load_entry(folder, k, t) for k, t in entries]
+    missing = [i for i, d in enumerate(data) if d is None]
+    counts = {"simulated": 0, "reused": len(faults) - len(missing)}
+    if missing:
+        sweep = Sweep(base=config, parameters=(
+            Parameter("fault", tuple(faults[i] for i in missing),
+                      tuple(labels[i] for i in missing)),
+            Parameter("sensor", (list(sensors),), ("assumed sensors",))),
+            simulation=dict(run), title="gearvib diagnosis: candidate faults",
+            max_cases=10_000)
+        job = ProfileJob(settings, str(folder), tuple(entries[i] for i in missing), keep_runs)
+        with contextlib.ExitStack() as stack:
+            out = work_dir if work_dir is not None else Path(stack.enter_context(
+                tempfile.TemporaryDirectory(prefix="gearvib-diagnosis-sweep-")))
+            try:
+                result = run_sweep(sweep, out, workers=workers, progress=progress,
+                                   report=False, runner=functools.partial(profile_case, job))
+            except BaseException:  # an interrupt: the stopped workers' temporary entries
+                tempfiles.remove_stale(folder)
+                raise
+        if result.failed:
+            i = result.failed[0]
+            raise RuntimeError(f"diagnosis: the simulation of {labels[missing[i]]!r} failed: "
+                               f"{result.dataset['failure'].values[i]}")
+        counts["simulated"] = len(result.simulated)
+        for i in missing:
+            data[i] = load_entry(folder, *entries[i])
+            if data[i] is None:
+                raise RuntimeError(f"diagnosis: the library entry of {labels[i]!r} in {folder} "
+                                   "was not written (is the folder shared with another "
+                                   "diagnosis that removed it?)")
     n = min(d["order"].size for d in data)
     order = data[0]["order"][:n]
     profiles = [[OrderProfile(order, d["amplitude"][k, :n], "m s-2", settings.revolutions,
                               int(d["segments"]), (0.0, 0.0, 0.0), lab)
                  for k in range(d["amplitude"].shape[0])]
                 for d, lab in zip(data, labels, strict=True)]
-    return profiles, data[0]["natural_frequency"], result
+    return profiles, data[0]["natural_frequency"], counts
 
 
 def _fit_ramp(t: np.ndarray, rpm: np.ndarray) -> tuple[float, float]:
@@ -410,7 +519,7 @@ def _local_kind_scores(best: dict[tuple[str, str], tuple[float, Candidate]],
         rm, rn = meas_cache[c.member]
         if rm.size == 0:
             continue
-        sims = [sideband_ratios(p, f, mesh)[0] for p in by_label[c.label]]
+        sims = [sideband_ratios(p, f, mesh, with_noise=False)[0] for p in by_label[c.label]]
         if any(x.shape != rm.shape for x in sims):
             continue
         v = impulse_mismatch_db(rm, rn, sims)
@@ -431,7 +540,9 @@ def _local_kind_scores(best: dict[tuple[str, str], tuple[float, Candidate]],
 
 
 def diagnose(measured: Record, config: str, *, baseline: Record | None = None,
-             work_dir: str | os.PathLike, workers: int | None = None,
+             library: str | os.PathLike | bool | None = None,
+             work_dir: str | os.PathLike | None = None, keep_runs: bool = False,
+             workers: int | None = None,
              kinds: tuple[str, ...] = KINDS, sensors: tuple[dict, ...] | None = None,
              revolutions: int = DEFAULT_REVOLUTIONS, threshold: float = DEFAULT_THRESHOLD,
              max_duration: float = 30.0, progress: bool = False) -> Diagnosis:
@@ -447,8 +558,18 @@ def diagnose(measured: Record, config: str, *, baseline: Record | None = None,
         A measurement of the healthy gearbox with the same sensor. Without it the healthy
         simulation is the baseline (the transfer path then differs; prominences absorb the
         slowly varying part of the difference).
-    work_dir : path-like
-        Folder of the candidate runs (``runs/*.nc``, ``sweep.nc``; reused).
+    library : path-like, bool or None
+        Folder of the candidate library (:mod:`gearvib.diagnosis.library`): the order
+        profiles of candidates simulated before at the same operating point are read from it
+        instead of being simulated, new ones are added. ``None`` (default):
+        :func:`gearvib.diagnosis.library.default_library` (a private folder in the user's
+        cache); ``False``: none (every candidate simulated, nothing kept).
+    work_dir : path-like, optional
+        Folder of the candidates' sweep (``sweep.nc``; with ``keep_runs`` the run files
+        ``runs/*.nc``); default a temporary folder.
+    keep_runs : bool
+        Write every simulated candidate run to ``work_dir/runs`` (and reuse the run files
+        found there); needs ``work_dir``.
     workers : int, optional
         Local worker processes of the sweep (default all CPUs).
     kinds : tuple of str
@@ -461,12 +582,20 @@ def diagnose(measured: Record, config: str, *, baseline: Record | None = None,
     threshold : float
         Score above which a cause is likely, in (0, 1).
     max_duration : float
-        Longest simulated run [s] (the measured speed profile is fitted by a ramp over at most
-        this time).
+        The measured speed profile is fitted by a ramp over at most its first
+        ``max_duration`` seconds [s].
 
     Returns
     -------
     analysis.diagnosis.Diagnosis
+
+    Notes
+    -----
+    The candidates are simulated at the operating point of the record
+    (:func:`operating_point`: a fitted ramp on a 0.5 % speed grid) over
+    :data:`SIM_SEGMENTS` profile segments (:func:`simulated_duration`), not over the whole
+    record: their profiles do not depend on the record's length, so a library entry serves
+    every record of the operating point (``docs/diagnosis.md``).
     """
     from gearvib.config import load_config
 
@@ -474,6 +603,8 @@ def diagnose(measured: Record, config: str, *, baseline: Record | None = None,
     if not 0.0 < float(threshold) < 1.0:
         raise ValueError(f"threshold = {threshold!r} is not admissible (admissible: 0 < "
                          "threshold < 1)")
+    if keep_runs and work_dir is None:
+        raise ValueError("keep_runs = True needs work_dir (the folder of the run files)")
     cfg, base = load_config(config)
     candidates = candidate_faults(cfg, kinds, base=base)
     kin = _kinematics(cfg, base)
@@ -492,26 +623,28 @@ def diagnose(measured: Record, config: str, *, baseline: Record | None = None,
     meas = order_profile(measured.signal, measured.fs, c_rpm, max_order=max_order,
                          revolutions=revolutions, name="measured", units=measured.units)
     max_order = float(meas.order[-1])
-    # simulate the measured speed profile (a fitted ramp of the input member)
+    # the operating point: the measured speed profile fitted by a ramp of the input member,
+    # on the grid of the library (records of one operating point share candidates)
     t = np.arange(measured.signal.size) / measured.fs
     n_use = min(t.size, int(max_duration * measured.fs))
     in_rpm = np.abs(measured.speed_rpm[:n_use]) * ratio * abs(ms[input_member])
-    start, end = _fit_ramp(t[:n_use], in_rpm)
-    if min(start, end) <= 0:
-        raise ValueError("diagnosis: the measured speed profile reaches standstill; give a "
-                         "record at speed")
-    fc_max = max(start, end) / abs(ms[input_member]) / 60.0
-    fs_out = float(max(5000.0, 1000.0 * np.ceil(2.6 * max_order * fc_max * 1.05 / 1000.0)))
-    # rounded (1 min-1, 0.1 s) so that records of one operating point share candidate runs
-    run = {"speed_start_rpm": float(round(start)), "speed_end_rpm": float(round(end)),
-           "duration": round(n_use / measured.fs + SKIP_S, 1), "fs_out": fs_out}
+    start, end = operating_point(*_fit_ramp(t[:n_use], in_rpm))
+    input_per_carrier = abs(ms[input_member])
+    full_order = MESH_HARMONICS * mesh
+    fc_max = max(start, end) / input_per_carrier / 60.0
+    fs_out = float(max(5000.0, 1000.0 * np.ceil(2.6 * full_order * fc_max * 1.05 / 1000.0)))
+    run = {"speed_start_rpm": start, "speed_end_rpm": end,
+           "duration": simulated_duration(start, end, input_per_carrier, int(revolutions)),
+           "fs_out": fs_out}
     sim_t0 = _time.perf_counter()
     sensors = [dict(x) for x in (sensors or ASSUMED_SENSORS)]
-    settings = ProfileSettings(tuple(x["name"] for x in sensors), 1.0 / abs(ms[input_member]),
-                               max_order, int(revolutions), SKIP_S)
-    profiles, natural_hz, sweep_result = _sweep_runs(config, candidates, run, sensors,
-                                                     settings, Path(work_dir), workers,
-                                                     progress)
+    settings = ProfileSettings(tuple(x["name"] for x in sensors), 1.0 / input_per_carrier,
+                               full_order, int(revolutions), SKIP_S)
+    with contextlib.ExitStack() as stack:
+        folder = _library(library, stack)
+        profiles, natural_hz, counts = _candidate_profiles(
+            config, cfg, base, candidates, run, sensors, settings, folder,
+            None if work_dir is None else Path(work_dir), keep_runs, workers, progress)
     sim_time = _time.perf_counter() - sim_t0
     if baseline is not None:
         b_ratio = kin.ratio(baseline.member or input_member)
@@ -570,6 +703,7 @@ def diagnose(measured: Record, config: str, *, baseline: Record | None = None,
         best, candidates, [[cut(p) for p in ps] for ps in profiles[1:]], cut(meas), lines)
     groups = {m.name for m in members if m.interchangeable}
     causes = []
+    cause_fams: dict[tuple[str, str], Any] = {}
     for (cause, mem), (s, c) in best.items():
         s = kind_scores.get((cause, mem), s)
         sig = signatures[c.label]
@@ -585,23 +719,24 @@ def diagnose(measured: Record, config: str, *, baseline: Record | None = None,
                       f"harmonic, shape): {mismatch[(cause, mem)]:.1f} dB from the measured one "
                       f"(cosine score {best[(cause, mem)][0]:.2f})")
         fe = fam_by.get(_cause_family(cause, lines[mem])) if mem in lines else None
+        cause_fams[(cause, mem)] = fe
         if fe is not None:
             ev.append(fe.text())
         if mem in groups:
             ev.append("the planets are interchangeable (equally spaced): which planet cannot "
                       "be told without a carrier phase reference")
         causes.append(Cause(cause, mem, float(s), tuple(ev), c.label))
-    causes.sort(key=lambda c: (-c.score, c.cause, c.member))
-    best_score = causes[0].score if causes else 0.0
-    if best_score < threshold:
-        causes.insert(0, Cause("none", "", 1.0 - best_score, (
-            f"no candidate explains the measured differences (best score {best_score:.2f} < "
-            f"threshold {threshold:.2f})", f"{peaks.size} rising peaks above the noise "
-            f"deadband of {dead:.1f} dB"), ""))
+    causes = rank_causes(causes, float(threshold), families=cause_fams, mismatch=mismatch,
+                         local_kinds=LOCAL_KINDS, none_evidence=(
+                             f"{peaks.size} rising peaks above the noise deadband of "
+                             f"{dead:.1f} dB",))
+    lead = causes[0]
+    weak = lead.verdict != "likely"
+    close = (len(causes) > 1 and causes[1].cause != "none" and lead.cause != "none"
+             and lead.score - causes[1].score < 0.05)
     # what to measure next
     nxt = []
-    if best_score < threshold or (len(causes) > 1 and causes[0].cause != "none"
-                                  and causes[0].score - causes[1].score < 0.05):
+    if weak or close:
         lo, mean, hi = meas.speed_rpm
         if (hi - lo) / mean < 0.03:
             nxt.append("a run-up over the operating range: it tells order-locked features "
@@ -615,18 +750,18 @@ def diagnose(measured: Record, config: str, *, baseline: Record | None = None,
         if dead > 6.0:
             nxt.append(f"a quieter signal (noise deadband {dead:.1f} dB): a sensor closer to "
                        "the ring gear, more averaging or a higher load")
-        if causes[0].cause != "none" and any(c.member in groups for c in causes[:2]):
+        if lead.cause != "none" and any(c.member in groups for c in causes[:2]):
             nxt.append("a once-per-revolution carrier tacho to tell which planet")
-    local = LOCAL_KINDS
-    if (len(causes) > 1 and causes[0].cause in local and causes[1].cause in local
-            and causes[0].member == causes[1].member
-            and causes[0].score - causes[1].score < 0.1):
-        nxt.append(f"an inspection of {causes[0].member} (borescope, oil debris): the kind of "
-                   f"local tooth fault ({causes[0].cause} or {causes[1].cause}) differs in "
-                   "the spectrum mainly by its size, which an unknown transfer path hides")
-        if not nxt:
-            nxt.append("a second sensor position and another load: the leading causes differ "
-                       "little on this record")
+    kinds = [c for c in causes if c.member == lead.member and c.cause in LOCAL_KINDS]
+    if ((lead.cause in LOCAL_KINDS or lead.cause == LOCAL_FAULT) and len(kinds) > 1
+            and (lead.cause == LOCAL_FAULT or kinds[0].score - kinds[1].score < 0.1)):
+        nxt.append(f"an inspection of {lead.member} (borescope, oil debris): the kind of "
+                   f"local tooth fault ({kinds[0].cause} or {kinds[1].cause}) differs in "
+                   "the spectrum mainly by its size and impulse shape, which an unknown "
+                   "transfer path hides")
+    if close and not nxt:
+        nxt.append("a second sensor position and another load: the leading causes differ "
+                   "little on this record")
     notes = [f"order locking: {locking}", *mode_notes,
              f"resolution {1 / revolutions:.4g} {kin.reference} orders, {meas.segments} "
              f"segments, band up to order {max_order:.0f} ({max_order / mesh:.1f} mesh "
@@ -647,6 +782,5 @@ def diagnose(measured: Record, config: str, *, baseline: Record | None = None,
     d = Diagnosis(causes, float(threshold), order, cut(meas), cut(base_prof), d_meas, dead,
                   signatures, fam_ev, nxt, notes, kin.reference, attrs)
     # timing: not part of the report or the Dataset (same input, same output)
-    d.timing = {"simulation_s": sim_time, "total_s": _time.perf_counter() - t0,
-                "simulated": len(sweep_result.simulated), "reused": len(sweep_result.reused)}
+    d.timing = {"simulation_s": sim_time, "total_s": _time.perf_counter() - t0, **counts}
     return d

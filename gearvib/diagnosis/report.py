@@ -49,7 +49,8 @@ def scores_figure(d: Diagnosis, *, figsize: tuple[float, float] = (8.0, 4.2)) ->
     ax = fig.subplots()
     cs = [c for c in d.causes if c.cause != "none"][::-1]
     y = np.arange(len(cs))
-    colors = ["tab:red" if c.score >= d.threshold else "tab:gray" for c in cs]
+    colors = [{"likely": "tab:red", "possible": "tab:orange"}.get(c.verdict, "tab:gray")
+              for c in cs]
     ax.barh(y, [c.score for c in cs], color=colors)
     ax.set_yticks(y, [f"{c.cause} ({c.member})" for c in cs], fontsize=8)
     ax.axvline(d.threshold, color="k", ls="--", lw=1.0)
@@ -91,31 +92,43 @@ def spectrum_figure(d: Diagnosis, *, figsize: tuple[float, float] = (9.0, 5.0)) 
     return fig
 
 
+def _what(c) -> str:
+    """A cause in words: ``crack on sun``, ``local tooth fault on sun``."""
+    return f"{c.cause.replace('_', ' ')} on {c.member}"
+
+
 def _sections(d: Diagnosis, title_name: str) -> list[Section]:
     likely = d.likely
+    lead = d.causes[0] if d.causes else None
     if likely:
         verdict = (f"{len(likely)} cause(s) above the threshold {d.threshold:.2f}; the most "
-                   f"likely is {likely[0].cause} on {likely[0].member} (score "
-                   f"{likely[0].score:.2f}).")
+                   f"likely is {_what(lead)} (score {lead.score:.2f}).")
         members = {c.member for c in likely}
-        if len(likely) > 1 and len(members) == 1:
-            gap = likely[0].score - likely[1].score
-            verdict += (f" All likely causes are on {likely[0].member}: the member is clear, "
+        kinds = [c for c in likely if c.cause != "local_tooth_fault"]
+        if len(kinds) > 1 and len(members) == 1:
+            gap = kinds[0].score - kinds[1].score
+            verdict += (f" All likely causes are on {lead.member}: the member is clear, "
                         + ("the kind less so (see What to measure next)." if gap < 0.1 else
-                           f"and {likely[0].cause} leads {likely[1].cause} by {gap:.2f}."))
+                           f"and {kinds[0].cause} leads {kinds[1].cause} by {gap:.2f}."))
+    elif lead is not None and lead.verdict == "possible":
+        verdict = (f"Possible: {_what(lead)} (score {lead.score:.2f}, below the threshold "
+                   f"{d.threshold:.2f}; {lead.evidence[-1] if lead.evidence else ''}). "
+                   "Nothing is likely; see What to measure next.")
     else:
         best = next((c for c in d.causes if c.cause != "none"), None)
         verdict = ("Nothing stands out: no candidate explains the measured differences (best "
                    f"score {best.score if best else 0.0:.2f} below the threshold "
-                   f"{d.threshold:.2f}).")
+                   f"{d.threshold:.2f}) and no fault family carries the measured rises.")
     rows = tuple((str(i + 1), c.cause, c.member or "-", f"{c.score:.2f}",
-                  "likely" if (c.cause != "none" and c.score >= d.threshold) else "",
+                  "" if c.verdict == "unlikely" else c.verdict,
                   " | ".join(c.evidence)) for i, c in enumerate(d.causes))
     verdict_blocks = (
         Block("text", verdict),
-        Block("table", "Ranked causes (score in [0, 1]; likely at or above the threshold)",
+        Block("table", "Ranked causes (score in [0, 1]; likely at or above the threshold, "
+              "possible near it or where the fault family carries the measured rises)",
               ("rank", "cause", "member", "score", "", "evidence"), rows),
-        Block("figure", "Scores of the candidate causes; red: above the threshold (dashed).",
+        Block("figure", "Scores of the candidate causes; red: likely (above the threshold, "
+              "dashed), orange: possible.",
               figure=lambda: scores_figure(d)),
     )
     fam_rows = tuple((f.family, f"{f.fundamental:.4g}", str(f.hits), str(f.rising),

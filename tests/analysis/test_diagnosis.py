@@ -116,8 +116,8 @@ def test_family_evidence_chance_on_random_peaks():
 def _diagnosis():
     order = np.arange(100) / 16
     prof = OrderProfile(order, np.ones(100), "m s-2", 16, 3, (1.0, 2.0, 3.0), "measured")
-    causes = [Cause("crack", "sun", 0.7, ("a", "b"), "crack sun 50 %"),
-              Cause("pin_error", "planet", 0.1, ("c",), "pin_error planet 30 um")]
+    causes = [Cause("crack", "sun", 0.7, ("a", "b"), "crack sun 50 %", "likely"),
+              Cause("pin_error", "planet", 0.1, ("c",), "pin_error planet 30 um", "unlikely")]
     return Diagnosis(causes, 0.4, order, prof, prof, np.zeros(100), 2.0,
                      {"crack sun 50 %": np.ones(100), "pin_error planet 30 um": np.zeros(100)})
 
@@ -126,10 +126,12 @@ def test_result_json_dataset_and_plot():
     d = _diagnosis()
     js = json.loads(d.to_json())
     assert list(js) == ["threshold", "causes"]
-    assert [list(c) for c in js["causes"]] == [["cause", "member", "score", "evidence"]] * 2
+    assert [list(c) for c in js["causes"]] == [["cause", "member", "score", "verdict",
+                                                "evidence"]] * 2
     assert js["causes"][0] == {"cause": "crack", "member": "sun", "score": 0.7,
-                               "evidence": ["a", "b"]}
+                               "verdict": "likely", "evidence": ["a", "b"]}
     assert [c.cause for c in d.likely] == ["crack"]
+    assert d.possible == []
     ds = d.to_dataset()
     for v in ds.variables:
         assert "long_name" in ds[v].attrs or v in ("cause", "member", "variant"), v
@@ -209,6 +211,9 @@ def test_sideband_ratios_against_the_fourier_series_of_a_pulse():
         big = exact > 0.01 * exact.max()  # the sinc's zeros only show the window's leakage
         np.testing.assert_allclose(r[big], exact[big], rtol=0.03)
         assert np.all(n < 1e-3)  # no noise
+        # without the noise floor (simulated profiles): the same ratios, bit for bit
+        r2, n2 = sideband_ratios(p, 2.5, 40.0, mesh_harmonics=1, with_noise=False)
+        assert np.array_equal(r, r2) and n2.size == 0
     with pytest.raises(ValueError, match="fundamental"):
         sideband_ratios(p, 0.0, 40.0)
     # a fault order above half the mesh order has no sidebands of its own

@@ -363,7 +363,8 @@ def test_diagnose_interrupted_at_a_random_moment(tmp_path, measured_run, k):
     sig = rng.choice([signal.SIGINT, signal.SIGTERM])
     delay = rng.uniform(0.0, 20.0)  # about 25 s in all on 2 cores
     r = run_and_signal(["diagnose", str(measured_run), "--gearset", "paper-case1", "-o", "dg",
-                        "--revolutions", "4", "--workers", "2", "-q"], tmp_path, sig,
+                        "--revolutions", "4", "--workers", "2", "-q", "--library", "lib",
+                        "--keep-runs"], tmp_path, sig,
                        delay=delay, timeout=300)
     print(f"seed {SEED}, {sig.name} after {delay:.3f} s: exit {r.returncode} in "
           f"{r.exit_seconds:.3f} s")

@@ -3,10 +3,11 @@
 Each measurement is a run-up 1300 -> 1700 min-1 of paper-case1 with one fault, seen by an
 accelerometer whose transfer path the diagnosis does not assume (200 deg, exponential window
 50 deg, housing modes at 1.5 and 4.5 kHz), 2 % white noise, the speed taken from the tacho
-channel. All diagnoses share one folder of candidate runs (same operating point).
+channel. All diagnoses share one candidate library (same operating point).
 """
 
 import json
+import os
 import subprocess
 import sys
 
@@ -47,9 +48,9 @@ def results(work):
     out = {}
     for i, (name, (fault, _)) in enumerate(FAULTS.items()):
         rec = record_from_run(_measure([fault], seed=10 + i))
-        out[name] = diagnose(rec, "paper-case1", work_dir=work, workers=2)
+        out[name] = diagnose(rec, "paper-case1", library=work, workers=2)
     out["healthy"] = diagnose(record_from_run(_measure([], seed=99)), "paper-case1",
-                              work_dir=work, workers=2)
+                              library=work, workers=2)
     return out
 
 
@@ -100,13 +101,40 @@ def test_evidence_and_dataset(results):
 def test_measured_baseline(work):
     base = record_from_run(_measure([], seed=7), name="baseline")
     healthy = diagnose(record_from_run(_measure([], seed=8)), "paper-case1", baseline=base,
-                       work_dir=work, workers=2)
+                       library=work, workers=2)
     assert healthy.causes[0].cause == "none"
     fault, _member = FAULTS["eccentricity-sun"]
     d = diagnose(record_from_run(_measure([fault], seed=9)), "paper-case1", baseline=base,
-                 work_dir=work, workers=2)
+                 library=work, workers=2)
     assert (d.causes[0].cause, d.causes[0].member) == ("eccentricity", "sun")
     assert d.attrs["baseline"] == "measured"
+
+
+def test_a_reused_library_gives_the_same_causes_bit_for_bit(results, work):
+    fault, _ = FAULTS["crack-sun"]
+    again = diagnose(record_from_run(_measure([fault], seed=10)), "paper-case1", library=work,
+                     workers=2)
+    first = results["crack-sun"]
+    assert again.timing["simulated"] == 0 and again.timing["reused"] == 25
+    assert [(c.cause, c.member, c.score, c.evidence) for c in again.causes] == [
+        (c.cause, c.member, c.score, c.evidence) for c in first.causes]
+    for k, v in first.signatures.items():
+        assert np.array_equal(v, again.signatures[k])
+    assert again.to_json() == first.to_json()
+
+
+@pytest.mark.parametrize(("duration", "speed"), [(DURATION + 0.07, SPEED),
+                                                 (DURATION - 0.5, SPEED),
+                                                 (DURATION, (1298.5, 1698.5))])
+def test_records_of_one_operating_point_share_the_candidates(work, duration, speed):
+    """Another length (0.07 s longer, 0.5 s shorter) or a speed within the grid (-0.1 %):
+    no candidate simulated again."""
+    fault, member = FAULTS["eccentricity-sun"]
+    ds = synthetic_measurement("paper-case1", [fault], speed_rpm=speed, duration=duration,
+                               noise=0.02, seed=21)
+    d = diagnose(record_from_run(ds), "paper-case1", library=work, workers=2)
+    assert d.timing["simulated"] == 0 and d.timing["reused"] == 25
+    assert (d.causes[0].cause, d.causes[0].member) == ("eccentricity", member)
 
 
 def test_candidates():
@@ -203,36 +231,42 @@ def test_parallel_pinion_and_wolfrom_planet_named_first(tmp_path, case, fault, k
 def test_bad_input(tmp_path):
     rec = Record(np.zeros(100), 1000.0, np.full(100, 1000.0))
     with pytest.raises(ValueError, match="threshold"):
-        diagnose(rec, "paper-case1", work_dir=tmp_path, threshold=1.5)
+        diagnose(rec, "paper-case1", library=tmp_path, threshold=1.5)
     with pytest.raises(ValueError, match="revolutions"):
-        diagnose(rec, "paper-case1", work_dir=tmp_path)
+        diagnose(rec, "paper-case1", library=tmp_path)
     with pytest.raises(ValueError, match="one value per sample"):
         Record(np.zeros(100), 1000.0, np.ones(99))
     with pytest.raises(ValueError, match="non-finite"):
         Record(np.full(10, np.nan), 1000.0, np.ones(10))
 
 
-def _cli(*args, cwd):
+def _cli(*args, cwd, library=None):
+    env = dict(os.environ)
+    if library is not None:
+        env["GEARVIB_DIAGNOSIS_LIBRARY"] = str(library)
     return subprocess.run([sys.executable, "-m", "gearvib", *args], capture_output=True,
-                          text=True, cwd=cwd, timeout=600)
+                          text=True, cwd=cwd, timeout=600, env=env)
 
 
 def test_cli_json_report_and_output_rule(tmp_path, work):
     fault, _ = FAULTS["pin-planet3"]
     write_netcdf(_measure([fault], seed=14), tmp_path / "meas.nc")
     out = tmp_path / "out"
-    # the candidate runs of the module are copied in, so the CLI reuses them
-    import shutil
-
-    shutil.copytree(work, out / "candidates")
+    # the CLI finds the candidates of the module in the library (same operating point):
+    # nothing is simulated or added
+    entries = sorted(p.name for p in work.rglob("*.npz"))
     r = _cli("diagnose", "meas.nc", "--gearset", "paper-case1", "-o", "out", "--json",
-             "--workers", "2", cwd=tmp_path)
+             "--workers", "2", cwd=tmp_path, library=work)
     assert r.returncode == 0, r.stderr
+    assert sorted(p.name for p in work.rglob("*.npz")) == entries
+    assert not (out / "candidates").exists()  # no run files unless --keep-runs
     js = json.loads(r.stdout)
     assert list(js) == ["threshold", "causes"]
     assert js["causes"][0]["cause"] == "pin_error" and js["causes"][0]["member"] == "planet"
-    scores = [c["score"] for c in js["causes"]]
-    assert scores == sorted(scores, reverse=True) and all(0 <= s <= 1 for s in scores)
+    # likely, then possible, then unlikely causes, each by score
+    rank = {"likely": 0, "possible": 1, "unlikely": 2}
+    keys = [(rank[c["verdict"]], -c["score"]) for c in js["causes"]]
+    assert keys == sorted(keys) and all(0 <= c["score"] <= 1 for c in js["causes"])
     for f in ("report.html", "report.pdf", "diagnosis.nc"):
         assert (out / f).stat().st_size > 1000
     html = (out / "report.html").read_text()
