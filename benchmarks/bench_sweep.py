@@ -14,9 +14,10 @@ runs (this process and its workers) tell whether the 2 workers add work.
     python benchmarks/bench_sweep.py --batch    # batched vs case by case, 1 worker
 
 ``--batch``: 16 damping variants of ``paper-case1`` (4 x 4 sun and ring damping ratios, 0.5 s
-run-ups) on 1 worker, case by case (``batch=False``) against two batches of 8 on the batched
-kernel (``batch=True``), alternated ``--repeat`` times; prints the median ratio and the spread,
-and checks that every run file and ``sweep.nc`` are identical bit for bit. Then the runs
+run-ups) on 1 worker, case by case (``batch=False``) and in two batches of 8 on the batched
+kernel (``batch=True``), each with and without run files (``run_files``), the four runs
+interleaved ``--repeat`` times; prints the median ratios and their spread, and checks that the
+run files and ``sweep.nc`` are identical bit for bit batched and case by case. Then the runs
 alone: 8 x ``simulate`` against one ``simulate_batch`` of 8 (paper-case1 and
 paper-case1-elastic).
 """
@@ -98,9 +99,14 @@ def bench_simulate_batch(repeat: int, duration: float) -> None:
               f"({repeat} pairs; load {_load()})")
 
 
-def bench_batch(repeat: int, duration: float) -> None:
-    """Batched against case-by-case sweep on 1 worker, alternated."""
-    sweep = _sweep(4, duration)
+MODES = (("case by case, run files", False, True), ("batched, run files", True, True),
+         ("case by case, no run files", False, False), ("batched, no run files", True, False))
+
+
+def bench_batch(repeat: int, n_side: int, duration: float) -> None:
+    """Batched against case-by-case sweeps on 1 worker, with and without run files, the four
+    runs interleaved in every round; medians of the ratios of each round."""
+    sweep = _sweep(n_side, duration)
     print(f"sweep: {sweep.n_cases} damping variants of paper-case1, {duration:g} s run-up each, "
           f"1 worker; load average before: {_load()}")
     with tempfile.TemporaryDirectory() as tmp:
@@ -109,25 +115,36 @@ def bench_batch(repeat: int, duration: float) -> None:
                   batch=False)
         run_sweep(warm, Path(tmp) / "warm1", workers=1, progress=False, report=False,
                   batch=True)
-        times: dict[bool, list[float]] = {False: [], True: []}
+        times: dict[str, list[float]] = {m[0]: [] for m in MODES}
         same = True
         for rep in range(max(1, repeat)):
-            for batched in (False, True):
-                out = Path(tmp) / f"r{rep}b{int(batched)}"
+            for label, batched, files in MODES:
+                out = Path(tmp) / f"r{rep}b{int(batched)}f{int(files)}"
                 t0 = time.perf_counter()
                 res = run_sweep(sweep, out, workers=1, progress=False, report=False,
-                                batch=batched)
+                                batch=batched, run_files=files)
                 wall = time.perf_counter() - t0
                 assert len(res.simulated) == sweep.n_cases and not res.failed
-                times[batched].append(wall)
-                print(f"  {'batched     ' if batched else 'case by case'}: {wall:7.2f} s wall "
+                times[label].append(wall)
+                print(f"  {label:28s}: {wall:7.2f} s wall, {sweep.n_cases / wall:5.2f} runs/s "
                       f"(load {_load()})")
-            same &= _same_output(Path(tmp) / f"r{rep}b0", Path(tmp) / f"r{rep}b1")
-    ratios = sorted(a / b for a, b in zip(times[False], times[True], strict=True))
-    med = _median(ratios)
-    print(f"speed-up batched / case by case (wall, pairs of consecutive runs): median "
-          f"{med:.2f}x, range {ratios[0]:.2f}-{ratios[-1]:.2f}x over {len(ratios)} pairs; "
-          f"run files and sweep.nc identical: {same}; load average after: {_load()}")
+            r = Path(tmp)
+            same &= _same_output(r / f"r{rep}b0f1", r / f"r{rep}b1f1")
+            same &= (r / f"r{rep}b0f0" / "sweep.nc").read_bytes() == \
+                (r / f"r{rep}b1f0" / "sweep.nc").read_bytes()
+
+    def ratio(a: str, b: str) -> str:
+        rs = sorted(x / y for x, y in zip(times[a], times[b], strict=True))
+        return (f"median {_median(rs):.2f}x, range {rs[0]:.2f}-{rs[-1]:.2f}x "
+                f"({len(rs)} rounds)")
+
+    print(f"speed-up, wall time per case (1 worker = per core), {sweep.n_cases} cases:")
+    print(f"  batched, no run files / case by case, run files (the default before): "
+          f"{ratio(MODES[0][0], MODES[3][0])}   (goal >= 2.5)")
+    print(f"  batched / case by case, both with run files:    {ratio(MODES[0][0], MODES[1][0])}")
+    print(f"  batched / case by case, both without run files: {ratio(MODES[2][0], MODES[3][0])}")
+    print(f"  run files and sweep.nc identical batched and case by case: {same}; "
+          f"load average after: {_load()}")
 
 
 def main() -> None:
@@ -139,8 +156,12 @@ def main() -> None:
                     help="alternate 1 and 2 workers this many times; the best of each counts")
     args = ap.parse_args()
     if args.batch:
-        bench_batch(max(3, args.repeat), 0.25 if args.quick else 0.5)
-        bench_simulate_batch(max(3, args.repeat), 0.25 if args.quick else 0.5)
+        if args.quick:
+            bench_batch(1, 2, 0.05)
+            bench_simulate_batch(1, 0.05)
+        else:
+            bench_batch(max(3, args.repeat), 4, 0.5)
+            bench_simulate_batch(max(3, args.repeat), 0.5)
         return
     n_side, duration = (4, 0.25) if args.quick else (8, 1.0)
     sweep = _sweep(n_side, duration)

@@ -482,7 +482,8 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
             raise CliError(str(exc)) from None
     try:
         result = run_sweep(sweep, args.output, workers=args.workers, executor=executor,
-                           progress=not args.quiet, report=not args.no_report)
+                           progress=not args.quiet, report=not args.no_report,
+                           run_files=not args.no_run_files)
     finally:
         if client is not None:
             client.close()
@@ -717,6 +718,9 @@ def _parser() -> argparse.ArgumentParser:
                    "10; where nothing listens the sweep fails at once)")
     w.add_argument("--list", action="store_true", help="print the cases and exit")
     w.add_argument("--no-report", action="store_true", help="write sweep.nc only")
+    w.add_argument("--no-run-files", action="store_true",
+                   help="keep the runs in memory for their summaries, write no DIR/runs/*.nc "
+                   "(faster, most of all batched; nothing to resume from)")
     w.set_defaults(func=_cmd_sweep)
     return p
 
