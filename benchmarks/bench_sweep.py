@@ -12,6 +12,7 @@ runs (this process and its workers) tell whether the 2 workers add work.
     python benchmarks/bench_sweep.py --quick    # 16 runs of 0.25 s
     python benchmarks/bench_sweep.py --repeat 3 # alternate 3 times, best of each
     python benchmarks/bench_sweep.py --batch    # batched vs case by case, 1 worker
+    python benchmarks/bench_sweep.py --dask     # local pool vs Dask (LocalCluster, processes)
 
 ``--batch``: 16 damping variants of ``paper-case1`` (4 x 4 sun and ring damping ratios, 0.5 s
 run-ups) on 1 worker, case by case (``batch=False``) and in two batches of 8 on the batched
@@ -25,6 +26,7 @@ paper-case1-elastic).
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
 import resource
 import tempfile
@@ -147,6 +149,92 @@ def bench_batch(repeat: int, n_side: int, duration: float) -> None:
           f"load average after: {_load()}")
 
 
+@contextlib.contextmanager
+def _dask_processes(folder: Path, n_workers: int = 2):
+    """`dask scheduler` on 127.0.0.1 (free port) + `n_workers` `dask worker` processes."""
+    import json
+    import shutil
+    import subprocess
+    import sys
+
+    from distributed import Client
+
+    dask_cli = shutil.which("dask") or str(Path(sys.executable).with_name("dask"))
+    info = folder / "scheduler.json"
+    procs: list[subprocess.Popen] = []
+    try:
+        procs.append(subprocess.Popen(
+            [dask_cli, "scheduler", "--host", "127.0.0.1", "--port", "0", "--no-dashboard",
+             "--scheduler-file", str(info)], stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL))
+        deadline = time.monotonic() + 120
+        while not info.exists() or not info.read_text().strip():
+            if time.monotonic() > deadline or procs[0].poll() is not None:
+                raise RuntimeError("the dask scheduler did not start")
+            time.sleep(0.2)
+        address = json.loads(info.read_text())["address"]
+        for _ in range(n_workers):
+            procs.append(subprocess.Popen(
+                [dask_cli, "worker", address, "--nthreads", "1", "--nworkers", "1",
+                 "--no-dashboard", "--host", "127.0.0.1"], stdout=subprocess.DEVNULL,
+                stderr=subprocess.DEVNULL))
+        client = Client(address, timeout=60, set_as_default=False)
+        client.wait_for_workers(n_workers, timeout=180)
+        yield client
+        client.close()
+    finally:
+        for p in reversed(procs):
+            p.terminate()
+        for p in reversed(procs):
+            try:
+                p.wait(timeout=30)
+            except subprocess.TimeoutExpired:
+                p.kill()
+                p.wait()
+
+
+def bench_dask(repeat: int, n_side: int, duration: float) -> None:
+    """2 local pool workers against a Dask LocalCluster of 2 processes and a `dask scheduler`
+    with 2 `dask worker` processes (loopback), interleaved; sweep.nc compared byte for byte."""
+    from distributed import Client, LocalCluster
+
+    sweep = _sweep(n_side, duration)
+    print(f"sweep: {sweep.n_cases} runs of paper-case1, {duration:g} s run-up each, automatic "
+          f"batches, 2 workers each; load average before: {_load()}")
+    kw = dict(progress=False, report=False)
+    with tempfile.TemporaryDirectory() as tmp, contextlib.ExitStack() as stack:
+        tmp = Path(tmp)
+        run_sweep(_sweep(2, 0.01), tmp / "warm", workers=1, **kw)  # compile / load here
+        cluster = stack.enter_context(LocalCluster(n_workers=2, threads_per_worker=1,
+                                                   processes=True, dashboard_address=None))
+        local_client = stack.enter_context(Client(cluster, set_as_default=False))
+        proc_client = stack.enter_context(_dask_processes(tmp))
+        executors = {"local pool": None, "LocalCluster": local_client.get_executor(),
+                     "scheduler + 2 workers": proc_client.get_executor()}
+        for name, ex in executors.items():  # the workers load the kernels outside the timings
+            if ex is not None:
+                run_sweep(_sweep(2, 0.01), tmp / f"warm-{len(name)}", executor=ex, **kw)
+        times: dict[str, list[float]] = {n: [] for n in executors}
+        same = True
+        for rep in range(max(1, repeat)):
+            for k, (name, ex) in enumerate(executors.items()):
+                out = tmp / f"r{rep}e{k}"
+                t0 = time.perf_counter()
+                res = run_sweep(sweep, out, workers=2, executor=ex, **kw)
+                wall = time.perf_counter() - t0
+                assert len(res.simulated) == sweep.n_cases and not res.failed
+                times[name].append(wall)
+                print(f"  {name:22s}: {wall:7.2f} s wall, {sweep.n_cases / wall:5.2f} runs/s "
+                      f"(load {_load()})")
+                same &= (out / "sweep.nc").read_bytes() == \
+                    (tmp / f"r{rep}e0" / "sweep.nc").read_bytes()
+    for name in list(executors)[1:]:
+        rs = sorted(a / b for a, b in zip(times["local pool"], times[name], strict=True))
+        print(f"throughput {name} / local pool (2 workers each): median {_median(rs):.2f}x, "
+              f"range {rs[0]:.2f}-{rs[-1]:.2f}x ({len(rs)} rounds)")
+    print(f"sweep.nc identical on all three: {same}; load average after: {_load()}")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="16 runs of 0.25 s")
@@ -154,7 +242,13 @@ def main() -> None:
                     help="batched vs case-by-case sweep of 16 runs on 1 worker")
     ap.add_argument("--repeat", type=int, default=2,
                     help="alternate 1 and 2 workers this many times; the best of each counts")
+    ap.add_argument("--dask", action="store_true",
+                    help="local pool vs Dask LocalCluster vs dask scheduler + 2 workers")
     args = ap.parse_args()
+    if args.dask:
+        bench_dask(1 if args.quick else max(3, args.repeat), *((2, 0.05) if args.quick
+                                                              else (4, 0.5)))
+        return
     if args.batch:
         if args.quick:
             bench_batch(1, 2, 0.05)
