@@ -199,12 +199,23 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     out, removed = check_output_file(args.output, overwrite=args.overwrite)
     _report_removed(removed)
     model = assemble(gearset)
+    if not args.quiet:
+        _first_run_notice()
     result = simulate(model, cond, dt=run["dt"], fs_out=run["fs_out"],
                       gyroscopic=run["gyroscopic"], progress=None if not args.quiet else False,
                       config={"gearset": cfg, "run": run}, max_steps=args.max_steps)
     path = write_netcdf(result.to_plain_dataset(), out)  # without importing xarray
     print(f"wrote {path}")
     return 0
+
+
+def _first_run_notice() -> None:
+    """One line on stderr before a run that compiles the kernels (a cold numba cache)."""
+    from gearvib.jit_cache import first_run_notice
+
+    notice = first_run_notice()
+    if notice:
+        print(notice, file=sys.stderr, flush=True)
 
 
 def _report_removed(removed: Sequence) -> None:
@@ -443,6 +454,7 @@ def _cmd_demo(args: argparse.Namespace) -> int:
         overwrite=args.overwrite)[1])
     print(f"gearvib demo: simulating the paper's run-ups (0 -> 4000 min-1 in "
           f"{args.duration or 1.0:g} s, cases 1 and 2) into {out}/ ...")
+    _first_run_notice()
     with removed_if_left_empty(out):
         result = run_study(study, out, progress=not args.quiet, duration=args.duration)
     for name, path in result.runs.items():
