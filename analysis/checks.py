@@ -24,6 +24,7 @@ __all__ = [
     "require_positive",
     "require_real",
     "require_same_length",
+    "require_size",
     "require_square",
     "sample_rate",
     "time_or_rate",
@@ -84,6 +85,41 @@ def require_real(value: Any, name: str) -> float:
     if not np.isfinite(v):
         raise ValueError(f"{name} = {value!r} is not admissible: must be finite")
     return v
+
+
+def require_size(nbytes: float, what: str, parameters: str) -> None:
+    """Raise unless ``nbytes`` (computed from the arguments) fit into the usable memory.
+
+    Called *before* an allocation whose size follows from the arguments (a record's length,
+    ``fs``, ``nfft``, ``samples_per_rev``, the number of orders ...), so that an absurd value
+    gives a :class:`ValueError` naming ``parameters`` instead of a :class:`MemoryError`, a
+    swapping machine or a killed process.
+
+    Parameters
+    ----------
+    nbytes : float
+        Bytes the call is about to allocate (may be astronomically large, or inf).
+    what : str
+        What needs them, for the message (``"the map (12 x 4096 x 2049 float64)"``).
+    parameters : str
+        The arguments that set the size, for the message (``"nfft"``, ``"rpm, fs"``).
+
+    Notes
+    -----
+    The limit is :func:`analysis.readers.integrity.memory_budget`: 80 % of the smallest of
+    the free memory, the cgroup limit and the address-space limit (``RLIMIT_AS``), the same
+    rule the readers apply to a file's declared sizes.
+    """
+    from analysis.readers.integrity import format_bytes, memory_budget
+
+    budget = memory_budget()
+    if not nbytes <= budget:  # also catches NaN
+        shown = format_bytes(nbytes) if np.isfinite(nbytes) else "unbounded memory"
+        raise ValueError(
+            f"{parameters}: {what} needs {shown}, more than the {format_bytes(budget)} this "
+            "process can use; admissible: values giving a result that fits into memory "
+            "(check their units)"
+        )
 
 
 def require_monotonic(values: np.ndarray, name: str, *, strict: bool = True) -> np.ndarray:
@@ -227,20 +263,38 @@ def uniform_rate(time: Any, name: str = "time", rtol: float = 1e-6) -> float:
     return 1.0 / dt
 
 
-def require_finite_blocks(x: np.ndarray, name: str) -> None:
-    """Raise if ``x`` is empty or holds NaN/inf; works block-wise along the last axis."""
+def require_finite_blocks(x: np.ndarray, name: str, bound: float | None = None) -> None:
+    """Raise if ``x`` is empty or holds NaN/inf; works block-wise along the last axis.
+
+    With ``bound``, a magnitude above it is refused too (its powers would overflow float64).
+    The message names the channel (its index for a multi-channel array) and the time sample.
+    """
     if x.size == 0:
         raise ValueError(f"{name}: channel is empty (needs at least one sample)")
     n = x.shape[-1]
     step = max(1, (1 << 20) // max(1, x.size // max(n, 1)))
+    kind = np.dtype(x.dtype).kind
+    if kind not in "fc" or bound is None or float(np.finfo(x.dtype).max) <= bound:
+        bound = None  # integers and narrow floats never exceed it
     for start in range(0, n, step):
         blk = x[..., start : start + step]
-        if not np.all(np.isfinite(blk)):
-            idx = start + int(np.argwhere(~np.isfinite(blk))[0][-1])
-            raise ValueError(
-                f"{name}: non-finite value (NaN or inf) at time sample {idx}; only finite "
-                "values are admissible (gap-fill or trim the channel first)"
-            )
+        bad = ~np.isfinite(blk)
+        if bound is not None and not bad.any():
+            bad = np.abs(blk) > bound
+            if not bad.any():
+                continue
+            kind, hint = f"a magnitude above {bound:g}", "check its units and scaling"
+        elif bad.any():
+            kind, hint = "non-finite value (NaN or inf)", "gap-fill or trim the channel first"
+        else:
+            continue
+        where = np.argwhere(bad)[0]
+        idx = start + int(where[-1])
+        channel = f" of channel {tuple(int(i) for i in where[:-1])}" if x.ndim > 1 else ""
+        raise ValueError(
+            f"{name}: {kind} at time sample {idx}{channel}; only finite values"
+            f"{'' if bound is None else f' up to {bound:g}'} are admissible ({hint})"
+        )
 
 
 def renamed(

@@ -22,10 +22,12 @@ if TYPE_CHECKING:
     from analysis.envelope import EnvelopeSpectrum, SquaredEnvelope
     from analysis.envelope_orders import EnvelopeOrderSpectrum
     from analysis.kurtogram import Kurtogram, SpectralKurtosis
+    from analysis.line_evidence import LineEvidence
 
 __all__ = [
     "envelope_spectrum_figure",
     "kurtogram_figure",
+    "line_evidence_figure",
     "spectral_kurtosis_figure",
     "squared_envelope_figure",
 ]
@@ -255,4 +257,90 @@ def squared_envelope_figure(
     ax.set_title(f"{env.name}: squared envelope of {env.band.low:.5g}-{env.band.high:.5g} Hz",
                  fontsize=10)  # fmt: skip
     ax.grid(True, alpha=0.3)
+    return fig
+
+
+def line_evidence_figure(
+    evidence: LineEvidence,
+    *,
+    axis_max: float | None = None,
+    ax: Any = None,
+    title: str | None = None,
+    figsize: tuple[float, float] = (9.0, 4.2),
+) -> Figure:
+    """A spectrum with the families checked in it: where each line was expected, which were
+    found, and each family's status.
+
+    Parameters
+    ----------
+    evidence : LineEvidence
+        Result of :func:`analysis.line_evidence.line_evidence`.
+    axis_max : float, optional
+        Upper end of the axis; default 1.1 times the highest harmonic of the families that
+        lie inside the spectrum (else the spectrum's end).
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw into.
+    title : str, optional
+        Axes title (default: the spectrum's name).
+    figsize : (float, float)
+        Size of a new figure [in].
+
+    Notes
+    -----
+    Level: ``10 log10(P / median P)`` over the axis shown [dB over the median]. Harmonics
+    dashed in the family's colour (the fundamental labelled with the family's name), lines
+    found (>= the threshold over their local floor) marked with a triangle at their level,
+    sidebands found with a dot; the legend (below the axes) gives every family's status,
+    harmonics found and, for a family whose lines were found, its chance of a coincidence.
+    """
+    fig, ax = _axes(ax, figsize)
+    x = evidence.axis
+    status = evidence.status
+    tops = [float(c.expected[c.sideband == 0].max()) for c, st in
+            zip(evidence.checks, status, strict=True) if st != "outside"]
+    if axis_max is None:
+        axis_max = 1.1 * max(tops) if tops else float(x[-1])
+    axis_max = min(float(axis_max), float(x[-1]))
+    keep = x <= axis_max
+    ref = float(np.median(evidence.power[keep][1:])) if np.count_nonzero(keep) > 2 else 1.0
+    with np.errstate(divide="ignore"):
+        level = 10.0 * np.log10(np.maximum(evidence.power, 1e-300) / max(ref, 1e-300))
+    ax.plot(x[keep], level[keep], lw=0.7, color="0.35")
+    top = float(np.max(level[keep][1:])) if np.count_nonzero(keep) > 2 else 1.0
+    bottom = float(np.percentile(level[keep], 1)) if np.count_nonzero(keep) > 2 else -1.0
+    span = max(top - bottom, 10.0)
+    ax.set_ylim(bottom - 0.05 * span, top + (0.12 + 0.07 * max(1, len(evidence))) * span)
+    rows = evidence.rows()
+    for j, c in enumerate(evidence.checks):
+        colour = _FAMILY_COLOURS[j % len(_FAMILY_COLOURS)]
+        harm = c.sideband == 0
+        _, _, st, found, _, _, _ = rows[j]
+        ch = float(evidence.chance[j])
+        shown = (np.isfinite(ch) and status[j] in ("detected", "possible", "explained"))
+        chance = ("" if not shown else ", chance < 1e-4" if ch < 1e-4 else
+                  f", chance {ch:.2g}")
+        ax.plot([], [], color=colour, ls="--", label=f"{c.family.name}: {st} "
+                f"({found} harmonics{chance})")
+        for h, p in zip(c.harmonic[harm], c.expected[harm], strict=True):
+            if p <= axis_max:
+                ax.axvline(p, color=colour, lw=0.8, ls="--", alpha=0.55)
+                if h == 1:
+                    ax.annotate(c.family.name, (p, 1.0), xycoords=("data", "axes fraction"),
+                                xytext=(2, -3 - 10 * j), textcoords="offset points",
+                                ha="left", va="top", fontsize=7, color=colour)
+        hit = c.found & np.isfinite(c.position) & (c.position <= axis_max)
+        k = np.clip(np.searchsorted(x, c.position[hit]), 0, x.size - 1)
+        main = harm[hit]
+        ax.plot(c.position[hit][main], level[k][main], "v", color=colour, ms=6,
+                mec="k", mew=0.4)
+        ax.plot(c.position[hit][~main], level[k][~main], "o", color=colour, ms=3.5,
+                mec="k", mew=0.3)
+    ax.set_xlim(0.0, axis_max)
+    ax.set_xlabel("order [-]" if evidence.axis_units == "1" else "frequency [Hz]")
+    ax.set_ylabel("level [dB over the median]")
+    ax.set_title(title or evidence.name, fontsize=10)
+    ax.grid(True, alpha=0.3)
+    if evidence.checks:  # below the axes: the spectrum and the families' names stay clear
+        ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(0.0, -0.16), frameon=False,
+                  ncol=1)
     return fig

@@ -9,8 +9,11 @@ One set of rules for every function of :mod:`analysis.spectrum`, :mod:`analysis.
   coordinate. A 1-D array is one channel. An array with more dimensions needs ``axis=`` (its
   time axis) unless the length of ``rpm``/``angle``/``time`` singles out one axis: a
   ``(samples, channels)`` array is never analysed along the wrong axis. The other axis of a
-  2-D array becomes the ``channel`` dimension of the result.
+  2-D array becomes the ``channel`` dimension of the result. Samples must be finite and at
+  most :data:`MAX_SAMPLE` in magnitude (the error names the channel and the time sample).
 * **Sampling**: ``fs`` [Hz] or ``time`` [s] (uniform; they must agree when both are given).
+  ``fs`` is a real number (a bool or a string is a :class:`TypeError`), > 0, with a finite
+  record duration ``n / fs``.
 * **Speed reference**: ``rpm`` [min-1] or ``angle`` [rad] per sample, exactly one of them
   for order analysis. A tacho's angle is more accurate than the rpm derived from it, so give
   the angle when you have it. For a Dataset or DataArray the reference can be named
@@ -33,11 +36,13 @@ from analysis.checks import (
     BLOCK_SAMPLES,
     require_finite_blocks,
     require_int,
+    require_real,
     uniform_rate,
 )
 
 __all__ = [
     "ANGLE_UNITS",
+    "MAX_SAMPLE",
     "SPEED_UNITS",
     "Reference",
     "Signal",
@@ -75,7 +80,10 @@ ANGLE_UNITS = {
     "deg": np.pi / 180.0,
 }
 _SPEED_WORDS = ("speed", "rpm", "revolution", "rotation", "rotational")
-_MIN_RPM_FRACTION = 0.02  # default standstill threshold: 2 % of the highest speed
+_MIN_RPM_FRACTION = 0.02
+#: Largest magnitude of a sample of a signal: the powers (squares summed over a record) of
+#: larger values overflow float64, and no physical measurement reaches it in any unit.
+MAX_SAMPLE = 1e100  # default standstill threshold: 2 % of the highest speed
 
 
 @dataclass
@@ -313,7 +321,7 @@ def signal_input(
         t_raw = x["time"].values  # float seconds, or decoded datetimes: since the first
         fs_t = uniform_rate(t_raw, f"{where}.time")  # a decoded axis within its resolution
         t_coord = elapsed_seconds(t_raw)
-        if fs is not None and abs(float(fs) - fs_t) > 1e-6 * fs_t:
+        if fs is not None and abs(require_real(fs, "fs") - fs_t) > 1e-6 * fs_t:
             raise ValueError(
                 f"sample-rate mismatch: fs = {fs!r} Hz but the time coordinate of {where} "
                 f"gives {fs_t:.9g} Hz; omit fs or make them agree"
@@ -351,9 +359,12 @@ def signal_input(
         if time is None:
             if fs is None:
                 raise ValueError("fs (sample rate in Hz, > 0) or time (s) is required")
-            rate = float(fs)
-            if not np.isfinite(rate) or rate <= 0:
-                raise ValueError(f"fs = {fs!r} is not admissible: must be finite and > 0 Hz")
+            rate = require_real(fs, "fs")
+            if rate <= 0 or not np.isfinite(arr.shape[-1] / rate):
+                raise ValueError(
+                    f"fs = {fs!r} is not admissible: must be > 0 Hz with a finite record "
+                    f"duration ({arr.shape[-1]} samples / fs)"
+                )
             t0 = 0.0
         else:
             time_arr = np.asarray(time)
@@ -362,14 +373,14 @@ def signal_input(
                     f"sample-count mismatch ({where}: {arr.shape[-1]}, time: {time_arr.size})"
                 )
             rate = uniform_rate(time_arr, "time")
-            if fs is not None and abs(float(fs) - rate) > 1e-6 * rate:
+            if fs is not None and abs(require_real(fs, "fs") - rate) > 1e-6 * rate:
                 raise ValueError(
                     f"sample-rate mismatch: fs = {fs!r} Hz but the time axis gives {rate:.9g} Hz"
                 )
             t0 = float(time_arr[0])
     if np.iscomplexobj(arr) or not np.issubdtype(arr.dtype, np.number):
         raise ValueError(f"{where} must be a real numeric array; got dtype {arr.dtype}")
-    require_finite_blocks(arr, name if name is not None else where)
+    require_finite_blocks(arr, name if name is not None else where, MAX_SAMPLE)
     return Signal(
         arr,
         rate,

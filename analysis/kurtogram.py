@@ -92,6 +92,7 @@ __all__ = [
 
 #: Default deepest level of the fast kurtogram (also limited to ``log2(n) - 8``).
 MAX_LEVEL = 8
+_TREE_LEVELS = 48  # deepest tree kurtogram_levels lists (2**48 bands: no record is that long)
 #: Smooth-edge width of the kurtogram's bands, as a fraction of their width: gain 1/2 at the
 #: band edges, 1 over the central half; short impulse responses (a few band periods).
 KURTOGRAM_TRANSITION = 0.5
@@ -312,6 +313,11 @@ def kurtogram_levels(max_level: int) -> list[tuple[float, int]]:
     the level is ``log2`` of the number of bands, so a band is ``fs / 2^(level + 1)`` wide.
     """
     top = require_int(max_level, "max_level", 1)
+    if top > _TREE_LEVELS:
+        raise ValueError(
+            f"max_level = {max_level!r} is not admissible: an integer in 1..{_TREE_LEVELS} "
+            "(2**max_level bands; a record holds fewer samples than that)"
+        )
     rows = [(0.0, 1)]
     for k in range(1, top + 1):
         rows.append((float(k), 2**k))

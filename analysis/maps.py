@@ -33,7 +33,7 @@ from typing import TYPE_CHECKING, Any, Literal, Self
 import numpy as np
 
 from analysis.cf import cf_dataset, processing_attrs
-from analysis.checks import require_choice, require_finite
+from analysis.checks import require_choice, require_finite, require_size
 from analysis.frames import frame_coords, frequency_plan, order_plan, stft_into
 from analysis.inputs import channel_coords, dataset_reference, dataset_variable, select_channel
 from analysis.levels import power_of, to_db
@@ -323,6 +323,10 @@ def rpm_frequency_map(
         time=time, axis=axis, units=units, name=name,
     )  # fmt: skip
     sig = p.signal
+    require_size(
+        8.0 * np.prod(sig.lead, dtype=float) * p.n_frames * p.axis.size,
+        f"the map ({p.n_frames} frames x {p.axis.size} lines)", "resolution, overlap, x",
+    )
     out = np.empty((*sig.lead, p.n_frames, p.axis.size))
     stft_into(p.x, p.w, p.step, out, amplitude, scale)
     tc, rc = p.frame_speeds(0, p.n_frames)
@@ -437,6 +441,10 @@ def rpm_order_map(
         min_rpm=min_rpm, units=units, name=name, block_size=block_size, orders=orders,
     )  # fmt: skip
     sig = p.signal
+    require_size(
+        8.0 * np.prod(sig.lead, dtype=float) * p.n_frames * p.axis.size,
+        f"the map ({p.n_frames} frames x {p.axis.size} lines)", "resolution, overlap, x",
+    )
     out = np.empty((*sig.lead, p.n_frames, p.axis.size))
     tc = np.empty(p.n_frames)
     rc = np.empty(p.n_frames)

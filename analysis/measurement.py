@@ -42,8 +42,15 @@ import numpy as np
 import xarray as xr
 
 from analysis.cf import cf_dataset, elapsed_seconds, labels_from_cf
-from analysis.checks import uniform_rate
+from analysis.checks import require_finite_blocks, uniform_rate
 from analysis.inputs import ANGLE_UNITS, find_reference
+from analysis.measurement_options import (
+    apply_calibration,
+    check_fs,
+    check_rate,
+    reader_options,
+    scalar_speed,
+)
 from analysis.readers import FORMATS, ReaderError, read
 from analysis.readers.cdf3 import check_cdf3, is_cdf3
 from analysis.readers.integrity import require_memory
@@ -203,32 +210,41 @@ def _is_run_without_sensor(ds: xr.Dataset) -> bool:
     return _RUN_MARKER not in ds.variables and _RUN_FORCE in ds.variables
 
 
-def _read_file(path: Path, options: dict | None) -> tuple[xr.Dataset, dict]:
-    """The file's Dataset (common layout, or a gearvib run) and its provenance."""
+def _read_file(path: Path, options: dict | None, fs: float | None = None,
+               time_column: Any = None) -> tuple[xr.Dataset, dict]:
+    """The file's Dataset (common layout, or a gearvib run) and its provenance; ``fs`` and
+    ``time_column`` as stated by the user (:mod:`analysis.measurement_options`)."""
     if not path.exists():
         raise FileNotFoundError(f"measurement file not found: {path}")
     if path.is_dir():
         raise ValueError(f"measurement {str(path)!r} is a directory; give a file")
     ext = path.suffix.lower()
+    opts, compare_rate = reader_options(ext, options, fs, time_column)
     image = _netcdf_run_image(path) if ext in FORMATS["netcdf"][1] else None
     if image is not None:
+        if time_column is not None or options:
+            raise ValueError(f"{path} is a simulated run: reader options and time_column do "
+                             "not apply")
         try:  # from the image, as every netCDF read here: see analysis.readers.ncimage
             ds = labels_from_cf(load_image(path, image, decode_times=False,
                                            decode_timedelta=False))
         except (OSError, ValueError, RuntimeError) as exc:
             raise ReaderError(f"{path}: not a readable netCDF file ({exc})") from None
+        if fs is not None:
+            check_rate(ds, fs, str(path))
         return ds, {"file": str(path), "format": "netcdf (gearvib run)",
                     "reader": "xarray.open_dataset"}
-    opts = dict(options or {})
     if ext in FORMATS["csv"][1] and not opts:
         opts = {"time_column": "time"}  # the layout write_csv writes: "time [s]" first
         try:
             ds = read(path, **opts)
         except ValueError as exc:
             raise ValueError(f"{exc} (a CSV file needs its time column named 'time', or give "
-                             "reader_options={'fs': ...} or {'time_column': ...})") from None
+                             "fs= (--fs HZ) or time_column= (--time-column NAME))") from None
     else:
         ds = read(path, **opts)
+    if compare_rate:
+        check_rate(ds, fs, str(path))
     fmt = str(ds.attrs.get("source_format", ext.lstrip(".")))
     reader = next((f"analysis.readers.{fn.__name__}" for name, (fn, exts) in FORMATS.items()
                    if ext in exts), "analysis.readers.read")
@@ -544,6 +560,11 @@ def load_measurement(
     speed: str | None = None,
     angle: str | None = None,
     rpm: float | None = None,
+    rpm_from: str | None = None,
+    fs: float | None = None,
+    time_column: str | int | None = None,
+    calibration: float | dict[str, float] | None = None,
+    units: str | dict[str, str] | None = None,
     reader_options: dict | None = None,
     forces: bool = False,
 ) -> Measurement:
@@ -569,6 +590,22 @@ def load_measurement(
     rpm : float, optional
         A constant speed of the reference shaft [min-1] stated by the user, for records
         without a speed channel (stated in :attr:`Measurement.reference`).
+    rpm_from : str, optional
+        The name of a scalar variable of the file holding a constant speed [min-1] (a MAT
+        scalar such as CWRU's ``X105RPM``, a netCDF scalar variable, a numeric global
+        attribute).
+    fs : float, optional
+        Sample rate [Hz] of a file that does not state one (CSV without a time column, MAT
+        without ``fs`` or time vector, TDMS without ``wf_increment``); for a file that
+        states its rate (WAV, UFF, netCDF, a Dataset) it must agree with it.
+    time_column : str or int, optional
+        Time column of a CSV file (name or 0-based index) or time vector of a MAT file.
+    calibration : float or dict, optional
+        Factor in ``units`` per file unit, for every channel or per channel
+        (:func:`analysis.measurement_options.apply_calibration`).
+    units : str or dict, optional
+        Unit of the (calibrated) values, for every channel or per channel, e.g. ``"g"``
+        (converted to SI as the readers do: ``g`` -> ``m s-2``).
     reader_options : dict, optional
         Passed to the file's reader (e.g. ``{"fs": 25600}`` or ``{"time_column": "t"}`` for
         a CSV file, ``{"sets": [0, 1]}`` for UFF); a CSV file defaults to its ``time`` column.
@@ -590,26 +627,38 @@ def load_measurement(
     analysis.readers.ReaderError
         The file cannot be read (a :class:`ValueError`).
     ValueError
-        More than one of ``tacho``/``speed``/``angle``/``rpm``; ``pulses_per_rev`` without a
-        tacho; an unknown channel (the channels are listed); no speed reference found (the
-        options are named, the channels listed); fewer than 64 samples; a shaft that does not
-        turn.
+        More than one of ``tacho``/``speed``/``angle``/``rpm``/``rpm_from``;
+        ``pulses_per_rev`` without a tacho; an unknown channel (the channels are listed); no
+        speed reference found (the options are named, the channels listed); fewer than 64
+        samples; a shaft that does not turn; ``fs`` outside (0, 1e9] Hz or against the
+        file's own rate; ``time_column`` for a format without one; a calibration of 0 or a
+        channel it names that the file does not hold; ``rpm_from`` naming no scalar of the
+        file (its scalars are listed).
+    TypeError
+        ``fs`` or a calibration factor that is not a number (a bool or a string), a unit
+        that is not a string.
     """
     given = {k: v for k, v in (("tacho", tacho), ("speed", speed), ("angle", angle),
-                                ("rpm", rpm)) if v is not None}
+                                ("rpm", rpm), ("rpm_from", rpm_from)) if v is not None}
     if len(given) > 1:
         raise ValueError(f"give one speed reference, not {' and '.join(given)}")
     if pulses_per_rev is not None and (speed is not None or angle is not None
-                                       or rpm is not None):
-        raise ValueError("pulses_per_rev applies to a tacho channel, not to speed/angle/rpm")
+                                       or rpm is not None or rpm_from is not None):
+        raise ValueError("pulses_per_rev applies to a tacho channel, not to "
+                         "speed/angle/rpm/rpm_from")
+    fs = check_fs(fs)
     if isinstance(source, xr.Dataset):
+        if time_column is not None:
+            raise ValueError("time_column applies to a CSV or MAT file, not to a Dataset")
+        if fs is not None:
+            check_rate(source, fs, "the dataset")
         ds, prov = source, {"file": str(source.attrs.get("source_file", "")) or None,
                             "format": str(source.attrs.get("source_format", "dataset")),
                             "reader": "in-memory Dataset"}
         where = "the dataset"
     elif isinstance(source, str | os.PathLike):
         p = Path(source)
-        ds, prov = _read_file(p, reader_options)
+        ds, prov = _read_file(p, reader_options, fs, time_column)
         where = str(p)
     else:
         raise TypeError(f"source must be a path or an xarray.Dataset, not {type(source).__name__}")
@@ -624,13 +673,27 @@ def load_measurement(
         signals = _channels_of_layout(ds, t)
         extra = {"kind": "file" if prov.get("reader") != "in-memory Dataset" else "dataset"}
     prov.update(extra)
+    for name in signals.data_vars:  # a NaN sample (a netCDF gap) names channel and sample
+        if signals[name].dtype.kind in "fc" and "time" in signals[name].dims:
+            require_finite_blocks(np.asarray(signals[name].transpose(..., "time").values),
+                                  f"{where}: channel {name!r}")
+    signals = apply_calibration(signals, calibration, units)
+    stated = {k: v for k, v in (("fs", fs), ("time_column", time_column),
+                                ("calibration", calibration), ("units", units),
+                                ("rpm_from", rpm_from)) if v is not None}
+    if stated:
+        prov["stated"] = stated
+    if rpm_from is not None:
+        rpm = scalar_speed(ds, rpm_from, MAX_RPM)
     angle_da = None
     accuracy: dict = {}
     if rpm is not None:
         v = _check_rpm(rpm)
         ref_channel = None
         speed_values = np.full(t.size, v)
-        reference = f"constant speed {v:g} min-1 stated by the user (no speed channel used)"
+        reference = (f"constant speed {v:g} min-1 from the file's scalar {rpm_from!r}"
+                     if rpm_from is not None else
+                     f"constant speed {v:g} min-1 stated by the user (no speed channel used)")
     else:
         if tacho is not None:
             kind, name = "tacho", tacho

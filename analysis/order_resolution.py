@@ -102,7 +102,7 @@ def requested_orders(orders: Any, name: str = "orders") -> np.ndarray | None:
     if isinstance(orders, str | bytes | bool):
         raise TypeError(f"{name} = {orders!r} must be a number or a list of orders > 0")
     arr = np.asarray(orders)
-    if arr.dtype == bool or not np.issubdtype(arr.dtype, np.number):
+    if arr.dtype == bool or not np.issubdtype(arr.dtype, np.number) or np.iscomplexobj(arr):
         raise TypeError(f"{name} = {orders!r} must be a number or a list of orders > 0")
     ords = np.atleast_1d(require_finite(arr, name))
     if ords.ndim != 1 or np.any(ords <= 0):

@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING, Any, Literal
 import numpy as np
 
 from analysis.cf import cf_dataset, processing_attrs
-from analysis.checks import require_block_size, require_choice, time_or_rate
+from analysis.checks import require_block_size, require_choice, require_size, time_or_rate
 from analysis.frames import (
     BLOCK_ELEMENTS,
     FrequencyPlan,
@@ -540,6 +540,17 @@ def _cut_setup(
     return ords, kind, bw, spacing
 
 
+def _require_analysed(ords: np.ndarray, top: float, where: str) -> None:
+    """Raise for orders above the highest analysed order ``top`` (a band whose edge only
+    leaves the axis reads NaN, as documented)."""
+    if np.any(ords > top):
+        raise ValueError(
+            f"orders: {ords[ords > top].tolist()[:5]} lie above the highest analysed order "
+            f"({top:.6g}{where}); admissible: orders <= that (raise max_order or "
+            "samples_per_rev; for bandwidth_hz, fs)"
+        )
+
+
 def _warn_overlaps(
     ords: np.ndarray,
     kind: str,
@@ -820,8 +831,15 @@ def order_cuts(
             f"bandwidth ({bw:g} {kind}) is narrower than the map's line spacing somewhere "
             "(the band would hold no line); widen it or use a finer map"
         )
+    if not is_freq:
+        _require_analysed(ords, float(axis[-1]), "")
     named = named_lines(lines)
     sig = plan.signal
+    rows = min(plan.n_frames, plan.block // plan.step + 1)
+    require_size(
+        8.0 * np.prod(sig.lead, dtype=float) * (ords.size * plan.n_frames + rows * axis.size),
+        f"the cuts ({ords.size} orders x {plan.n_frames} frames)", "orders, resolution, x",
+    )
     band = np.empty((*sig.lead, ords.size, plan.n_frames))
     tc = np.empty(plan.n_frames)
     rc = np.empty(plan.n_frames)
@@ -832,6 +850,9 @@ def order_cuts(
             power, r_blk, axis, ords, kind, bw, is_freq, plan.info.enbw_bins
         )
         tc[k0:k1], rc[k0:k1] = t_blk, r_blk
+    if is_freq:
+        _require_analysed(ords, float(axis[-1]) * 60.0 / max(float(rc.min()), 1e-300),
+                          " at the slowest frame")
     resolution = plan.info.enbw_hz(plan.rate)
     _warn_overlaps(ords, kind, bw, is_freq, spacing, plan.window, rc, named, resolution)
     vals, units, ref = _levels(band, amplitude, scale, sig.units)

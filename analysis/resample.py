@@ -54,7 +54,9 @@ from analysis.checks import (
     require_finite,
     require_finite_blocks,
     require_monotonic,
+    require_positive,
     require_same_length,
+    require_size,
     time_or_rate,
 )
 from analysis.inputs import (
@@ -84,6 +86,12 @@ __all__ = [
 ]
 
 _MAX_OVERSAMPLING = 64
+#: Largest number of fine-grid angle samples per time sample of the record (plus
+#: :data:`MIN_ANGLE_LIMIT`): a finer angle grid holds no information the record has, so a
+#: larger one means a speed, ``fs`` or ``samples_per_rev`` in the wrong units.
+MAX_ANGLE_PER_TIME_SAMPLE = 1024
+#: Angle samples always admissible, however short the record.
+MIN_ANGLE_LIMIT = 1 << 20
 _MIN_INTERVAL = 256  # smallest spacing of the time-domain checkpoints [samples]
 
 
@@ -478,7 +486,18 @@ class AngleResampler:
         self.oversampling = over
         fine = spr * over
         self.dphi = 2.0 * np.pi / fine
-        self.n_fine = int(np.floor((track.last - track.first) / self.dphi)) + 1
+        n_fine = np.floor((track.last - track.first) / self.dphi) + 1.0
+        limit = MIN_ANGLE_LIMIT + MAX_ANGLE_PER_TIME_SAMPLE * track.n
+        if not n_fine <= limit:  # also catches inf and NaN
+            raise ValueError(
+                f"rpm/angle, fs, samples_per_rev: {track.n} time samples turning "
+                f"{(track.last - track.first) / (2 * np.pi):.6g} revolutions at "
+                f"{spr} x {over} (oversampling) samples per revolution need {n_fine:.6g} angle "
+                f"samples; admissible: at most {MAX_ANGLE_PER_TIME_SAMPLE} per time sample "
+                f"(+ {MIN_ANGLE_LIMIT}); check the units of the speed reference and fs, or "
+                "lower samples_per_rev"
+            )
+        self.n_fine = int(n_fine)
         self.t_first = float(track.time(0, 1)[0])
         # 3) angle-domain anti-alias FIR for the decimation by `over`
         self.fir: np.ndarray | None = None
@@ -558,7 +577,12 @@ def check_sampling(samples_per_rev: Any, max_order: float | None) -> tuple[int, 
 
 def default_samples_per_rev(fs: float, rpm_max: float) -> tuple[int, float]:
     """Angular sampling matching ``fs`` at the top speed, and its max order ``spr / 2.56``."""
-    spr = int(2 * np.ceil(0.5 * fs / (rpm_max / 60.0)))
+    fs, rpm_max = require_positive(fs, "fs"), require_positive(rpm_max, "rpm_max")
+    spr = 2.0 * np.ceil(0.5 * fs / (rpm_max / 60.0))
+    if not spr <= 2**62:
+        raise ValueError(f"fs / rpm_max = {fs:g} Hz / {rpm_max:g} min-1 give {spr:g} samples per "
+                         "revolution; admissible: at most 2**62 (check their units)")
+    spr = int(spr)
     return max(spr, 8), max(spr, 8) / 2.56
 
 
@@ -752,6 +776,10 @@ def resample_to_angle(
     block = require_block_size(block_size)
     tr = tracking(sig, ref, samples_per_rev, max_order, block, min_rpm)
     res = tr.resampler
+    require_size(
+        8.0 * res.n_out * (np.prod(sig.lead, dtype=float) + 2),
+        f"the resampled signal ({res.n_out} angle samples)", "rpm/angle, fs, samples_per_rev",
+    )
     values = np.empty((*sig.lead, res.n_out))
     times = np.empty(res.n_out)
     for j0 in range(0, res.n_out, block):

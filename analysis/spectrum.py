@@ -33,7 +33,7 @@ import scipy.optimize
 import scipy.signal
 
 from analysis.cf import cf_dataset
-from analysis.checks import require_choice, require_int, time_or_rate
+from analysis.checks import require_choice, require_int, require_size, time_or_rate
 from analysis.fft import RfftPlan, rfft_plan
 from analysis.inputs import channel_coords, select_channel, signal_input
 from analysis.levels import AMPLITUDES, SCALINGS, amplitude_choice, to_db, units_of
@@ -383,6 +383,10 @@ def spectrum(
     nfft = seg if nfft is None else require_int(nfft, "nfft", 1)
     if nfft < seg:
         raise ValueError(f"nfft = {nfft} is not admissible: must be >= segment_length = {seg}")
+    require_size(
+        8.0 * (nfft + 2) * (np.prod(sig.lead, dtype=float) + 3),
+        f"a spectrum of nfft = {nfft} lines", "nfft, segment_length, resolution",
+    )
     overlap = float(overlap)
     if not 0.0 <= overlap < 1.0:
         raise ValueError(f"overlap = {overlap!r} is not admissible: must be in [0, 1)")

@@ -2,7 +2,8 @@
 
 Run ``python3 benchmarks/bench_kernel.py [--quick]``. For ``paper-case1`` and
 ``paper-case1-elastic`` (1 s run-up 0 -> 4000 min^-1 at 60 N m input torque, the automatic
-step), it prints side by side:
+step; in the C comparison also both with every mesh under the always-on ``viscous``
+damping law), it prints side by side:
 
 * **ns per right-hand-side evaluation**, numba kernel against a plain C loop of the same
   algorithm (``benchmarks/c/rk4_kernel.c``, compiled here with ``gcc -O2`` and, second, with
@@ -36,6 +37,7 @@ from __future__ import annotations
 
 import argparse
 import ctypes
+import dataclasses
 import os
 import shutil
 import subprocess
@@ -47,9 +49,16 @@ import numpy as np
 from gearvib import kernels as kn
 from gearvib import kernels_batch as kb
 from gearvib.assembly import assemble
-from gearvib.config import gearset_from_dict, load_config, load_gearset
-from gearvib.simulate import SpeedRamp, choose_step, prepare_run, static_equilibrium
+from gearvib.config import gearset_from_dict, load_config
+from gearvib.simulate import (
+    SpeedRamp,
+    choose_step,
+    prepare_run,
+    static_equilibrium,
+    with_coupling,
+)
 from gearvib.simulation.frequencies import stiffest_matrix, undamped_frequencies
+from gearvib.simulation.settings import conditions_from_settings, read_run_settings
 from gearvib.sweep.keys import set_path
 
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -60,6 +69,17 @@ CFLAGS = ["-O2", "-shared", "-fPIC"]
 CFLAGS_NATIVE = ["-O2", "-march=native", "-ffp-contract=off", "-shared", "-fPIC"]
 I64 = ctypes.POINTER(ctypes.c_int64)
 F64 = ctypes.POINTER(ctypes.c_double)
+#: The constants of gearvib.kernels the C file mirrors, in the order of its ``GV_LAYOUT``.
+HEADER_NAMES = (
+    "H_N", "H_NMESH", "H_IPAR", "IP_MODE", "IP_INPUT", "IP_OUTPUT", "IP_CARRIER", "IP_GYRO",
+    "N_IPAR", "FP_KC", "FP_CC", "FP_OUTDIR", "FP_T0", "FP_C1", "FP_C2", "FP_SPEED_LIMIT",
+    "H_LP", "H_LI", "H_CP", "H_CI", "H_GP", "H_GI", "H_II", "H_OI", "H_VP", "H_VI", "H_FP",
+    "H_FI", "H_PP", "H_PI", "H_BP", "H_RFLAG", "H_RVP", "H_RVI", "H_RFP", "H_RFI", "H_FREC",
+    "H_FINT", "H_MLAW", "H_DI", "H_ACC0", "H_LV", "H_CV", "H_GV", "H_IV", "H_OV", "H_VV",
+    "H_FV", "H_PV", "H_S0", "H_BL", "H_MC", "H_FPAR", "H_LIMIT", "H_BV", "H_RVV", "H_RFV",
+    "H_FVAL", "H_DV", "H_NI", "H_NO", "H_FPASS", "H_ND", "N_HEADER", "DRIVE_NONE",
+    "DRIVE_SPEED", "DRIVE_TORQUE", "DRIVE_MOTOR", "MESH_OUT_COLUMNS",
+)
 
 
 def build_c(tmp: str, flags: list[str], name: str) -> ctypes.CDLL:
@@ -71,8 +91,17 @@ def build_c(tmp: str, flags: list[str], name: str) -> ctypes.CDLL:
     subprocess.run([gcc, *flags, "-o", lib, C_SOURCE, "-lm"], check=True)
     c = ctypes.CDLL(lib)
     c.gv_header_size.restype = ctypes.c_int64
-    if c.gv_header_size() != kn.N_HEADER:
-        raise SystemExit("benchmarks/c/rk4_kernel.c is out of date with gearvib.kernels' header")
+    c.gv_header_layout.restype = ctypes.c_int64
+    c.gv_header_layout.argtypes = [I64, ctypes.c_int64]
+    layout = np.zeros(len(HEADER_NAMES) + 1, dtype=np.int64)
+    n_layout = c.gv_header_layout(ptr(layout, I64), layout.size)
+    expected = [getattr(kn, name) for name in HEADER_NAMES]
+    if c.gv_header_size() != kn.N_HEADER or n_layout != len(HEADER_NAMES) or list(
+            layout[:n_layout]) != expected:
+        wrong = [name for name, a, b in zip(HEADER_NAMES, layout, expected, strict=False)
+                 if a != b]
+        raise SystemExit("benchmarks/c/rk4_kernel.c is out of date with gearvib.kernels' header"
+                         f" (entries that differ: {wrong or 'their number'})")
     c.gv_integrate_chunk.restype = ctypes.c_int64
     c.gv_integrate_chunk.argtypes = [
         I64, F64, F64, ctypes.c_int64, F64, ctypes.c_int64, F64, ctypes.c_int64, F64,
@@ -87,6 +116,27 @@ def build_c(tmp: str, flags: list[str], name: str) -> ctypes.CDLL:
     return c
 
 
+#: The runs of the C comparison (their records bit-identical too, so every branch of the C
+#: file is checked): the default drive (a controller on the rigid-body mode); ``coupling``:
+#: the preset's own drive, a spring-damper on the sun; ``viscous``: every mesh under the
+#: always-on damping law.
+C_CASES = ("paper-case1", "paper-case1-elastic", "paper-case1 coupling",
+           "paper-case1 viscous", "paper-case1-elastic viscous")
+
+
+def c_case(name: str, cond: SpeedRamp) -> Case:
+    """The packed run of an entry of :data:`C_CASES` (``cond`` with its drive), at 0.4 s."""
+    preset, _, variant = name.partition(" ")
+    cfg, base = load_config(preset)
+    if variant == "viscous":
+        for family in ("sun", "ring"):
+            cfg = set_path(cfg, f"meshes.{family}.damping_law", variant)
+    elif variant == "coupling":
+        run = read_run_settings(cfg.get("simulation", {}))
+        cond = dataclasses.replace(cond, coupling=conditions_from_settings(run).coupling)
+    return Case(assemble(gearset_from_dict(cfg, base=base)), cond, 0.4)
+
+
 def ptr(a: np.ndarray, kind=F64):
     return a.ctypes.data_as(kind)
 
@@ -97,9 +147,8 @@ class Case:
     def __init__(self, model, cond, t_start: float):
         setup = prepare_run(model, cond, False)
         system = setup.system
-        k_max = stiffest_matrix(model, setup.torque_sign).copy()
-        k_in = system.ipar[kn.IP_INPUT]
-        k_max[k_in, k_in] += setup.coupling.stiffness
+        k_max = with_coupling(stiffest_matrix(model, setup.torque_sign), setup.mass,
+                              setup.rigid, int(system.ipar[kn.IP_INPUT]), setup.coupling)
         f_nat = float(undamped_frequencies(setup.mass, k_max).max())
         f_mesh = float(np.nanmax(model.mesh_frequencies_per_rpm)) * setup.speed_max * 30 / np.pi
         self.step = choose_step(f_nat, f_mesh, speed_max_rpm=setup.speed_max * 30 / np.pi)
@@ -312,15 +361,15 @@ def main() -> None:
             print(f"\nC baseline: gcc {' '.join(flags)} {os.path.relpath(C_SOURCE)}")
             print("ns per right-hand-side evaluation (CPU time, best of "
                   f"{repeat}; window {window} s of the run-up from t = 0.4 s, ~1600 min^-1)")
-            print(f"{'model':22s} {'RHS evals':>10s} {'RK4 loop numba':>15s} {'C':>8s} "
+            print(f"{'model':28s} {'RHS evals':>10s} {'RK4 loop numba':>15s} {'C':>8s} "
                   f"{'ratio':>6s} {'RHS alone numba':>16s} {'C':>8s} {'ratio':>6s}")
-            for preset in ("paper-case1", "paper-case1-elastic"):
+            for preset in C_CASES:
                 if preset not in cases:
-                    cases[preset] = Case(assemble(load_gearset(preset)), cond, 0.4)
+                    cases[preset] = c_case(preset, cond)
                 case = cases[preset]
                 n_steps = round(window / case.dt)
                 r = rhs_per_eval(case, c, n_steps, repeat)
-                print(f"{preset:22s} {r['n_rhs']:10d} {r['loop_numba']:15.1f} "
+                print(f"{preset:28s} {r['n_rhs']:10d} {r['loop_numba']:15.1f} "
                       f"{r['loop_c']:8.1f} {r['loop_numba'] / r['loop_c']:6.2f} "
                       f"{r['rhs_numba']:16.1f} {r['rhs_c']:8.1f} "
                       f"{r['rhs_numba'] / r['rhs_c']:6.2f}")

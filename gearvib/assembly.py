@@ -587,6 +587,8 @@ def assemble(gs: GearSet, *, n_table: int = N_TABLE) -> AssembledModel:
         mesh_frequencies_per_rpm=f_per_rpm,
         meta=meta,
         mesh_teeth=mesh_tooth_map(gs.meshes, bodies, resolved, s0, centre),
+        mesh_damping_laws=tuple(m.damping_law for m in gs.meshes)
+        if any(m.damping_law != "gated" for m in gs.meshes) else (),
     )
     if gs.faults:
         model = model.with_faults(gs.faults)

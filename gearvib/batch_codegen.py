@@ -34,6 +34,7 @@ from gearvib.kernels import (
     H_LI,
     H_LP,
     H_LV,
+    H_MLAW,
     H_N,
     H_NMESH,
     H_PI,
@@ -119,8 +120,8 @@ def rhs_source(ints: np.ndarray, modes: dict[str, int], rows: RowTerms,
 
     The function has the generic kernel's signature, ``name(y, dy, mo, scr, ints, vals,
     uniform, rows, forces, tables, speed_tab, torque_tab)`` (``forces`` unused); it expects
-    the names of :mod:`gearvib.kernels_batch` (lane operations, ``_mesh8``, ``_torque8``,
-    ``_load8``, ``_U``, ``njit``) in its module.
+    the names of :mod:`gearvib.kernels_batch` (lane operations, ``_mesh8``,
+    ``_mesh8_viscous``, ``_torque8``, ``_load8``, ``_U``, ``njit``) in its module.
 
     Parameters
     ----------
@@ -145,7 +146,7 @@ def rhs_source(ints: np.ndarray, modes: dict[str, int], rows: RowTerms,
     vp, vi, vv = (int(ints[h]) for h in (H_VP, H_VI, H_VV))
     pp, pi, pv = (int(ints[h]) for h in (H_PP, H_PI, H_PV))
     rvp, rvi, rvv = (int(ints[h]) for h in (H_RVP, H_RVI, H_RVV))
-    s0, rflag = int(ints[H_S0]), int(ints[H_RFLAG])
+    s0, rflag, mlaw = int(ints[H_S0]), int(ints[H_RFLAG]), int(ints[H_MLAW])
     force = {}
     for m in range(n_mesh):
         p0, p1 = int(ints[vp + m]), int(ints[vp + m + 1])
@@ -160,7 +161,8 @@ def rhs_source(ints: np.ndarray, modes: dict[str, int], rows: RowTerms,
         body(f"s_{m} = lanes_load(vals, {(s0 + m) * LANES})")
         s = _terms(body, f"s_{m}", ints, int(ints[pp + m]), int(ints[pp + m + 1]), pi, pv, 0,
                    modes["pv"])
-        body(f"fl{m}, fr{m} = _mesh8(_U({m}), {d}, {dd}, {dr}, {ddr}, {s}, mo, vals, ints, "
+        law = "_mesh8_viscous" if int(ints[mlaw + m]) != 0 else "_mesh8"  # damping law
+        body(f"fl{m}, fr{m} = {law}(_U({m}), {d}, {dd}, {dr}, {ddr}, {s}, mo, vals, ints, "
              "tables)")
         if two_lines:
             force[2 * m] = f"fl{m}"

@@ -67,20 +67,27 @@ MAX_SIDEBAND_LINES = 20_000
 
 def _cmd_catalogue(args: argparse.Namespace) -> int:
     from gearvib.catalogue import gear_set_catalogue
-    from gearvib.config import load_gearset
+    from gearvib.config import load_description
+    from gearvib.structure import GearSet
 
     combos = args.mesh_harmonics * (2 * args.sidebands + 1)
     if combos > MAX_SIDEBAND_LINES:
         raise CliError(f"--mesh-harmonics {args.mesh_harmonics} with --sidebands "
                        f"{args.sidebands} asks for {combos} sideband lines per mesh frequency; "
                        f"admissible: mesh harmonics x (2 sidebands + 1) <= {MAX_SIDEBAND_LINES}")
-    cat = gear_set_catalogue(load_gearset(args.config), reference=args.reference,
-                             speed_rpm=args.speed, mesh_harmonics=args.mesh_harmonics,
-                             harmonics=args.harmonics, sidebands=args.sidebands)
+    described = load_description(args.config)
+    if isinstance(described, GearSet):
+        cat = gear_set_catalogue(described, reference=args.reference,
+                                 speed_rpm=args.speed, mesh_harmonics=args.mesh_harmonics,
+                                 harmonics=args.harmonics, sidebands=args.sidebands)
+    else:  # shafts and bearings without gears: no meshes, no sidebands
+        cat = described.catalogue(reference=args.reference, speed_rpm=args.speed,
+                                  harmonics=args.harmonics)
     if args.json:
         print(cat.to_json(visible_only=True))
     else:
-        print(f"gear set: {cat.name}; lines a sensor on {cat.sensor} can see "
+        kind = "gear set" if isinstance(described, GearSet) else "machine (shafts, bearings)"
+        print(f"{kind}: {cat.name}; lines a sensor on {cat.sensor} can see "
               f"({int(cat.visible.sum())} of {len(cat)})")
         print(cat.table(visible_only=True))
     return 0
@@ -226,13 +233,19 @@ def _report_removed(removed: Sequence) -> None:
 
 
 def _cmd_preset(args: argparse.Namespace) -> int:
-    from gearvib.config import preset_text, preset_titles
+    from gearvib.config import preset_text, preset_titles, rig_titles
 
     if args.name is None:
         titles = preset_titles()
-        width = max(len(n) for n in titles)
+        rigs = rig_titles()
+        width = max(len(n) for n in [*titles, *rigs])
         for name, title in titles.items():
             print(f"{name:<{width}}  {title}")
+        if rigs:
+            print("\nmachines without gears (shafts and rolling bearings, for measured "
+                  "reports):")
+            for name, title in rigs.items():
+                print(f"{name:<{width}}  {title}")
         print("\n`gearvib preset NAME > my-set.toml` writes one to start your own file from.")
         return 0
     sys.stdout.write(preset_text(args.name))
@@ -289,7 +302,7 @@ def _cmd_report(args: argparse.Namespace) -> int:
 
 
 _MEASURED_OPTIONS = ("gearset", "channel", "tacho", "pulses_per_rev", "speed", "angle", "rpm",
-                     "reference")
+                     "reference", "rpm_from", "fs", "time_column", "calibration", "units")
 
 
 def _is_measured_report(args: argparse.Namespace, inputs: Sequence) -> bool:
@@ -304,9 +317,55 @@ def _is_measured_report(args: argparse.Namespace, inputs: Sequence) -> bool:
 
 
 def _speed_options(args: argparse.Namespace) -> dict:
-    """The speed-reference options of a measurement, as load_measurement keywords."""
-    return {k: getattr(args, k) for k in ("tacho", "pulses_per_rev", "speed", "angle", "rpm")
-            if getattr(args, k, None) is not None}
+    """The speed-reference and file options of a measurement, as load_measurement keywords
+    (--calibration and --unit collected into one value or a channel mapping)."""
+    out = {k: getattr(args, k) for k in ("tacho", "pulses_per_rev", "speed", "angle", "rpm",
+                                         "rpm_from", "fs", "time_column")
+           if getattr(args, k, None) is not None}
+    for key, option in (("calibration", "--calibration"), ("units", "--unit")):
+        pairs = getattr(args, key, None)
+        if pairs:
+            out[key] = _per_channel(pairs, option)
+    return out
+
+
+def _per_channel(pairs: Sequence[tuple[str | None, object]], option: str) -> object:
+    """One value for every channel (``VALUE``) or a mapping (``CH=VALUE``, repeated)."""
+    if any(ch is None for ch, _ in pairs):
+        if len(pairs) > 1:
+            raise CliError(f"{option}: give either one VALUE (every channel) or CH=VALUE per "
+                           "channel, not both or twice")
+        return pairs[0][1]
+    names = [ch for ch, _ in pairs]
+    twice = sorted({n for n in names if names.count(n) > 1})
+    if twice:
+        raise CliError(f"{option}: channel {twice[0]!r} is given twice")
+    return dict(pairs)
+
+
+def _calibration(text: str) -> tuple[str | None, float]:
+    """``CH=VALUE`` or ``VALUE``: a factor in the channel's unit per file unit."""
+    ch, sep, value = text.rpartition("=")
+    try:
+        v = float(value)
+    except ValueError:
+        v = math.nan
+    if (sep and not ch.strip()) or not math.isfinite(v) or not 1e-30 <= abs(v) <= 1e30:
+        raise argparse.ArgumentTypeError(
+            f"{text[:40]!r} is not admissible (admissible: CH=VALUE or VALUE, VALUE a finite "
+            "factor with 1e-30 <= |VALUE| <= 1e30 in the unit per file unit, e.g. "
+            "acc=0.102)")
+    return (ch.strip() if sep else None), v
+
+
+def _unit(text: str) -> tuple[str | None, str]:
+    """``CH=UNIT`` or ``UNIT``."""
+    ch, sep, unit = text.rpartition("=")
+    if (sep and not ch.strip()) or not unit.strip() or len(unit) > 64:
+        raise argparse.ArgumentTypeError(
+            f"{text[:40]!r} is not admissible (admissible: CH=UNIT or UNIT, a unit of 1-64 "
+            "characters, e.g. acc=g, acc=m/s2, V)")
+    return (ch.strip() if sep else None), unit.strip()
 
 
 def _measured_report(args: argparse.Namespace, inputs: Sequence, out, files: list[str]) -> int:
@@ -320,9 +379,9 @@ def _measured_report(args: argparse.Namespace, inputs: Sequence, out, files: lis
     if args.duration is not None:
         raise CliError("--duration applies to a study .toml, not to a measurement")
     if args.gearset is not None:  # inputs first: the description, then the file
-        from gearvib.config import load_gearset
+        from gearvib.config import load_description
 
-        gearset = load_gearset(args.gearset)
+        gearset = load_description(args.gearset)  # a gear set, or shafts and bearings
     else:
         gearset = None
     m = load_measurement(inputs[0], channel=args.channel, **_speed_options(args))
@@ -330,7 +389,7 @@ def _measured_report(args: argparse.Namespace, inputs: Sequence, out, files: lis
     with removed_if_left_empty(out):
         paths = build_measured_report(m, out, gearset=gearset, channel=args.channel,
                                       reference=args.reference)
-    if paths.case.model is None:
+    if paths.case.model is None and paths.case.rig is None:
         print("gearvib: no --gearset: the report shows the maps, spectra and orders of the "
               "reference shaft only", file=sys.stderr)
     print(f"report: {paths.html}")
@@ -339,7 +398,8 @@ def _measured_report(args: argparse.Namespace, inputs: Sequence, out, files: lis
 
 
 def _add_speed_options(p: argparse.ArgumentParser) -> None:
-    """--channel, --tacho, --pulses-per-rev, --speed, --angle, --rpm (a measurement's)."""
+    """--channel, --tacho, --pulses-per-rev, --speed, --angle, --rpm, --rpm-from, --fs,
+    --time-column, --calibration, --unit (a measurement's)."""
     p.add_argument("--channel", metavar="CH", help="vibration channel of the measurement "
                    "(default: the first that is not the speed reference)")
     g = p.add_mutually_exclusive_group()
@@ -352,6 +412,19 @@ def _add_speed_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--rpm", type=_limits(0.0, 1e7, strict=True), metavar="N",
                    help="constant reference speed [min-1] for a record without a speed "
                    "channel")
+    g.add_argument("--rpm-from", metavar="VAR", help="constant reference speed [min-1] held "
+                   "by a scalar variable of the file (e.g. X105RPM of a CWRU record)")
+    p.add_argument("--fs", type=_limits(0.0, 1e9, strict=True), metavar="HZ",
+                   help="sample rate of a file that states none (CSV without a time column, "
+                   "MAT without fs); must agree with a rate the file states")
+    p.add_argument("--time-column", metavar="NAME", help="time column of a CSV file (time "
+                   "vector of a MAT file), in seconds (default for CSV: 'time')")
+    p.add_argument("--calibration", type=_calibration, action="append", metavar="CH=VALUE",
+                   help="calibration of a channel in its unit per file unit (repeat per "
+                   "channel; VALUE alone: every channel)")
+    p.add_argument("--unit", dest="units", type=_unit, action="append", metavar="CH=UNIT",
+                   help="unit of a channel's (calibrated) values, e.g. g, m/s2, V (repeat per "
+                   "channel; UNIT alone: every channel); g is converted to m s-2")
     p.add_argument("--pulses-per-rev", type=_pulses, metavar="N",
                    help="tacho pulses per revolution, 1..10000 (default: the channel's "
                    "attribute, else 1)")
@@ -632,7 +705,8 @@ def _parser() -> argparse.ArgumentParser:
     r.add_argument("inputs", nargs="+", help="a study .toml, one or more run .nc files, or "
                    "one measurement file")
     r.add_argument("--gearset", metavar="CONFIG", help="gear set of a measurement (TOML file "
-                   "or preset name)")
+                   "or preset name), or a machine without gears (type = \"shafts\": shafts "
+                   "and rolling bearings, e.g. the preset cwru-drive-end)")
     _add_speed_options(r)
     _add_output_options(r, "output folder (default ./gearvib-report)",
                         default="gearvib-report")

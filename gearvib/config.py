@@ -5,7 +5,10 @@ A description is a TOML file (or the equivalent dict) with a ``type`` that selec
 with an idler), ``two-stage``, ``multi-stage`` (``[stage1]`` ... ``[stageN]`` of any of the
 former in series, joined by ``[[shaft]]``) or ``general`` (bodies, meshes and couplings listed
 one by one; this is also how a literature model given directly by its lumped parameters is
-written). All values are SI (m, kg, kg m^2, N/m, N s/m), angles are in degrees
+written). A machine without gears (shafts and rolling bearings, e.g. a bearing test rig) is
+``type = "shafts"`` (:mod:`gearvib.rig`): it serves measured reports and the catalogue, not
+the simulator; :func:`load_description` reads either kind, :func:`load_gearset` gear sets
+only. All values are SI (m, kg, kg m^2, N/m, N s/m), angles are in degrees
 in keys ending in ``_deg``. A support stiffness may be ``"rigid"`` (the DOF is removed) or
 ``"free"`` (0). Every table is checked: an unknown key is an error that names the key and the
 admissible ones, and every value is type- and range-checked (numbers finite, integers such as
@@ -41,6 +44,7 @@ from gearvib.structure import (
     GearSet,
     Mesh,
     Support,
+    check_damping_law,
     ravigneaux,
     simple_planetary,
     two_stage,
@@ -57,16 +61,21 @@ __all__ = [
     "ConfigError",
     "check_keys",
     "config_hash",
+    "description_from_dict",
     "example_text",
     "example_titles",
     "gearset_from_dict",
     "list_examples",
     "list_presets",
+    "list_rigs",
     "load_config",
+    "load_description",
     "load_gearset",
     "preset_text",
     "preset_titles",
     "read_toml",
+    "rig_from_dict",
+    "rig_titles",
 ]
 
 
@@ -129,7 +138,8 @@ _SUPPORT = {"radial", "tangential", "axial", "torsional", "radial_damping",
             "tangential_damping", "axial_damping", "torsional_damping"}
 _BODY = {"mass", "inertia", "support", "comment"}
 _BODY_GENERAL = _BODY | {"name", "role", "carrier", "angle_deg", "radius"}
-_MESH_SPEC = {"stiffness", "back_stiffness", "backlash", "damping", "damping_ratio", "comment"}
+_MESH_SPEC = {"stiffness", "back_stiffness", "backlash", "damping", "damping_ratio",
+              "damping_law", "comment"}
 _MESH_GENERAL = _MESH_SPEC | {"name", "gear1", "gear2", "toothing1", "toothing2",
                               "base_radius1", "base_radius2", "pressure_angle_deg",
                               "helix_angle_deg", "z1", "z2", "phase", "centre_distance",
@@ -336,11 +346,20 @@ def _mesh_spec(table: dict, where: str, base: Path | None,
             damping_ratio=_number(table["damping_ratio"], f"{where}.damping_ratio", low=0.0,
                                   high=MAX_DAMPING_RATIO)
             if "damping_ratio" in table else None,
+            damping_law=_damping_law(table.get("damping_law", "gated"), f"{where}.damping_law"),
         )
     except ValueError as exc:
         if isinstance(exc, ConfigError):
             raise
         raise ConfigError(f"{where}: {exc}") from None
+
+
+def _damping_law(value: Any, where: str) -> str:
+    """A mesh-damping law name (``"gated"`` or ``"viscous"``)."""
+    try:
+        return check_damping_law(value, where)
+    except ValueError as exc:
+        raise ConfigError(str(exc)) from None
 
 
 def _toothing(table: dict, where: str) -> Toothing:
@@ -831,7 +850,8 @@ def _general_set(cfg: dict, base: Path | None) -> GearSet:
             meshes.append(Mesh(
                 **names, stiffness=spec.stiffness,
                 back_stiffness=spec.back_stiffness, backlash=spec.backlash,
-                damping=spec.damping, damping_ratio=spec.damping_ratio, **kw))
+                damping=spec.damping, damping_ratio=spec.damping_ratio,
+                damping_law=spec.damping_law, **kw))
         except (ValueError, OverflowError, ZeroDivisionError) as exc:
             raise ConfigError(f"{where}: {exc}") from None
     couplings = _couplings(cfg)
@@ -903,9 +923,14 @@ def _gearset_from_dict(cfg: dict, *, base: Path | None = None) -> GearSet:
     if "references" in cfg and not (isinstance(cfg["references"], str | list)):
         raise ConfigError("references must be a string or a list")
     kind = cfg.get("type", "simple")
+    if kind == RIG_TYPE:
+        raise ConfigError(f"type = {RIG_TYPE!r} describes shafts and rolling bearings without "
+                          "gears: it has no dynamic model to simulate or analyse; it serves "
+                          "measured reports (gearvib report MEASURED --gearset RIG) and "
+                          "gearvib catalogue")
     if not isinstance(kind, str) or kind not in _TYPE_KEYS:
         raise ConfigError(f"unknown type {_short(kind)} (admissible: simple, wolfrom, ravigneaux, "
-                          "parallel, two-stage, multi-stage, general)")
+                          f"parallel, two-stage, multi-stage, general, {RIG_TYPE})")
     check_keys(cfg, _COMMON_TOP | _TYPE_KEYS[kind] | (stage_keys if kind == "multi-stage"
                                                       else set()),
                f"a description of type = {kind!r}")
@@ -935,6 +960,115 @@ def _gearset_from_dict(cfg: dict, *, base: Path | None = None) -> GearSet:
     return _with_extras(gs, cfg, _operation(cfg) if "operation" in cfg else None)
 
 
+RIG_TYPE = "shafts"
+"""``type`` of a description of shafts and rolling bearings without gears."""
+_RIG_TOP = {"name", "title", "description", "type", "references", "operation", "shaft",
+            "rolling_bearing"}
+_RIG_SHAFT = {"name", "ratio", "comment"}
+
+
+def rig_from_dict(cfg: dict) -> Any:
+    """A :class:`gearvib.rig.ShaftRig` from a ``type = "shafts"`` description (parsed TOML).
+
+    Keys: ``name``, ``title``, ``description``, ``references``, ``[operation].input`` (the
+    input shaft, default the first), ``[[shaft]]`` (``name``, ``ratio`` = speed per input
+    speed, default 1) and ``[[rolling_bearing]]`` (:mod:`gearvib.rolling_bearings`; members
+    are the shafts).
+
+    Raises
+    ------
+    ConfigError
+        An unknown or missing key, a value of the wrong type or out of range, a shaft named
+        twice or ``ground``, an input that is not a shaft or whose ratio is not 1, a bearing
+        on a member that is not a shaft.
+    """
+    from gearvib.rig import MAX_SHAFTS, Shaft, ShaftRig, check_ratio
+    from gearvib.rolling_bearings import RollingBearingError, rolling_bearings_from_list
+
+    if not isinstance(cfg, dict):
+        raise ConfigError(f"a description must be a table (dict), got {type(cfg).__name__}")
+    where = f"a description of type = {RIG_TYPE!r}"
+    check_keys(cfg, _RIG_TOP, where)
+    if cfg.get("type") != RIG_TYPE:
+        raise ConfigError(f"type must be {RIG_TYPE!r} for a description of shafts and bearings, "
+                          f"got {_short(cfg.get('type'))}")
+    for key in ("name", "title", "description"):
+        if key in cfg and not isinstance(cfg[key], str):
+            raise ConfigError(f"{key} must be a string, got {_short(cfg[key])}")
+    if "references" in cfg and not isinstance(cfg["references"], str | list):
+        raise ConfigError("references must be a string or a list")
+    tables = _require(cfg, "shaft", where)
+    if not isinstance(tables, list) or not 1 <= len(tables) <= MAX_SHAFTS:
+        raise ConfigError(f"[[shaft]] must be an array of 1..{MAX_SHAFTS} tables (one per "
+                          "shaft)")
+    shafts = []
+    for i, t in enumerate(tables):
+        w = f"[[shaft]] #{i + 1}"
+        check_keys(t, _RIG_SHAFT, w)
+        name = _string(_require(t, "name", w), f"{w}.name")
+        if len(name) > 100 or name == "ground":
+            raise ConfigError(f"{w}.name = {_short(name)} is not admissible (a name of at most "
+                              "100 characters other than 'ground', the housing)")
+        try:
+            ratio = check_ratio(t.get("ratio", 1.0), f"[[shaft]] {name!r}.ratio")
+        except ValueError as exc:
+            raise ConfigError(str(exc)) from None
+        shafts.append(Shaft(name, ratio))
+    names = [s.name for s in shafts]
+    twice = sorted({n for n in names if names.count(n) > 1})
+    if twice:
+        raise ConfigError(f"[[shaft]]: name {twice[0]!r} is used twice")
+    op = check_keys(cfg.get("operation", {}), {"input"}, "[operation]")
+    inp = _string(op.get("input", names[0]), "[operation].input")
+    if inp not in names:
+        raise ConfigError(f"[operation].input = {_short(inp)} is not a shaft (admissible: "
+                          f"{', '.join(names)})")
+    ratio_in = shafts[names.index(inp)].ratio
+    if ratio_in != 1.0:
+        raise ConfigError(f"[operation].input = {inp!r} has ratio {ratio_in:g}; the input "
+                          "shaft's ratio is 1 (ratios are speeds per input speed)")
+    try:
+        bearings = rolling_bearings_from_list(cfg.get("rolling_bearing"))
+        members: dict[str, str | None] = {n: None for n in names}
+        for b in bearings:
+            b.resolve(members)
+    except RollingBearingError as exc:
+        raise ConfigError(str(exc)) from None
+    return ShaftRig(name=str(cfg.get("name", RIG_TYPE)), shafts=tuple(shafts), input=inp,
+                    rolling_bearings=bearings, title=str(cfg.get("title", "")),
+                    config=copy.deepcopy(cfg))
+
+
+def description_from_dict(cfg: dict, *, base: Path | None = None) -> Any:
+    """A :class:`GearSet`, or a :class:`gearvib.rig.ShaftRig` for ``type = "shafts"``."""
+    if isinstance(cfg, dict) and cfg.get("type") == RIG_TYPE:
+        return rig_from_dict(cfg)
+    return gearset_from_dict(cfg, base=base)
+
+
+def load_description(name_or_path: str | Path) -> Any:
+    """A gear set or a rig of shafts and bearings from a TOML file, a preset or a rig name.
+
+    Returns
+    -------
+    GearSet or gearvib.rig.ShaftRig
+    """
+    cfg, base = load_config(name_or_path)
+    return description_from_dict(cfg, base=base)
+
+
+def list_rigs() -> list[str]:
+    """Names of the built-in rig descriptions (shafts and bearings, no gears)."""
+    files = resources.files("gearvib.rigs").iterdir()
+    return sorted(f.name[:-5] for f in files if f.name.endswith(".toml"))
+
+
+def rig_titles() -> dict[str, str]:
+    """``{name: title}`` of every built-in rig description."""
+    return {name: str(tomllib.loads(preset_text(name)).get("title", "")) for name in
+            list_rigs()}
+
+
 def list_presets() -> list[str]:
     """Names of the built-in presets."""
     files = resources.files("gearvib.presets").iterdir()
@@ -949,8 +1083,11 @@ def preset_text(name: str) -> str:
     ConfigError
         For an unknown preset (the message lists the available ones).
     """
+    if name in list_rigs():
+        return resources.files("gearvib.rigs").joinpath(f"{name}.toml").read_text("utf-8")
     if name not in list_presets():
-        raise ConfigError(f"unknown preset {name!r} (available: {', '.join(list_presets())})")
+        raise ConfigError(f"unknown preset {name!r} (available: "
+                          f"{', '.join(list_presets() + list_rigs())})")
     return resources.files("gearvib.presets").joinpath(f"{name}.toml").read_text("utf-8")
 
 
@@ -1103,16 +1240,17 @@ def load_config(name_or_path: str | Path) -> tuple[dict, Path | None]:
     if p.suffix == ".toml" or exists(p):
         return read_toml(p, "configuration file"), p.parent
     name = str(name_or_path)
-    if name not in list_presets():
+    if name not in list_presets() and name not in list_rigs():
         raise ConfigError(
-            f"unknown preset {name!r} (available: {', '.join(list_presets())}; or give a "
-            "path to a .toml file)"
+            f"unknown preset {name!r} (available: "
+            f"{', '.join(list_presets() + list_rigs())}; or give a path to a .toml file)"
         )
     return tomllib.loads(preset_text(name)), None
 
 
 def load_gearset(name_or_path: str | Path) -> GearSet:
-    """Load a gear set from a TOML file or a preset name (``paper-case1``, ...)."""
+    """Load a gear set from a TOML file or a preset name (``paper-case1``, ...); a
+    ``type = "shafts"`` description is refused (:func:`load_description` reads it)."""
     cfg, base = load_config(name_or_path)
     return gearset_from_dict(cfg, base=base)
 

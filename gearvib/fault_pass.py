@@ -23,9 +23,11 @@ Bit for bit: every sum is written term by term in the order of the generic pass,
 are the generic pass's helpers (:func:`gearvib.kernels.interp_cell`,
 :func:`~gearvib.kernels.cos_sin`, :func:`~gearvib.kernels.mean_offset`,
 :func:`~gearvib.kernels.faulty_flanks`, :func:`~gearvib.kernels.stiffness_flanks`,
-:func:`~gearvib.kernels.flank_forces_two_lines`), so a run gives the same record with either
-pass (tested for every law). ``GEARVIB_FAULT_PASS=generic`` in the environment keeps the
-generic pass (comparisons, benchmarks).
+:func:`~gearvib.kernels.flank_forces_two_lines`,
+:func:`~gearvib.kernels.flank_forces_viscous`; the mesh-damping law of each mesh chosen when
+the source is written), so a run gives the same record with either pass (tested for every
+law). ``GEARVIB_FAULT_PASS=generic`` in the environment keeps the generic pass (comparisons,
+benchmarks).
 """
 
 from __future__ import annotations
@@ -166,19 +168,21 @@ def _mesh(out: _Lines, ints: np.ndarray, h: dict[str, int], m: int) -> None:
         out.add(2, "edr = 0.0")
     law = int(ints[r + kn.F_LAW])
     mc = f"vals[{h['mc'] + m}]"
+    viscous = int(ints[h["mlaw"] + m]) != 0  # the mesh-damping law (kernels.DAMPING_*)
     pair_law = (f"faulty_flanks(ints, vals, tables, U({m}), U({r}), s, d, dd, dr, ddr, el, er, "
-                f"edl, edr, half, {mc}, mesh_out)")
+                f"edl, edr, half, {mc}, mesh_out, {viscous})")
     if law == LAW_STIFFNESS:
         out.add(2, f"fl, fr, ke, st = stiffness_flanks(ints, vals, tables, U({m}), U({r}), s, "
-                   f"d + el, dd + edl, dr + er, ddr + edr, half, {mc}, mesh_out)")
+                   f"d + el, dd + edl, dr + er, ddr + edr, half, {mc}, mesh_out, {viscous})")
     elif law == LAW_PAIRS:
         out.add(2, f"fl, fr, ke, st = {pair_law}")
     elif law in (LAW_SHIFTED, LAW_MEAN_OFFSET):
         out.add(2, "i0, i1, w = interp_cell(n_table, s)")
         out.add(2, f"kl = (1.0 - w) * tables[0, {m}, i0] + w * tables[0, {m}, i1]")
         out.add(2, f"kr = (1.0 - w) * tables[1, {m}, i0] + w * tables[1, {m}, i1]")
-        shifted = (f"flank_forces_two_lines(d + el, dd + edl, dr + er, ddr + edr, kl, kr, "
-                   f"2.0 * half, {mc})")
+        flanks = "flank_forces_viscous" if viscous else "flank_forces_two_lines"
+        shifted = (f"{flanks}(d + el, dd + edl, dr + er, ddr + edr, kl, kr, 2.0 * half, "
+                   f"{mc})")
         if law == LAW_SHIFTED:
             out.add(2, f"fl, fr, ke, st = {shifted}")
         else:
@@ -216,7 +220,7 @@ def pass_source(ints: np.ndarray, tables: np.ndarray) -> str:
     ints = np.asarray(ints)
     h = {name: int(ints[getattr(kn, f"H_{name.upper()}")]) for name in (
         "n", "nmesh", "vp", "vi", "vv", "fp", "fi", "fv", "pp", "pi", "pv", "s0", "bl", "mc",
-        "rflag", "rvp", "rvi", "rvv", "rfp", "rfi", "rfv", "frec", "fint", "fval")}
+        "rflag", "rvp", "rvi", "rvv", "rfp", "rfi", "rfv", "frec", "fint", "fval", "mlaw")}
     n, n_mesh = h["n"], h["nmesh"]
     faulty = [m for m in range(n_mesh) if int(ints[h["frec"] + m]) >= 0]
     if not faulty:
@@ -230,8 +234,9 @@ def pass_source(ints: np.ndarray, tables: np.ndarray) -> str:
         f'(do not edit).\n\nsha256 of {", ".join(DEPENDENCIES)}: {dependency_digest()}\n"""\n\n'
         "import numpy as np\n"
         "from numba import carray, cfunc, types\n\n"
-        "from gearvib.kernels import (cos_sin, faulty_flanks, flank_forces_two_lines, "
-        "interp_cell,\n                             mean_offset, stiffness_flanks)\n\n"
+        "from gearvib.kernels import (cos_sin, faulty_flanks, flank_forces_two_lines,\n"
+        "                             flank_forces_viscous, interp_cell, mean_offset,\n"
+        "                             stiffness_flanks)\n\n"
         "U = np.uint64\n"
         "F = types.CPointer(types.float64)\n"
         "I = types.CPointer(types.int64)\n\n\n"

@@ -15,8 +15,11 @@ centripetal terms on (1) or off (0). For every mesh ``m`` (see :mod:`gearvib.mod
 ``delta = v_m . q`` along the left flank's line of action, ``delta_R = u_m . q`` along the
 right (back) flank's (``u_m = v_m`` unless the mesh has a distinct back line), ``s = w_m . q +
 s0_m``, ``k_L = table_L(s)``, ``k_R = table_R(s)``, and :func:`flank_forces_two_lines` gives the
-flank forces (paper eq. 2, superposed). The force term is ``F_L v_m + F_R u_m``. The mesh
-position uses the actual rotation angles, so vibration feeds back into the mesh phase.
+flank forces (paper eq. 2, superposed; the mesh damping acts only on a flank in contact, the
+gated law), or :func:`flank_forces_viscous` for a mesh with the always-on damping of Kahraman
+& Singh (``mesh_damping_law``: a flag per mesh in the packed block ``mlaw``). The force term
+is ``F_L v_m + F_R u_m``. The mesh position uses the actual rotation angles, so vibration
+feeds back into the mesh phase.
 
 A mesh whose back line equals its left line (every mesh of a model with rigid in-plane
 bearings) takes the one-line path: ``delta_R = delta`` and the force ``(F_L + F_R) v_m``, the
@@ -37,9 +40,12 @@ record reads and law dispatch. A packed system without that address takes the ge
 Drive (``ipar[IP_MODE]``):
 
 * ``DRIVE_NONE``: no drive; only ``f_const`` and the load act.
-* ``DRIVE_SPEED``: torsional spring-damper between the prescribed input angle ``phi(t)`` and the
-  input coordinate, ``k_c (phi - q_in) + c_c (omega - qdot_in)``; ``phi`` is the exact integral of
-  the piecewise-linear speed table.
+* ``DRIVE_SPEED``: torque ``k_c (phi - theta) + c_c (omega - theta')`` on the input coordinate,
+  ``phi`` the exact integral of the piecewise-linear speed table. ``theta = q_in`` (a torsional
+  spring-damper between the prescribed angle and the input coordinate), or, with a drive
+  sensing row ``p`` (``KernelSystem.drive_sensing``, the packed blocks ``di``/``dv``),
+  ``theta = p . q``: the rigid-body coordinate of a speed controller on the rigid-body mode
+  (:class:`gearvib.simulate.DriveCoupling`).
 * ``DRIVE_TORQUE``: input torque from a piecewise-linear table of time (constant outside).
 * ``DRIVE_MOTOR``: input torque from the motor's torque-speed characteristic, a
   piecewise-linear table of the input speed [rad/s] (constant outside), evaluated at the
@@ -94,6 +100,8 @@ from analysis.jit import prepare_cache
 prepare_cache(__file__)  # a writable numba cache also in read-only installs (before @njit)
 
 __all__ = [
+    "DAMPING_GATED",
+    "DAMPING_VISCOUS",
     "DRIVE_MOTOR",
     "DRIVE_NONE",
     "DRIVE_SPEED",
@@ -109,6 +117,7 @@ __all__ = [
     "fir_decimate",
     "flank_forces",
     "flank_forces_two_lines",
+    "flank_forces_viscous",
     "insert_split",
     "integrate",
     "integrate_chunk",
@@ -135,6 +144,12 @@ DRIVE_NONE = 0
 DRIVE_SPEED = 1
 DRIVE_TORQUE = 2
 DRIVE_MOTOR = 3
+
+#: Mesh-damping laws (``KernelSystem.mesh_damping_law``, the packed block ``mlaw``): the
+#: damping acts only on a flank in contact and the flank force is floored at 0
+#: (:func:`flank_forces_two_lines`), or it acts always (:func:`flank_forces_viscous`).
+DAMPING_GATED = 0
+DAMPING_VISCOUS = 1
 
 # integer parameters
 IP_MODE = 0
@@ -193,6 +208,12 @@ class KernelSystem:
         mesh in ``fault_ints`` (-1: healthy) and the integer and float data.
     fault_jumps : dict of int to ndarray, optional
         Extra per-cycle jump positions of faulty meshes [cycles, 0..1).
+    mesh_damping_law : ndarray of int64, shape (n_mesh,), optional
+        :data:`DAMPING_GATED` (damping only on a flank in contact, the default) or
+        :data:`DAMPING_VISCOUS` (always on) per mesh; None: gated everywhere.
+    drive_sensing : ndarray, shape (n,), optional
+        ``DRIVE_SPEED``: the row ``p`` whose product with ``q`` (``qdot``) is the angle
+        (speed) the drive controls (rigid-body sensing); None: the input coordinate.
     """
 
     minv: np.ndarray
@@ -218,13 +239,16 @@ class KernelSystem:
     fault_ints: np.ndarray | None = None
     fault_vals: np.ndarray | None = None
     fault_jumps: dict | None = None
+    mesh_damping_law: np.ndarray | None = None
+    drive_sensing: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         for f in fields(self):
             a = getattr(self, f.name)
             if a is None or f.name == "fault_jumps":
                 continue
-            dtype = np.int64 if f.name in ("ipar", "fault_records", "fault_ints") else np.float64
+            dtype = np.int64 if f.name in ("ipar", "fault_records", "fault_ints",
+                                           "mesh_damping_law") else np.float64
             setattr(self, f.name, np.ascontiguousarray(a, dtype=dtype))
         n = self.minv.shape[0]
         n_mesh = self.mesh_vectors.shape[0]
@@ -234,6 +258,14 @@ class KernelSystem:
             raise ValueError("mesh_back_vectors must have the shape of mesh_vectors")
         if self.ipar.shape != (N_IPAR,) or self.fpar.shape != (N_FPAR,):
             raise ValueError("ipar must have 5 and fpar 7 entries")
+        law = self.mesh_damping_law
+        if law is not None and (law.shape != (n_mesh,) or not np.all(
+                (law == DAMPING_GATED) | (law == DAMPING_VISCOUS))):
+            raise ValueError(f"mesh_damping_law must hold {n_mesh} values "
+                             f"{DAMPING_GATED} (gated) or {DAMPING_VISCOUS} (viscous)")
+        if self.drive_sensing is not None and (self.drive_sensing.shape != (n,) or not np.all(
+                np.isfinite(self.drive_sensing)) or not np.any(self.drive_sensing)):
+            raise ValueError(f"drive_sensing must be a finite, non-zero row of {n} values")
 
     @property
     def n_dof(self) -> int:
@@ -268,27 +300,29 @@ H_NMESH = 1
 H_IPAR = 2
 _INT_BLOCKS = (
     "lp", "li", "cp", "ci", "gp", "gi", "ii", "oi", "vp", "vi", "fp", "fi", "pp", "pi", "bp",
-    "rflag", "rvp", "rvi", "rfp", "rfi", "frec", "fint",
+    "rflag", "rvp", "rvi", "rfp", "rfi", "frec", "fint", "mlaw", "di",
 )
 _FLOAT_BLOCKS = (
     "acc0", "lv", "cv", "gv", "iv", "ov", "vv", "fv", "pv", "s0", "bl", "mc", "fpar", "limit",
-    "bv", "rvv", "rfv", "fval",
+    "bv", "rvv", "rfv", "fval", "dv",
 )
 (
     H_LP, H_LI, H_CP, H_CI, H_GP, H_GI, H_II, H_OI, H_VP, H_VI, H_FP, H_FI, H_PP, H_PI, H_BP,
-    H_RFLAG, H_RVP, H_RVI, H_RFP, H_RFI, H_FREC, H_FINT,
+    H_RFLAG, H_RVP, H_RVI, H_RFP, H_RFI, H_FREC, H_FINT, H_MLAW, H_DI,
 ) = range(H_IPAR + N_IPAR, H_IPAR + N_IPAR + len(_INT_BLOCKS))
 (
     H_ACC0, H_LV, H_CV, H_GV, H_IV, H_OV, H_VV, H_FV, H_PV, H_S0, H_BL, H_MC, H_FPAR, H_LIMIT,
-    H_BV, H_RVV, H_RFV, H_FVAL,
+    H_BV, H_RVV, H_RFV, H_FVAL, H_DV,
 ) = range(H_LP + len(_INT_BLOCKS), H_LP + len(_INT_BLOCKS) + len(_FLOAT_BLOCKS))
-H_NI = H_FVAL + 1  # number of entries of the sparse input column
-H_NO = H_FVAL + 2  # ... and of the output column
+H_NI = H_DV + 1  # number of entries of the sparse input column
+H_NO = H_DV + 2  # ... and of the output column
 #: Address of the faulty-mesh pass compiled for this system (:mod:`gearvib.fault_pass`), 0:
 #: the generic pass. Set only in the process that runs the kernel (an address is no value
 #: to pickle): :func:`pack` writes 0.
-H_FPASS = H_FVAL + 3
-N_HEADER = H_FVAL + 4
+H_FPASS = H_DV + 3
+#: Number of entries of the drive sensing row (0: the drive acts on the input coordinate).
+H_ND = H_DV + 4
+N_HEADER = H_DV + 5
 
 # record of a faulty mesh in the fault integer block (gearvib.faults.law.FaultLaw.pack); int
 # entries that are offsets point into the fault int block or (``*V``) the fault float block
@@ -375,8 +409,9 @@ def operators(system: KernelSystem) -> list[np.ndarray]:
 
     ``lin = -M^-1 [K C]``, ``cent = M^-1 K_Omega``, ``gyro = -M^-1 G``, the columns ``M^-1 e``
     of the input and output coordinates (as ``(1, n)`` rows; empty without such a
-    coordinate), ``v_m``, ``(M^-1 v_m)^T``, ``w_m``, and the back-flank ``u_m`` and
-    ``(M^-1 u_m)^T`` (zero rows for meshes without a distinct back line).
+    coordinate), ``v_m``, ``(M^-1 v_m)^T``, ``w_m``, the back-flank ``u_m`` and
+    ``(M^-1 u_m)^T`` (zero rows for meshes without a distinct back line), and the drive
+    sensing row (``(1, n)``; zeros without one).
     """
     minv = system.minv
 
@@ -396,6 +431,8 @@ def operators(system: KernelSystem) -> list[np.ndarray]:
         system.mesh_position_vectors,
         back,
         (minv @ back.T).T,
+        np.zeros((1, minv.shape[0])) if system.drive_sensing is None
+        else system.drive_sensing[None, :],
     ]
 
 
@@ -418,10 +455,13 @@ def pack(system: KernelSystem, patterns: list[np.ndarray] | None = None,
         the rows ``(M^-1 v_m)^T``, the mesh-position vectors ``w_m``, the jump counts, a flag
         per mesh (1: distinct back line), the back-flank vectors ``u_m`` and rows
         ``(M^-1 u_m)^T`` (empty rows for the meshes without a distinct back line), the fault
-        record of every mesh (-1: healthy) and the fault integer data.
+        record of every mesh (-1: healthy), the fault integer data, the mesh-damping law
+        of every mesh (:data:`DAMPING_GATED`, :data:`DAMPING_VISCOUS`) and the coordinates of
+        the drive sensing row.
     floats : ndarray
         ``M^-1 f_const``, the CSR data of the operators above, ``s0``, backlash, mesh damping,
-        ``fpar``, the deflection limits, the jump positions and the fault float data.
+        ``fpar``, the deflection limits, the jump positions, the fault float data and the
+        drive sensing row's values.
     tables : ndarray, shape (2, n_mesh, n_table)
         Left and right flank stiffness tables.
     speed_table, torque_table : ndarray
@@ -438,7 +478,7 @@ def pack(system: KernelSystem, patterns: list[np.ndarray] | None = None,
     ops = operators(system)
     pat = [None] * len(ops) if patterns is None else patterns
     (lp, li, lv), (cp, ci, cv), (gp, gi, gv), (_, ii, iv), (_, oi, ov), (vp, vi, vv), (
-        fp, fi, fv), (pp, pi, pv), (rvp, rvi, rvv), (rfp, rfi, rfv) = (
+        fp, fi, fv), (pp, pi, pv), (rvp, rvi, rvv), (rfp, rfi, rfv), (_, di, dv) = (
         csr(a, q) for a, q in zip(ops, pat, strict=True))
     jumps = jump_positions(system.left_tables, system.right_tables)
     for m, extra in (system.fault_jumps or {}).items():
@@ -450,12 +490,14 @@ def pack(system: KernelSystem, patterns: list[np.ndarray] | None = None,
     bp = np.concatenate([[0], np.cumsum([j.size for j in jumps])]).astype(np.int64)
     bv = np.concatenate([np.zeros(0), *jumps])
     rflag = system.distinct_back_lines().astype(np.int64)
+    mlaw = (np.zeros(n_mesh, dtype=np.int64) if system.mesh_damping_law is None
+            else system.mesh_damping_law)
     int_blocks = [lp, li, cp, ci, gp, gi, ii, oi, vp, vi, fp, fi, pp, pi, bp,
-                  rflag, rvp, rvi, rfp, rfi, frec, fint]
+                  rflag, rvp, rvi, rfp, rfi, frec, fint, mlaw, di]
     float_blocks = [
         system.minv @ system.f_const, lv, cv, gv, iv, ov, vv, fv, pv, system.mesh_position_offsets,
         system.backlash, system.mesh_damping, system.fpar, system.deflection_limit, bv,
-        rvv, rfv, fval,
+        rvv, rfv, fval, dv,
     ]
     header = np.zeros(N_HEADER, dtype=np.int64)
     header[H_N] = n
@@ -471,6 +513,7 @@ def pack(system: KernelSystem, patterns: list[np.ndarray] | None = None,
         pos += block.size
     header[H_NI] = ii.size
     header[H_NO] = oi.size
+    header[H_ND] = di.size
     ints = np.concatenate([header, *int_blocks]).astype(np.int64)
     floats = np.concatenate([np.asarray(b, dtype=np.float64).ravel() for b in float_blocks])
     tables = np.ascontiguousarray(np.stack([system.left_tables, system.right_tables]))
@@ -551,7 +594,8 @@ def flank_forces_two_lines(
     backlash : float
         Total normal backlash ``j`` [m]; negative loads both flanks.
     damping : float
-        Viscous mesh damping [N s/m], acting only on a flank in contact.
+        Viscous mesh damping [N s/m], acting only on a flank in contact (the gated law;
+        :func:`flank_forces_viscous` is the always-on law).
 
     Returns
     -------
@@ -583,6 +627,69 @@ def flank_forces_two_lines(
         k_eff += k_right
         state += 2
     return f_left, f_right, k_eff, state
+
+
+@njit(cache=True)
+def flank_forces_viscous(
+    delta: float, ddelta: float, delta_right: float, ddelta_right: float, k_left: float,
+    k_right: float, backlash: float, damping: float
+) -> tuple[float, float, float, int]:
+    """Contact law of one mesh with always-on viscous damping (Kahraman & Singh 1990).
+
+    The flank springs of :func:`flank_forces_two_lines` (piecewise linear, the dead zone of
+    the backlash between them) plus the viscous force ``c ddelta``, which acts whatever the
+    contact and is neither floored nor capped: on a mesh with one line of action the total
+    force along it is ``k f(delta) + c ddelta``, the published equation. The viscous force
+    goes on the left flank's line (``c ddelta``) unless only the right flank is in contact
+    (then ``c ddelta_R`` on the back line): with two lines of action it acts along the loaded
+    line, inside the backlash along the left one.
+
+    Parameters and returns as :func:`flank_forces_two_lines`; ``f_left`` may be negative
+    and ``f_right`` positive (the viscous force), ``k_eff`` and ``state`` are those of the
+    flank springs.
+
+    References
+    ----------
+    Kahraman, A., Singh, R. (1990). Non-linear dynamics of a spur gear pair. J. Sound Vib.
+    142(1), 49-75.
+    """
+    half = 0.5 * backlash
+    f_left = 0.0
+    f_right = 0.0
+    k_eff = 0.0
+    state = 0
+    if delta > half:
+        f_left = k_left * (delta - half)
+        k_eff += k_left
+        state += 1
+    if delta_right < -half:
+        f_right = k_right * (delta_right + half)
+        k_eff += k_right
+        state += 2
+    if state == 2:  # the back flank alone: the viscous force on its line of action
+        f_right += damping * ddelta_right
+    else:
+        f_left += damping * ddelta
+    return f_left, f_right, k_eff, state
+
+
+@njit(cache=True, inline="always")
+def _viscous_sums(on_l, on_r, f_el, f_er, c_l, c_r):
+    """Flank forces and state of the always-on law from the flank springs' forces ``f_el``,
+    ``f_er`` (counted where ``on_l``, ``on_r``) and the viscous forces ``c_l``, ``c_r`` along
+    the left and the back line (:func:`flank_forces_viscous`)."""
+    fl = f_el if on_l else 0.0
+    fr = f_er if on_r else 0.0
+    st = 0
+    if on_l:
+        st += 1
+    if on_r:
+        st += 2
+    if st == 2:
+        fr += c_r
+    else:
+        fl += c_l
+    return fl, fr, st
 
 
 @njit(cache=True, _nrt=False)
@@ -1020,12 +1127,13 @@ def _mean_offset(ints, vals, r, s, i0, d, dr, el, er, kl, kr, half, mesh_out, m)
 
 @njit(cache=True, _nrt=False)
 def _faulty_flanks(ints, vals, tables, m, r, s, d, dd, dr, ddr, el, er, edl, edr, half,
-                   damping, mesh_out):
+                   damping, mesh_out, viscous):
     """Contact law of a faulty mesh, tooth pair by tooth pair (:mod:`gearvib.faults.law`).
 
     ``r``: the mesh's record in ``ints``; ``el, er, edl, edr``: its mesh-wide deflection
-    offsets and their rates (:func:`_deviation_offsets`). Returns ``(f_left, f_right, k_eff,
-    state)`` like :func:`flank_forces_two_lines`.
+    offsets and their rates (:func:`_deviation_offsets`); ``viscous``: the always-on damping
+    law (:func:`flank_forces_viscous`) instead of the gated one. Returns ``(f_left, f_right,
+    k_eff, state)`` like :func:`flank_forces_two_lines`.
     """
     z1, z2, nu, nper, nslot, ce, sg1, sg2, p1, p2, shared, pv, prv = _pair_record(ints, r)
     i0, w, k1, k2 = _pair_cell(ints, r, s, mesh_out, m)
@@ -1087,6 +1195,10 @@ def _faulty_flanks(ints, vals, tables, m, r, s, d, dd, dr, ddr, el, er, edl, edr
         ke_l *= share_l if on_l else 0.0
         ke_r *= share_r if on_r else 0.0
     ke = ke_l + ke_r
+    if viscous:
+        fl, fr, st = _viscous_sums(on_l, on_r, f_el, f_er, damping * (dd + edl),
+                                   damping * (ddr + edr))
+        return fl, fr, ke, st
     fl = 0.0
     fr = 0.0
     st = 0
@@ -1104,15 +1216,17 @@ def _faulty_flanks(ints, vals, tables, m, r, s, d, dd, dr, ddr, el, er, edl, edr
 
 
 @njit(cache=True, _nrt=False)
-def _stiffness_flanks(ints, vals, tables, m, r, s, d, dd, dr, ddr, half, damping, mesh_out):
+def _stiffness_flanks(ints, vals, tables, m, r, s, d, dd, dr, ddr, half, damping, mesh_out,
+                      viscous):
     """Contact law of a faulty mesh whose tooth faults change the stiffness only
     (:attr:`gearvib.faults.law.FaultedMesh.stiffness_only`): the table law with the summed
     stiffness of the pairs present.
 
     ``d, dd, dr, ddr`` include the mesh-wide offsets. Every pair meets the same deflection, so
     the pair law's sums become one product per flank: the same stiffness sums as
-    :func:`_faulty_flanks` (bit for bit), the force equal to rounding. Returns ``(f_left,
-    f_right, k_eff, state)`` like :func:`flank_forces_two_lines`.
+    :func:`_faulty_flanks` (bit for bit), the force equal to rounding. ``viscous``: the
+    always-on damping law. Returns ``(f_left, f_right, k_eff, state)`` like
+    :func:`flank_forces_two_lines`.
     """
     z1, z2, nu, nper, nslot, ce, sg1, sg2, p1, p2, shared, pv, prv = _pair_record(ints, r)
     i0, w, k1, k2 = _pair_cell(ints, r, s, mesh_out, m)
@@ -1143,6 +1257,14 @@ def _stiffness_flanks(ints, vals, tables, m, r, s, d, dd, dr, ddr, half, damping
         f_er *= share_r
         ke_l *= share_l
         ke_r *= share_r
+    if viscous:
+        fl, fr, st = _viscous_sums(on_l, on_r, f_el, f_er, damping * dd, damping * ddr)
+        ke = 0.0
+        if on_l:
+            ke += ke_l
+        if on_r:
+            ke += ke_r
+        return fl, fr, ke, st
     ke = 0.0
     fl = 0.0
     fr = 0.0
@@ -1165,12 +1287,13 @@ def _stiffness_flanks(ints, vals, tables, m, r, s, d, dd, dr, ddr, half, damping
 @njit(cache=True, inline="always")
 def _mesh_header(ints):
     """Offsets of the mesh operators in the packed system, unsigned (:func:`pack`): ``(vp, vi,
-    vv, fp, fi, fv, pp, pi, pv, s0, bl, mc, rflag, rvp, rvi, rvv, rfp, rfi, rfv, frec)``."""
+    vv, fp, fi, fv, pp, pi, pv, s0, bl, mc, rflag, rvp, rvi, rvv, rfp, rfi, rfv, frec,
+    mlaw)``."""
     return (_U(ints[H_VP]), _U(ints[H_VI]), _U(ints[H_VV]), _U(ints[H_FP]), _U(ints[H_FI]),
             _U(ints[H_FV]), _U(ints[H_PP]), _U(ints[H_PI]), _U(ints[H_PV]), _U(ints[H_S0]),
             _U(ints[H_BL]), _U(ints[H_MC]), _U(ints[H_RFLAG]), _U(ints[H_RVP]),
             _U(ints[H_RVI]), _U(ints[H_RVV]), _U(ints[H_RFP]), _U(ints[H_RFI]),
-            _U(ints[H_RFV]), _U(ints[H_FREC]))
+            _U(ints[H_RFV]), _U(ints[H_FREC]), _U(ints[H_MLAW]))
 
 
 @njit(cache=True, inline="always")
@@ -1247,6 +1370,7 @@ def _faulty_meshes(y, dy, mesh_out, ints, vals, tables, hdr):
     bl = hdr[10]
     mc = hdr[11]
     frec = hdr[19]
+    ml = hdr[20]
     fi0 = _U(ints[H_FINT])
     for m in range(_U(ints[H_NMESH])):
         rec = ints[frec + m]
@@ -1262,10 +1386,11 @@ def _faulty_meshes(y, dy, mesh_out, ints, vals, tables, hdr):
         if ints[r + _U(F_MESHWIDE)] != 0:
             el, er, edl, edr = _deviation_offsets(ints, vals, r, y, n, mesh_out, m)
         law = ints[r + _U(F_LAW)]  # gearvib.faults.law.LAW_*
+        viscous = ints[ml + m] != 0
         if law == 3:  # stiffness-only tooth faults: the table law with the pairs' stiffness
             fl, fr, ke, st = _stiffness_flanks(ints, vals, tables, m, r, s, d + el, dd + edl,
                                                dr + er, ddr + edr, half, vals[mc + m],
-                                               mesh_out)
+                                               mesh_out, viscous)
         else:
             pairs = law == 2
             kl = 0.0
@@ -1285,8 +1410,11 @@ def _faulty_meshes(y, dy, mesh_out, ints, vals, tables, hdr):
             if pairs:  # tooth pair by tooth pair
                 fl, fr, ke, st = _faulty_flanks(ints, vals, tables, m, r, s, d, dd, dr, ddr,
                                                 el, er, edl, edr, half, vals[mc + m],
-                                                mesh_out)
-            else:  # the same offset on every pair in contact: the table law, shifted
+                                                mesh_out, viscous)
+            elif viscous:  # the same offset on every pair in contact: the table law, shifted
+                fl, fr, ke, st = flank_forces_viscous(d + el, dd + edl, dr + er, ddr + edr,
+                                                      kl, kr, 2.0 * half, vals[mc + m])
+            else:
                 fl, fr, ke, st = flank_forces_two_lines(d + el, dd + edl, dr + er, ddr + edr,
                                                         kl, kr, 2.0 * half, vals[mc + m])
         _add_mesh_forces(dy, ints, vals, mesh_out, m, n, hdr, two_lines, fl, fr, ke, st, d, s,
@@ -1359,8 +1487,21 @@ def _rhs(t, y, dy, mesh_out, ints, vals, tables, speed_tab, torque_tab):
     torque = 0.0
     if mode == DRIVE_SPEED:
         phi, w = _speed_at(speed_tab, t)
-        torque = vals[fpar + _U(FP_KC)] * (phi - y[k_in]) + vals[fpar + _U(FP_CC)] * (
-            w - y[n + k_in])
+        nd = _U(ints[H_ND])
+        if nd == 0:  # a coupling on the input coordinate
+            torque = vals[fpar + _U(FP_KC)] * (phi - y[k_in]) + vals[fpar + _U(FP_CC)] * (
+                w - y[n + k_in])
+        else:  # a controller on the rigid-body coordinate p . q
+            di = _U(ints[H_DI])
+            dv = _U(ints[H_DV])
+            ang = 0.0
+            rate = 0.0
+            for p in range(nd):
+                j = _U(ints[di + p])
+                ang += vals[dv + p] * y[j]
+                rate += vals[dv + p] * y[n + j]
+            torque = vals[fpar + _U(FP_KC)] * (phi - ang) + vals[fpar + _U(FP_CC)] * (
+                w - rate)
     elif mode == DRIVE_TORQUE:
         torque = _table_at(torque_tab, t)
     elif mode == DRIVE_MOTOR:
@@ -1386,6 +1527,7 @@ def _rhs(t, y, dy, mesh_out, ints, vals, tables, speed_tab, torque_tab):
     bl = hdr[10]
     mc = hdr[11]
     frec = hdr[19]
+    ml = hdr[20]
     faulty = False
     for m in range(n_mesh):
         if ints[frec + m] >= 0 and mesh_out[m, 7] != 0.0:
@@ -1395,8 +1537,12 @@ def _rhs(t, y, dy, mesh_out, ints, vals, tables, speed_tab, torque_tab):
         i0, i1, w = _interp_cell(n_table, s)
         kl = (1.0 - w) * tables[0, m, _U(i0)] + w * tables[0, m, _U(i1)]
         kr = (1.0 - w) * tables[1, m, _U(i0)] + w * tables[1, m, _U(i1)]
-        fl, fr, ke, st = flank_forces_two_lines(d, dd, dr, ddr, kl, kr, vals[bl + m],
-                                                vals[mc + m])
+        if ints[ml + m] != 0:  # DAMPING_VISCOUS: always-on damping (Kahraman & Singh)
+            fl, fr, ke, st = flank_forces_viscous(d, dd, dr, ddr, kl, kr, vals[bl + m],
+                                                  vals[mc + m])
+        else:
+            fl, fr, ke, st = flank_forces_two_lines(d, dd, dr, ddr, kl, kr, vals[bl + m],
+                                                    vals[mc + m])
         _add_mesh_forces(dy, ints, vals, mesh_out, m, n, hdr, two_lines, fl, fr, ke, st, d, s,
                          dr)
     if faulty:

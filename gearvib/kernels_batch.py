@@ -93,6 +93,8 @@ from gearvib.kernels import (
     H_CI,
     H_CP,
     H_CV,
+    H_DI,
+    H_DV,
     H_FI,
     H_FP,
     H_FPAR,
@@ -108,7 +110,9 @@ from gearvib.kernels import (
     H_LP,
     H_LV,
     H_MC,
+    H_MLAW,
     H_N,
+    H_ND,
     H_NI,
     H_NMESH,
     H_NO,
@@ -290,6 +294,41 @@ def _mesh8(m, d, dd, dr, ddr, s, mo, vals, ints, tables):
     fr = where_lt(dr, nhalf, where_gt(fr, zero, zero, fr), zero)
     ke = where_lt(dr, nhalf, ke + kr, ke)
     st = where_lt(dr, nhalf, st + 2.0, st)
+    _store_mesh8(mo, m, fl, fr, ke, st, d, s, dr)
+    return fl, fr
+
+
+@njit(cache=True, inline="always")
+def _mesh8_viscous(m, d, dd, dr, ddr, s, mo, vals, ints, tables):
+    """:func:`_mesh8` with the always-on damping law (:func:`gearvib.kernels.
+    flank_forces_viscous`, branches as selects): the viscous force on the left line unless
+    only the back flank is in contact."""
+    n_mesh = _U(ints[H_NMESH])
+    n_table = tables.shape[2]
+    tw = _U(tables.shape[3])
+    tstride = _U(n_table) * tw
+    zero = lanes_splat(0.0)
+    one = lanes_splat(1.0)
+    kl, kr = lanes_table_pair(tables, m * tstride, (n_mesh + m) * tstride, n_table, tw, s)
+    half = 0.5 * lanes_load(vals, (_U(ints[H_BL]) + m) * _UW)
+    damping = lanes_load(vals, (_U(ints[H_MC]) + m) * _UW)
+    sl = where_gt(d, half, kl * (d - half), zero)
+    ke = where_gt(d, half, zero + kl, zero)
+    st = where_gt(d, half, zero + one, zero)
+    nhalf = -half
+    sr = where_lt(dr, nhalf, kr * (dr + half), zero)
+    ke = where_lt(dr, nhalf, ke + kr, ke)
+    st = where_lt(dr, nhalf, st + 2.0, st)
+    cl = sl + damping * dd
+    fl = where_gt(d, half, cl, where_lt(dr, nhalf, sl, cl))
+    fr = where_gt(d, half, sr, where_lt(dr, nhalf, sr + damping * ddr, sr))
+    _store_mesh8(mo, m, fl, fr, ke, st, d, s, dr)
+    return fl, fr
+
+
+@njit(cache=True, inline="always")
+def _store_mesh8(mo, m, fl, fr, ke, st, d, s, dr):
+    """``mo[m] = (F_L, -F_R, k_eff, state, delta, s, delta_R)`` on lanes."""
     r = m * _U(BATCH_MESH_COLUMNS) * _UW
     lanes_store(mo, r, fl)
     lanes_store(mo, r + _UW, -fr)
@@ -298,7 +337,6 @@ def _mesh8(m, d, dd, dr, ddr, s, mo, vals, ints, tables):
     lanes_store(mo, r + _U(4) * _UW, d)
     lanes_store(mo, r + _U(5) * _UW, s)
     lanes_store(mo, r + _U(6) * _UW, dr)
-    return fl, fr
 
 
 @njit(cache=True, inline="always")
@@ -327,9 +365,22 @@ def _torque8(y, scr, ints, vals, speed_tab, torque_tab):
                 scr[_R_W, b] = w
             phi_v = lanes_load(scr, _R_PHI * WIDTH)
             w_v = lanes_load(scr, _R_W * WIDTH)
-        torque = lanes_load(vals, (fpar + _U(FP_KC)) * _UW) * (
-            phi_v - lanes_load(y, k_in * _UW)) + lanes_load(
-            vals, (fpar + _U(FP_CC)) * _UW) * (w_v - lanes_load(y, (n + k_in) * _UW))
+        nd = _U(ints[H_ND])
+        if nd == 0:  # a coupling on the input coordinate
+            ang = lanes_load(y, k_in * _UW)
+            rate = lanes_load(y, (n + k_in) * _UW)
+        else:  # a controller on the rigid-body coordinate (a stored zero masked out)
+            di = _U(ints[H_DI])
+            dv = _U(ints[H_DV])
+            ang = lanes_splat(0.0)
+            rate = lanes_splat(0.0)
+            for p in range(nd):
+                j = _U(ints[di + p])
+                v = lanes_load(vals, (dv + p) * _UW)
+                ang = lanes_madd_nz(ang, v, lanes_load(y, j * _UW))
+                rate = lanes_madd_nz(rate, v, lanes_load(y, (n + j) * _UW))
+        torque = lanes_load(vals, (fpar + _U(FP_KC)) * _UW) * (phi_v - ang) + lanes_load(
+            vals, (fpar + _U(FP_CC)) * _UW) * (w_v - rate)
     elif mode in (DRIVE_TORQUE, DRIVE_MOTOR):
         for b in range(WIDTH):
             x = scr[_R_T, b] if mode == DRIVE_TORQUE else y[n + k_in, b]
@@ -389,6 +440,7 @@ def _rhs8(y, dy, mo, scr, ints, vals, uniform, rows, forces, tables, speed_tab, 
     m_v = uniform[_B_VV]
     m_rv = uniform[_B_RVV]
     m_p = uniform[_B_PV]
+    ml = _U(ints[H_MLAW])
     for m in range(n_mesh):
         d, dd = _dot2(ints, _U(ints[vp + m]), _U(ints[vp + m + _U1]), vi, vals, vv, y, n, m_v)
         two_lines = ints[rflag + m] != 0
@@ -399,7 +451,10 @@ def _rhs8(y, dy, mo, scr, ints, vals, uniform, rows, forces, tables, speed_tab, 
                             y, n, m_rv)
         s = _dot(lanes_load(vals, (s0 + m) * _UW), ints, _U(ints[pp + m]),
                  _U(ints[pp + m + _U1]), pi, vals, pv, y, _U(0), m_p)
-        fl, fr = _mesh8(m, d, dd, dr, ddr, s, mo, vals, ints, tables)
+        if ints[ml + m] != 0:  # the always-on damping law (every lane: part of the topology)
+            fl, fr = _mesh8_viscous(m, d, dd, dr, ddr, s, mo, vals, ints, tables)
+        else:
+            fl, fr = _mesh8(m, d, dd, dr, ddr, s, mo, vals, ints, tables)
         # one line of action: the summed force (slot 2 m), else F_L and F_R
         lanes_store(forces, _U(2) * m * _UW, fl if two_lines else fl + fr)
         lanes_store(forces, (_U(2) * m + _U1) * _UW, fr)
@@ -829,6 +884,8 @@ _BLOCK_NAMES = {
     "rfp": "sparsity of the back-flank force vectors",
     "rfi": "sparsity of the back-flank force vectors",
     "frec": "local faults or manufacturing errors", "fint": "local faults or manufacturing errors",
+    "mlaw": "mesh-damping laws (gated or viscous)",
+    "di": "drive coupling (on the input member or on the rigid-body mode)",
 }
 _INT_BLOCKS = tuple(_BLOCK_NAMES)
 
@@ -903,6 +960,11 @@ def pack_batch(systems: list) -> BatchSystem:
             raise ValueError(f"variant {k} does not share the topology of variant 0: its "
                              f"number of coordinates / meshes ({s.n_dof} / {s.n_mesh}) differs "
                              f"({s0.n_dof} / {s0.n_mesh})")
+        if k and s.ipar[IP_MODE] == s0.ipar[IP_MODE] and (
+                (s.drive_sensing is None) != (s0.drive_sensing is None)):
+            raise ValueError(f"variant {k} does not share the topology of variant 0: its "
+                             "drive coupling (on the input member or on the rigid-body mode) "
+                             "differs")
         if k and s.left_tables.shape != s0.left_tables.shape:
             raise ValueError(f"variant {k} does not share the topology of variant 0: its "
                              f"stiffness table length ({s.left_tables.shape[1]} samples per "

@@ -89,7 +89,8 @@ class MeshContacts:
         Largest stiffness of every contact [N/m] (two flanks on one line: the sum of both
         flanks' largest values).
     damping : ndarray, shape (n_contact,)
-        Viscous damping [N s/m] (the mesh damping once per flank in contact).
+        Viscous damping [N s/m] (the mesh damping once per flank in contact under the gated
+        law; once per mesh under the viscous law, on the left contact of a preloaded mesh).
     torque_sign : float
         Sense of the mean load they belong to (+1: the input drives forward).
     """
@@ -226,7 +227,8 @@ class AssembledModel:
     mesh_backlash : ndarray, shape (n_mesh,)
         Total normal backlash ``j`` [m]; negative means both flanks in contact.
     mesh_damping : ndarray, shape (n_mesh,)
-        Viscous mesh damping [N s/m], acting only while a flank is in contact.
+        Viscous mesh damping [N s/m]: under the gated law (default) acting only while a flank
+        is in contact, under the viscous law always (:attr:`mesh_damping_laws`).
     bearing_names : tuple of str
         One per elastic bearing direction, e.g. ``"planet1.radial"``, ``"sun.x"``.
     bearing_vectors : ndarray, shape (n_bearing, n)
@@ -263,6 +265,9 @@ class AssembledModel:
         error changes), and the run applies the faults. Empty: a healthy set.
     sensors : tuple
         Virtual sensors on the housing and the tacho (:mod:`gearvib.sensors`), computed by a run.
+    mesh_damping_laws : tuple of str
+        ``"gated"`` or ``"viscous"`` per mesh (:class:`gearvib.structure.Mesh`); empty: every
+        mesh gated. Use :attr:`viscous_meshes`.
     """
 
     dof_names: tuple[str, ...]
@@ -296,10 +301,17 @@ class AssembledModel:
     mesh_teeth: np.ndarray | None = None
     faults: tuple = ()
     sensors: tuple = ()
+    mesh_damping_laws: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "faults", tuple(self.faults))
         object.__setattr__(self, "sensors", tuple(self.sensors))
+        laws = tuple(self.mesh_damping_laws)
+        if laws and (len(laws) != len(self.mesh_names)
+                     or any(law not in ("gated", "viscous") for law in laws)):
+            raise ValueError(f"mesh_damping_laws must be empty or hold 'gated' or 'viscous' "
+                             f"for each of the {len(self.mesh_names)} meshes")
+        object.__setattr__(self, "mesh_damping_laws", laws)
         if self.mesh_back_vectors is not None:
             back = np.ascontiguousarray(self.mesh_back_vectors, dtype=float)
             if back.shape != np.shape(self.mesh_vectors):
@@ -440,6 +452,12 @@ class AssembledModel:
         :attr:`mesh_vectors` when the lines of action coincide)."""
         return self.mesh_vectors if self.mesh_back_vectors is None else self.mesh_back_vectors
 
+    @property
+    def viscous_meshes(self) -> np.ndarray:
+        """True for every mesh under the always-on (viscous) damping law, shape (n_mesh,)."""
+        return np.array([law == "viscous" for law in self.mesh_damping_laws]
+                        or [False] * self.n_mesh, dtype=bool)
+
     def distinct_back_lines(self) -> np.ndarray:
         """True for every mesh whose back-flank line of action differs from the left one's."""
         if self.mesh_back_vectors is None:
@@ -532,16 +550,20 @@ class AssembledModel:
             peak.append(top)
             damp.append(c)
 
+        viscous = self.viscous_meshes
         for m, fl in enumerate(flanks):
             c = float(self.mesh_damping[m])
+            # gated: each flank in contact damps; viscous: one damper, on the left line
+            # unless only the back flank is loaded (gearvib.kernels.flank_forces_viscous)
+            c_back = 0.0 if viscous[m] and fl == FLANK_BOTH else c
             if fl == FLANK_BOTH and not distinct[m]:
                 add(m, "both", vl[m], left_t[m] + back_t[m], left_t[m].max() + back_t[m].max(),
-                    2.0 * c)
+                    c + c_back)
                 continue
             if fl & FLANK_LEFT:
                 add(m, "left", vl[m], left_t[m], left_t[m].max(), c)
             if fl & FLANK_RIGHT:
-                add(m, "right", vr[m], back_t[m], back_t[m].max(), c)
+                add(m, "right", vr[m], back_t[m], back_t[m].max(), c_back)
         return MeshContacts(flanks, np.array(mesh, dtype=np.int64), tuple(names),
                             np.ascontiguousarray(np.array(rows).reshape(len(rows), self.n_dof)),
                             np.ascontiguousarray(np.array(tables).reshape(len(rows), -1)),

@@ -63,8 +63,10 @@ from gearvib.simulation.run_setup import (
     COUPLING_FREQUENCY_FRACTION,
     RunSetup,
     check_model,
+    coupling_matrices,
     default_coupling,
     prepare_run,
+    with_coupling,
 )
 from gearvib.simulation.run_size import (
     DEFAULT_MAX_STEPS,
@@ -107,6 +109,7 @@ __all__ = [
     "batch_groups",
     "check_run_size",
     "choose_step",
+    "coupling_matrices",
     "decimation_filter",
     "default_coupling",
     "prepare_run",
@@ -114,6 +117,7 @@ __all__ = [
     "simulate_batch",
     "static_equilibrium",
     "static_tooth_forces",
+    "with_coupling",
 ]
 
 CHUNK_DURATION = 0.05
@@ -142,7 +146,13 @@ def _blow_up_message(t: float, code: int, setup: RunSetup, step: StepChoice, gyr
         causes.append("a drive coupling or load torque that destabilises the system")
     if gyro:
         causes.append("centripetal softening (Omega_c^2 K_Omega) beyond the bearing stiffness")
-    causes.append("a parametric instability without enough damping")
+    if setup.coupling is not None and setup.coupling.sensing == "rigid-body":
+        causes.append("a parametric instability without enough damping (the default speed "
+                      "drive adds none to the elastic modes: more mesh damping, or a coupling "
+                      "on the input member, DriveCoupling(k, c) or [simulation] "
+                      "drive_stiffness and drive_damping)")
+    else:
+        causes.append("a parametric instability without enough damping")
     return (
         f"numerical blow-up at simulated time t = {t:.6g} s: {what}. Likely cause: "
         + "; or ".join(causes)
@@ -189,8 +199,9 @@ def simulate(
         stored forces and added to the result.
     conditions : SpeedRamp, SpeedTable, TorqueDriven or MotorDriven
         Operating conditions. Speed-driven runs prescribe the input angle ``phi(t)`` through a
-        :class:`DriveCoupling`; by default its frequency (rigid-body mode on the coupling) is
-        0.1x the lowest elastic natural frequency of the model, with critical damping.
+        :class:`DriveCoupling`; by default (:func:`default_coupling`) a speed controller on the
+        rigid-body mode, which adds nothing to the elastic modes: the rigid-body mode at 0.1x
+        the lowest elastic natural frequency of the model, critically damped.
     dt : float, optional
         Internal step [s]. Default ``min(1/(40 f_nat_max), 1/(40 f_mesh_max))`` rounded down
         to ``1 / (D fs_out)``; ``f_nat_max`` uses the stiffest table values.
@@ -384,8 +395,8 @@ def _prepare_variant(model, conditions, dt, fs_out, duration, gyroscopic, max_st
                           "integer in 1..1e15)")
     k_max = stiffest_matrix(model, setup.torque_sign)
     if setup.drive == "speed":
-        k_max = k_max.copy()
-        k_max[system.ipar[kn.IP_INPUT], system.ipar[kn.IP_INPUT]] += setup.coupling.stiffness
+        k_max = with_coupling(k_max, setup.mass, setup.rigid, int(system.ipar[kn.IP_INPUT]),
+                              setup.coupling)
     f_nat = undamped_frequencies(setup.mass, k_max)
     f_nat_max = float(f_nat.max()) if f_nat.size else 0.0
     f_rpm = model.mesh_frequencies_per_rpm

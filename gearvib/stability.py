@@ -9,7 +9,11 @@ backlash), and the theory candidates get the mode families and the planetary mes
 of the gear set.
 
 The input member is held by the same drive coupling the run-up simulation uses, so the
-rigid-body mode is removed and the stability chart describes the simulated system.
+rigid-body mode is removed and the stability chart describes the simulated system. The default
+drive, a speed controller on the rigid-body mode, enters as the symmetric ``k p p^T``, ``c p
+p^T`` (:func:`gearvib.simulate.coupling_matrices`): the simulated form (the torque on the
+input member) has the same Floquet multipliers, and the elastic modes are those of the free
+set.
 
 Several mesh frequencies
 ------------------------
@@ -60,7 +64,7 @@ from analysis.instability import (
 from gearvib.execution import default_workers, executor_for
 from gearvib.modal import ModalResult, modal_analysis
 from gearvib.model import AssembledModel, MeshContacts, MeshFrequencyGroup, interpolate_tables
-from gearvib.simulate import DriveCoupling, default_coupling
+from gearvib.simulate import DriveCoupling, coupling_matrices, default_coupling
 
 __all__ = [
     "ATTRIBUTION_N_MAX",
@@ -527,10 +531,7 @@ def periodic_system(model: AssembledModel, *, coupling: DriveCoupling | None = N
     """
     coupling = coupling or default_coupling(model, torque_sign)
     k_in = model.rotation_dofs[model.input_member]
-    kd = np.zeros_like(model.stiffness)
-    kd[k_in, k_in] = coupling.stiffness
-    cd = np.zeros_like(model.stiffness)
-    cd[k_in, k_in] = coupling.damping
+    kd, cd = coupling_matrices(model.mass, model.rigid_body_velocity(), k_in, coupling)
     # the flanks in contact at the mean load, each on its line of action (both, with stiffness
     # and damping, for a negative backlash), as in the simulation
     contacts = model.mesh_contacts(torque_sign)

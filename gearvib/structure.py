@@ -18,6 +18,7 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field, replace
 from typing import Literal
 
+from gearvib.checks import short
 from gearvib.geometry import (
     MeshGeometry,
     Toothing,
@@ -28,6 +29,7 @@ from gearvib.geometry import (
 from gearvib.stiffness import MeshStiffness, stiffness_from_dict
 
 __all__ = [
+    "DAMPING_LAWS",
     "RIGID",
     "BaseStructure",
     "Body",
@@ -35,6 +37,7 @@ __all__ = [
     "GearSet",
     "Mesh",
     "Support",
+    "check_damping_law",
     "check_ravigneaux_clearances",
     "check_ravigneaux_pairs",
     "check_stepped_planet_angles",
@@ -50,6 +53,18 @@ RIGID = math.inf
 """Stiffness value of a rigid support: the corresponding DOF is removed."""
 
 Role = Literal["central", "carrier", "planet"]
+
+
+DAMPING_LAWS = ("gated", "viscous")
+"""Mesh-damping laws: damping only on a flank in contact (default), or always on."""
+
+
+def check_damping_law(value: object, name: str) -> str:
+    """``value`` if it is one of :data:`DAMPING_LAWS`, else a ``ValueError`` naming ``name``."""
+    if not (isinstance(value, str) and value in DAMPING_LAWS):
+        raise ValueError(f"{name} = {short(value)} is not admissible (admissible: "
+                         f"{', '.join(repr(v) for v in DAMPING_LAWS)})")
+    return value
 
 
 def _check_value(value: float, name: str, *, allow_zero: bool = True, allow_inf: bool = False):
@@ -178,6 +193,10 @@ class Mesh:
     damping_ratio : float, optional
         Alternative to ``damping``: fraction of critical damping of the pair's torsional
         mode at the mean stiffness.
+    damping_law : {"gated", "viscous"}
+        ``"gated"`` (default): the damping acts only on a flank in contact and a flank never
+        pulls (its force is floored at 0). ``"viscous"``: always on, ``c delta'`` whatever the
+        contact, as in Kahraman & Singh (1990) (:func:`gearvib.kernels.flank_forces_viscous`).
     phase : float, optional
         Mesh position at the assembly reference [cycles]; computed from geometry if omitted.
     centre_distance : float, optional
@@ -205,6 +224,7 @@ class Mesh:
     backlash: float = 0.0
     damping: float | None = None
     damping_ratio: float | None = None
+    damping_law: str = "gated"
     phase: float | None = None
     centre_distance: float | None = None
     tooth_offset1: float = 0.0
@@ -252,6 +272,7 @@ class Mesh:
             _check_value(self.damping, f"damping of mesh {self.name!r}")
         if self.damping_ratio is not None:
             _check_value(self.damping_ratio, f"damping_ratio of mesh {self.name!r}")
+        check_damping_law(self.damping_law, f"damping_law of mesh {self.name!r}")
         for label, model in (("stiffness", self.stiffness), ("back_stiffness",
                                                               self.back_stiffness)):
             if model is not None and not model.min >= 0:
@@ -509,6 +530,10 @@ class MeshSpec:
     backlash: float = 0.0
     damping: float | None = None
     damping_ratio: float | None = None
+    damping_law: str = "gated"
+
+    def __post_init__(self) -> None:
+        check_damping_law(self.damping_law, "damping_law")
 
     def resolve(self, geometry: MeshGeometry) -> MeshSpec:
         """Build stiffness models given as TOML tables (contact ratio from ``geometry``)."""
@@ -525,7 +550,7 @@ def _mesh(name: str, g1: str, g2: str, t1: Toothing, t2: Toothing, spec: MeshSpe
     return Mesh(name=name, gear1=g1, gear2=g2, stiffness=spec.stiffness, toothing1=t1,
                 toothing2=t2, back_stiffness=spec.back_stiffness, backlash=spec.backlash,
                 damping=spec.damping, damping_ratio=spec.damping_ratio,
-                centre_distance=centre_distance)
+                damping_law=spec.damping_law, centre_distance=centre_distance)
 
 
 def _planet(template: Body, index: int, carrier: Body, angle: float, radius: float) -> Body:

@@ -33,7 +33,7 @@ _STREAMING = 0xFFFFFFFF
 
 def is_cdf3(path: str | os.PathLike[str]) -> bool:
     """Whether the file starts with a netCDF-3 magic number (``CDF`` + 1, 2 or 5)."""
-    with open(path, "rb") as fh:
+    with open(os.fspath(path), "rb") as fh:  # fspath: an int would open a file descriptor
         head = fh.read(4)
     return len(head) == 4 and head[:3] == b"CDF" and head[3] in (1, 2, 5)
 

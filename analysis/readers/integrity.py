@@ -62,7 +62,7 @@ def format_bytes(n: float) -> str:
 
 def file_size(path: str | os.PathLike[str]) -> int:
     """Size of ``path`` in bytes."""
-    return os.stat(path).st_size
+    return os.stat(os.fspath(path)).st_size  # fspath: an int would stat a file descriptor
 
 
 def _read_int(path: str) -> int | None:

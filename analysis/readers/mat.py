@@ -147,8 +147,9 @@ def read_mat(
         found = [k for k in _FS_NAMES if k in scalars]
         if not found:
             raise ReaderError(
-                f"{p}: no sample rate; pass fs=<Hz> or fs='<scalar variable>', or "
-                f"time_variable='<time vector>' (variables: {sorted(content)})"
+                f"{p}: no sample rate; pass fs=<Hz> (gearvib: --fs HZ) or "
+                f"fs='<scalar variable>', or time_variable='<time vector>' (variables: "
+                f"{sorted(content)})"
             )
         rate = scalars[found[0]]
         if not (np.isfinite(rate) and rate > 0):

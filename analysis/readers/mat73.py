@@ -106,7 +106,7 @@ def is_mat73(path: str | os.PathLike[str]) -> bool:
     bool
         True when the header text starts with ``MATLAB 7.3 MAT-file``.
     """
-    with open(path, "rb") as fh:
+    with open(os.fspath(path), "rb") as fh:  # fspath: an int would open a file descriptor
         return fh.read(len(MAT73_HEADER_TEXT)) == MAT73_HEADER_TEXT
 
 

@@ -13,6 +13,7 @@ import numpy as np
 import xarray as xr
 
 from analysis.cf import labels_from_cf
+from analysis.checks import require_finite_blocks
 from analysis.readers.cdf3 import check_cdf3, is_cdf3
 from analysis.readers.integrity import format_bytes, reading, require_memory
 from analysis.readers.layout import ReaderError, clean_attrs, validate_dataset
@@ -100,7 +101,15 @@ def read_netcdf(path: str | os.PathLike[str]) -> xr.Dataset:
         ds = labels_from_cf(load_image(p, image, decode_times=False, decode_timedelta=False))
     ds = ds.set_coords([v for v in ds.data_vars if "time" not in ds[v].dims])
     ds.attrs.setdefault("source_file", str(p))
-    return validate_dataset(ds, name=str(p))
+    ds = validate_dataset(ds, name=str(p))
+    for var in ds.data_vars:  # the layout forbids NaN (netCDF gaps); other readers refuse them
+        if ds[var].dtype.kind == "f":
+            try:
+                require_finite_blocks(ds[var].transpose(..., "time").values,
+                                      f"{p}: channel {var!r}")
+            except ValueError as exc:
+                raise ReaderError(str(exc)) from None
+    return ds
 
 
 def write_netcdf(ds: xr.Dataset, path: str | os.PathLike[str], *, compress: bool = True) -> Path:

@@ -3,8 +3,9 @@
  *
  * The same algorithm as gearvib.kernels.integrate_chunk for models without tooth faults or
  * manufacturing errors: the right-hand side of the packed system (sparse operators
- * premultiplied by M^-1, drive, load, gyroscopic terms, two-flank contact law with one or two
- * lines of action), classical RK4 with sub-steps ending at the predicted stiffness jumps, and
+ * premultiplied by M^-1, drive (a coupling on the input member or a controller on the
+ * rigid-body coordinate), load, gyroscopic terms, two-flank contact law with one or two
+ * lines of action, gated or always-on (viscous) mesh damping per mesh), classical RK4 with sub-steps ending at the predicted stiffness jumps, and
  * the recorded sample rows. It reads the very arrays gearvib.kernels.pack builds and performs
  * the same floating-point operations in the same order, so its output is bit-identical to the
  * numba kernel's (benchmarks/bench_kernel.py checks this) and its time is the reference a
@@ -21,15 +22,35 @@ enum { IP_MODE = 0, IP_INPUT = 1, IP_OUTPUT = 2, IP_CARRIER = 3, IP_GYRO = 4, N_
 enum { FP_KC = 0, FP_CC = 1, FP_OUTDIR = 2, FP_T0 = 3, FP_C1 = 4, FP_C2 = 5, FP_SPEED_LIMIT = 6 };
 enum {
     H_LP = H_IPAR + N_IPAR, H_LI, H_CP, H_CI, H_GP, H_GI, H_II, H_OI, H_VP, H_VI, H_FP, H_FI,
-    H_PP, H_PI, H_BP, H_RFLAG, H_RVP, H_RVI, H_RFP, H_RFI, H_FREC, H_FINT,
+    H_PP, H_PI, H_BP, H_RFLAG, H_RVP, H_RVI, H_RFP, H_RFI, H_FREC, H_FINT, H_MLAW, H_DI,
     H_ACC0, H_LV, H_CV, H_GV, H_IV, H_OV, H_VV, H_FV, H_PV, H_S0, H_BL, H_MC, H_FPAR, H_LIMIT,
-    H_BV, H_RVV, H_RFV, H_FVAL, H_NI, H_NO, N_HEADER
+    H_BV, H_RVV, H_RFV, H_FVAL, H_DV, H_NI, H_NO, H_FPASS, H_ND, N_HEADER
 };
 enum { DRIVE_NONE = 0, DRIVE_SPEED = 1, DRIVE_TORQUE = 2, DRIVE_MOTOR = 3 };
 enum { STATUS_OK = 0, STATUS_NONFINITE = 1, STATUS_DEFLECTION = 2, STATUS_SPEED = 3 };
-#define MESH_OUT_COLUMNS 18
+#define MESH_OUT_COLUMNS 31 /* gearvib.kernels.MESH_OUT_COLUMNS (the first 7 are used) */
 
 int64_t gv_header_size(void) { return N_HEADER; }
+
+/* The header layout as this file sees it, in the order of HEADER_NAMES in
+ * benchmarks/bench_kernel.py, which compares it with gearvib.kernels' constants. */
+#define GV_LAYOUT                                                                           \
+    H_N, H_NMESH, H_IPAR, IP_MODE, IP_INPUT, IP_OUTPUT, IP_CARRIER, IP_GYRO, N_IPAR, FP_KC, \
+        FP_CC, FP_OUTDIR, FP_T0, FP_C1, FP_C2, FP_SPEED_LIMIT, H_LP, H_LI, H_CP, H_CI,      \
+        H_GP, H_GI, H_II, H_OI, H_VP, H_VI, H_FP, H_FI, H_PP, H_PI, H_BP, H_RFLAG, H_RVP,   \
+        H_RVI, H_RFP, H_RFI, H_FREC, H_FINT, H_MLAW, H_DI, H_ACC0, H_LV, H_CV, H_GV, H_IV,  \
+        H_OV, H_VV, H_FV, H_PV, H_S0, H_BL, H_MC, H_FPAR, H_LIMIT, H_BV, H_RVV, H_RFV,      \
+        H_FVAL, H_DV, H_NI, H_NO, H_FPASS, H_ND, N_HEADER, DRIVE_NONE, DRIVE_SPEED,         \
+        DRIVE_TORQUE, DRIVE_MOTOR, MESH_OUT_COLUMNS
+static const int64_t gv_layout[] = {GV_LAYOUT};
+
+int64_t gv_header_layout(int64_t *out, int64_t cap)
+{
+    int64_t n = (int64_t)(sizeof gv_layout / sizeof gv_layout[0]);
+    for (int64_t k = 0; k < n && k < cap; k++)
+        out[k] = gv_layout[k];
+    return n;
+}
 
 typedef struct {
     const int64_t *ints;
@@ -122,7 +143,19 @@ static void rhs(double t, const double *y, double *dy, double *mesh_out, const g
     if (mode == DRIVE_SPEED) {
         double phi, w;
         speed_at(sys->speed, sys->n_speed, t, &phi, &w);
-        torque = vals[fpar + FP_KC] * (phi - y[k_in]) + vals[fpar + FP_CC] * (w - y[n + k_in]);
+        const int64_t nd = ints[H_ND];
+        if (nd == 0) { /* a coupling on the input coordinate */
+            torque = vals[fpar + FP_KC] * (phi - y[k_in]) + vals[fpar + FP_CC] * (w - y[n + k_in]);
+        } else { /* a controller on the rigid-body coordinate p . q */
+            const int64_t di = ints[H_DI], dv = ints[H_DV];
+            double ang = 0.0, rate = 0.0;
+            for (int64_t p = 0; p < nd; p++) {
+                int64_t j = ints[di + p];
+                ang += vals[dv + p] * y[j];
+                rate += vals[dv + p] * y[n + j];
+            }
+            torque = vals[fpar + FP_KC] * (phi - ang) + vals[fpar + FP_CC] * (w - rate);
+        }
     } else if (mode == DRIVE_TORQUE) {
         torque = table_at(sys->torque, sys->n_torque, t);
     } else if (mode == DRIVE_MOTOR) {
@@ -149,6 +182,7 @@ static void rhs(double t, const double *y, double *dy, double *mesh_out, const g
     const int64_t s0 = ints[H_S0], bl = ints[H_BL], mc = ints[H_MC], rflag = ints[H_RFLAG];
     const int64_t rvp = ints[H_RVP], rvi = ints[H_RVI], rvv = ints[H_RVV];
     const int64_t rfp = ints[H_RFP], rfi = ints[H_RFI], rfv = ints[H_RFV];
+    const int64_t mlaw = ints[H_MLAW];
     const double *tl = sys->tables, *tr = sys->tables + n_mesh * n_table;
     for (int64_t m = 0; m < n_mesh; m++) {
         double d = 0.0, dd = 0.0;
@@ -190,19 +224,36 @@ static void rhs(double t, const double *y, double *dy, double *mesh_out, const g
         double half = 0.5 * backlash;
         double fl = 0.0, fr = 0.0, ke = 0.0;
         int64_t st = 0;
-        if (d > half) {
-            fl = kl * (d - half) + damping * dd;
-            if (fl < 0.0)
-                fl = 0.0;
-            ke += kl;
-            st += 1;
-        }
-        if (dr < -half) {
-            fr = kr * (dr + half) + damping * ddr;
-            if (fr > 0.0)
-                fr = 0.0;
-            ke += kr;
-            st += 2;
+        if (ints[mlaw + m] != 0) { /* always-on (viscous) damping, flank_forces_viscous */
+            if (d > half) {
+                fl = kl * (d - half);
+                ke += kl;
+                st += 1;
+            }
+            if (dr < -half) {
+                fr = kr * (dr + half);
+                ke += kr;
+                st += 2;
+            }
+            if (st == 2)
+                fr += damping * ddr;
+            else
+                fl += damping * dd;
+        } else { /* gated damping, flank_forces_two_lines */
+            if (d > half) {
+                fl = kl * (d - half) + damping * dd;
+                if (fl < 0.0)
+                    fl = 0.0;
+                ke += kl;
+                st += 1;
+            }
+            if (dr < -half) {
+                fr = kr * (dr + half) + damping * ddr;
+                if (fr > 0.0)
+                    fr = 0.0;
+                ke += kr;
+                st += 2;
+            }
         }
         if (two_lines) {
             if (fl != 0.0)

@@ -544,10 +544,16 @@ class FaultLaw:
                     ke += kr
                     on_r = True
             c = float(model.mesh_damping[m])
-            if on_l:
-                fl = max(fl + c * (dd + edl), 0.0)
-            if on_r:
-                fr = min(fr + c * (ddr + edr), 0.0)
+            if model.viscous_meshes[m]:  # always-on damping: on the loaded line, no floor
+                if on_r and not on_l:
+                    fr += c * (ddr + edr)
+                else:
+                    fl += c * (dd + edl)
+            else:
+                if on_l:
+                    fl = max(fl + c * (dd + edl), 0.0)
+                if on_r:
+                    fr = min(fr + c * (ddr + edr), 0.0)
             out[m] = (fl, fr, ke)
         return out
 

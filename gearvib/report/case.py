@@ -60,6 +60,7 @@ from gearvib.modal import ModalResult, modal_analysis
 from gearvib.model import AssembledModel
 from gearvib.report.study import AnalysisSettings
 from gearvib.report.wording import count
+from gearvib.simulation.conditions import DriveCoupling
 from gearvib.stability import (
     ATTRIBUTION_N_MAX,
     CHART_ACCURACY,
@@ -1074,9 +1075,25 @@ def _run_settings(caller: dict, ds: xr.Dataset) -> dict:
     return out
 
 
+def _run_drive(ds: xr.Dataset) -> DriveCoupling | None:
+    """The drive coupling a speed-driven run was simulated with (its file's attributes; a run
+    written before the sensing attribute existed had its coupling on the input member), or
+    None (the default) for any other run."""
+    attrs = ds.attrs
+    if attrs.get("drive") != "speed" or "drive_coupling_stiffness" not in attrs:
+        return None
+    try:
+        return DriveCoupling(float(attrs["drive_coupling_stiffness"]),
+                             float(attrs["drive_coupling_damping"]),
+                             str(attrs.get("drive_coupling_sensing", "input")))
+    except (KeyError, TypeError, ValueError):
+        return None
+
+
 def _stability(model: AssembledModel, modal: ModalResult, candidates: Candidates,
                span: tuple[float, float], settings: AnalysisSettings,
-               progress: bool | None) -> tuple[Any, str, float]:
+               progress: bool | None,
+               coupling: DriveCoupling | None = None) -> tuple[Any, str, float]:
     mode = STABILITY_MODES[settings.stability]
     hi = float(span[1])
     lo = max(float(span[0]), _RPM_MIN_FRACTION * hi)
@@ -1086,19 +1103,21 @@ def _stability(model: AssembledModel, modal: ModalResult, candidates: Candidates
     t0 = time.perf_counter()
     try:
         chart = stability_over_speed(
-            model, speeds, n_max=settings.n_max, refine=True, candidates=candidates,
-            modal=modal, floquet_options=dict(mode["floquet"]), workers=None,
-            progress=progress, xtol_rel=mode["xtol_rel"], max_cycles=cycle_budget(model))
+            model, speeds, coupling=coupling, n_max=settings.n_max, refine=True,
+            candidates=candidates, modal=modal, floquet_options=dict(mode["floquet"]),
+            workers=None, progress=progress, xtol_rel=mode["xtol_rel"],
+            max_cycles=cycle_budget(model))
     except (ValueError, ArithmeticError, np.linalg.LinAlgError) as exc:
         return None, f"Floquet stability chart failed: {exc}", time.perf_counter() - t0
     return chart, "", time.perf_counter() - t0
 
 
 def _first_order_rows(model: AssembledModel, span: tuple[float, float],
-                      settings: AnalysisSettings) -> list[tuple[str, ...]]:
+                      settings: AnalysisSettings,
+                      coupling: DriveCoupling | None = None) -> list[tuple[str, ...]]:
     """First-order (Hsu) regions inside the run-up speed range, for the stability section."""
     try:
-        widths = first_order_regions(model, l_max=settings.n_max)
+        widths = first_order_regions(model, coupling=coupling, l_max=settings.n_max)
     except (ValueError, ArithmeticError, np.linalg.LinAlgError):
         return []
     lo_r, hi_r = span
@@ -1329,10 +1348,11 @@ def analyse_case(ds: xr.Dataset, *, name: str | None = None,
                          "\"off\"); parametric rises are judged by the theory candidates "
                          "alone")
         else:
-            chart, why, t_stab = _stability(model, modal, all_cands, span, settings, progress)
+            chart, why, t_stab = _stability(model, modal, all_cands, span, settings, progress,
+                                            _run_drive(ds))
             if why:
                 notes.append(why)
-        first_order = _first_order_rows(model, span, settings)
+        first_order = _first_order_rows(model, span, settings, _run_drive(ds))
         if not several:
             rule, families = mesh_phasing(model, modal)
     candidates = _shown_candidates(all_cands, chart, settings.n_max, span)

@@ -51,9 +51,18 @@ from analysis.runup import MapFeatures, map_features
 from analysis.spectrum import Peaks, Spectrum, find_peaks, spectrum, to_db
 from gearvib.assembly import assemble
 from gearvib.catalogue import gear_set_catalogue
-from gearvib.config import GearSet, load_gearset
+from gearvib.config import GearSet, load_description
+from gearvib.fault_lines import confirmed_catalogue
 from gearvib.io import atomic_write
 from gearvib.modal import modal_analysis
+from gearvib.report.bearings import (
+    FAULT_SECTION_ID,
+    FAULT_TITLE,
+    comb_note,
+    fault_line_blocks,
+    fault_lines_of,
+    rig_blocks,
+)
 from gearvib.report.case import (
     REGION_HEADER,
     RISE_HEADER,
@@ -70,6 +79,7 @@ from gearvib.report.runner import check_output_dir
 from gearvib.report.sections import Block, Section
 from gearvib.report.study import AnalysisSettings, check_report_size
 from gearvib.report.wording import count
+from gearvib.rig import ShaftRig
 from gearvib.stability import gear_set_candidates
 
 if TYPE_CHECKING:
@@ -88,13 +98,14 @@ __all__ = [
     "measured_sections",
 ]
 
-MEASURED_SECTION_IDS = ("measurement", "gear-set", "spectra", "sonograms", "resonances",
-                        "provenance")
+MEASURED_SECTION_IDS = ("measurement", "gear-set", "spectra", FAULT_SECTION_ID, "sonograms",
+                        "resonances", "provenance")
 """Section ids of a measured report, in order."""
 
 TITLES = {"measurement": "Measurement and speed reference",
           "gear-set": "Gear set: kinematics and natural frequencies",
           "spectra": "Spectrum and order spectrum with identified peaks",
+          FAULT_SECTION_ID: FAULT_TITLE,
           "sonograms": "Order analysis: rpm-frequency and rpm-order maps",
           "resonances": "Resonances and their classification",
           "provenance": "Provenance"}
@@ -107,6 +118,11 @@ speed: no rpm maps (rays and vertical lines cannot be told apart), the spectrum 
 with the catalogue at the mean speed."""
 
 _PEAKS = 12  # peaks identified per spectrum
+MAX_LABEL_CHANCE = 0.25
+"""A peak's label is offered as its explanation only when a random peak there would get a
+label of the same family at most this often (the family's windows cover at most a quarter
+of the band around the peak): harmonics of a shaft at high orders, whose windows widen with
+the speed uncertainty until they cover the band, explain nothing."""
 PEAK_RANGE_DB = 40.0
 """Peaks more than this below the strongest one of a spectrum are not identified."""
 _DYNAMIC_RANGE_DB = 50.0
@@ -166,6 +182,11 @@ class MeasuredCase:
         What the report could not do, and why.
     provenance : list of (str, str)
         File, format, reader, channels, reference, settings.
+    rig : ShaftRig or None
+        The machine, when it was described as shafts and bearings without gears.
+    fault_lines : FaultLines or None
+        Bearing and gear-fault families checked in the envelope and order spectra
+        (:mod:`gearvib.report.bearings`).
     """
 
     name: str
@@ -198,6 +219,8 @@ class MeasuredCase:
     settings: AnalysisSettings
     notes: list[str] = field(default_factory=list)
     provenance: list[tuple[str, str]] = field(default_factory=list)
+    rig: ShaftRig | None = None
+    fault_lines: Any = None
 
     @property
     def has_gearset(self) -> bool:
@@ -286,10 +309,14 @@ class MeasuredCase:
             else:
                 exprs = [m.expression.split(" ≈ ")[0] for m in ms[:2]]
                 more = f" (+{len(ms) - 2} more)" if len(ms) > 2 else ""
-                best = (" ≈ ".join(exprs) + more if status == "explained"
-                        else f"ambiguous: {', '.join(exprs)}{more}")
-                dev = f"{ms[0].deviation:+.3g}"
-                win = f"± {ms[0].tolerance:.3g}"
+                if status == "explained":
+                    best = " ≈ ".join(exprs) + more
+                    dev = f"{ms[0].deviation:+.3g}"
+                    win = f"± {ms[0].tolerance:.3g}"
+                else:  # chance-level candidates are not offered as explanations
+                    best = (f"unexplained ({ms[0].family} lines would match "
+                            f"{100 * ms[0].coincidence:.0f} % of random peaks here)")
+                    dev, win = "–", "–"
             rows.append((head, f"{lv[i]:.1f}", best, dev, win,
                          f"{100 * ident.coincidence[i]:.0f} %"))
         return rows
@@ -356,13 +383,14 @@ class MeasuredCase:
 
 
 def _load_gearset(gearset: Any):
-    """A GearSet from a path, a preset name or a GearSet (None stays None)."""
+    """A GearSet or a ShaftRig from a path, a preset or rig name, or the object (None stays
+    None)."""
     if gearset is None:
         return None
 
-    if isinstance(gearset, GearSet):
+    if isinstance(gearset, GearSet | ShaftRig):
         return gearset
-    return load_gearset(str(gearset))
+    return load_description(str(gearset))
 
 
 def _reference_member(model: AssembledModel, m: Measurement, reference: str | None
@@ -396,16 +424,18 @@ def _segment(n: int, fs: float, resolution_hz: float) -> int:
 def analyse_measurement(measurement: Measurement, *, gearset: Any = None,
                         channel: str | None = None, reference: str | None = None,
                         settings: AnalysisSettings | None = None,
-                        name: str | None = None) -> MeasuredCase:
+                        name: str | None = None, envelope_band: Any = None,
+                        min_bandwidth: float | None = None) -> MeasuredCase:
     """Compute the content of a measured report.
 
     Parameters
     ----------
     measurement : Measurement
         From :func:`analysis.measurement.load_measurement`.
-    gearset : path, preset name or GearSet, optional
-        The gear set the measurement comes from; without it the report shows what needs no
-        model (maps, spectra, orders of the reference shaft).
+    gearset : path, preset name, GearSet or ShaftRig, optional
+        The gear set the measurement comes from, or a machine without gears
+        (``type = "shafts"``: shafts and rolling bearings, :mod:`gearvib.rig`); without it
+        the report shows what needs no model (maps, spectra, orders of the reference shaft).
     channel : str, optional
         Vibration channel (default: the measurement's first).
     reference : str, optional
@@ -416,6 +446,11 @@ def analyse_measurement(measurement: Measurement, *, gearset: Any = None,
         ``frequency_max_hz``, ``orders`` (default :class:`AnalysisSettings`).
     name : str, optional
         Report name of the measurement (default: the file stem).
+    envelope_band : (float, float), optional
+        Band [Hz] demodulated for the fault lines (default: the fast kurtogram's choice).
+    min_bandwidth : float, optional
+        Narrowest band [Hz] the kurtogram may choose (default: twice the highest fault line
+        checked, :mod:`gearvib.fault_lines`).
 
     Returns
     -------
@@ -434,6 +469,9 @@ def analyse_measurement(measurement: Measurement, *, gearset: Any = None,
     varying = hi >= MIN_SPEED_RATIO * max(lo, 1e-300)
     notes: list[str] = []
     gs = _load_gearset(gearset)
+    rig = gs if isinstance(gs, ShaftRig) else None
+    if rig is not None:
+        gs = None
     model = modal = cat = None
     fn = np.zeros(0)
     names: list[str] = []
@@ -449,13 +487,22 @@ def analyse_measurement(measurement: Measurement, *, gearset: Any = None,
         ref_member, in_per_ref, why = _reference_member(model, m, reference)
         if why:
             notes.append(why)
-        cat = gear_set_catalogue(model, reference=ref_member, mesh_harmonics=7, harmonics=3,
-                                 sidebands=2)
+        cat = gear_set_catalogue(gs, model=model, reference=ref_member, mesh_harmonics=7,
+                                 harmonics=3, sidebands=2)
         fmax_auto = min(0.5 * fs, max(2.2 * float(fn.max()) if fn.size else 0.0,
                                       0.25 * fs))
+    elif rig is not None:
+        ref_member, in_per_ref, why = _rig_reference(rig, m, reference)
+        if why:
+            notes.append(why)
+        cat = rig.catalogue(reference=ref_member, harmonics=3)
+        fmax_auto = 0.5 * fs
+        notes.append(f"{rig.name} is a machine without gears (shafts and rolling bearings): no "
+                     "mesh orders or natural frequencies; peaks are compared with the shaft "
+                     "harmonics and the bearing lines")
     else:
         if reference is not None:
-            raise ValueError("reference applies with a gear set (--gearset)")
+            raise ValueError("reference applies with a description (--gearset)")
         fmax_auto = 0.5 * fs
         notes.append("no gear set given (--gearset CONFIG): no mesh orders, catalogue lines or "
                      "natural frequencies; orders are those of the reference shaft, and rises "
@@ -468,6 +515,13 @@ def analyse_measurement(measurement: Measurement, *, gearset: Any = None,
             k = st.orders or int(np.clip(math.ceil(fmax / max(f_ref * max(lo, 0.25 * hi),
                                                               1e-300)), 3, 20))
             groups.append((str(g.name), f_ref, k))
+
+    # bearing and gear-fault lines at their own positions (envelope and order spectra); a
+    # bearing line labels a peak only when its family is detected there
+    bearings = rig.bearings() if rig is not None else _bearings_of(gs)
+    fault = fault_lines_of(m, cat, bearings, channel=ch, band=envelope_band,
+                           min_bandwidth=min_bandwidth, notes=notes)
+    label_cat = confirmed_catalogue(cat, fault) if cat is not None else None
 
     # spectrum over the record, peaks identified against frequency-locked lines (natural
     # frequencies) and, at constant speed, the catalogue at the mean speed
@@ -495,12 +549,16 @@ def analyse_measurement(measurement: Measurement, *, gearset: Any = None,
         opk = find_peaks(osp, prominence_db=6.0, max_peaks=_PEAKS,
                          min_distance_hz=3 * osp.bin_spacing_hz)
         opk = _select_peaks(opk, (opk.order > 0.5) & (opk.order <= max_order))
-        olines = ([catalogue_lines(cat, axis="order", speed_uncertainty=2e-3)]
-                  if cat is not None else [_shaft_lines(1.0, max_order, "order")])
+        olines = ([catalogue_lines(label_cat, axis="order", speed_uncertainty=2e-3)]
+                  if model is not None else [_shaft_lines(1.0, max_order, "order")])
+        if rig is not None and _BEARING_FAMILIES & set(label_cat.family):
+            olines.append(catalogue_lines(label_cat, axis="order", speed_uncertainty=2e-3,
+                                          families=_BEARING_FAMILIES))
         ow = peak_half_widths(ospec.order, to_db(ospec.values, ospec.amplitude),
                               opk.order) if len(opk) else None
         oident = identify_peaks(opk.order, olines, resolution=ospec.enbw_orders,
-                                peak_widths=ow, band=(0.0, max_order))
+                                peak_widths=ow, band=(0.0, max_order),
+                                max_coincidence=MAX_LABEL_CHANCE)
     except ValueError as exc:
         notes.append(f"order spectrum not available: {exc}")
 
@@ -538,10 +596,12 @@ def analyse_measurement(measurement: Measurement, *, gearset: Any = None,
         lines.append(modal_lines(fn, names=names, kinds=("natural",),
                                  uncertainty=st.tolerance))
     mean_rpm = float(np.mean(rpm))
-    if cat is not None and not varying:
-        lines.append(catalogue_lines(cat, speed_rpm=mean_rpm, axis="frequency",
-                                     speed_uncertainty=max(1e-3, (hi - lo) / max(hi, 1e-300))))
-    if not varying and cat is None:
+    if cat is not None and not varying and (rig is None
+                                            or _BEARING_FAMILIES & set(label_cat.family)):
+        lines.append(catalogue_lines(label_cat, speed_rpm=mean_rpm, axis="frequency",
+                                     speed_uncertainty=max(1e-3, (hi - lo) / max(hi, 1e-300)),
+                                     families=_BEARING_FAMILIES if rig is not None else None))
+    if not varying and model is None:
         lines.append(_shaft_lines(mean_rpm / 60.0, fmax, "frequency"))
     if varying and not fn.size and features is not None and np.size(features.frequencies):
         lines.append(_map_lines(features, st.tolerance))
@@ -553,7 +613,7 @@ def analyse_measurement(measurement: Measurement, *, gearset: Any = None,
                      "unexplained (read them in the maps)")
         lines.append(_shaft_lines(1e9, 1.0, "frequency"))  # one line far outside the band
     ident = identify_peaks(pk.frequency, lines, resolution=sp.enbw_hz, peak_widths=widths,
-                           band=(0.0, fmax))
+                           band=(0.0, fmax), max_coincidence=MAX_LABEL_CHANCE)
     regions = (resonance_regions(resonances, rpm_gap=_REGION_GAP * hi)
                if resonances is not None else [])
     prov = [("measurement", name or m.name),
@@ -562,9 +622,10 @@ def analyse_measurement(measurement: Measurement, *, gearset: Any = None,
             ("reader", str(m.source.get("reader", ""))),
             ("channels", ", ".join(m.source.get("channels", []))),
             ("speed reference", m.reference),
-            ("gear set", (f"{model.meta.get('name', '')}"
-                          + (f" ({gearset})" if isinstance(gearset, str | os.PathLike) else "")
-                          if model is not None else "(none)")),
+            ("gear set" if rig is None else "machine (shafts and bearings)",
+             (f"{(model or rig).meta.get('name', '')}"
+              + (f" ({gearset})" if isinstance(gearset, str | os.PathLike) else "")
+              if model is not None or rig is not None else "(none)")),
             ("analysis settings", json.dumps({k: v for k, v in st.to_dict().items()
                                               if k in ("map_resolution_hz", "map_overlap",
                                                        "threshold_db", "tolerance", "n_max",
@@ -576,15 +637,56 @@ def analyse_measurement(measurement: Measurement, *, gearset: Any = None,
                             f"{fmap.overlap:g}, {fmap.time.size} frames"))
     if m.source.get("kind") == "simulation":
         prov.append(("simulated run", str(m.source.get("title", ""))))
+    if m.source.get("stated"):
+        prov.append(("stated by the user", json.dumps(m.source["stated"], sort_keys=True)))
+    if fault is not None:
+        b = fault.envelope.band
+        prov.append(("envelope analysis", f"band {b.low:.6g}-{b.high:.6g} Hz ("
+                     + ("fast kurtogram, min_bandwidth "
+                        f"{fault.min_bandwidth:.6g} Hz" if fault.kurtogram is not None
+                        else "given") + f"), {fault.domain} axis"))
     return MeasuredCase(
         name=name or m.name, measurement=m, channel=ch, units=units, model=model, modal=modal,
-        gearset_name=str(model.meta.get("name", "")) if model is not None else "",
+        gearset_name=(str(model.meta.get("name", "")) if model is not None else
+                      rig.name if rig is not None else ""),
         reference_member=ref_member, input_per_reference=in_per_ref,
         natural_frequencies_hz=fn, mode_names=names, mesh_groups=groups, catalogue=cat,
         spectrum=sp, peaks=pk, identification=ident, order_spectrum=ospec, order_peaks=opk,
         order_identification=oident, fmap=fmap, omap=omap, features=features,
         resonances=resonances, regions=regions, frequency_max_hz=fmax, speed_range=(lo, hi),
-        varying_speed=varying, settings=st, notes=notes, provenance=prov)
+        varying_speed=varying, settings=st, notes=notes, provenance=prov, rig=rig,
+        fault_lines=fault)
+
+
+_BEARING_FAMILIES = frozenset(("bearing_ftf", "bearing_bpfo", "bearing_bpfi", "bearing_bsf"))
+
+
+def _bearings_of(gs: GearSet | None) -> list:
+    """The rolling bearings of a gear set with their rings' members (catalogue form)."""
+    if gs is None:
+        return []
+    members = {b.name: b.carrier if b.role == "planet" else None for b in gs.bodies}
+    return [b.resolve(members) for b in gs.rolling_bearings]
+
+
+def _rig_reference(rig: ShaftRig, m: Measurement, reference: str | None
+                   ) -> tuple[str, float, str]:
+    """The shaft the speed reference measures (default: the tacho's member when it names a
+    shaft, else the input shaft) and the input speed per reference speed."""
+    ratios = rig.kinematic_ratios
+    note = ""
+    if reference is None:
+        ch = m.source.get("reference_channel")
+        member = (str(m.signals[ch].attrs.get("member", "")) if ch in m.signals.data_vars
+                  else "")
+        reference = member if member in ratios else rig.input
+        if member not in ratios and len(ratios) > 1:
+            note = (f"the speed reference is taken as the speed of the input shaft "
+                    f"{rig.input!r} (give --reference SHAFT if it measures another shaft)")
+    if reference not in ratios:
+        raise ValueError(f"reference = {reference!r} is not a shaft of the machine; "
+                         f"admissible: {sorted(ratios)}")
+    return reference, 1.0 / abs(float(ratios[reference])), note
 
 
 def _revolutions(m: Measurement) -> float:
@@ -787,7 +889,8 @@ def spectra_figure(mc: MeasuredCase, figsize: tuple[float, float] = (8.0, 6.4)) 
             labelled.append((ax, mc.order_peaks.order, y,
                              [_short(mc.order_identification, i, "order")
                               for i in range(len(mc.order_peaks))]))
-    fig.suptitle(f"{mc.name}: {mc.channel} ('?' unexplained, '~' ambiguous)", fontsize=10)
+    fig.suptitle(f"{mc.name}: {mc.channel} ('?' unexplained, '~' only chance-level labels)",
+                 fontsize=10)
 
     items = []
     for a, xs, ys, texts in labelled:
@@ -914,6 +1017,8 @@ def measured_sections(mc: MeasuredCase) -> list[Section]:
                    "the rigid-body rotation)", ("mode", "f [Hz]", "type",
                                                  "dominant mesh (strain energy)"),
                    mc.mode_rows())]
+    elif mc.rig is not None:
+        s["gear-set"] += rig_blocks(mc, mc.rig)
     else:
         s["gear-set"] += [Block("text", f"{n}: no gear set was given (--gearset CONFIG). The "
                                 "report shows the orders of the reference shaft and what the "
@@ -922,6 +1027,8 @@ def measured_sections(mc: MeasuredCase) -> list[Section]:
                                 "of rises as forced resonances need the gear set.")]
     expl = ("natural frequencies of the model" if mc.natural_frequencies_hz.size else
             "harmonics of the reference shaft")
+    if mc.rig is not None and not mc.varying_speed:
+        expl += " and the bearing lines at the mean speed"
     if not mc.varying_speed and mc.has_gearset:
         expl += " and the kinematic catalogue at the mean speed"
     s["spectra"] += [
@@ -932,13 +1039,23 @@ def measured_sections(mc: MeasuredCase) -> list[Section]:
         Block("text", f"{n}: spectrum peaks are compared with the {expl}; order peaks with "
               + ("the gear set's kinematic catalogue (mesh harmonics, planet-pass sidebands, "
                  "shaft and fault orders that the planet phasing lets through)"
-                 if mc.has_gearset else "the integer orders of the reference shaft")
+                 if mc.has_gearset else "the integer orders of the reference shaft and the "
+                 "bearing lines" if mc.rig is not None else
+                 "the integer orders of the reference shaft")
               + ". A candidate's window is the peak's -3 dB half-width plus the line's "
-              "uncertainty; 'chance' is how often a random peak there would get a label, and a "
-              "peak is 'ambiguous' when a random one would match as easily."),
+              "uncertainty; 'chance' is how often a random peak there would get a label. A "
+              "label is offered only when its family's windows cover at most "
+              f"{100 * MAX_LABEL_CHANCE:g} % of the band around the peak (e.g. not the "
+              "high harmonics of a shaft, whose windows grow with the speed uncertainty "
+              "until any peak matches one): otherwise the peak is unexplained, and the "
+              "table says how often its nearest family would match a random peak."),
         _table(f"Spectrum peaks of {n}", PEAK_HEADER, mc.peak_rows())]
     if mc.order_spectrum is not None:
         s["spectra"] += [_table(f"Order peaks of {n}", PEAK_HEADER, mc.order_peak_rows())]
+    comb = comb_note(mc) if mc.fault_lines is not None else ""
+    if comb:
+        s["spectra"] += [Block("text", comb)]
+    s[FAULT_SECTION_ID] += fault_line_blocks(mc)
     if mc.fmap is not None:
         fam = ("mesh orders " + ", ".join(f"1–{k} ({g})" for g, _, k in mc.mesh_groups)
                if mc.mesh_groups else "the strongest order rays the map shows (orders of the "
@@ -1012,6 +1129,7 @@ def build_measured_report(source: Measurement | str | os.PathLike | xr.Dataset,
                           out_dir: str | os.PathLike, *, gearset: Any = None,
                           channel: str | None = None, reference: str | None = None,
                           settings: AnalysisSettings | None = None, title: str | None = None,
+                          envelope_band: Any = None, min_bandwidth: float | None = None,
                           **speed: Any) -> MeasuredReportPaths:
     """Analyse a measurement and write ``report.html`` and ``report.pdf`` into ``out_dir``.
 
@@ -1020,10 +1138,11 @@ def build_measured_report(source: Measurement | str | os.PathLike | xr.Dataset,
     source : Measurement, path or Dataset
         The measurement (a path or Dataset is loaded with
         :func:`analysis.measurement.load_measurement` and the ``speed`` keywords:
-        ``tacho``, ``pulses_per_rev``, ``speed``, ``angle``, ``rpm``).
+        ``tacho``, ``pulses_per_rev``, ``speed``, ``angle``, ``rpm``, ``rpm_from``, ``fs``,
+        ``time_column``, ``calibration``, ``units``).
     out_dir : path-like
         Output folder (created when the files are written).
-    gearset, channel, reference, settings
+    gearset, channel, reference, settings, envelope_band, min_bandwidth
         See :func:`analyse_measurement`.
     title : str, optional
         Report title.
@@ -1036,12 +1155,14 @@ def build_measured_report(source: Measurement | str | os.PathLike | xr.Dataset,
         source, channel=channel, **speed)
     out = check_output_dir(out_dir)
     mc = analyse_measurement(m, gearset=gearset, channel=channel, reference=reference,
-                             settings=settings)
+                             settings=settings, envelope_band=envelope_band,
+                             min_bandwidth=min_bandwidth)
     sections = measured_sections(mc)
     title = title or (f"Order-analysis report of the measurement {mc.name}"
                       + (f" ({mc.gearset_name})" if mc.gearset_name else ""))
     subtitle = (f"Channel {mc.channel}; speed reference: {m.reference}; "
-                + (f"gear set {mc.gearset_name}." if mc.gearset_name else "no gear set."))
+                + (f"machine {mc.gearset_name} (shafts and bearings)." if mc.rig is not None
+                   else f"gear set {mc.gearset_name}." if mc.gearset_name else "no gear set."))
     images = FigureImages()
     text = render_html(sections, title=title, subtitle=subtitle, images=images)
     out.mkdir(parents=True, exist_ok=True)

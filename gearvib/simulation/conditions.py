@@ -18,6 +18,7 @@ import numpy as np
 
 __all__ = [
     "RAD_S_PER_RPM",
+    "SENSING",
     "Conditions",
     "DriveCoupling",
     "MotorDriven",
@@ -30,24 +31,62 @@ RAD_S_PER_RPM = 2.0 * math.pi / 60.0
 """One min^-1 in rad/s."""
 
 
+#: What a drive coupling's angle and speed are taken from (:class:`DriveCoupling`).
+SENSING = ("input", "rigid-body")
+
+
 @dataclass(frozen=True)
 class DriveCoupling:
-    """Torsional spring-damper between the prescribed input angle and the input member.
+    """The drive of a speed-driven run: a torque on the input member that makes the set
+    follow the prescribed input angle ``phi(t)``.
+
+    The torque is ``k (phi - theta) + c (omega - theta')``. With ``sensing = "input"`` (the
+    default of this class) ``theta`` is the input member's rotation: a torsional
+    spring-damper between the prescribed angle and the input member, a physical coupling
+    whose stiffness and damping act on every mode the input member takes part in. With
+    ``sensing = "rigid-body"`` ``theta = r^T M q / (r^T M r)`` is the rigid-body coordinate of
+    the set (``r`` the rigid-body velocity per unit input speed, ``r_in = 1``): a speed
+    controller on the rigid-body mode. The elastic modes are M-orthogonal to ``r``, so they
+    do not feed back into the torque: the controller keeps the speed profile and adds no
+    stiffness or damping to them (their eigenvalues are those of the free set), while the
+    rigid-body mode gets ``sqrt(k / J)`` and the damping ratio ``c / (2 sqrt(k J))``,
+    ``J = r^T M r``. :func:`gearvib.simulate.default_coupling` is such a controller.
 
     Parameters
     ----------
     stiffness : float
-        Torsional stiffness [N m/rad].
+        Torsional stiffness [N m/rad] (> 0, finite).
     damping : float
-        Torsional damping [N m s/rad].
+        Torsional damping [N m s/rad] (>= 0, finite).
+    sensing : {"input", "rigid-body"}
+        What ``theta`` is (above).
     """
 
     stiffness: float
     damping: float
+    sensing: str = "input"
 
     def __post_init__(self) -> None:
-        if not (self.stiffness > 0 and self.damping >= 0):
-            raise ValueError("DriveCoupling needs stiffness > 0 and damping >= 0")
+        for name in ("stiffness", "damping"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, int | float | np.floating
+                                                         | np.integer):
+                raise TypeError(f"DriveCoupling.{name} = {value!r} is not a number")
+        if not (0 < self.stiffness < math.inf and 0 <= self.damping < math.inf):
+            raise ValueError(f"DriveCoupling needs 0 < stiffness < inf and 0 <= damping < inf "
+                             f"(got stiffness = {self.stiffness!r}, damping = "
+                             f"{self.damping!r})")
+        if not (isinstance(self.sensing, str) and self.sensing in SENSING):
+            raise ValueError(f"DriveCoupling.sensing = {self.sensing!r:.40} is not admissible "
+                             f"(admissible: {', '.join(repr(s) for s in SENSING)})")
+
+    def to_dict(self) -> dict:
+        """``{"stiffness", "damping"}`` and, for rigid-body sensing, ``"sensing"`` (a run's
+        configuration text; an input coupling's is as it was before the field existed)."""
+        out = {"stiffness": float(self.stiffness), "damping": float(self.damping)}
+        if self.sensing != "input":
+            out["sensing"] = self.sensing
+        return out
 
 
 @dataclass(frozen=True)

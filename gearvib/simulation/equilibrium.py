@@ -281,7 +281,12 @@ def static_equilibrium(
     mesh positions of the solution itself (fixed-point iteration: the static wind-up of the
     drive coupling rotates the whole set and so shifts the mesh positions). The rigid-body
     acceleration ``a`` is prescribed (speed-driven runs) or, with ``free_rigid``, an unknown
-    fixed by the torque balance; then the input rotation is pinned to 0.
+    fixed by the torque balance; then the input rotation is pinned to 0. A speed drive on the
+    rigid-body coordinate ``p . q`` (``system.drive_sensing``) is solved as a coupling on the
+    input coordinate, and the solution turned rigidly until ``p . q`` equals its input angle:
+    the drive torque, and so every deflection, is the same (exact when the rigid-body motion
+    strains nothing, ``K r = 0``, which is when the default drive senses it; the residual of
+    the run's own equations is checked).
 
     Parameters
     ----------
@@ -331,12 +336,17 @@ def static_equilibrium(
         f -= om * system.gyroscopic @ qd0
     k_in = int(ipar[kn.IP_INPUT])
     mode = int(ipar[kn.IP_MODE])
+    sensing = system.drive_sensing if mode == kn.DRIVE_SPEED else None
     if mode == kn.DRIVE_SPEED:
         phi = np.zeros(1)
         w = np.zeros(1)
         kn.speed_profile(system.speed_table, np.zeros(1), phi, w)
+        # a controller on the rigid-body coordinate (sensing p) is solved as a coupling on the
+        # input coordinate (symmetric), then the set is turned rigidly until p . q equals that
+        # input angle: the same torque, so the same deflections (K r = 0; see below)
         a0[k_in, k_in] += fpar[kn.FP_KC]
-        f[k_in] += fpar[kn.FP_KC] * phi[0] + fpar[kn.FP_CC] * (w[0] - qd0[k_in])
+        rate = qd0[k_in] if sensing is None else float(sensing @ qd0)
+        f[k_in] += fpar[kn.FP_KC] * phi[0] + fpar[kn.FP_CC] * (w[0] - rate)
     elif mode == kn.DRIVE_TORQUE:
         f[k_in] += float(np.interp(0.0, system.torque_table[0], system.torque_table[1]))
     elif mode == kn.DRIVE_MOTOR:
@@ -390,6 +400,13 @@ def static_equilibrium(
             ) from None
         if not free_rigid:
             acc = float(rigid_acceleration)
+        if sensing is not None:
+            q = q + rigid * ((q[k_in] - float(sensing @ q)) / float(sensing @ rigid))
+    if sensing is not None:  # the residual of the run's own (non-symmetric) drive
+        a = a.copy()
+        a[k_in, k_in] -= fpar[kn.FP_KC]
+        a[k_in] += fpar[kn.FP_KC] * sensing
+        resid = a @ q - b
     if not _balanced(a, b, q, resid):
         raise SimulationError(
             "no static equilibrium at t = 0: the initial load is not balanced (a member is "

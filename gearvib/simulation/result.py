@@ -57,6 +57,9 @@ def model_sha256(model: AssembledModel) -> str:
         h.update(b"mesh_back_vectors")
         h.update(str(a.shape).encode())
         h.update(a.tobytes())
+    if "viscous" in model.mesh_damping_laws:  # the damping laws (all gated: as before)
+        h.update(b"mesh_damping_laws")
+        h.update(json.dumps(list(model.mesh_damping_laws)).encode())
     if model.faults:  # local tooth faults and manufacturing errors (healthy: as before)
         h.update(b"faults")
         h.update(json.dumps([f.to_dict() for f in model.faults], sort_keys=True).encode())
@@ -370,7 +373,19 @@ class RunUpResult:
         if self.coupling is not None:
             attrs["drive_coupling_stiffness"] = float(self.coupling.stiffness)
             attrs["drive_coupling_damping"] = float(self.coupling.damping)
+            if self.coupling.sensing != "input":  # (input couplings' files as before)
+                attrs["drive_coupling_sensing"] = self.coupling.sensing
         return PlainDataset(data, coords, attrs)
+
+
+def _conditions_dict(conditions: Conditions) -> dict:
+    """The fields of the conditions, a drive coupling as :meth:`DriveCoupling.to_dict` gives
+    it (an input coupling's text as before the sensing existed)."""
+    out = asdict(conditions)
+    coupling = getattr(conditions, "coupling", None)
+    if coupling is not None:
+        out["coupling"] = coupling.to_dict()
+    return out
 
 
 def build_result(
@@ -398,8 +413,13 @@ def build_result(
     time = np.arange(n_out) * (step.decimation * step.dt)
     q = out[:, :n]
     qd = out[:, n : 2 * n]
-    f_left = np.clip(out[:, 2 * n : 2 * n + nm].T, 0.0, None)
-    f_right = np.clip(out[:, 2 * n + nm : 2 * n + 2 * nm].T, 0.0, None)
+    f_left = out[:, 2 * n : 2 * n + nm].T
+    f_right = out[:, 2 * n + nm : 2 * n + 2 * nm].T
+    # gated law: a flank never pulls, values below 0 are filter ringing (clipped); the viscous
+    # law's forces carry the damping force, which may pull (kept)
+    gated = ~model.viscous_meshes[:, None]
+    f_left = np.where(gated, np.clip(f_left, 0.0, None), f_left)
+    f_right = np.where(gated, np.clip(f_right, 0.0, None), f_right)
     k_eff = np.clip(out[:, 2 * n + 2 * nm :].T, 0.0, None)
     normal_force = np.ascontiguousarray(np.stack([f_left, f_right], axis=1))
     deflection = system.mesh_vectors @ q.T
@@ -418,8 +438,12 @@ def build_result(
         angle = np.empty(n_out)
         w = np.empty(n_out)
         kn.speed_profile(system.speed_table, time, angle, w)
-        drive_torque = system.fpar[kn.FP_KC] * (angle - q[:, k_in]) + system.fpar[kn.FP_CC] * (
-            w - qd[:, k_in]
+        if system.drive_sensing is None:  # a coupling on the input member
+            theta, rate = q[:, k_in], qd[:, k_in]
+        else:  # a controller on the rigid-body coordinate
+            theta, rate = q @ system.drive_sensing, qd @ system.drive_sensing
+        drive_torque = system.fpar[kn.FP_KC] * (angle - theta) + system.fpar[kn.FP_CC] * (
+            w - rate
         )
         input_speed = w / RAD_S_PER_RPM
     else:
@@ -442,7 +466,7 @@ def build_result(
         "gearvib_version": __version__,
         "model": cfg_model,
         "model_sha256": model_sha256(model),
-        "conditions": {"type": type(conditions).__name__, **asdict(conditions)},
+        "conditions": {"type": type(conditions).__name__, **_conditions_dict(conditions)},
         "simulation": {
             "dt": step.dt,
             "fs_out": step.fs_out,
@@ -450,7 +474,7 @@ def build_result(
             "duration": duration,
             "gyroscopic": bool(gyroscopic),
             "integrator": INTEGRATOR,
-            "drive_coupling": None if setup.coupling is None else asdict(setup.coupling),
+            "drive_coupling": None if setup.coupling is None else setup.coupling.to_dict(),
             "load_torque": list(setup.load),
         },
     }

@@ -29,8 +29,11 @@ __all__ = [
     "COUPLING_FREQUENCY_FRACTION",
     "RunSetup",
     "check_model",
+    "coupling_matrices",
     "default_coupling",
+    "drive_sensing",
     "prepare_run",
+    "with_coupling",
 ]
 
 COUPLING_FREQUENCY_FRACTION = 0.1
@@ -124,14 +127,23 @@ class RunSetup:
 
 
 def default_coupling(model: AssembledModel, torque_sign: float = 1.0) -> DriveCoupling:
-    """The default drive coupling of speed-driven runs.
+    """The default drive of speed-driven runs: a speed controller on the rigid-body mode.
 
-    Its rigid-body mode (all members turning on the coupling) lies at
+    The drive torque acts on the input member, its angle and speed are those of the set's
+    rigid-body coordinate (``sensing = "rigid-body"``, :class:`DriveCoupling`): the elastic
+    modes do not feed back into it, so it keeps the prescribed speed without adding
+    stiffness or damping to them (their frequencies and damping are those of
+    :func:`gearvib.modal.modal_analysis`, the free set). The rigid-body mode lies at
     :data:`COUPLING_FREQUENCY_FRACTION` x the lowest elastic natural frequency of the mean
-    system (the flanks in contact at the mean load of sense ``torque_sign``, both flanks of a
-    preloaded mesh: :meth:`AssembledModel.mesh_contacts`), critically damped:
+    system (the flanks in contact at the mean load of sense ``torque_sign``, both flanks of
+    a preloaded mesh: :meth:`AssembledModel.mesh_contacts`), critically damped:
     ``k = J_eff w_c**2``, ``c = 2 J_eff w_c`` with ``J_eff`` the inertia of the kinematic
     motion reduced to the input member.
+
+    The rigid-body motion strains nothing (``K r = 0``: :meth:`AssembledModel.
+    rigid_body_velocity` refuses a set whose kinematic motion a support resists), so the
+    elastic modes are exactly those of the free set whenever the set's own damping does not
+    act on it either (``C r = 0``: no torsional damper to ground on a turning member).
     """
     rigid = model.rigid_body_velocity()
     k_in = int(model.rotation_dofs[model.input_member])
@@ -142,7 +154,52 @@ def default_coupling(model: AssembledModel, torque_sign: float = 1.0) -> DriveCo
         raise ValueError("the model has no elastic mode to choose a drive coupling from")
     j_eff = float(rigid @ model.mass @ rigid) / rigid[k_in] ** 2
     wc = 2.0 * math.pi * COUPLING_FREQUENCY_FRACTION * float(f_el[0])
-    return DriveCoupling(float(j_eff * wc * wc), float(2.0 * j_eff * wc))
+    return DriveCoupling(float(j_eff * wc * wc), float(2.0 * j_eff * wc), "rigid-body")
+
+
+def drive_sensing(mass: np.ndarray, rigid: np.ndarray, k_in: int) -> np.ndarray:
+    """The row ``p = r_in M r / (r^T M r)`` whose product with ``q`` is the rigid-body
+    coordinate in radians of the input member (``p . q = phi`` for the rigid rotation ``q = r
+    phi / r_in``; the elastic modes, M-orthogonal to ``r``, give 0): the angle a
+    rigid-body-sensing drive controls (:class:`DriveCoupling`)."""
+    mr = np.asarray(mass, float) @ rigid
+    return mr * (float(rigid[k_in]) / float(rigid @ mr))
+
+
+def coupling_matrices(mass: np.ndarray, rigid: np.ndarray, k_in: int,
+                      coupling: DriveCoupling) -> tuple[np.ndarray, np.ndarray]:
+    """Symmetric stiffness and damping matrices ``(K_d, C_d)`` of a drive coupling in the
+    linearised system.
+
+    ``"input"``: ``k e e^T`` and ``c e e^T`` on the input coordinate. ``"rigid-body"``:
+    ``k p p^T`` and ``c p p^T`` (:func:`drive_sensing`). The run applies the controller's
+    torque on the input member (``k e p^T``, not symmetric); both forms leave the elastic
+    modes of a free set untouched and give its rigid-body mode ``k`` and ``c`` on ``J``, so
+    they have the same eigenvalues (the simulated form is block-triangular in modal
+    coordinates: the elastic modes are forced by the rigid-body coordinate but do not act
+    back). The symmetric form serves the step choice, the stability analysis and anything
+    that needs a symmetric mean system.
+    """
+    n = np.asarray(mass).shape[0]
+    if coupling.sensing == "rigid-body":
+        p = drive_sensing(mass, rigid, k_in)
+        shape = np.outer(p, p)
+    else:
+        shape = np.zeros((n, n))
+        shape[k_in, k_in] = 1.0
+    return coupling.stiffness * shape, coupling.damping * shape
+
+
+def with_coupling(stiffness: np.ndarray, mass: np.ndarray, rigid: np.ndarray, k_in: int,
+                  coupling: DriveCoupling) -> np.ndarray:
+    """A copy of ``stiffness`` with the coupling's symmetric stiffness
+    (:func:`coupling_matrices`) added where it is not zero (an input coupling: the one entry
+    of the input coordinate, as the step choice always added it)."""
+    kd = coupling_matrices(mass, rigid, k_in, coupling)[0]
+    out = np.array(stiffness, dtype=float, copy=True)
+    nz = kd != 0.0
+    out[nz] += kd[nz]
+    return out
 
 
 def prepare_run(
@@ -183,6 +240,7 @@ def prepare_run(
     speed_tab = np.zeros((3, 1))
     torque_tab = np.zeros((2, 1))
     coupling = None
+    sensing = None
     free_rigid = False
     if isinstance(conditions, SpeedRamp | SpeedTable):
         ipar[kn.IP_MODE] = kn.DRIVE_SPEED
@@ -212,6 +270,8 @@ def prepare_run(
         coupling = conditions.coupling or default_coupling(model, torque_sign)
         fpar[kn.FP_KC] = coupling.stiffness
         fpar[kn.FP_CC] = coupling.damping
+        if coupling.sensing == "rigid-body":
+            sensing = drive_sensing(mass, rigid, k_in)
         speed_max = float(np.abs(w).max())
         duration = float(conditions.duration)
         drive = "speed"
@@ -255,8 +315,7 @@ def prepare_run(
         # system, as the step choice computes it (gearvib.simulate)
         k_max = stiffest_matrix(model, torque_sign)
         if coupling is not None:
-            k_max = k_max.copy()
-            k_max[k_in, k_in] += coupling.stiffness
+            k_max = with_coupling(k_max, mass, rigid, k_in, coupling)
         f_max = float(undamped_frequencies(mass, k_max).max(initial=0.0))
         rec, fints, fvals = law.pack(kn.short_step_header(2.0 * math.pi * f_max))
         fault_arrays = {"fault_records": rec, "fault_ints": fints, "fault_vals": fvals,
@@ -286,6 +345,9 @@ def prepare_run(
         torque_table=torque_tab,
         deflection_limit=np.full(model.n_mesh, np.inf),
         mesh_back_vectors=model.mesh_back_vectors,
+        mesh_damping_law=np.where(model.viscous_meshes, kn.DAMPING_VISCOUS, kn.DAMPING_GATED)
+        if model.mesh_damping_laws else None,
+        drive_sensing=sensing,
         **fault_arrays,
     )
     return RunSetup(

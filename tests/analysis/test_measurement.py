@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 import xarray as xr
@@ -170,3 +172,129 @@ def test_bad_sources(tmp_path) -> None:
     still = layout({"speed": (np.zeros(N), "min-1")}).drop_vars("tacho")
     with pytest.raises(ValueError, match="does not turn"):
         load_measurement(still)
+
+
+# ------------------------------------------------------------------ what a real export lacks
+
+CWRU = Path("/work/shared/data/cwru")
+
+
+def _bare_mat(tmp_path: Path) -> Path:
+    """A MAT file as data sets export them: no rate, no units, the speed as a scalar."""
+    from scipy.io import savemat
+
+    t = np.arange(N) / FS
+    path = tmp_path / "bare.mat"
+    savemat(path, {"acc": 0.5 * np.sin(2 * np.pi * 100 * t), "mic": np.cos(t),
+                   "RPM": np.uint16(1500)})
+    return path
+
+
+def test_rate_speed_calibration_and_units_stated_for_a_bare_mat_file(tmp_path) -> None:
+    path = _bare_mat(tmp_path)
+    with pytest.raises(ReaderError, match=r"no sample rate; pass fs=<Hz> \(gearvib: --fs HZ\)"):
+        load_measurement(path, rpm=1500)
+    m = load_measurement(path, fs=FS, rpm_from="RPM", calibration={"acc": 2.0},
+                         units={"acc": "g"})
+    assert m.fs == FS and m.time.size == N and m.time[1] == pytest.approx(1 / FS)
+    assert np.all(m.speed_rpm.values == 1500.0)
+    assert m.reference == "constant speed 1500 min-1 from the file's scalar 'RPM'"
+    acc = m.channel("acc")
+    t = np.arange(N) / FS
+    # file value x 2 g per file unit x 9.80665 m s-2 per g
+    np.testing.assert_allclose(acc.values, 0.5 * np.sin(2 * np.pi * 100 * t) * 2.0 * 9.80665,
+                               rtol=1e-12)
+    assert acc.attrs["units"] == "m s-2" and acc.attrs["source_units"] == "g"
+    assert acc.attrs["calibration"] == 2.0 and acc.attrs["calibration_basis"] == \
+        "g per file unit"
+    # the other channel untouched, the options kept as provenance
+    np.testing.assert_array_equal(m.channel("mic").values, np.cos(t))
+    assert m.channel("mic").attrs["units"] == "1"
+    assert m.source["stated"] == {"fs": FS, "calibration": {"acc": 2.0},
+                                  "units": {"acc": "g"}, "rpm_from": "RPM"}
+    # one unit / one factor for every channel
+    m = load_measurement(path, fs=FS, rpm=100, units="V", calibration=-3.0)
+    assert all(m.channel(c).attrs["units"] == "V" for c in ("acc", "mic"))
+    np.testing.assert_allclose(m.channel("mic").values, -3.0 * np.cos(t), rtol=1e-12)
+
+
+def test_rate_and_time_column_of_a_csv_file(tmp_path) -> None:
+    ds = layout()
+    with_time = write_csv(ds, tmp_path / "rec.csv")
+    bare = tmp_path / "bare.csv"
+    bare.write_text("acc,tacho\n" + "\n".join(f"{float(a)!r},{float(b)!r}" for a, b in zip(
+        ds["acc"].values, ds["tacho"].values, strict=True)) + "\n")
+    m = load_measurement(bare, fs=FS, tacho="tacho", pulses_per_rev=10)
+    np.testing.assert_allclose(m.channel().values, ds["acc"].values, rtol=1e-15)
+    assert m.fs == FS
+    with pytest.raises(ValueError, match=r"--fs HZ\) or time_column= \(--time-column NAME\)"):
+        load_measurement(bare, tacho="tacho")
+    renamed = tmp_path / "t.csv"
+    renamed.write_text(with_time.read_text().replace("time [s]", "t [s]", 1))
+    m = load_measurement(renamed, time_column="t", pulses_per_rev=10)
+    assert m.fs == pytest.approx(FS) and m.vibration_channels == ("acc",)
+    m = load_measurement(renamed, time_column=0, fs=FS, pulses_per_rev=10)
+    assert m.fs == pytest.approx(FS)
+    with pytest.raises(ValueError, match="fs is given twice"):
+        load_measurement(bare, fs=FS, reader_options={"fs": FS})
+
+
+def test_a_rate_the_file_states_must_agree(tmp_path) -> None:
+    from analysis.readers import write_wav
+
+    ds = layout()
+    wav = tmp_path / "rec.wav"
+    write_wav(ds, wav)
+    # a WAV file names no channels: ch1 (acc), ch2 (tacho)
+    assert load_measurement(wav, fs=FS, tacho="ch2", pulses_per_rev=10).fs == FS
+    with pytest.raises(ValueError, match=r"fs = 4000 Hz disagrees with the rate .*rec.wav "
+                       r"states \(5000 Hz\)"):
+        load_measurement(wav, fs=4000, tacho="ch2")
+    with pytest.raises(ValueError, match=r"time_column = 't' applies to CSV files .* not to "
+                       r"\.wav files"):
+        load_measurement(wav, time_column="t", tacho="ch2")
+    with pytest.raises(ValueError, match="fs = 4000 Hz disagrees with the rate the dataset"):
+        load_measurement(ds, fs=4000.0)
+    assert load_measurement(ds, fs=FS, pulses_per_rev=10).fs == FS
+
+
+@pytest.mark.parametrize(("kwargs", "error", "match"), [
+    ({"fs": 0}, ValueError, r"fs = 0 is not admissible: a sample rate in \(0, 1e\+09\] Hz"),
+    ({"fs": float("inf")}, ValueError, "fs = inf is not admissible: must be finite"),
+    ({"fs": True}, TypeError, "fs = True is not admissible: must be a real number"),
+    ({"fs": "12000"}, TypeError, "fs = '12000' is not admissible"),
+    ({"rpm_from": "RPMX"}, ValueError, r"rpm_from = 'RPMX' is not a numeric scalar of the "
+     r"file; scalars: \['RPM'\]"),
+    ({"rpm_from": "RPM", "rpm": 100}, ValueError, "give one speed reference, not rpm and "
+     "rpm_from"),
+    ({"rpm_from": 3}, TypeError, "rpm_from = 3 is not admissible"),
+    ({"calibration": {"nope": 1.0}}, ValueError, r"calibration: 'nope' is not a channel of "
+     r"the measurement; channels: \['acc', 'mic'\]"),
+    ({"calibration": 0.0}, ValueError, r"calibration\['acc'\] = 0.0 is not admissible"),
+    ({"calibration": {"acc": True}}, TypeError, r"calibration\['acc'\] = True"),
+    ({"calibration": {"acc": "2"}}, TypeError, r"calibration\['acc'\] = '2'"),
+    ({"calibration": float("nan")}, ValueError, r"calibration\['acc'\] = nan"),
+    ({"calibration": 1e300}, ValueError, r"calibration\['acc'\] = 1e\+300 is not admissible"),
+    ({"units": {"mic": ""}}, TypeError, r"units\['mic'\] = '' is not admissible"),
+    ({"units": {"x": "g"}}, ValueError, "units: 'x' is not a channel"),
+    ({"time_column": 0}, TypeError, "time_column = 0 is not admissible for a MAT file"),
+])
+def test_bad_export_options_are_named(tmp_path, kwargs, error, match) -> None:
+    path = _bare_mat(tmp_path)
+    base = {"fs": FS, "rpm_from": "RPM"}
+    if "rpm" in kwargs or "rpm_from" in kwargs:
+        base.pop("rpm_from")
+    with pytest.raises(error, match=match):
+        load_measurement(path, **{**base, **kwargs})
+
+
+@pytest.mark.skipif(not CWRU.is_dir(), reason="CWRU records not available "
+                    "(/work/shared/data/cwru)")
+def test_the_cwru_record_with_its_rate_speed_and_unit_stated() -> None:
+    m = load_measurement(CWRU / "IR007_0.mat", fs=12000, rpm_from="X105RPM",
+                         units={"X105_DE_time": "g"})
+    assert m.vibration_channels == ("X105_DE_time", "X105_FE_time", "X105_BA_time")
+    assert m.time.size == 121265 and m.fs == 12000.0
+    assert m.time[-1] == pytest.approx(121264 / 12000.0)
+    assert np.all(m.speed_rpm.values == 1797.0)
+    assert m.channel().attrs["units"] == "m s-2"

@@ -279,15 +279,27 @@ def test_order_cuts_blockwise_equals_single_block(kw):
     def overlap():
         return pytest.warns(OrderBandWarning) if "bandwidth_hz" in kw else nullcontext()
 
+    # order 40 leaves the frequency axis at high speed; 12.4 is the top of the order axis
+    # (its band's upper edge beyond it reads NaN); an order above the axis is refused
+    orders = [3, 7, 40] if "bandwidth_hz" in kw else [3, 7, 12.4]
     with overlap():
-        one = order_cuts(x, FS, rpm, [3, 7, 40], block_size=10**9, **kw)
+        one = order_cuts(x, FS, rpm, orders, block_size=10**9, **kw)
+    assert np.isfinite(one.values).any()
     for block in (150, 777):
         with overlap():
-            cut = order_cuts(x, FS, rpm, [3, 7, 40], block_size=block, **kw)
+            cut = order_cuts(x, FS, rpm, orders, block_size=block, **kw)
         np.testing.assert_array_equal(np.isnan(cut.values), np.isnan(one.values))
         np.testing.assert_allclose(cut.values, one.values, rtol=1e-12)
         np.testing.assert_allclose(cut.time, one.time, rtol=1e-14)
         np.testing.assert_allclose(cut.rpm, one.rpm, rtol=1e-14)
+
+
+def test_order_cuts_refuse_an_order_never_analysed():
+    _t, rpm, _, x = _runup()
+    with pytest.raises(ValueError, match=r"orders: \[40\.0\] lie above the highest analysed"):
+        order_cuts(x, FS, rpm, [3, 40])
+    with pytest.raises(ValueError, match=r"orders: .*at the slowest frame"):
+        order_cuts(x, FS, rpm, [3, 1e9], bandwidth_hz=50.0)
 
 
 def _peak_bytes(fn) -> tuple[int, object]:

@@ -268,8 +268,10 @@ def test_preloaded_planetary_set_modes_equal_the_hand_built_matrix():
         k_max = (model.stiffness + (vl.T * model.mesh_stiffness_tables.max(axis=1)) @ vl
                  + (vr.T * model.mesh_back_tables.max(axis=1)) @ vr)
         setup = prepare_run(model, SpeedRamp(0, 100, 0.1, input_torque=10.0), False)
-        k_in = model.rotation_dofs["sun"]
-        k_max[k_in, k_in] += setup.coupling.stiffness
+        # the default drive, a controller on the rigid-body coordinate p.q, as k p p^T
+        r = model.rigid_body_velocity()
+        p = model.mass @ r / (r @ model.mass @ r)
+        k_max += setup.coupling.stiffness * np.outer(p, p)
         f_max = math.sqrt(scipy.linalg.eigh(k_max, model.mass, eigvals_only=True)[-1]) / (
             2 * math.pi)
         run = simulate(model, SpeedRamp(0, 100, 0.001, input_torque=10.0), progress=False)

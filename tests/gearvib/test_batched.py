@@ -14,7 +14,7 @@ from gearvib import kernels_batch as kb
 from gearvib.assembly import assemble
 from gearvib.config import gearset_from_dict, load_config
 from gearvib.faults import Crack
-from gearvib.simulate import SpeedRamp, TorqueDriven, prepare_run
+from gearvib.simulate import DriveCoupling, SpeedRamp, TorqueDriven, prepare_run
 from gearvib.sweep.keys import set_path
 from tests.gearvib.batch_support import RAMP, start_state
 
@@ -91,6 +91,12 @@ def test_topology_differences_are_named(elastic_variants):
                              SpeedRamp(0.0, 1000.0, 1.0, input_torque=60.0), False).system
     with pytest.raises(ValueError, match="speed table"):
         kb.pack_batch([elastic, other_ramp])
+    on_input = prepare_run(_variant("paper-case1-elastic", 0.005),
+                           dataclasses.replace(RAMP, coupling=DriveCoupling(3000.0, 5.0)),
+                           False).system
+    with pytest.raises(ValueError, match=r"variant 1 .*drive coupling \(on the input member "
+                                         r"or on the rigid-body mode\)"):
+        kb.pack_batch([elastic, on_input])
     cracked = prepare_run(_variant("paper-case1-elastic", 0.005).with_faults(
         [Crack("sun", 3, severity=0.3)]), RAMP, False).system
     with pytest.raises(ValueError, match="variant 1 has local faults"):

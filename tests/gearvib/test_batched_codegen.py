@@ -24,8 +24,10 @@ from gearvib.sweep.keys import set_path
 from tests.gearvib.batch_support import start_state
 
 
-def _preset_variants(preset: str, radial: bool = False):
+def _preset_variants(preset: str, radial: bool = False, viscous: bool = False):
     cfg, base = load_config(preset)
+    if viscous:  # the sun meshes under the always-on damping law, the ring meshes gated
+        cfg = set_path(cfg, "meshes.sun.damping_law", "viscous")
     runs = []
     for k in range(3):
         d = set_path(cfg, "meshes.sun.damping_ratio", 0.005 * (1 + k))
@@ -53,12 +55,15 @@ def _run(systems, y0, dt, n_steps, monkeypatch, kernel):
     return kb.integrate_batch(systems, np.array(y0), dt, n_steps)
 
 
-@pytest.mark.parametrize("case", ["paper-case1", "paper-case1-elastic", "bearing", "other"])
+@pytest.mark.parametrize("case", ["paper-case1", "paper-case1-elastic", "bearing", "other",
+                                  "viscous"])
 def test_specialised_kernel_is_bit_identical(case, monkeypatch):
     if case == "other":
         runs, dt = _other_topology(), 5e-6
     elif case == "bearing":
         runs, dt = _preset_variants("paper-case1-elastic", radial=True), 8e-6
+    elif case == "viscous":
+        runs, dt = _preset_variants("paper-case1-elastic", radial=True, viscous=True), 8e-6
     else:
         runs, dt = _preset_variants(case), 1e-5 if case == "paper-case1" else 8e-6
     systems = [s for s, _ in runs]
@@ -97,6 +102,39 @@ def test_specialised_right_hand_side_per_lane():
         dy1, mo1 = kn.evaluate_rhs(t[b], np.ascontiguousarray(y[:, b]), system.astuple())
         assert dy[:, b].tobytes() == dy1.tobytes()
         assert mo[:, :, b].tobytes() == mo1.tobytes()
+
+
+@pytest.mark.parametrize("kernel", ["specialised", "generic"])
+def test_viscous_law_on_lanes_in_every_contact_zone(kernel, monkeypatch):
+    """Sun meshes under the always-on damping law, ring meshes gated, bearing variants (two
+    lines of action): at states thrown across the backlash (left flank, backlash, back flank,
+    opening and closing) every lane's right-hand side equals the single one bit for bit, and
+    a batch mixing the laws of a mesh is refused (the law is part of the topology)."""
+    monkeypatch.setenv(kb.KERNEL_ENV, kernel)
+    runs = _preset_variants("paper-case1-elastic", radial=True, viscous=True)
+    systems = [s for s, _ in runs]
+    assert list(systems[0].mesh_damping_law) == [1, 1, 1, 0, 0, 0]
+    batch = kb.pack_batch(systems)
+    rng = np.random.default_rng(8)
+    zones = set()
+    for _ in range(20):
+        y = np.empty((runs[0][1].size, kb.WIDTH))
+        for b in range(kb.WIDTH):
+            y0 = runs[b % 3][1]
+            n = y0.size // 2
+            y[:, b] = y0 + np.concatenate([rng.normal(0, 4e-4, n), rng.normal(0, 0.5, n)])
+        t = np.full(kb.WIDTH, 0.05)
+        dy, mo = kb.evaluate_rhs_batch(t, y, batch)
+        for b in range(kb.WIDTH):
+            system = systems[b] if b < 3 else systems[0]
+            dy1, mo1 = kn.evaluate_rhs(t[b], np.ascontiguousarray(y[:, b]), system.astuple())
+            assert dy[:, b].tobytes() == dy1.tobytes()
+            assert mo[:, :, b].tobytes() == mo1.tobytes()
+            zones.update(int(v) for v in mo1[:3, 3])
+    assert zones >= {0, 1, 2}  # every zone of the viscous meshes was visited (3: both lines)
+    gated = _preset_variants("paper-case1-elastic", radial=True)[0][0]
+    with pytest.raises(ValueError, match="mesh-damping laws"):
+        kb.pack_batch([gated, systems[0]])
 
 
 def test_generated_source_is_straight_line():

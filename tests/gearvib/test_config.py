@@ -181,3 +181,46 @@ def test_config_hash_is_stable_and_sensitive():
 def test_body_validation_names_the_body():
     with pytest.raises(ValueError, match="'sun'"):
         Body("sun", "central", mass=-1.0, inertia=1.0)
+
+
+@pytest.mark.parametrize("value", ["Viscous", "none", 1, True, None, "x" * 500])
+def test_bad_damping_law_names_the_key_and_the_laws(value):
+    cfg, _ = load_config("paper-case1")
+    cfg["meshes"]["ring"]["damping_law"] = value
+    with pytest.raises(ConfigError, match=r"\[meshes\.ring\]\.damping_law = .* is not "
+                                          r"admissible \(admissible: 'gated', 'viscous'\)"
+                       ) as err:
+        gearset_from_dict(cfg)
+    assert len(str(err.value)) < 200  # a long value is shortened
+
+
+def test_damping_law_per_mesh_family_and_in_general_sets():
+    """``damping_law`` of a mesh family (builders) or of a ``[[mesh]]`` (general sets) reaches
+    the model; the default is the gated law on every mesh (and no law list is stored)."""
+    cfg, _ = load_config("paper-case1")
+    assert assemble(gearset_from_dict(cfg)).mesh_damping_laws == ()
+    cfg["meshes"]["sun"]["damping_law"] = "viscous"
+    model = assemble(gearset_from_dict(cfg))
+    assert model.mesh_damping_laws == ("viscous",) * 3 + ("gated",) * 3
+    assert list(model.viscous_meshes) == [True] * 3 + [False] * 3
+    general = {
+        "name": "pair", "type": "general",
+        "operation": {"fixed": "carrier", "input": "pinion", "output": "wheel"},
+        "body": [
+            {"name": "pinion", "role": "central", "mass": 1.0, "inertia": 1e-3,
+             "support": {"radial": "rigid", "axial": "rigid", "torsional": "free"}},
+            {"name": "carrier", "role": "carrier", "mass": 1.0, "inertia": 1.0,
+             "support": {"radial": "rigid", "axial": "rigid"}},
+            {"name": "wheel", "role": "planet", "carrier": "carrier", "mass": 1.0,
+             "inertia": 1e-3,
+             "support": {"radial": "rigid", "axial": "rigid", "tangential": "rigid"}},
+        ],
+        "mesh": [{"name": "pinion-wheel", "gear1": "pinion", "gear2": "wheel",
+                  "base_radius1": 0.05, "base_radius2": 0.05, "pressure_angle_deg": 20.0,
+                  "stiffness": {"model": "constant", "k": 1e8}, "damping": 100.0,
+                  "damping_law": "viscous"}],
+    }
+    assert assemble(gearset_from_dict(general)).mesh_damping_laws == ("viscous",)
+    general["mesh"][0]["damping_law"] = "wet"
+    with pytest.raises(ConfigError, match=r"damping_law = 'wet'"):
+        gearset_from_dict(general)

@@ -411,9 +411,14 @@ def test_wolfrom_statics_by_hand(torque):
 @pytest.mark.parametrize(("name", "light", "heavy"),
                          [("ravigneaux-example", 1.5, 150.0), ("wolfrom-example", 0.5, 20.0)])
 def test_run_ups_with_backlash_at_light_and_heavy_load(name, light, heavy):
-    """0 -> 1500 min^-1 in 0.05 s (alpha = 3142 rad/s^2). The drive coupling then carries
-    the input torque plus the inertia torque of the rigid-body motion, J_eff alpha with
-    J_eff = r.M.r reduced to the input: checked on the second half of the run."""
+    """0 -> 1500 min^-1 in 0.05 s (alpha = 3142 rad/s^2), then 50 ms at 1500 min^-1. The drive
+    then carries the input torque plus the inertia torque of the rigid-body motion, J_eff
+    alpha with J_eff = r.M.r reduced to the input: checked on the second half of the ramp.
+    The output turns at the kinematic ratio of the input: checked on the mean speeds of the
+    constant part (within 1 %; measured 0.27 % for the Wolfrom set at 20 N m). During the
+    ramp the Wolfrom set at 20 N m vibrates with contact loss (about 1100 flank changes) and
+    its output's mean speed over 25 ms carries the drift of its mean deflection, 2.1 % (the
+    drive, a controller on the rigid-body mode, adds no damping to the set)."""
     from gearvib.simulate import SpeedRamp, simulate
 
     model = preset_model(name)
@@ -421,13 +426,14 @@ def test_run_ups_with_backlash_at_light_and_heavy_load(name, light, heavy):
     j_eff = float(rigid @ model.mass @ rigid)
     alpha = 1500 * 2 * math.pi / 60 / 0.05
     for torque in (light, heavy):
-        res = simulate(model, SpeedRamp(0.0, 1500.0, 0.05, input_torque=torque))
+        res = simulate(model, SpeedRamp(0.0, 1500.0, 0.05, input_torque=torque), duration=0.1)
         assert np.all(np.isfinite(res.normal_force))
-        late = res.time > 0.025
+        late = (res.time > 0.025) & (res.time <= 0.05)
         expected = torque + j_eff * alpha
         assert res.drive_torque[late].mean() == pytest.approx(expected, rel=0.03), torque
-        out = res.speed[res.members.index(model.output_member), late].mean()
-        inp = res.speed[res.members.index(model.input_member), late].mean()
+        after = res.time > 0.05
+        out = res.speed[res.members.index(model.output_member), after].mean()
+        inp = res.speed[res.members.index(model.input_member), after].mean()
         assert out / inp == pytest.approx(model.kinematic_ratios[model.output_member],
                                           rel=0.01)
 

@@ -24,6 +24,7 @@ def pair_system(
     torque: tuple = ((0.0,), (0.0,)),
     load: tuple[float, float, float] = (0.0, 0.0, 0.0),
     limit: float = 1e-2,
+    viscous: bool = False,
 ) -> kn.KernelSystem:
     """External gear pair, two rotations, one mesh: delta = R1 th1 + R2 th2, s = Z1 th1 / 2 pi."""
     kl = np.atleast_1d(np.asarray(k_left, dtype=float))[None, :]
@@ -41,6 +42,7 @@ def pair_system(
         mesh_damping=[damping], f_const=np.zeros(2), ipar=[mode, 0, 1, -1, 0], fpar=fpar,
         speed_table=np.zeros((3, 1)), torque_table=np.array(torque, dtype=float),
         deflection_limit=[limit],
+        mesh_damping_law=[kn.DAMPING_VISCOUS] if viscous else None,
     )
 
 
@@ -72,6 +74,32 @@ def test_flank_forces_backlash_left_right_and_floor() -> None:
     assert kn.flank_forces(11e-6, -10.0, 1e8, 2e8, j, 1e3)[0] == 0.0
     assert kn.flank_forces(11e-6, 0.1, 1e8, 2e8, j, 1e3)[0] == pytest.approx(1e8 * 1e-6 + 100)
     assert kn.flank_forces(-11e-6, 10.0, 1e8, 2e8, j, 1e3)[1] == 0.0
+
+
+def test_viscous_law_damps_always_and_never_floors() -> None:
+    """Kahraman & Singh's law: the springs of the gated law plus ``c delta'`` everywhere, on
+    the left flank's line unless only the back flank is in contact; no floor, no cap."""
+    j, c = 20e-6, 1e3
+    law = kn.flank_forces_viscous
+    # inside the backlash: the viscous force alone, on the left line, states and k_eff zero
+    assert law(5e-6, 0.3, 5e-6, 0.3, 1e8, 2e8, j, c) == (c * 0.3, 0.0, 0.0, 0)
+    assert law(5e-6, -0.3, 5e-6, -0.3, 1e8, 2e8, j, c) == (-c * 0.3, 0.0, 0.0, 0)
+    # left flank: spring + damping, pulling when the flank separates fast (gated: 0)
+    fl, fr, k, st = law(11e-6, -10.0, 11e-6, -10.0, 1e8, 2e8, j, c)
+    assert (fl, fr, k, st) == (1e8 * (11e-6 - 10e-6) + c * -10.0, 0.0, 1e8, 1)
+    assert fl < 0.0 and kn.flank_forces(11e-6, -10.0, 1e8, 2e8, j, c)[0] == 0.0
+    # back flank alone: on its own line (delta_R, its rate), pushing back when it separates
+    fl, fr, k, st = law(-11e-6, 10.0, -12e-6, 11.0, 1e8, 2e8, j, c)
+    assert (fl, fr, k, st) == (0.0, 2e8 * (-12e-6 + 10e-6) + c * 11.0, 2e8, 2)
+    assert fr > 0.0
+    # both flanks (preload): one damper, on the left line (the gated law has one per flank)
+    fl, fr, k, st = law(2e-6, 0.5, 2e-6, 0.5, 1e8, 2e8, -j, c)
+    assert (fl, fr, k, st) == (1e8 * (2e-6 + 10e-6) + c * 0.5, 2e8 * (2e-6 - 10e-6), 3e8, 3)
+    # with one line of action the total is the published k f(x) + c x' in every zone
+    for x, v in itertools.product((-15e-6, -3e-6, 0.0, 4e-6, 13e-6), (-2.0, 0.0, 1.5)):
+        fl, fr, _, _ = law(x, v, x, v, 1e8, 1e8, j, c)
+        dead = x - j / 2 if x > j / 2 else (x + j / 2 if x < -j / 2 else 0.0)
+        assert fl + fr == pytest.approx(1e8 * dead + c * v, rel=1e-15, abs=1e-15)
 
 
 def test_negative_backlash_loads_both_flanks_doubled_stiffness() -> None:
@@ -164,8 +192,9 @@ def test_negative_backlash_oscillates_with_doubled_stiffness() -> None:
     np.testing.assert_allclose(delta, 5e-6 * np.cos(w * np.arange(2001) * dt), atol=5e-6 * 1e-6)
 
 
-def _python_rhs(t, y, kl_tab, kr_tab, j, c, torque, load):
-    """Independent right-hand side of the gear pair (plain numpy)."""
+def _python_rhs(t, y, kl_tab, kr_tab, j, c, torque, load, viscous=False):
+    """Independent right-hand side of the gear pair (plain numpy); ``viscous``: Kahraman &
+    Singh's always-on damping ``k f(delta) + c delta'``."""
     th1, th2, w1, w2 = y
     delta = R1 * th1 + R2 * th2
     ddelta = R1 * w1 + R2 * w2
@@ -176,10 +205,17 @@ def _python_rhs(t, y, kl_tab, kr_tab, j, c, torque, load):
     kl = np.interp(frac, grid, np.append(kl_tab, kl_tab[0]))
     kr = np.interp(frac, grid, np.append(kr_tab, kr_tab[0]))
     f = 0.0
-    if delta > j / 2:
-        f += max(kl * (delta - j / 2) + c * ddelta, 0.0)
-    if delta < -j / 2:
-        f += min(kr * (delta + j / 2) + c * ddelta, 0.0)
+    if viscous:
+        f = c * ddelta
+        if delta > j / 2:
+            f += kl * (delta - j / 2)
+        if delta < -j / 2:
+            f += kr * (delta + j / 2)
+    else:
+        if delta > j / 2:
+            f += max(kl * (delta - j / 2) + c * ddelta, 0.0)
+        if delta < -j / 2:
+            f += min(kr * (delta + j / 2) + c * ddelta, 0.0)
     t_in = np.interp(t, torque[0], torque[1])
     wo = -w2
     t_load = load[0] + load[1] * wo + load[2] * wo * abs(wo)
@@ -188,13 +224,14 @@ def _python_rhs(t, y, kl_tab, kr_tab, j, c, torque, load):
     return [w1, w2, a1, a2]
 
 
-def test_rk4_matches_solve_ivp_on_nonlinear_pair() -> None:
+@pytest.mark.parametrize("viscous", [False, True], ids=["gated", "viscous"])
+def test_rk4_matches_solve_ivp_on_nonlinear_pair(viscous: bool) -> None:
     """Time-varying (position-dependent) stiffness, backlash, damping, torque table, load.
 
-    DOP853 at rtol 1e-10 on an independent numpy right-hand side. With ~29 flank changes the
-    agreement is limited by the contact kinks (the RK4 error then converges irregularly):
-    measured 5e-8 of the largest angle, 2e-6 of the largest speed and 1e-4 of the largest mesh
-    deflection (0.2 N of tooth force at k = 1e8 N/m).
+    DOP853 at rtol 1e-10 on an independent numpy right-hand side, for both mesh-damping laws.
+    With ~29 flank changes the agreement is limited by the contact kinks (the RK4 error then
+    converges irregularly): measured 5e-8 of the largest angle, 2e-6 of the largest speed and
+    1e-4 of the largest mesh deflection (0.2 N of tooth force at k = 1e8 N/m).
     """
     phase = np.arange(32) / 32
     kl_tab = 1e8 * (1 + 0.3 * np.sin(2 * np.pi * phase))
@@ -202,7 +239,8 @@ def test_rk4_matches_solve_ivp_on_nonlinear_pair() -> None:
     j, c = 10e-6, 200.0
     torque = ((0.0, 0.01, 0.02), (50.0, -80.0, 30.0))  # reverses: both flanks get loaded
     load = (5.0, 0.01, 1e-4)
-    sys_ = pair_system(kl_tab, kr_tab, backlash=j, damping=c, torque=torque, load=load)
+    sys_ = pair_system(kl_tab, kr_tab, backlash=j, damping=c, torque=torque, load=load,
+                       viscous=viscous)
     y0 = np.array([0.0, 0.0, 50.0, -50.0 * R1 / R2])
     dt, n = 5e-7, 60000
     rec, changes, status, _ = kn.integrate(sys_, y0, dt, n)
@@ -211,7 +249,7 @@ def test_rk4_matches_solve_ivp_on_nonlinear_pair() -> None:
     t_eval = np.arange(0, n + 1, 500) * dt
     ref = solve_ivp(
         _python_rhs, (0.0, n * dt), y0, method="DOP853", rtol=1e-10, atol=1e-14,
-        t_eval=t_eval, args=(kl_tab, kr_tab, j, c, np.array(torque), load),
+        t_eval=t_eval, args=(kl_tab, kr_tab, j, c, np.array(torque), load, viscous),
     )
     assert ref.success
     got = rec[::500, :4]

@@ -157,3 +157,110 @@ def test_catalogue_command_lists_the_bearing_lines(tmp_path):
     text = subprocess.run([sys.executable, "-m", "gearvib", "catalogue", "set.toml", "--speed",
                            "1797"], cwd=tmp_path, capture_output=True, text=True, check=False)
     assert text.returncode == 0 and "bearing_bpfi" in text.stdout
+
+
+# ------------------------------------------------------------- machines without gears (rigs)
+
+RIG = {"name": "rig", "type": "shafts", "operation": {"input": "motor"},
+       "shaft": [{"name": "motor"}, {"name": "fan", "ratio": -2.5}],
+       "rolling_bearing": [dict(CWRU["input bearing"], member="motor")]}
+
+
+def test_the_cwru_rig_preset_gives_the_published_multiples_without_a_gear_set():
+    from gearvib.config import load_description, load_gearset
+    from gearvib.rig import ShaftRig
+
+    rig = load_description("cwru-drive-end")
+    assert isinstance(rig, ShaftRig) and rig.input == "motor"
+    cat = rig.catalogue(speed_rpm=1797)
+    bearing = "drive-end bearing"
+    for fam, order in (("bearing_bpfi", 5.4152), ("bearing_bpfo", 3.5848),
+                       ("bearing_ftf", 0.39828)):
+        assert lines(cat, fam, bearing)[1] == pytest.approx(order, rel=1e-4), fam
+    assert 2 * lines(cat, "bearing_bsf", bearing)[1] == pytest.approx(4.7135, rel=1e-4)
+    bpfi = cat.frequency_hz()[(cat.family == "bearing_bpfi") & (cat.harmonic == 1)]
+    assert bpfi[0] == pytest.approx(162.19, abs=0.01)  # the 162.19 Hz at 1797 min-1
+    # no mesh, no natural frequency: only shaft harmonics and the bearing's families
+    assert set(cat.family) == {"shaft", "bearing_ftf", "bearing_bpfo", "bearing_bpfi",
+                               "bearing_bsf"}
+    with pytest.raises(ConfigError, match="type = 'shafts' describes shafts and rolling "
+                       "bearings without gears"):
+        load_gearset("cwru-drive-end")
+
+
+def test_shafts_with_ratios_and_a_bearing_between_two_shafts():
+    from gearvib.config import rig_from_dict
+
+    cfg = copy.deepcopy(RIG)
+    cfg["rolling_bearing"].append(dict(PLANET, name="fan bearing", member="fan",
+                                       on="motor"))
+    rig = rig_from_dict(cfg)
+    assert rig.kinematic_ratios == {"motor": 1.0, "fan": -2.5}
+    cat = rig.catalogue()
+    assert lines(cat, "shaft", "fan")[1] == pytest.approx(2.5)
+    # between the shafts the rings turn at |-2.5 - 1| = 3.5 per motor revolution
+    g = 6e-3 / 30e-3 * math.cos(math.radians(15.0))
+    assert rig.relative_speed("fan bearing") == pytest.approx(3.5)
+    assert lines(cat, "bearing_bpfo", "fan bearing")[1] == pytest.approx(
+        12 * 3.5 * (1 - g) / 2, rel=1e-12)
+    # orders of another reference shaft
+    assert rig.catalogue(reference="fan").order[0] == pytest.approx(
+        cat.order[0] / 2.5, rel=1e-12)
+    with pytest.raises(ValueError, match=r"reference = 'x' is not a shaft of the rig; "
+                       r"admissible: \['fan', 'motor'\]"):
+        rig.catalogue(reference="x")
+
+
+@pytest.mark.parametrize(("change", "match"), [
+    (lambda c: c.update(sensor=[]), r"unknown key 'sensor' in a description of type = "
+     r"'shafts' \(admissible: description, name, operation"),
+    (lambda c: c.pop("shaft"), r"missing key 'shaft'"),
+    (lambda c: c.update(shaft=[]), r"\[\[shaft\]\] must be an array of 1..100 tables"),
+    (lambda c: c["shaft"].append({"name": "motor"}), "name 'motor' is used twice"),
+    (lambda c: c["shaft"][1].update(ratio=0.0), r"\[\[shaft\]\] 'fan'.ratio = 0.0 is not "
+     r"admissible \(admissible: 1e-6 <= \|ratio\| <= 1e6"),
+    (lambda c: c["shaft"][1].update(ratio=True), "ratio must be a number, got True"),
+    (lambda c: c["shaft"][1].update(ratio="2"), "ratio must be a number, got '2'"),
+    (lambda c: c["shaft"][1].update(ratio=math.nan), "ratio = nan is not admissible"),
+    (lambda c: c["shaft"][1].update(speed=2), r"unknown key 'speed' in \[\[shaft\]\] #2"),
+    (lambda c: c["shaft"][0].update(name="ground"), "other than 'ground'"),
+    (lambda c: c["operation"].update(input="belt"), r"\[operation\].input = 'belt' is not a "
+     "shaft"),
+    (lambda c: c["operation"].update(input="fan"), "has ratio -2.5; the input shaft's ratio "
+     "is 1"),
+    (lambda c: c["operation"].update(output="fan"), r"unknown key 'output' in \[operation\]"),
+    (lambda c: c["rolling_bearing"][0].update(member="sun"), r"member = 'sun' is not a member "
+     r"of the gear set \(admissible: fan, motor\)"),
+    (lambda c: c["rolling_bearing"][0].update(n_rolling=2), "n_rolling = 2 is not admissible"),
+    (lambda c: c.update(name=3), "name must be a string"),
+])
+def test_bad_rig_descriptions_name_the_key(change, match):
+    from gearvib.config import description_from_dict, gearset_from_dict
+
+    cfg = copy.deepcopy(RIG)
+    change(cfg)
+    with pytest.raises(ConfigError, match=match):
+        description_from_dict(cfg)
+    with pytest.raises(ConfigError):  # never a gear set
+        gearset_from_dict(cfg)
+
+
+def test_rig_preset_on_the_command_line(capsys):
+    import tomllib
+
+    from gearvib.cli import main
+    from gearvib.config import list_presets, list_rigs, load_config
+
+    assert "cwru-drive-end" in list_rigs() and "cwru-drive-end" not in list_presets()
+    assert main(["preset"]) == 0
+    out = capsys.readouterr().out
+    assert "machines without gears" in out and "cwru-drive-end" in out
+    assert main(["preset", "cwru-drive-end"]) == 0
+    text = capsys.readouterr().out
+    assert tomllib.loads(text) == load_config("cwru-drive-end")[0]
+    assert main(["catalogue", "cwru-drive-end", "--speed", "1797", "--json"]) == 0
+    rows = json.loads(capsys.readouterr().out)["lines"]
+    bpfi = next(r for r in rows if r["family"] == "bearing_bpfi" and r["harmonic"] == 1)
+    assert bpfi["frequency_hz"] == pytest.approx(162.19, abs=0.01)
+    assert main(["modes", "cwru-drive-end"]) == 2
+    assert "no dynamic model" in capsys.readouterr().err

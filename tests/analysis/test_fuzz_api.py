@@ -1,0 +1,518 @@
+"""Property-based fuzzing of every public function of :mod:`analysis` (issue 26).
+
+For every function named in a module's ``__all__`` (:func:`fuzz_api_cases.public_functions`)
+an admissible baseline call (:data:`fuzz_api_cases.BASELINES`) has one argument replaced by a
+hostile value drawn by hypothesis: extreme floats (0, negative, 1e-300, 1e300, inf, NaN),
+bool, str, bytes, None, huge integers, complex numbers, containers, and for an array argument
+its empty, one-sample, two-dimensional, NaN/inf-holding, huge, bool, str and complex versions.
+
+The property: the call returns, or raises :class:`ValueError`/:class:`TypeError` (a reader
+may also raise :class:`FileNotFoundError`/:class:`IsADirectoryError` for a path) whose message
+is one line; never another exception, never a numpy overflow/invalid :class:`RuntimeWarning`
+(a silent inf/NaN), never a hang (an alarm ends a call after :data:`HANG_S` seconds - a hang
+detector, not a timing assertion) and never a :class:`MemoryError`: the address space is
+capped at :data:`CAP_BYTES` above the process's size while the suite runs, so a size check
+that is missing shows as a MemoryError instead of a swapping machine.
+
+Functions in :data:`KNOWN` still fail the property for the reason given there (they are
+run, and reported as expected failures until fixed).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import resource
+import signal
+import warnings
+from collections import Counter
+from typing import Any
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, Phase, given, settings
+from hypothesis import strategies as st
+
+from tests.analysis import fuzz_api_cases as cases
+
+HANG_S = 30
+CAP_BYTES = 3 << 30
+EXAMPLES = 6  # hostile calls per function (deterministic: derandomized)
+FEW = 2  # for the functions whose one call takes more than ~0.2 s
+SLOW = {
+    "analysis.cm_plots.gear_signals_figure", "analysis.cm_plots.planetary_figure",
+    "analysis.cm_plots.trend_figure", "analysis.comparison.compare_measurements",
+    "analysis.instability.chart.stability_chart", "analysis.instability.growth.unstable_bands",
+    "analysis.instability.plots.plot_chart", "analysis.measurement.load_measurement",
+    "analysis.planetary_tsa.planetary_tsa", "analysis.vold_kalman.order_waveform",
+    "analysis.vold_kalman.remove_orders", "analysis.vold_kalman_plots.order_removal_figure",
+    "analysis.vold_kalman_plots.order_waveform_figure", "analysis.diagnosis.order_locking",
+    "analysis.envelope_plots.spectral_kurtosis_figure", "analysis.runup.map_features",
+    "analysis.instability.resonances.detect_resonances", "analysis.tsa.tsa_windows",
+    "analysis.indicators.condition_indicators", "analysis.alarm_limits.learn_limits",
+    "analysis.envelope_orders.envelope_order_spectrum",
+}  # fmt: skip
+#: Functions that still fail the property, with what fails (kept short; see the report).
+KNOWN: dict[str, str] = {
+    "analysis.sinc.interpolate": "compiled kernel without bounds checks: segfaults on "
+                                 "out-of-range positions (internal; the caller checks them)",
+    "analysis.alarm_limits.learn_limits":
+        "#0: AttributeError: 'int' object has no attribute 'dims'",
+    "analysis.bands.band_moments":
+        "#1: ZeroDivisionError: division by zero",
+    "analysis.bands.envelope_decimation":
+        "#0: AttributeError: 'int' object has no attribute 'support'",
+    "analysis.bands.squared_envelope_samples":
+        "#1: ZeroDivisionError: division by zero",
+    "analysis.catalogue.kinematic_catalogue":
+        "#1: AttributeError: 'str' object has no attribute 'gear'",
+    "analysis.cf.cf_dataset":
+        "#0: AttributeError: 'int' object has no attribute 'copy'",
+    "analysis.cf.labels_from_cf":
+        "#0: AttributeError: 'int' object has no attribute 'variables'",
+    "analysis.cf.labels_to_cf":
+        "#0: AttributeError: 'int' object has no attribute 'copy'",
+    "analysis.cf.time_attrs":
+        "reference: AttributeError: 'int' object has no attribute 'strip'",
+    "analysis.checks.require_finite_blocks":
+        "#0: AttributeError: 'int' object has no attribute 'size'",
+    "analysis.checks.require_same_length":
+        "#0: IndexError: tuple index out of range",
+    "analysis.cm_plots.gear_signals_figure":
+        "#0: AttributeError: 'int' object has no attribute 'tsa'",
+    "analysis.cm_plots.planetary_figure":
+        "#0: AttributeError: 'int' object has no attribute 'planets'",
+    "analysis.cm_plots.trend_figure":
+        "#0: AttributeError: 'int' object has no attribute 'data_vars'",
+    "analysis.cm_plots.tsa_figure":
+        "#0: AttributeError: 'int' object has no attribute 'values'",
+    "analysis.comparison.simulated_channel_name":
+        "#0: AttributeError: 'int' object has no attribute 'vibration_channels'",
+    "analysis.diagnosis.dynamic_range_db":
+        "#0: AttributeError: 'int' object has no attribute 'level_db'",
+    "analysis.diagnosis.family_evidence":
+        "#0: IndexError: index 0 is out of bounds for axis 0 with size 0",
+    "analysis.diagnosis.near_modes":
+        "#2: AttributeError: 'float' object has no attribute 'items'",
+    "analysis.diagnosis.order_locking":
+        "#0: AttributeError: 'int' object has no attribute 'speed_rpm'",
+    "analysis.diagnosis.prominence_db":
+        "#0: AttributeError: 'int' object has no attribute 'level_db'",
+    "analysis.diagnosis.rising_peaks":
+        "#0: IndexError: index 8 is out of bounds for axis 0 with size 0",
+    "analysis.diagnosis.sideband_ratios":
+        "#0: AttributeError: 'int' object has no attribute 'order'",
+    "analysis.diagnosis.signature_score":
+        "#0: RuntimeWarning (silent inf/NaN): overflow encountered in dot",
+    "analysis.diagnosis.with_noise_floor":
+        "#0: AttributeError: 'int' object has no attribute 'amplitude'",
+    "analysis.envelope.band_attributes":
+        "#0: AttributeError: 'int' object has no attribute 'low'",
+    "analysis.envelope.line_power":
+        "#0: RuntimeWarning (silent inf/NaN): overflow encountered in square",
+    "analysis.envelope_plots.envelope_spectrum_figure":
+        "#0: AttributeError: 'int' object has no attribute 'frequency'",
+    "analysis.envelope_plots.kurtogram_figure":
+        "#0: AttributeError: 'int' object has no attribute 'grid'",
+    "analysis.envelope_plots.spectral_kurtosis_figure":
+        "#0: AttributeError: 'int' object has no attribute 'frequency'",
+    "analysis.envelope_plots.squared_envelope_figure":
+        "#0: AttributeError: 'int' object has no attribute 'time'",
+    "analysis.fft.empty_aligned":
+        "#0: OverflowError: Python int too large to convert to C long",
+    "analysis.frames.stft_into":
+        "#3: AttributeError: 'float' object has no attribute 'shape'",
+    "analysis.frames.values_at":
+        "#1: IndexError: index -2 is out of bounds for axis 0 with size 0",
+    "analysis.identification.catalogue_lines":
+        "#0: AttributeError: 'int' object has no attribute 'select'",
+    "analysis.identification.plot_identification":
+        "#0: AttributeError: 'int' object has no attribute 'status'",
+    "analysis.indicators.crest_factor":
+        "#0: RuntimeWarning (silent inf/NaN): overflow encountered in multiply",
+    "analysis.indicators.energy_ratio":
+        "#0: RuntimeWarning (silent inf/NaN): overflow encountered in multiply",
+    "analysis.indicators.fm0":
+        "#1: RuntimeWarning (silent inf/NaN): divide by zero encountered in scalar divide",
+    "analysis.indicators.fm4":
+        "#0: RuntimeWarning (silent inf/NaN): overflow encountered in multiply",
+    "analysis.indicators.gear_indicators":
+        "na4_history: AttributeError: 'int' object has no attribute 'add'",
+    "analysis.indicators.kurtosis":
+        "#0: RuntimeWarning (silent inf/NaN): overflow encountered in multiply",
+    "analysis.indicators.m6a":
+        "#0: RuntimeWarning (silent inf/NaN): overflow encountered in multiply",
+    "analysis.indicators.m8a":
+        "#0: RuntimeWarning (silent inf/NaN): overflow encountered in multiply",
+    "analysis.indicators.na4":
+        "#1: RuntimeWarning (silent inf/NaN): divide by zero encountered in scalar divide",
+    "analysis.indicators.normalized_moment":
+        "#1: RuntimeWarning (silent inf/NaN): underflow encountered in power",
+    "analysis.indicators.rms":
+        "#0: RuntimeWarning (silent inf/NaN): overflow encountered in multiply",
+    "analysis.inputs.dataset_reference":
+        "#0: AttributeError: 'int' object has no attribute 'coords'",
+    "analysis.inputs.dataset_variable":
+        "#0: AttributeError: 'int' object has no attribute 'data_vars'",
+    "analysis.inputs.find_reference":
+        "#0: AttributeError: 'int' object has no attribute 'coords'",
+    "analysis.inputs.moving_range":
+        "#0: AttributeError: 'int' object has no attribute 'values'",
+    "analysis.inputs.one_channel":
+        "#0: AttributeError: 'int' object has no attribute 'lead'",
+    "analysis.inputs.select_channel":
+        "#2: AttributeError: 'float' object has no attribute 'get'",
+    "analysis.instability.chart.attribute_region":
+        "shares: AttributeError: 'float' object has no attribute 'size'",
+    "analysis.instability.chart.terminate_pool":
+        "#0: AttributeError: 'int' object has no attribute 'shutdown'",
+    "analysis.instability.floquet.floquet":
+        "#1: RuntimeWarning (silent inf/NaN): underflow encountered in exp",
+    "analysis.instability.growth.runup_growth":
+        "#0: AttributeError: 'str' object has no attribute 'upper_rpm'",
+    "analysis.instability.labels.label_peaks":
+        "catalogue: AttributeError: 'int' object has no attribute 'select'",
+    "analysis.instability.labels.theory_lines":
+        "#0: AttributeError: 'int' object has no attribute 'natural_frequencies_hz'",
+    "analysis.instability.plots.plot_candidates":
+        "#0: AttributeError: 'int' object has no attribute 'mesh_frequency_per_rpm'",
+    "analysis.instability.plots.plot_chart":
+        "#0: AttributeError: 'int' object has no attribute 'mesh_frequencies_hz'",
+    "analysis.instability.plots.plot_floquet":
+        "#0: AttributeError: 'int' object has no attribute 'multipliers'",
+    "analysis.instability.plots.plot_peak_labels":
+        "#0: AttributeError: 'int' object has no attribute 'peak_frequencies_hz'",
+    "analysis.instability.plots.plot_resonances":
+        "#0: AttributeError: 'int' object has no attribute 'mesh_frequency_per_rpm'",
+    "analysis.instability.resonances.merge_mesh_frequencies":
+        "#0: IndexError: string index out of range",
+    "analysis.levels.line_factors":
+        "#0: IndexError: index 0 is out of bounds for axis 0 with size 0",
+    "analysis.levels.power_of":
+        "#0: RuntimeWarning (silent inf/NaN): overflow encountered in square",
+    "analysis.lines.check_lines":
+        "#2: AttributeError: 'int' object has no attribute 'lines'",
+    "analysis.maps.rpm_frequency_map_ds":
+        "#0: AttributeError: 'int' object has no attribute 'data_vars'",
+    "analysis.maps.rpm_order_map_ds":
+        "#0: AttributeError: 'int' object has no attribute 'data_vars'",
+    "analysis.measurement.reference_channel":
+        "#0: AttributeError: 'int' object has no attribute 'coords'",
+    "analysis.measurement.tacho_reference":
+        "#0: AttributeError: 'int' object has no attribute 'coords'",
+    "analysis.order_resolution.choose_order_resolution":
+        "#1: AttributeError: 'str' object has no attribute 'size'",
+    "analysis.order_resolution.default_frequency_resolution":
+        "orders: AttributeError: 'int' object has no attribute 'size'",
+    "analysis.order_resolution.default_order_resolution":
+        "#0: AttributeError: 'int' object has no attribute 'size'",
+    "analysis.plots.campbell_figure":
+        "#0: AttributeError: 'int' object has no attribute 'orders'",
+    "analysis.plots.order_cuts_figure":
+        "#0: AttributeError: 'int' object has no attribute 'scale'",
+    "analysis.plots.order_spectrum_figure":
+        "#0: AttributeError: 'int' object has no attribute 'values'",
+    "analysis.plots.overall_level_figure":
+        "#0: AttributeError: 'int' object has no attribute 'values'",
+    "analysis.plots.rpm_frequency_map_figure":
+        "#0: AttributeError: 'int' object has no attribute 'values'",
+    "analysis.plots.rpm_order_map_figure":
+        "#0: AttributeError: 'int' object has no attribute 'values'",
+    "analysis.plots.spectrum_figure":
+        "#0: AttributeError: 'int' object has no attribute 'values'",
+    "analysis.readers.csv.write_csv":
+        "#0: AttributeError: 'int' object has no attribute 'coords'",
+    "analysis.readers.layout.clean_attrs":
+        "#0: AttributeError: 'int' object has no attribute 'items'",
+    "analysis.readers.layout.validate_dataset":
+        "#0: AttributeError: 'int' object has no attribute 'coords'",
+    "analysis.readers.mat.write_mat":
+        "#0: AttributeError: 'int' object has no attribute 'coords'",
+    "analysis.readers.netcdf.write_netcdf":
+        "#0: AttributeError: 'int' object has no attribute 'copy'",
+    "analysis.readers.riff.read_samples":
+        "#1: AttributeError: 'int' object has no attribute 'frames'",
+    "analysis.readers.texttable.table_lines":
+        "#0: AttributeError: 'int' object has no attribute 'splitlines'",
+    "analysis.readers.timebase.grid_fits":
+        "#0: IndexError: index 0 is out of bounds for axis 0 with size 0",
+    "analysis.readers.timebase.uniform_rate":
+        "#1: AttributeError: 'int' object has no attribute 'bound'",
+    "analysis.readers.wav.write_wav":
+        "#0: AttributeError: 'int' object has no attribute 'coords'",
+    "analysis.resample.tracking":
+        "#0: AttributeError: 'int' object has no attribute 'fs'",
+    "analysis.sinc.decimate":
+        "#2: OverflowError: int too big to convert",
+    "analysis.sinc.kernel_table":
+        "degree: hang (> 30 s)",
+    "analysis.sinc.positions":
+        "#4: OverflowError: int too big to convert",
+    "analysis.speed.from_angle":
+        "#0: RuntimeWarning (silent inf/NaN): overflow encountered in divide",
+    "analysis.speed.from_rpm":
+        "#0: RuntimeWarning (silent inf/NaN): overflow encountered in divide",
+    "analysis.sync_reference.shaft_angle":
+        "#0: AttributeError: 'int' object has no attribute 'n'",
+    "analysis.tsa.fractional_shift":
+        "#0: AttributeError: 'int' object has no attribute 'shape'",
+    "analysis.vold_kalman.bandwidth_to_weight":
+        "#0: RuntimeWarning (silent inf/NaN): divide by zero encountered in scalar divide",
+    "analysis.vold_kalman.weight_to_bandwidth":
+        "#0: RuntimeWarning (silent inf/NaN): divide by zero encountered in scalar divide",
+    "analysis.vold_kalman_checks.per_order":
+        "#0: AttributeError: 'int' object has no attribute 'size'",
+    "analysis.vold_kalman_checks.speed_references":
+        "#0: AttributeError: 'int' object has no attribute 'n'",
+    "analysis.vold_kalman_plots.order_removal_figure":
+        "#0: AttributeError: 'int' object has no attribute 'extraction'",
+    "analysis.vold_kalman_plots.order_waveform_figure":
+        "#0: AttributeError: 'int' object has no attribute 'envelope'",
+    "analysis.vold_kalman_solver.difference_coefficients":
+        "#0: hang (> 30 s)",
+    "analysis.vold_kalman_solver.minimum_working_bytes":
+        "#0: ZeroDivisionError: integer division or modulo by zero",
+    "analysis.vold_kalman_solver.plan":
+        "#0: ZeroDivisionError: integer division or modulo by zero",
+    "analysis.vold_kalman_solver.solve":
+        "#3: AttributeError: 'float' object has no attribute 'shape'",
+    "analysis.windows.window_info_of":
+        "#1: AttributeError: 'int' object has no attribute 'size'",
+    "analysis.windows.window_sums":
+        "#0: AttributeError: 'int' object has no attribute 'sum'",
+}
+
+FUNCTIONS = cases.public_functions()
+COUNTS: Counter[str] = Counter()
+
+_SCALARS: list[Any] = [
+    0, -1, 1, 0.0, -0.0, -1.0, 5e-324, 1e-300, 1e300, -1e300, math.inf, -math.inf, math.nan,
+    True, False, np.True_, "10", "", b"1", None, 2**63, 10**30, -(10**30), 1j,
+    np.float64("nan"), np.int64(-5), [], (), {}, [math.nan], [1e300, -1e300], "x" * 100_000,
+]
+
+
+def _arrays(base: np.ndarray) -> list[Any]:
+    """Hostile versions of an array argument."""
+    a = np.asarray(base)
+    out: list[Any] = [a[:0], a.reshape(-1)[:1], np.zeros(0), np.stack([a, a]), a[..., None]]
+    if a.size and a.dtype.kind in "fiu":
+        f = a.astype(float)
+        for bad in (math.nan, math.inf, -math.inf):
+            b = f.copy()
+            b.flat[b.size // 2] = bad
+            out.append(b)
+        out += [f * 1e300, -f, np.zeros_like(f), f.astype(bool), f.astype(str),
+                f.astype(complex), f.astype(object), f[::-1].copy(), np.full_like(f, 1e-300)]
+    return out
+
+
+@st.composite
+def _hostile(draw: Any, base: Any) -> Any:
+    pools = [st.sampled_from(_SCALARS), st.floats(), st.integers(-(2**70), 2**70)]
+    if isinstance(base, np.ndarray):
+        pools.insert(0, st.sampled_from(_arrays(base)))
+    elif isinstance(base, list | tuple) and base and all(
+        isinstance(v, int | float) for v in base
+    ):
+        pools.insert(0, st.sampled_from(_arrays(np.asarray(base, dtype=float))))
+    return draw(st.one_of(pools))
+
+
+class Hang(Exception):
+    """A call ran longer than :data:`HANG_S`."""
+
+
+def _alarm(signum: int, frame: Any) -> None:
+    raise Hang(f"no result after {HANG_S} s")
+
+
+@pytest.fixture(scope="module", autouse=True)
+def _guarded(tmp_path_factory: Any) -> Any:
+    """Address-space cap, hang alarm, and a temporary working folder (a path argument
+    fuzzed to a relative name lands there)."""
+    with open("/proc/self/statm") as fh:
+        size = int(fh.read().split()[0]) * os.sysconf("SC_PAGE_SIZE")
+    soft, hard = resource.getrlimit(resource.RLIMIT_AS)
+    cap = size + CAP_BYTES
+    if hard != resource.RLIM_INFINITY:
+        cap = min(cap, hard)
+    old = signal.signal(signal.SIGALRM, _alarm)
+    cwd = os.getcwd()
+    os.chdir(tmp_path_factory.mktemp("fuzz-cwd"))
+    from analysis import fft
+
+    workers, effort = fft.get_workers(), fft.set_planner_effort("FFTW_ESTIMATE")
+    cases.objects()  # build the baselines' result objects before the cap
+    cases.files()
+    resource.setrlimit(resource.RLIMIT_AS, (cap, hard))
+    try:
+        yield
+    finally:
+        resource.setrlimit(resource.RLIMIT_AS, (soft, hard))
+        signal.signal(signal.SIGALRM, old)
+        os.chdir(cwd)
+        fft.set_workers(workers)
+        fft.set_planner_effort(effort)
+
+
+def _consume(result: Any) -> None:
+    """Run a generator or context manager a function returns (their checks run lazily)."""
+    if hasattr(result, "__next__"):
+        for _ in zip(range(1000), result, strict=False):
+            pass
+    elif hasattr(result, "__enter__") and hasattr(result, "__exit__"):
+        with result:
+            pass
+    elif hasattr(result, "shutdown") and callable(result.shutdown):
+        result.shutdown()
+
+
+def outcome(name: str, args: tuple, kwargs: dict) -> str:
+    """``"result"``, ``"refused"`` (a documented error) or a description of the failure."""
+    func = FUNCTIONS[name]
+    allowed: tuple[type[BaseException], ...] = (ValueError, TypeError)
+    if ".readers." in name or name.endswith((".read", ".load_measurement", "prepare_cache")):
+        allowed += (FileNotFoundError, IsADirectoryError, NotADirectoryError)
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        signal.alarm(HANG_S)
+        try:
+            with np.errstate(all="warn"):
+                _consume(func(*args, **kwargs))
+            result = "result"
+        except allowed as exc:
+            msg = str(exc).strip()
+            result = "refused" if "\n" not in msg else f"multi-line message: {msg[:300]!r}"
+        except Hang:
+            result = f"hang (> {HANG_S} s)"
+        except Exception as exc:  # the property: nothing else (MemoryError included)
+            result = f"{type(exc).__name__}: {str(exc)[:300]}"
+        finally:
+            signal.alarm(0)
+    if result in ("result", "refused"):
+        for w in seen:
+            if issubclass(w.category, RuntimeWarning) and not issubclass(
+                w.category, FutureWarning | DeprecationWarning
+            ):
+                return f"RuntimeWarning (silent inf/NaN): {str(w.message)[:200]}"
+    return result
+
+
+def test_every_public_function_is_fuzzed():
+    missing = sorted(set(FUNCTIONS) - set(cases.BASELINES))
+    extra = sorted(set(cases.BASELINES) - set(FUNCTIONS))
+    assert not missing, f"public functions without a fuzz baseline: {missing}"
+    assert not extra, f"baselines of functions that are not public: {extra}"
+    assert len(FUNCTIONS) > 250
+
+
+@pytest.mark.parametrize("name", sorted(FUNCTIONS))
+def test_hostile_argument(name: str) -> None:
+    if name in KNOWN:
+        pytest.xfail(KNOWN[name])
+    args, kwargs = cases.BASELINES[name]()
+    base = outcome(name, args, kwargs)
+    assert base in ("result", "refused"), f"baseline call: {base}"
+    params = [*(f"#{i}" for i in range(len(args))), *kwargs]
+    sig_params = [
+        p.name for p in __import__("inspect").signature(FUNCTIONS[name]).parameters.values()
+        if p.kind in (p.KEYWORD_ONLY, p.POSITIONAL_OR_KEYWORD) and p.name not in kwargs
+    ][len(args):]
+    params += sig_params  # optional parameters left at their default are fuzzed too
+    if not params:
+        COUNTS["calls"] += 1
+        COUNTS[base] += 1
+        return
+
+    @settings(max_examples=FEW if name in SLOW else EXAMPLES, deadline=None, derandomize=True,
+              database=None, suppress_health_check=list(HealthCheck),
+              phases=(Phase.explicit, Phase.generate), print_blob=False)
+    @given(data=st.data())
+    def run(data: Any) -> None:
+        which = data.draw(st.sampled_from(params), label="parameter")
+        a, kw = list(args), dict(kwargs)
+        if which.startswith("#"):
+            i = int(which[1:])
+            a[i] = data.draw(_hostile(a[i]), label="value")
+        else:
+            kw[which] = data.draw(_hostile(kw.get(which)), label="value")
+        got = outcome(name, tuple(a), kw)
+        COUNTS["calls"] += 1
+        COUNTS[got if got in ("result", "refused") else "other"] += 1
+        if got not in ("result", "refused"):
+            raise AssertionError(f"{name}({which}=<hostile>): {got}")
+
+    run()
+
+
+def test_tally():
+    """Counts of the run (printed with ``-s``; docs/reliability.md quotes them)."""
+    if not COUNTS:
+        pytest.skip("run with the fuzz cases above")
+    print(f"\nfuzz_api: {len(FUNCTIONS)} functions, {len(KNOWN)} known to fail; calls "
+          f"{COUNTS['calls']}: {COUNTS['result']} results, {COUNTS['refused']} documented "
+          f"errors, {COUNTS['other']} other")
+    assert COUNTS["other"] == 0
+
+
+def _issue_case(kind: str) -> None:
+    from analysis.maps import rpm_order_map
+    from analysis.orders import order_cuts, order_spectrum
+    from analysis.spectrum import spectrum
+
+    x, rpm = cases.x(), cases.rpm()
+    fs = cases.FS
+    calls = {
+        "fs=1e-300": lambda: order_spectrum(x, fs=1e-300, rpm=rpm),
+        "rpm*1e9": lambda: order_spectrum(x, fs=fs, rpm=rpm * 1e9),
+        "map rpm*1e9": lambda: rpm_order_map(x, fs=fs, rpm=rpm * 1e9),
+        "cuts rpm*1e9": lambda: order_cuts(x, fs=fs, rpm=rpm * 1e9, orders=[1, 2]),
+        "map samples_per_rev=1e9": lambda: rpm_order_map(x, fs=fs, rpm=rpm,
+                                                         samples_per_rev=10**9),
+        "nfft=2**40": lambda: spectrum(x, fs=fs, nfft=2**40),
+        "fs=True": lambda: spectrum(x, fs=True),
+        "fs='10000'": lambda: spectrum(x, fs="10000"),
+        "x*1e300": lambda: spectrum(x * 1e300, fs=fs),
+        "orders=[1e9]": lambda: order_cuts(x, fs=fs, rpm=rpm, orders=[1e9]),
+    }
+    calls[kind]()
+
+
+@pytest.mark.parametrize(
+    ("kind", "error", "match"),
+    [
+        ("fs=1e-300", ValueError, r"rpm/angle, fs, samples_per_rev: .* angle samples"),
+        ("rpm*1e9", ValueError, r"rpm/angle, fs, samples_per_rev"),
+        ("map rpm*1e9", ValueError, r"rpm/angle, fs, samples_per_rev"),
+        ("cuts rpm*1e9", ValueError, r"rpm/angle, fs, samples_per_rev"),
+        ("map samples_per_rev=1e9", ValueError, r"samples_per_rev"),
+        ("nfft=2**40", ValueError, r"^nfft, .* needs 32 TiB"),
+        ("fs=True", TypeError, r"^fs = True is not admissible"),
+        ("fs='10000'", TypeError, r"^fs = '10000' is not admissible"),
+        ("x*1e300", ValueError, r"^x: a magnitude above 1e\+100 at time sample"),
+        ("orders=[1e9]", ValueError, r"^orders: \[1000000000\.0\] lie above"),
+    ],
+)
+def test_issue_26_inputs_are_refused_at_once(kind, error, match):
+    """The issue's hangs, MemoryErrors and silent coercions (items 1-3): one-line errors that
+    name the parameter, before any work (each was > 60 s, a MemoryError or a result)."""
+    with pytest.raises(error, match=match) as info:
+        _issue_case(kind)
+    assert "\n" not in str(info.value)
+
+
+def test_nan_sample_in_a_netcdf_file_is_refused(tmp_path):
+    """A netCDF measurement with a NaN sample (a gap) names the channel and the sample, in the
+    reader and in load_measurement; the other readers already refused it."""
+    from analysis.measurement import load_measurement
+    from analysis.readers import ReaderError, read
+
+    ds = cases.dataset().copy(deep=True)
+    ds["acc"].values[123] = np.nan
+    path = tmp_path / "gap.nc"
+    ds.to_netcdf(path)  # written without the layout's checks, as another tool would
+    with pytest.raises(ReaderError, match=r"channel 'acc': non-finite .* at time sample 123"):
+        read(path)
+    with pytest.raises(ValueError, match=r"channel 'acc': non-finite .* at time sample 123"):
+        load_measurement(ds, speed="speed")
