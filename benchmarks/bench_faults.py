@@ -85,7 +85,9 @@ def variants(preset: str) -> list[tuple[str, object]]:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true", help="3 repetitions, 0.25 s run-up")
+    parser.add_argument("--quick", action="store_true",
+                        help="smoke run: paper-case1 only (unless --preset), one round, "
+                             "0.05 s run-up")
     parser.add_argument("--repeat", type=int, default=None, help=f"rounds (default {REPEAT})")
     parser.add_argument("--preset", action="append", choices=("paper-case1", "paper-case2"),
                         help="gear set (repeatable; default both)")
@@ -97,10 +99,11 @@ def main() -> None:
                         help="variants whose name contains TEXT (repeatable; the healthy run "
                              "always runs)")
     args = parser.parse_args()
-    repeat = args.repeat or (3 if args.quick else REPEAT)
-    duration = 0.25 if args.quick else 1.0
+    repeat = args.repeat or (1 if args.quick else REPEAT)
+    duration = 0.05 if args.quick else 1.0
     cond = SpeedRamp(0.0, 4000.0 * duration, duration, input_torque=60.0)
-    for preset in args.preset or ("paper-case1", "paper-case2"):
+    presets = args.preset or (("paper-case1",) if args.quick else ("paper-case1", "paper-case2"))
+    for preset in presets:
         runs = [(name, model, "") for name, model in variants(preset)
                 if name == "healthy" or not args.only or any(t in name for t in args.only)]
         if args.generic:
