@@ -9,7 +9,7 @@ and after: the ratio means little when other processes use the cores; the CPU se
 runs (this process and its workers) tell whether the 2 workers add work.
 
     python benchmarks/bench_sweep.py            # 64 runs of 1 s
-    python benchmarks/bench_sweep.py --quick    # 16 runs of 0.25 s
+    python benchmarks/bench_sweep.py --quick    # smoke run: 4 runs of 0.05 s, one round
     python benchmarks/bench_sweep.py --repeat 3 # alternate 3 times, best of each
     python benchmarks/bench_sweep.py --batch    # batched vs case by case, 1 worker
     python benchmarks/bench_sweep.py --dask     # local pool vs Dask (LocalCluster, processes)
@@ -237,14 +237,18 @@ def bench_dask(repeat: int, n_side: int, duration: float) -> None:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--quick", action="store_true", help="16 runs of 0.25 s")
+    ap.add_argument("--quick", action="store_true",
+                    help="smoke run: 4 runs of 0.05 s, one round (--batch, --dask: smaller too)")
     ap.add_argument("--batch", action="store_true",
                     help="batched vs case-by-case sweep of 16 runs on 1 worker")
-    ap.add_argument("--repeat", type=int, default=2,
-                    help="alternate 1 and 2 workers this many times; the best of each counts")
+    ap.add_argument("--repeat", type=int, default=None,
+                    help="alternate 1 and 2 workers this many times; the best of each counts "
+                         "(2; --quick: 1)")
     ap.add_argument("--dask", action="store_true",
                     help="local pool vs Dask LocalCluster vs dask scheduler + 2 workers")
     args = ap.parse_args()
+    if args.repeat is None:
+        args.repeat = 1 if args.quick else 2
     if args.dask:
         bench_dask(1 if args.quick else max(3, args.repeat), *((2, 0.05) if args.quick
                                                               else (4, 0.5)))
@@ -257,7 +261,7 @@ def main() -> None:
             bench_batch(max(3, args.repeat), 4, 0.5)
             bench_simulate_batch(max(3, args.repeat), 0.5)
         return
-    n_side, duration = (4, 0.25) if args.quick else (8, 1.0)
+    n_side, duration = (2, 0.05) if args.quick else (8, 1.0)
     sweep = _sweep(n_side, duration)
     print(f"sweep: {sweep.n_cases} runs of paper-case1, {duration:g} s run-up each; "
           f"{os.cpu_count()} CPUs; load average before: {_load()}")
