@@ -43,7 +43,7 @@ the first run compiles the kernels, the second loads them; prints both and their
     python benchmarks/bench_cli.py
     python benchmarks/bench_cli.py --repeat 9 --baseline /work/main --importtime
     python benchmarks/bench_cli.py --first-run
-    python benchmarks/bench_cli.py --quick     # smoke run: one repeat, no breakdown
+    python benchmarks/bench_cli.py --quick     # smoke run: one run, no warm-up, no breakdown
 """
 
 from __future__ import annotations
@@ -232,7 +232,7 @@ def main() -> None:
     ap.add_argument("--first-run", action="store_true",
                     help="first vs second gearvib demo in a fresh numba cache folder")
     ap.add_argument("--quick", action="store_true",
-                    help="smoke run: one repeat of short commands, no breakdown")
+                    help="smoke run: one repeat of short commands, no warm-up, no breakdown")
     args = ap.parse_args()
     if args.first_run:
         first_run(args.quick)
@@ -249,7 +249,8 @@ def main() -> None:
         'python -c "import gearvib.cli"': [py, "-c", "import gearvib.cli"],
     }
     print(f"load average before: {' '.join(f'{x:.2f}' for x in os.getloadavg())}; "
-          f"median [min-max] of {args.repeat} runs after a warm-up; wall and CPU [s]")
+          f"median [min-max] of {args.repeat} runs "
+          f"{'without warm-up (--quick)' if args.quick else 'after a warm-up'}; wall and CPU [s]")
     with tempfile.TemporaryDirectory() as tmp:
         work = Path(tmp)
         checkouts = {"this": _env(None, None)}
@@ -259,7 +260,7 @@ def main() -> None:
                  for _ in range(args.repeat)]
         print(f"{'python -c pass (interpreter start)':<38s} wall {_summary(start)}")
         for name, cmd in commands.items():
-            for env in checkouts.values():
+            for env in checkouts.values() if not args.quick else ():
                 _timed(cmd, env, work)  # warm-up: numba cache, bytecode, OS file cache
             runs: dict[str, list[tuple[float, float]]] = {k: [] for k in checkouts}
             for _ in range(args.repeat):  # interleaved: this, baseline, this, ...
