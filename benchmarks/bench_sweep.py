@@ -255,8 +255,8 @@ def main() -> None:
         return
     if args.batch:
         if args.quick:
-            bench_batch(1, 2, 0.05)
-            bench_simulate_batch(1, 0.05)
+            bench_batch(1, 2, 0.02)
+            bench_simulate_batch(1, 0.02)
         else:
             bench_batch(max(3, args.repeat), 4, 0.5)
             bench_simulate_batch(max(3, args.repeat), 0.5)
