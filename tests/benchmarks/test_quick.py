@@ -1,6 +1,6 @@
 """Every benchmark's ``--quick`` smoke mode runs to the end (exit 0, its ratio line printed, no
 warning raised at one of its own lines), so that no benchmark can break unseen. Nothing is
-timed here: the figures belong to the benchmarks. One test per run, so that pytest-xdist
+timed here: the figures belong to the benchmarks. One test per benchmark, so that pytest-xdist
 spreads them over the workers; each ``--quick`` takes a few CPU seconds with a warm numba
 cache (benchmarks/RESULTS.md, "Smoke runs")."""
 
@@ -17,17 +17,8 @@ import pytest
 BENCHMARKS = Path(__file__).resolve().parents[2] / "benchmarks"
 SCRIPTS = sorted(BENCHMARKS.glob("bench_*.py"))
 
-#: Extra smoke runs of a benchmark's other modes: script -> options added to ``--quick``.
-MODES: dict[str, list[list[str]]] = {
-    "bench_sweep.py": [["--batch"]],
-}
 
-RUNS = [(script, []) for script in SCRIPTS] + [
-    (BENCHMARKS / name, opts) for name, extra in MODES.items() for opts in extra
-]
-
-#: A line every benchmark's ``--quick`` output must hold (its ratio or its last table), keyed
-#: by the script's name and its extra options.
+#: A line every benchmark's ``--quick`` output must hold (its ratio or its last table).
 EXPECTED = {
     "bench_cli.py": "gearvib simulate paper-case1",
     "bench_envelope.py": "x faster;",
@@ -41,7 +32,6 @@ EXPECTED = {
     "bench_spectrum.py": "numpy/ours",
     "bench_stability_map.py": "identical",
     "bench_sweep.py": "speed-up 2 workers / 1 worker",
-    "bench_sweep.py --batch": "simulate_batch of 8 vs 8 x simulate",
     "bench_tsa.py": "ratios analysis/straightforward",
     "bench_vold_kalman.py": "largest difference ours vs",
 }
@@ -51,13 +41,9 @@ EXPECTED = {
 OWN_WARNING = re.compile(r"benchmarks[/\\]bench_\w+\.py:\d+: \w*Warning")
 
 
-def _id(run: tuple[Path, list[str]]) -> str:
-    return " ".join([run[0].name, *run[1]])
-
-
 def test_every_benchmark_is_found():
     assert len(SCRIPTS) >= 10
-    assert all((BENCHMARKS / name).exists() for name in MODES)
+    assert set(EXPECTED) <= {p.name for p in SCRIPTS}
 
 
 def test_own_warning_pattern():
@@ -67,17 +53,16 @@ def test_own_warning_pattern():
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("run", RUNS, ids=[_id(r) for r in RUNS])
-def test_quick_mode_runs(run: tuple[Path, list[str]], tmp_path):
-    script, opts = run
+@pytest.mark.parametrize("script", SCRIPTS, ids=[p.name for p in SCRIPTS])
+def test_quick_mode_runs(script: Path, tmp_path):
     if "--quick" not in script.read_text():
         pytest.skip(f"{script.name} has no --quick mode yet")
     env = {**os.environ, "MPLBACKEND": "Agg"}
     root = str(BENCHMARKS.parent)
     env["PYTHONPATH"] = os.pathsep.join(p for p in (root, env.get("PYTHONPATH")) if p)
-    proc = subprocess.run([sys.executable, str(script), "--quick", *opts], cwd=tmp_path,
-                          env=env, capture_output=True, text=True, timeout=900)
-    name = _id(run)
+    proc = subprocess.run([sys.executable, str(script), "--quick"], cwd=tmp_path, env=env,
+                          capture_output=True, text=True, timeout=900)
+    name = script.name
     assert proc.returncode == 0, f"{name} --quick failed:\n{proc.stderr[-3000:]}"
     out = proc.stdout
     assert out.strip(), f"{name} --quick printed nothing"
