@@ -1,7 +1,8 @@
 """Benchmark of the run-up simulator (not a timed test).
 
 Run ``python3 benchmarks/bench_simulate.py [--quick]``. Reports, per model (paper-case1 and
-paper-case1-elastic, 1 s run-up 0 -> 4000 min^-1 at 60 N m input torque):
+paper-case1-elastic, 1 s run-up 0 -> 4000 min^-1 at 60 N m input torque, the drive of the
+preset's ``[simulation]`` table, as ``gearvib simulate`` runs it):
 
 * numba compile time, cold (fresh ``NUMBA_CACHE_DIR`` in a subprocess) and from the cache;
 * wall time of :func:`gearvib.simulate.simulate` after compilation (best of 3), simulated s
@@ -35,8 +36,9 @@ from scipy.integrate import solve_ivp
 
 from gearvib import kernels as kn
 from gearvib.assembly import assemble
-from gearvib.config import load_gearset
-from gearvib.simulate import SpeedRamp, prepare_run, simulate, static_equilibrium
+from gearvib.config import load_config, load_gearset
+from gearvib.simulate import DriveCoupling, SpeedRamp, prepare_run, simulate, static_equilibrium
+from gearvib.simulation.settings import conditions_from_settings, read_run_settings
 
 REPEAT = 3  # every wall time is the best of REPEAT runs
 
@@ -119,10 +121,17 @@ def run_kernel(packed: tuple, y0: np.ndarray, dt: float, n_steps: int, n: int,
     return record
 
 
-def versus_solve_ivp(model, window: float, repeat: int = REPEAT) -> dict:
+def preset_coupling(name: str) -> DriveCoupling | None:
+    """The drive coupling of the preset's ``[simulation]`` table (None: the default drive)."""
+    cfg, _ = load_config(name)
+    return conditions_from_settings(read_run_settings(cfg.get("simulation", {}))).coupling
+
+
+def versus_solve_ivp(model, window: float, repeat: int = REPEAT,
+                     coupling: DriveCoupling | None = None) -> dict:
     """Side-by-side: numba RK4 (raw kernel) vs solve_ivp at matched tooth-force accuracy."""
-    cond = SpeedRamp(1500, 1500, window, input_torque=60.0)
-    probe = simulate(model, SpeedRamp(1500, 1500, 1e-3, input_torque=60.0))
+    cond = SpeedRamp(1500, 1500, window, input_torque=60.0, coupling=coupling)
+    probe = simulate(model, SpeedRamp(1500, 1500, 1e-3, input_torque=60.0, coupling=coupling))
     dt = probe.step.dt
     setup = prepare_run(model, cond, False)
     qd0 = setup.rigid * setup.omega0
@@ -182,7 +191,8 @@ def versus_solve_ivp(model, window: float, repeat: int = REPEAT) -> dict:
 
 def bench_model(name: str, duration: float, window: float, repeat: int = REPEAT) -> None:
     model = assemble(load_gearset(name))
-    cond = SpeedRamp(0, 4000, duration, input_torque=60.0)
+    coupling = preset_coupling(name)
+    cond = SpeedRamp(0, 4000, duration, input_torque=60.0, coupling=coupling)
     simulate(model, SpeedRamp(0, 100, 1e-3, input_torque=60.0))  # compiled / cache loaded
     wall = np.inf
     for _ in range(repeat):
@@ -203,7 +213,7 @@ def bench_model(name: str, duration: float, window: float, repeat: int = REPEAT)
           f"wall s, {round(duration / res.step.dt) / wall / 1e6:.2f} M steps/s)")
     print(f"  peak numpy memory (tracemalloc): {peak / 2**20:.1f} MiB; process max RSS "
           f"{resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024:.0f} MiB")
-    cmp_ = versus_solve_ivp(model, window, repeat)
+    cmp_ = versus_solve_ivp(model, window, repeat, coupling)
     print(f"  side by side on {cmp_['window'] * 1e3:.1f} ms at 1500 min^-1 (tooth force scale "
           f"{cmp_['f_scale']:.0f} N): numba RK4 {cmp_['rk4_wall'] * 1e3:.2f} ms, error "
           f"{cmp_['rk4_err']:.2e} N ({cmp_['excluded']} of {cmp_['samples']} samples on a "
