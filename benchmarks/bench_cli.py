@@ -35,8 +35,15 @@ each top-level package (its modules' own times, the minimum over the runs).
 through ``PYTHONPATH``, its numba cache in a temporary folder), interleaved with this one
 (this, baseline, this, ...), with the ratio of the medians.
 
+``--first-run`` times ``gearvib demo`` (or, with ``--quick``, a 0.05 s ``gearvib simulate``)
+twice in a fresh numba cache folder (``NUMBA_CACHE_DIR`` pointing at a new temporary folder):
+the first run compiles the kernels, the second loads them; prints both and their ratio (goal
+<= 1.5).
+
     python benchmarks/bench_cli.py
     python benchmarks/bench_cli.py --repeat 9 --baseline /work/main --importtime
+    python benchmarks/bench_cli.py --first-run
+    python benchmarks/bench_cli.py --quick     # smoke run: one run, no warm-up, no breakdown
 """
 
 from __future__ import annotations
@@ -188,16 +195,53 @@ def _importtime(cmd: list[str], env: dict[str, str], cwd: Path, repeat: int) -> 
     return [(name, us / 1e6) for name, us in top.most_common()]
 
 
+def first_run(quick: bool) -> None:
+    """First against second run in a fresh numba cache folder."""
+    py = sys.executable
+    with tempfile.TemporaryDirectory() as tmp:
+        work = Path(tmp)
+        env = _env(None, work / "numba-cache")
+        if quick:
+            name = "gearvib simulate paper-case1 --duration 0.05"
+            cmd = [py, "-m", "gearvib", "simulate", "paper-case1", "-o", "x.nc", "--overwrite",
+                   "--duration", "0.05"]
+        else:
+            name = "gearvib demo"
+            cmd = [py, "-m", "gearvib", "demo", "-o", "demo", "--overwrite", "-q"]
+        print(f"{name} in a fresh numba cache folder; load average before: "
+              f"{' '.join(f'{x:.2f}' for x in os.getloadavg())}")
+        times = []
+        for label in ("first (compiles)", "second (cache)"):
+            t0 = time.perf_counter()
+            proc = subprocess.run(cmd, env=env, cwd=work, capture_output=True, text=True)
+            times.append((time.perf_counter() - t0, proc))
+            if proc.returncode != 0:
+                raise RuntimeError(f"{name} failed: {proc.stderr.strip()}")
+            told = "compiling the simulation kernels" in proc.stderr
+            print(f"  {label:<17s} {times[-1][0]:7.1f} s wall; first-run notice printed: {told}")
+        print(f"first / second: {times[0][0] / times[1][0]:.2f}x (goal <= 1.5); load average "
+              f"after: {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=5, help="timed runs per command")
     ap.add_argument("--baseline", type=Path, help="another checkout to compare with")
     ap.add_argument("--importtime", action="store_true",
                     help="also python -X importtime of the simulate command")
+    ap.add_argument("--first-run", action="store_true",
+                    help="first vs second gearvib demo in a fresh numba cache folder")
+    ap.add_argument("--quick", action="store_true",
+                    help="smoke run: one repeat of short commands, no warm-up, no breakdown")
     args = ap.parse_args()
+    if args.first_run:
+        first_run(args.quick)
+        return
+    if args.quick:
+        args.repeat = 1
     py = sys.executable
     simulate_cmd = [py, "-m", "gearvib", "simulate", "paper-case1", "-o", "x.nc",
-                    "--overwrite", "-q"]
+                    "--overwrite", "-q", *(["--duration", "0.05"] if args.quick else [])]
     commands = {
         "gearvib simulate paper-case1 -o x.nc": simulate_cmd,
         "gearvib modes paper-case1": [py, "-m", "gearvib", "modes", "paper-case1"],
@@ -205,7 +249,8 @@ def main() -> None:
         'python -c "import gearvib.cli"': [py, "-c", "import gearvib.cli"],
     }
     print(f"load average before: {' '.join(f'{x:.2f}' for x in os.getloadavg())}; "
-          f"median [min-max] of {args.repeat} runs after a warm-up; wall and CPU [s]")
+          f"median [min-max] of {args.repeat} runs "
+          f"{'without warm-up (--quick)' if args.quick else 'after a warm-up'}; wall and CPU [s]")
     with tempfile.TemporaryDirectory() as tmp:
         work = Path(tmp)
         checkouts = {"this": _env(None, None)}
@@ -215,7 +260,7 @@ def main() -> None:
                  for _ in range(args.repeat)]
         print(f"{'python -c pass (interpreter start)':<38s} wall {_summary(start)}")
         for name, cmd in commands.items():
-            for env in checkouts.values():
+            for env in checkouts.values() if not args.quick else ():
                 _timed(cmd, env, work)  # warm-up: numba cache, bytecode, OS file cache
             runs: dict[str, list[tuple[float, float]]] = {k: [] for k in checkouts}
             for _ in range(args.repeat):  # interleaved: this, baseline, this, ...
@@ -231,6 +276,9 @@ def main() -> None:
                     line += (f"  ratio wall {statistics.median(walls) / w0:.2f} "
                              f"CPU {statistics.median(cpus) / c0:.2f}")
                 print(line)
+        if args.quick:
+            print(f"load average after: {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
+            return
         print("\nbreakdown of `gearvib simulate paper-case1` (this checkout), median "
               "[min-max] [s]:")
         cpu = _breakdown(checkouts["this"], work, args.repeat, "cpu")

@@ -48,11 +48,12 @@ import time
 import numpy as np
 
 from gearvib.assembly import assemble
-from gearvib.config import load_gearset
+from gearvib.config import load_config, load_gearset
 from gearvib.fault_pass import PASS_ENV
 from gearvib.faults import BrokenTooth, Crack, Eccentricity, PinError, PitchError, Pitting
 from gearvib.sensors import HousingMode, HousingSensor
 from gearvib.simulate import SpeedRamp, simulate
+from gearvib.simulation.settings import conditions_from_settings, read_run_settings
 
 REPEAT = 11
 
@@ -85,7 +86,9 @@ def variants(preset: str) -> list[tuple[str, object]]:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true", help="3 repetitions, 0.25 s run-up")
+    parser.add_argument("--quick", action="store_true",
+                        help="smoke run: paper-case1 only (unless --preset), one round, "
+                             "0.05 s run-up")
     parser.add_argument("--repeat", type=int, default=None, help=f"rounds (default {REPEAT})")
     parser.add_argument("--preset", action="append", choices=("paper-case1", "paper-case2"),
                         help="gear set (repeatable; default both)")
@@ -97,10 +100,14 @@ def main() -> None:
                         help="variants whose name contains TEXT (repeatable; the healthy run "
                              "always runs)")
     args = parser.parse_args()
-    repeat = args.repeat or (3 if args.quick else REPEAT)
-    duration = 0.25 if args.quick else 1.0
-    cond = SpeedRamp(0.0, 4000.0 * duration, duration, input_torque=60.0)
-    for preset in args.preset or ("paper-case1", "paper-case2"):
+    repeat = args.repeat or (1 if args.quick else REPEAT)
+    duration = 0.05 if args.quick else 1.0
+    presets = args.preset or (("paper-case1",) if args.quick else ("paper-case1", "paper-case2"))
+    for preset in presets:
+        # the drive of the preset's [simulation] table, as gearvib simulate runs it
+        cfg, _ = load_config(preset)
+        coupling = conditions_from_settings(read_run_settings(cfg.get("simulation", {}))).coupling
+        cond = SpeedRamp(0.0, 4000.0 * duration, duration, input_torque=60.0, coupling=coupling)
         runs = [(name, model, "") for name, model in variants(preset)
                 if name == "healthy" or not args.only or any(t in name for t in args.only)]
         if args.generic:

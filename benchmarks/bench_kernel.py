@@ -30,7 +30,10 @@ damping law), it prints side by side:
   cache, generic and specialised (the compile time a first sweep pays), and with that cache.
 
 Every time is CPU time of a fixed window (the machine is shared), numba compilation excluded;
-the C comparison reports the best of several repetitions.
+the C comparison reports the best of several repetitions. Without ``gcc`` on the path the C
+comparison is skipped with a message. ``--quick`` is a smoke run: 5 ms windows from t = 0.05 s
+(~200 min^-1), one repetition and one round (every check of bit-identity still made; its
+ratios mean little).
 """
 
 from __future__ import annotations
@@ -124,8 +127,9 @@ C_CASES = ("paper-case1", "paper-case1-elastic", "paper-case1 coupling",
            "paper-case1 viscous", "paper-case1-elastic viscous")
 
 
-def c_case(name: str, cond: SpeedRamp) -> Case:
-    """The packed run of an entry of :data:`C_CASES` (``cond`` with its drive), at 0.4 s."""
+def c_case(name: str, cond: SpeedRamp, t_start: float = 0.4) -> Case:
+    """The packed run of an entry of :data:`C_CASES` (``cond`` with its drive), at
+    ``t_start``."""
     preset, _, variant = name.partition(" ")
     cfg, base = load_config(preset)
     if variant == "viscous":
@@ -134,7 +138,7 @@ def c_case(name: str, cond: SpeedRamp) -> Case:
     elif variant == "coupling":
         run = read_run_settings(cfg.get("simulation", {}))
         cond = dataclasses.replace(cond, coupling=conditions_from_settings(run).coupling)
-    return Case(assemble(gearset_from_dict(cfg, base=base)), cond, 0.4)
+    return Case(assemble(gearset_from_dict(cfg, base=base)), cond, t_start)
 
 
 def ptr(a: np.ndarray, kind=F64):
@@ -260,9 +264,10 @@ def batch_variants(preset: str, which: str) -> list:
     return out
 
 
-def batched_vs_single(preset: str, which: str, cond, window: float, rounds: int) -> dict:
+def batched_vs_single(preset: str, which: str, cond, window: float, rounds: int,
+                      t_start: float = T_BATCH) -> dict:
     """Per-core throughput of one batched call against 8 single calls (packed beforehand)."""
-    cases = [Case(m, cond, T_BATCH) for m in batch_variants(preset, which)]
+    cases = [Case(m, cond, t_start) for m in batch_variants(preset, which)]
     dt = cases[0].dt
     first = cases[0].first
     if any(c.dt != dt for c in cases):
@@ -337,7 +342,8 @@ def _spread(x: list[float]) -> str:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true", help="shorter windows, 3 repetitions")
+    parser.add_argument("--quick", action="store_true",
+                        help="smoke run: 5 ms windows from t = 0.05 s, one repetition and round")
     parser.add_argument("--batch-only", action="store_true",
                         help="only the batched-against-single comparison")
     parser.add_argument("--compile", action="store_true",
@@ -346,12 +352,24 @@ def main() -> None:
     if args.compile:
         print_compile_times()
         return
-    repeat = 3 if args.quick else 7
-    window = 0.02 if args.quick else 0.1
+    repeat = 1 if args.quick else 7
+    window = 0.005 if args.quick else 0.1
+    rounds = 1 if args.quick else 11
+    t_start = 0.05 if args.quick else T_BATCH  # where the windows start in the run-up
     cond = SpeedRamp(0.0, 4000.0, 1.0, input_torque=60.0)
     if args.batch_only:
-        print_batched(cond, window, rounds=5 if args.quick else 11)
+        print_batched(cond, window, rounds, t_start)
         return
+    if shutil.which("gcc") is None:
+        print("gcc not found: the comparison with the C kernel (benchmarks/c/rk4_kernel.c) is "
+              "skipped")
+    else:
+        print_c_comparison(cond, window, repeat, t_start)
+    print_batched(cond, window, rounds, t_start)
+
+
+def print_c_comparison(cond, window: float, repeat: int, t_start: float) -> None:
+    """The numba-against-C tables (gcc -O2, then with the host's instruction set)."""
     with tempfile.TemporaryDirectory() as tmp:
         builds = [("O2", CFLAGS), ("native", CFLAGS_NATIVE)]
         libs = {name: build_c(tmp, flags, name) for name, flags in builds}
@@ -360,12 +378,13 @@ def main() -> None:
             c = libs[name]
             print(f"\nC baseline: gcc {' '.join(flags)} {os.path.relpath(C_SOURCE)}")
             print("ns per right-hand-side evaluation (CPU time, best of "
-                  f"{repeat}; window {window} s of the run-up from t = 0.4 s, ~1600 min^-1)")
+                  f"{repeat}; window {window} s of the run-up from t = {t_start} s, "
+                  f"~{4000 * t_start:.0f} min^-1)")
             print(f"{'model':28s} {'RHS evals':>10s} {'RK4 loop numba':>15s} {'C':>8s} "
                   f"{'ratio':>6s} {'RHS alone numba':>16s} {'C':>8s} {'ratio':>6s}")
             for preset in C_CASES:
                 if preset not in cases:
-                    cases[preset] = c_case(preset, cond)
+                    cases[preset] = c_case(preset, cond, t_start)
                 case = cases[preset]
                 n_steps = round(window / case.dt)
                 r = rhs_per_eval(case, c, n_steps, repeat)
@@ -374,21 +393,20 @@ def main() -> None:
                       f"{r['rhs_numba']:16.1f} {r['rhs_c']:8.1f} "
                       f"{r['rhs_numba'] / r['rhs_c']:6.2f}")
             print("(records of the C loop and of the numba kernel bit-identical)")
-    print_batched(cond, window, rounds=5 if args.quick else 11)
 
 
-def print_batched(cond, window: float, rounds: int) -> None:
+def print_batched(cond, window: float, rounds: int, t_start: float = T_BATCH) -> None:
     """The batched-against-single table."""
     load = os.getloadavg()[0]
     print(f"\nbatched kernel ({N_BATCH} variants in one call) against {N_BATCH} single runs, "
-          f"{window} s from t = {T_BATCH} s (~1600 min^-1): CPU time, median (min-max) of "
-          f"{rounds} interleaved rounds; load average {load:.1f}")
+          f"{window} s from t = {t_start} s (~{4000 * t_start:.0f} min^-1): CPU time, median "
+          f"(min-max) of {rounds} interleaved rounds; load average {load:.1f}")
     print(f"{'model':22s} {'variants':16s} {'throughput':>17s} {'generic kernel':>17s} "
           f"{'same sub-steps':>17s} {'RHS alone':>17s} {'ns/RHS single':>14s} "
           f"{'batch/lane':>11s}")
     for preset, which in (("paper-case1", "damping"), ("paper-case1-elastic", "damping"),
                           ("paper-case1-elastic", "damping+bearing")):
-        r = batched_vs_single(preset, which, cond, window, rounds)
+        r = batched_vs_single(preset, which, cond, window, rounds, t_start)
         print(f"{preset:22s} {which:16s} {_spread(r['ratio']):>17s} "
               f"{_spread(r['generic']):>17s} {_spread(r['same']):>17s} "
               f"{_spread(r['rhs_ratio']):>17s} {r['rhs_single']:14.0f} "

@@ -151,15 +151,17 @@ def bench_mat(folder: Path, rows: int, repeat: int) -> None:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--rows", type=int, default=1_000_000)
-    parser.add_argument("--repeat", type=int, default=3)
-    parser.add_argument("--quick", action="store_true", help="10**5 rows, no previous parse")
+    parser.add_argument("--repeat", type=int, default=None, help="rounds (3; --quick: 1)")
+    parser.add_argument("--quick", action="store_true",
+                        help="smoke run: 2 * 10**4 rows, one round")
     args = parser.parse_args()
-    rows = 100_000 if args.quick else args.rows
+    rows = 20_000 if args.quick else args.rows
+    repeat = args.repeat or (1 if args.quick else 3)
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
-        bench_csv(folder, rows, args.repeat, previous=not args.quick)
-        bench_wav(folder, rows, args.repeat)
-        bench_mat(folder, rows, args.repeat)
+        bench_csv(folder, rows, repeat, previous=True)
+        bench_wav(folder, rows, repeat)
+        bench_mat(folder, rows, repeat)
 
 
 if __name__ == "__main__":

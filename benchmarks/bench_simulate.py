@@ -1,7 +1,8 @@
 """Benchmark of the run-up simulator (not a timed test).
 
 Run ``python3 benchmarks/bench_simulate.py [--quick]``. Reports, per model (paper-case1 and
-paper-case1-elastic, 1 s run-up 0 -> 4000 min^-1 at 60 N m input torque):
+paper-case1-elastic, 1 s run-up 0 -> 4000 min^-1 at 60 N m input torque, the drive of the
+preset's ``[simulation]`` table, as ``gearvib simulate`` runs it):
 
 * numba compile time, cold (fresh ``NUMBA_CACHE_DIR`` in a subprocess) and from the cache;
 * wall time of :func:`gearvib.simulate.simulate` after compilation (best of 3), simulated s
@@ -35,8 +36,9 @@ from scipy.integrate import solve_ivp
 
 from gearvib import kernels as kn
 from gearvib.assembly import assemble
-from gearvib.config import load_gearset
-from gearvib.simulate import SpeedRamp, prepare_run, simulate, static_equilibrium
+from gearvib.config import load_config, load_gearset
+from gearvib.simulate import DriveCoupling, SpeedRamp, prepare_run, simulate, static_equilibrium
+from gearvib.simulation.settings import conditions_from_settings, read_run_settings
 
 REPEAT = 3  # every wall time is the best of REPEAT runs
 
@@ -69,7 +71,8 @@ def compile_times() -> tuple[float, float]:
 
 
 def numpy_rhs_factory(system: kn.KernelSystem):
-    """Right-hand side of the same equations in numpy (speed drive, constant load torque)."""
+    """Right-hand side of the same equations in numpy (speed drive on the input coordinate or
+    on the rigid-body coordinate ``p . q``, constant load torque)."""
     minv, kmat, cmat = system.minv, system.stiffness, system.damping
     v, p, s0 = system.mesh_vectors, system.mesh_position_vectors, system.mesh_position_offsets
     tl, tr = system.left_tables, system.right_tables
@@ -81,6 +84,7 @@ def numpy_rhs_factory(system: kn.KernelSystem):
     e, t0 = system.fpar[kn.FP_OUTDIR], system.fpar[kn.FP_T0]
     tab = system.speed_table
     ang, spd = np.zeros(1), np.zeros(1)
+    sense = system.drive_sensing  # the speed controller's row p (None: the input coordinate)
 
     def interp(table, s):
         u = (s - np.floor(s)) * nt
@@ -92,7 +96,10 @@ def numpy_rhs_factory(system: kn.KernelSystem):
         q, qd = y[:n], y[n:]
         f = -kmat @ q - cmat @ qd
         kn.speed_profile(tab, np.array([t]), ang, spd)
-        f[k_in] += kc * (ang[0] - q[k_in]) + cc * (spd[0] - qd[k_in])
+        if sense is None:
+            f[k_in] += kc * (ang[0] - q[k_in]) + cc * (spd[0] - qd[k_in])
+        else:
+            f[k_in] += kc * (ang[0] - sense @ q) + cc * (spd[0] - sense @ qd)
         f[k_out] -= e * t0
         d, dd, s = v @ q, v @ qd, s0 + p @ q
         fl = np.where(d > j / 2, np.maximum(interp(tl, s) * (d - j / 2) + c * dd, 0.0), 0.0)
@@ -114,10 +121,17 @@ def run_kernel(packed: tuple, y0: np.ndarray, dt: float, n_steps: int, n: int,
     return record
 
 
-def versus_solve_ivp(model, window: float) -> dict:
+def preset_coupling(name: str) -> DriveCoupling | None:
+    """The drive coupling of the preset's ``[simulation]`` table (None: the default drive)."""
+    cfg, _ = load_config(name)
+    return conditions_from_settings(read_run_settings(cfg.get("simulation", {}))).coupling
+
+
+def versus_solve_ivp(model, window: float, repeat: int = REPEAT,
+                     coupling: DriveCoupling | None = None) -> dict:
     """Side-by-side: numba RK4 (raw kernel) vs solve_ivp at matched tooth-force accuracy."""
-    cond = SpeedRamp(1500, 1500, window, input_torque=60.0)
-    probe = simulate(model, SpeedRamp(1500, 1500, 1e-3, input_torque=60.0))
+    cond = SpeedRamp(1500, 1500, window, input_torque=60.0, coupling=coupling)
+    probe = simulate(model, SpeedRamp(1500, 1500, 1e-3, input_torque=60.0, coupling=coupling))
     dt = probe.step.dt
     setup = prepare_run(model, cond, False)
     qd0 = setup.rigid * setup.omega0
@@ -148,7 +162,7 @@ def versus_solve_ivp(model, window: float) -> dict:
     keep = dist.min(axis=1, initial=1.0) > 1.0 / n_tab
     run_kernel(packed, y0, dt, 10, model.n_dof, model.n_mesh)
     t_rk4 = np.inf
-    for _ in range(REPEAT):  # best of REPEAT: robust to other load on the machine
+    for _ in range(repeat):  # best of `repeat`: robust to other load on the machine
         t0 = time.perf_counter()
         rec = run_kernel(packed, y0, dt, n_steps, model.n_dof, model.n_mesh)
         t_rk4 = min(t_rk4, time.perf_counter() - t0)
@@ -161,7 +175,7 @@ def versus_solve_ivp(model, window: float) -> dict:
         t_ivp = time.perf_counter() - t0
         err = np.abs(force(sol.y.T) - f_ref)[keep].max()
         if err <= err_rk4:
-            for _ in range(REPEAT - 1):
+            for _ in range(repeat - 1):
                 t0 = time.perf_counter()
                 solve_ivp(rhs, (0, t_end), y0, method="RK45", rtol=rtol,
                           atol=1e-3 * rtol * 1e-6, t_eval=t_eval)
@@ -175,12 +189,13 @@ def versus_solve_ivp(model, window: float) -> dict:
     return result
 
 
-def bench_model(name: str, duration: float, window: float) -> None:
+def bench_model(name: str, duration: float, window: float, repeat: int = REPEAT) -> None:
     model = assemble(load_gearset(name))
-    cond = SpeedRamp(0, 4000, duration, input_torque=60.0)
+    coupling = preset_coupling(name)
+    cond = SpeedRamp(0, 4000, duration, input_torque=60.0, coupling=coupling)
     simulate(model, SpeedRamp(0, 100, 1e-3, input_torque=60.0))  # compiled / cache loaded
     wall = np.inf
-    for _ in range(REPEAT):
+    for _ in range(repeat):
         t0 = time.perf_counter()
         res = simulate(model, cond)
         wall = min(wall, time.perf_counter() - t0)
@@ -198,7 +213,7 @@ def bench_model(name: str, duration: float, window: float) -> None:
           f"wall s, {round(duration / res.step.dt) / wall / 1e6:.2f} M steps/s)")
     print(f"  peak numpy memory (tracemalloc): {peak / 2**20:.1f} MiB; process max RSS "
           f"{resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024:.0f} MiB")
-    cmp_ = versus_solve_ivp(model, window)
+    cmp_ = versus_solve_ivp(model, window, repeat, coupling)
     print(f"  side by side on {cmp_['window'] * 1e3:.1f} ms at 1500 min^-1 (tooth force scale "
           f"{cmp_['f_scale']:.0f} N): numba RK4 {cmp_['rk4_wall'] * 1e3:.2f} ms, error "
           f"{cmp_['rk4_err']:.2e} N ({cmp_['excluded']} of {cmp_['samples']} samples on a "
@@ -217,14 +232,16 @@ def bench_model(name: str, duration: float, window: float) -> None:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true", help="shorter windows, skip cold compile")
+    parser.add_argument("--quick", action="store_true",
+                        help="smoke run: 0.1 s run-ups, a 2 ms window, one repeat, no cold "
+                             "compile")
     args = parser.parse_args(argv)
     if not args.quick:
         cold, cached = compile_times()
         print(f"numba first-call overhead: cold compile {cold:.2f} s, from cache {cached:.2f} s")
-    window = 0.005 if args.quick else 0.02
+    window = 0.002 if args.quick else 0.02
     for name in ("paper-case1", "paper-case1-elastic"):
-        bench_model(name, 1.0, window)
+        bench_model(name, 0.1 if args.quick else 1.0, window, 1 if args.quick else REPEAT)
     return 0
 
 

@@ -62,16 +62,16 @@ def _best_round_robin(fns: list[Callable[[], object]], repeat: int) -> list[floa
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
-    parser.add_argument("--quick", action="store_true", help="5 s signal, few repeats")
-    parser.add_argument("--repeat", type=int, default=None, help="rounds (default 3 / 9)")
+    parser.add_argument("--quick", action="store_true", help="smoke run: 2 s signal, one round")
+    parser.add_argument("--repeat", type=int, default=None, help="rounds (default 9; --quick: 1)")
     parser.add_argument("--workers", type=int, default=1, help="FFT threads (all candidates)")
     parser.add_argument("--fallback", action="store_true", help="time our scipy.fft fallback")
     args = parser.parse_args()
     if args.fallback:
         analysis.fft._pyfftw = None
     fs = 51200.0
-    n = int(fs * (5 if args.quick else 60))
-    repeat = args.repeat if args.repeat is not None else (3 if args.quick else 9)
+    n = int(fs * (2 if args.quick else 60))
+    repeat = args.repeat if args.repeat is not None else (1 if args.quick else 9)
     x = np.random.default_rng(0).standard_normal(n)
     print(
         f"backend: {backend()}, signal: {n} samples ({n / fs:.0f} s at {fs:.0f} Hz), "
@@ -87,7 +87,7 @@ def main() -> None:
             return spectrum(x, fs, window="hann", segment_length=s, workers=args.workers)
 
         ref = _reference(np.fft.rfft, x, seg, args.workers)
-        got = spectrum(x, fs, window="hann", scaling="peak", segment_length=seg, overlap=0.5)
+        got = spectrum(x, fs, window="hann", amplitude="peak", segment_length=seg, overlap=0.5)
         assert np.allclose(got.values, ref, rtol=1e-9, atol=1e-15), "results differ"
         t_ours, t_np, t_sp = _best_round_robin(
             [

@@ -12,7 +12,7 @@ workers alternate ``--repeat`` times and the best of each counts. The load avera
 the ratio means little when other processes use the cores.
 
     python benchmarks/bench_stability_map.py
-    python benchmarks/bench_stability_map.py --quick   # paper-case1 only, not refined
+    python benchmarks/bench_stability_map.py --quick   # smoke run: paper-case1, 3 x 3, once
 """
 
 from __future__ import annotations
@@ -50,21 +50,26 @@ def _models(source: str, zetas: np.ndarray) -> dict:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--quick", action="store_true", help="paper-case1 only, not refined")
-    ap.add_argument("--repeat", type=int, default=3, help="alternate this many times")
+    ap.add_argument("--quick", action="store_true",
+                    help="smoke run: paper-case1 only, a 3 x 3 map, not refined and refined, "
+                         "once")
+    ap.add_argument("--repeat", type=int, default=None,
+                    help="alternate this many times (3; --quick: 1)")
     args = ap.parse_args()
-    speeds = np.linspace(500.0, 4000.0, 20)
-    zetas = np.linspace(0.0, 0.05, 20)
+    repeat = args.repeat or (1 if args.quick else 3)
+    side = 3 if args.quick else 20
+    speeds = np.linspace(500.0, 4000.0, side)
+    zetas = np.linspace(0.0, 0.05, side)
     print(f"load average before: {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
     print(f"{'gear set':<34s} {'refined':>7s} {'1 worker [s]':>13s} {'2 workers [s]':>14s} "
           f"{'ratio':>6s} {'identical':>9s} {'regions':>7s}")
     sets = {"paper-case1": SETS["paper-case1"]} if args.quick else SETS
     for name, (source, opts) in sets.items():
         models = _models(source, zetas)
-        for refine in ((False,) if args.quick else (False, True)):
+        for refine in (False, True):
             charts: list = [None, None]
             times = [np.inf, np.inf]
-            for _ in range(args.repeat):  # alternate, best of each
+            for _ in range(repeat):  # alternate, best of each
                 for i, workers in enumerate((1, 2)):
                     t0 = time.perf_counter()
                     charts[i] = stability_map(models.__getitem__, speeds, zetas,

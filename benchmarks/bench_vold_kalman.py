@@ -4,14 +4,15 @@ Run: ``python benchmarks/bench_vold_kalman.py [--quick] [--repeat N] [--baseline
 
 Extraction of 3 orders (1, 2 and 24 of a shaft running up 600 -> 3600 min-1, peak
 amplitudes 1, 0.5 and 0.3, white noise of 0.1 rms) from 60 s at 25.6 kHz (1.536 M samples;
-``--quick``: 2 s), jointly, with a -3 dB bandwidth of 2 Hz (full width; rota-order's
-``bandwidth`` is the half width, 1 Hz). Each run is a fresh subprocess that loads the signal
-from a ``.npy`` file, so that wall time, CPU time and peak resident memory (``ru_maxrss``
-minus the resident memory before the call) are measured alike:
+``--quick``: 1 s, one run of each), jointly, with a -3 dB bandwidth of 2 Hz (full width;
+rota-order's ``bandwidth`` is the half width, 1 Hz). Each run is a fresh subprocess that loads
+the signal from a ``.npy`` file, so that wall time, CPU time and peak resident memory
+(``ru_maxrss`` minus the resident memory before the call) are measured alike:
 
 * ``ours``: :func:`analysis.vold_kalman.order_waveform` with the default ``max_memory``
   (one pass: memory linear in the record);
-* ``ours-512M``: the same with ``max_memory=512 MiB`` (blocks with checkpoints, same result);
+* ``ours-512M``: the same with ``max_memory=512 MiB`` (blocks with checkpoints, same result;
+  ``--quick`` scales the budget with the record, ``ours-8.53M``, so that it too runs in blocks);
 * ``baseline``: rota-order 0.3.0's ``rota.extract.order_waveform`` (GPL) run as a black box
   with the Python of a separate virtual environment (``--rota-python``, default
   ``/tmp/rota/bin/python``; make it with ``python -m venv /tmp/rota && /tmp/rota/bin/pip
@@ -130,7 +131,7 @@ def make_signal(seconds: float, where: Path) -> tuple[Path, np.ndarray]:
     return path, np.repeat(truth[:, None], n, axis=1)
 
 
-def run(kind: str, signal: Path, out: Path, rota_python: str) -> dict:
+def run(kind: str, signal: Path, out: Path, rota_python: str, budget: float) -> dict:
     env = dict(os.environ, PYTHONPATH=str(REPO))
     if kind == "baseline-rota":
         cmd = [rota_python, "-c", ROTA, str(signal), str(out)]
@@ -138,8 +139,7 @@ def run(kind: str, signal: Path, out: Path, rota_python: str) -> dict:
     elif kind == "baseline-spsolve":
         cmd = [sys.executable, "-c", SPSOLVE, str(signal), str(out)]
     else:
-        budget = str(512 * 1024**2) if kind == "ours-512M" else str(2 * 1024**3)
-        cmd = [sys.executable, "-c", OURS, str(signal), str(out), budget]
+        cmd = [sys.executable, "-c", OURS, str(signal), str(out), str(budget)]
     done = subprocess.run(cmd, capture_output=True, text=True, env=env, check=False)
     if done.returncode != 0:
         raise RuntimeError(f"{kind} failed:\n{done.stderr[-2000:]}")
@@ -172,12 +172,17 @@ def uptime() -> str:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--quick", action="store_true", help="2 s instead of 60 s")
-    ap.add_argument("--repeat", type=int, default=3, help="interleaved runs of each (3)")
+    ap.add_argument("--quick", action="store_true",
+                    help="smoke run: 1 s instead of 60 s, one run of each")
+    ap.add_argument("--repeat", type=int, default=None,
+                    help="interleaved runs of each (3; --quick: 1)")
     ap.add_argument("--baseline", choices=("auto", "rota", "spsolve"), default="auto")
     ap.add_argument("--rota-python", default="/tmp/rota/bin/python")
     args = ap.parse_args()
-    seconds = 2.0 if args.quick else 60.0
+    seconds = 1.0 if args.quick else 60.0
+    repeat = args.repeat or (1 if args.quick else 3)
+    # the budgeted run: 512 MiB for 60 s, scaled with the record (blocks in both modes)
+    small = 512 * 1024**2 * seconds / 60.0
     base = args.baseline
     if base in ("auto", "rota"):
         if rota_available(args.rota_python):
@@ -187,7 +192,8 @@ def main() -> None:
         else:
             print(f"rota-order 0.3.0 not available at {args.rota_python}: baseline = spsolve")
             base = "spsolve"
-    kinds = ["ours", "ours-512M", f"baseline-{base}"]
+    budgets = {"ours": 2 * 1024**3, f"ours-{small / 1024**2:.3g}M": small}
+    kinds = [*budgets, f"baseline-{base}"]
     print(f"load before: {uptime()}")
     print(f"signal: {seconds:g} s at {FS:g} Hz = {int(seconds * FS)} samples, orders "
           f"{ORDERS}, bandwidth {BANDWIDTH} Hz (full -3 dB width), joint")  # fmt: skip
@@ -196,10 +202,10 @@ def main() -> None:
         signal, truth = make_signal(seconds, where)
         runs: dict[str, list[dict]] = {k: [] for k in kinds}
         envs: dict[str, np.ndarray] = {}
-        for i in range(args.repeat):
+        for i in range(repeat):
             for k in kinds:
                 out = where / f"{k}.npy"
-                r = run(k, signal, out, args.rota_python)
+                r = run(k, signal, out, args.rota_python, budgets.get(k, 0.0))
                 runs[k].append(r)
                 envs[k] = np.load(out)
                 print(f"  run {i + 1} {k:17s} wall {r['wall']:7.2f} s  cpu {r['cpu']:7.2f} s  "

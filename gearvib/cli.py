@@ -231,12 +231,23 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     out, removed = check_output_file(args.output, overwrite=args.overwrite)
     _report_removed(removed)
     model = assemble(gearset)
+    if not args.quiet:
+        _first_run_notice()
     result = simulate(model, cond, dt=run["dt"], fs_out=run["fs_out"],
                       gyroscopic=run["gyroscopic"], progress=None if not args.quiet else False,
                       config={"gearset": cfg, "run": run}, max_steps=args.max_steps)
     path = write_netcdf(result.to_plain_dataset(), out)  # without importing xarray
     print(f"wrote {path}")
     return 0
+
+
+def _first_run_notice() -> None:
+    """One line on stderr before a run that compiles the kernels (a cold numba cache)."""
+    from gearvib.jit_cache import first_run_notice
+
+    notice = first_run_notice()
+    if notice:
+        print(notice, file=sys.stderr, flush=True)
 
 
 def _report_removed(removed: Sequence) -> None:
@@ -554,6 +565,7 @@ def _cmd_demo(args: argparse.Namespace) -> int:
         overwrite=args.overwrite)[1])
     print(f"gearvib demo: simulating the paper's run-ups (0 -> 4000 min-1 in "
           f"{args.duration or 1.0:g} s, cases 1 and 2) into {out}/ ...")
+    _first_run_notice()
     with removed_if_left_empty(out):
         result = run_study(study, out, progress=not args.quiet)
     for name, path in result.runs.items():
@@ -593,7 +605,8 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
             raise CliError(str(exc)) from None
     try:
         result = run_sweep(sweep, args.output, workers=args.workers, executor=executor,
-                           progress=not args.quiet, report=not args.no_report)
+                           progress=not args.quiet, report=not args.no_report,
+                           run_files=not args.no_run_files)
     finally:
         if client is not None:
             client.close()
@@ -845,6 +858,9 @@ def _parser() -> argparse.ArgumentParser:
                    "10; where nothing listens the sweep fails at once)")
     w.add_argument("--list", action="store_true", help="print the cases and exit")
     w.add_argument("--no-report", action="store_true", help="write sweep.nc only")
+    w.add_argument("--no-run-files", action="store_true",
+                   help="keep the runs in memory for their summaries, write no DIR/runs/*.nc "
+                   "(faster, most of all batched; nothing to resume from)")
     w.set_defaults(func=_cmd_sweep)
     return p
 

@@ -65,11 +65,15 @@ class CaseTask:
         Where its run file is (or goes); absolute, on a file system the worker can reach.
     summary : SummarySettings
         What to summarise.
+    write_run : bool
+        Write the run file of a simulated case (default). False keeps the run in memory
+        only, for its summary (a finished run file found at ``run_path`` is still reused).
     """
 
     case: SweepCase
     run_path: str
     summary: SummarySettings
+    write_run: bool = True
 
 
 @dataclass(frozen=True)
@@ -181,7 +185,8 @@ def _in_worker(fn: Callable[[Any], Any], arg: Any) -> Any:
 
 
 def run_case(task: CaseTask) -> CaseOutcome:
-    """Simulate (or reuse) one case, write its run file and summarise it.
+    """Simulate (or reuse) one case, write its run file (unless ``task.write_run`` is False)
+    and summarise it.
 
     Parameters
     ----------
@@ -245,10 +250,7 @@ def _run_group(tasks: list[CaseTask]) -> list[CaseOutcome]:
     run = pending[0][1].case.run
     kw = dict(dt=run.get("dt"), fs_out=run.get("fs_out"),
               gyroscopic=bool(run.get("gyroscopic")))
-    try:  # the cases that can share a batch (e.g. the same default time grid)
-        parts = batch_groups([p[2] for p in pending], [p[3] for p in pending], **kw)
-    except (ConfigError, SimulationError, ValueError):
-        parts = [[j] for j in range(len(pending))]
+    parts = [list(range(len(pending)))]  # first try all together (the common case) ...
     for part in parts:
         members = [pending[j] for j in part]
         results = None
@@ -259,6 +261,13 @@ def _run_group(tasks: list[CaseTask]) -> list[CaseOutcome]:
                     [p[2] for p in members], [p[3] for p in members],
                     config=[_case_config(p[1].case) for p in members], errors="return", **kw)
             except (ConfigError, SimulationError, ValueError):
+                if len(parts) == 1:  # ... refused: the groups that can share a batch
+                    try:  # (e.g. the same default time grid) are appended, then run
+                        parts.extend(batch_groups([p[2] for p in pending],
+                                                  [p[3] for p in pending], **kw))
+                    except (ConfigError, SimulationError, ValueError):
+                        parts.extend([j] for j in range(len(pending)))
+                    continue
                 results = None  # not batchable after all: every case alone
             share = (time.perf_counter() - t0) / len(members)
         if results is None:
@@ -295,9 +304,12 @@ def _finish(task: CaseTask, model: AssembledModel, conditions: Conditions, res) 
 
 
 def _write_run(task: CaseTask, res) -> xr.Dataset:
-    """The run file of a simulated case (its Dataset, marked with the case's hash)."""
+    """The run of a simulated case (its Dataset, marked with the case's hash), written to its
+    run file unless the task says not to."""
     ds = res.to_dataset()
     ds.attrs["sweep_case_sha256"] = task.case.sha256
+    if not task.write_run:
+        return ds
     with _plain_file_locks():
         write_netcdf(ds, task.run_path)
     return ds

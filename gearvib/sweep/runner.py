@@ -161,7 +161,7 @@ def run_sweep(sweep: Sweep, out_dir: str | os.PathLike, *, workers: int | None =
               runner: CaseRunner = run_case,
               progress: bool = True, report: bool = True,
               on_case_done: Callable[[CaseOutcome], None] | None = None,
-              batch: bool | None = None) -> SweepResult:
+              batch: bool | None = None, run_files: bool = True) -> SweepResult:
     """Run every case of a sweep and write ``sweep.nc`` (and the report).
 
     Parameters
@@ -191,6 +191,12 @@ def run_sweep(sweep: Sweep, out_dir: str | os.PathLike, *, workers: int | None =
         batch, :func:`batch_units`; run files and ``sweep.nc`` bit-identical to case-by-case
         runs). Default (None): automatic, batches of at least :data:`MIN_AUTO_BATCH` cases
         while every worker gets one; False: case by case. Only with the default ``runner``.
+    run_files : bool
+        Write every simulated case's run file ``DIR/runs/<hash>.nc`` (default). False keeps the
+        runs in memory only for their summaries: ``sweep.nc`` holds the same summaries, its
+        ``run_file`` coordinate is ``""`` for every case, and nothing is left to resume from
+        (run files of earlier sweeps in the folder are still reused). Writing the compressed
+        run file is most of a batched case's time.
 
     Returns
     -------
@@ -206,14 +212,16 @@ def run_sweep(sweep: Sweep, out_dir: str | os.PathLike, *, workers: int | None =
         Pending cases are cancelled; finished run files stay and are reused by the next call.
     """
     t0 = time.perf_counter()
+    if not isinstance(run_files, bool):
+        raise TypeError(f"run_files must be True or False, got {run_files!r}")
     cases = sweep.cases()
     out = check_output_dir(out_dir)
     runs = out / "runs"
     runs.mkdir(parents=True, exist_ok=True)  # the folder is checked, not created
     _remove_stale_temporaries(runs)
-    run_files = [run_file_name(c.sha256) for c in cases]
-    tasks = [CaseTask(c, str((out / f).resolve()), sweep.summary)
-             for c, f in zip(cases, run_files, strict=True)]
+    file_names = [run_file_name(c.sha256) for c in cases]
+    tasks = [CaseTask(c, str((out / f).resolve()), sweep.summary, write_run=run_files)
+             for c, f in zip(cases, file_names, strict=True)]
     own = executor is None
     n_workers = default_workers() if workers is None else workers
     if runner is not run_case:
@@ -258,7 +266,8 @@ def run_sweep(sweep: Sweep, out_dir: str | os.PathLike, *, workers: int | None =
             if own and executor is not None and not stopped:
                 executor.shutdown(wait=True)
     ordered = [outcomes[c.index] for c in cases]
-    files = [f if o.summary is not None else "" for f, o in zip(run_files, ordered, strict=True)]
+    files = [f if o.summary is not None and run_files else ""
+             for f, o in zip(file_names, ordered, strict=True)]
     ds = combine_summaries(sweep, cases, ordered, files)
     path = write_netcdf(ds, out / "sweep.nc")
     report_path = None

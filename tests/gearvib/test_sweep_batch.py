@@ -101,3 +101,30 @@ def test_batch_units():
                              "parameter": SPEC["parameter"][:1]})
     mixed = tasks[:4] + [CaseTask(c, "/y.nc", other.summary) for c in other.cases()]
     assert [len(u) if isinstance(u, list) else 1 for u in batch_units(mixed, 1, True)] == [4, 3]
+
+
+def test_sweep_without_run_files(tmp_path):
+    """run_files=False: no run file, the same summaries (sweep.nc bit-identical batched and
+    case by case; equal to a sweep with run files but for the ``run_file`` coordinate)."""
+    sweep = sweep_from_dict(dict(SPEC, summary={"orders": [1, 2], "order_resolution": 0.25}))
+    kw = dict(workers=1, progress=False, report=False)
+    with_files = run_sweep(sweep, tmp_path / "files", batch=True, **kw)
+    single = run_sweep(sweep, tmp_path / "single", batch=False, run_files=False, **kw)
+    batched = run_sweep(sweep, tmp_path / "batched", batch=True, run_files=False, **kw)
+    assert single.simulated == batched.simulated == with_files.simulated
+    assert len(single.simulated) == sweep.n_cases
+    for name in ("single", "batched"):
+        assert not list((tmp_path / name / "runs").glob("*.nc"))
+    assert (tmp_path / "single" / "sweep.nc").read_bytes() == \
+        (tmp_path / "batched" / "sweep.nc").read_bytes()
+    with xr.open_dataset(tmp_path / "batched" / "sweep.nc") as fb, \
+            xr.open_dataset(tmp_path / "files" / "sweep.nc") as ff:
+        fb, ff = fb.load(), ff.load()
+    assert list(fb.run_file.values) == [""] * sweep.n_cases
+    assert all(f.startswith("runs/") for f in ff.run_file.values)
+    xr.testing.assert_identical(fb.drop_vars("run_file"), ff.drop_vars("run_file"))
+    # finished run files in the folder are still reused, and nothing is written
+    again = run_sweep(sweep, tmp_path / "files", batch=True, run_files=False, **kw)
+    assert again.reused == with_files.simulated
+    with pytest.raises(TypeError, match="run_files"):
+        run_sweep(sweep, tmp_path / "x", run_files=0, **kw)
