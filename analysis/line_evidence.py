@@ -122,6 +122,8 @@ def prominent_lines(axis: Any, power: Any, *, threshold_db: float = THRESHOLD_DB
     if ax.ndim != 1 or pw.shape != ax.shape or ax.size < 3:
         raise ValueError("axis and power must be 1-D of equal length (>= 3 lines)")
     thr = require_real(threshold_db, "threshold_db")
+    if not -300.0 <= thr <= 300.0:
+        raise ValueError(f"threshold_db = {thr!r} is not admissible (admissible: -300 .. 300 dB)")
     if isinstance(floor_lines, bool) or not isinstance(floor_lines, int | np.integer) \
             or floor_lines < 1:
         raise ValueError(f"floor_lines = {floor_lines!r} is not admissible: an integer >= 1")

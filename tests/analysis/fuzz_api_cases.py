@@ -354,7 +354,53 @@ def _literal(value: Any) -> Callable[[], Any]:
     return lambda: value
 
 
+@functools.cache
+def _evidence_parts() -> dict[str, Any]:
+    """A line family, its check and its line evidence in the fuzz envelope spectrum."""
+    from analysis.line_evidence import line_evidence
+    from analysis.lines import bearing_families
+
+    es = objects()["envelope_spectrum"]
+    family = bearing_families(10.0, bpfo=3.5848, bpfi=5.4152)[1]
+    power = np.square(es.values)
+    return {"axis": es.frequency, "power": power, "family": family,
+            "check": es.check(family),
+            "evidence": line_evidence(es.frequency, power, family)}
+
+
+def _e(key: str) -> Callable[[], Any]:
+    return lambda: _evidence_parts()[key]
+
+
+def _measured_signals() -> xr.Dataset:
+    r = run_up()
+    return xr.Dataset({"acc": ("time", r["x"], {"units": "m s-2", "long_name": "acc"})},
+                      coords={"time": ("time", r["t"], {"units": "s", "long_name": "time"})})
+
+
+def _scalar_file_dataset() -> xr.Dataset:
+    ds = _measured_signals()
+    ds["X105RPM"] = ((), 1797.0)
+    return ds
+
+
 BASELINES: dict[str, Callable[[], A]] = {
+    # line_evidence, measurement_options (entries added with those modules)
+    "analysis.envelope_plots.line_evidence_figure": _c(_e("evidence")),
+    "analysis.line_evidence.claim_tolerance": _c(lambda: np.arange(1, 4), 10.0),
+    "analysis.line_evidence.explained_positions": _c(_e("check"), 100.0),
+    "analysis.line_evidence.family_chance": _c(_e("axis"), _e("check"),
+                                               lambda: np.array([50.0, 54.2, 108.3])),
+    "analysis.line_evidence.line_evidence": _c(_e("axis"), _e("power"), _e("family")),
+    "analysis.line_evidence.prominent_lines": _c(_e("axis"), _e("power")),
+    "analysis.line_evidence.strength": _c(_e("check")),
+    "analysis.measurement_options.apply_calibration": _c(_measured_signals,
+                                                         {"acc": 9.81}, {"acc": "m s-2"}),
+    "analysis.measurement_options.check_fs": _c(FS),
+    "analysis.measurement_options.check_rate": _c(_measured_signals, FS, "fuzz"),
+    "analysis.measurement_options.reader_options": _c(".wav", None, FS, None),
+    "analysis.measurement_options.scalar_speed": _c(_scalar_file_dataset, "X105RPM", 1e5),
+    "analysis.measurement_options.scalar_variables": _c(_scalar_file_dataset),
     # alarm_limits
     "analysis.alarm_limits.learn_limits": _c(lambda: _indicators(3)),
     # bands
