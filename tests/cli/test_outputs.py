@@ -61,7 +61,7 @@ def test_report_and_demo_refuse_an_earlier_run_in_the_folder(tmp_path, capsys, m
 
     monkeypatch.setattr("gearvib.report.run_study", no_study)
     monkeypatch.setattr("gearvib.report.build_report", no_study)
-    assert main(["demo", "-o", str(out), "--duration", "0.05", "-q"]) == 2
+    assert main(["demo", "-o", str(out), "--duration", "0.15", "-q"]) == 2
     err = capsys.readouterr().err
     assert "holds outputs of an earlier run (report.pdf); add --overwrite" in err
     run = tmp_path / "run.nc"
