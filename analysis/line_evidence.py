@@ -53,7 +53,9 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from analysis.cf import cf_dataset
 from analysis.checks import require_finite, require_real
+from analysis.envelope_plots import line_evidence_figure
 from analysis.identification import covered_fraction
 from analysis.lines import (
     FLOOR_FACTOR,
@@ -405,7 +407,6 @@ class LineEvidence:
         """CF Dataset: one entry per family (dimension ``family``) and line (``line``)."""
         import xarray as xr
 
-        from analysis.cf import cf_dataset
 
         n = len(self.checks)
         k = max((c.expected.size for c in self.checks), default=0)
@@ -458,7 +459,6 @@ class LineEvidence:
     def plot(self, **kwargs: Any) -> matplotlib.figure.Figure:
         """Spectrum (dB over its median) with every family's harmonics marked, the lines found
         filled (see :func:`analysis.envelope_plots.line_evidence_figure`)."""
-        from analysis.envelope_plots import line_evidence_figure
 
         return line_evidence_figure(self, **kwargs)
 

@@ -30,9 +30,7 @@ MAX_CURVES = 5
 def _check(lv: Any, marks: Any = 0, frequency_max: Any = None,
            figsize: Any = (8.0, 4.0), **positive: Any) -> None:
     """The result type and the figure options (one-line errors naming the option)."""
-    from analysis.runup_levels import RunupLevels
-
-    if not isinstance(lv, RunupLevels):
+    if f"{type(lv).__module__}.{type(lv).__name__}" != "analysis.runup_levels.RunupLevels":
         raise TypeError(f"lv must be an analysis.runup_levels.RunupLevels, got "
                         f"{type(lv).__name__}")
     require_int(marks, "marks", 0)

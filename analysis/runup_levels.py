@@ -52,6 +52,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from analysis import runup_level_plots as rp
 from analysis.cf import cf_dataset
 from analysis.checks import require_finite, uniform_rate
 from analysis.cut_plan import (
@@ -328,8 +329,6 @@ class RunupLevels:
     def plot(self, kind: str = "cuts", **kwargs: Any) -> Figure:
         """Figure of ``kind`` ``"cuts"`` (order cuts and overall level), ``"waterfall"`` or
         ``"campbell"`` (see :mod:`analysis.runup_level_plots`)."""
-        from analysis import runup_level_plots as rp
-
         builders = {"cuts": rp.order_cuts_levels_figure, "waterfall": rp.waterfall_figure,
                     "campbell": rp.campbell_levels_figure}
         if kind not in builders:
