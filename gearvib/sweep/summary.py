@@ -308,6 +308,8 @@ def _order_levels(out: _Vars, name: str, da: xr.DataArray, ds: xr.Dataset, span:
                                  resolution=s.order_resolution, samples_per_rev=spr,
                                  max_order=max_order, units=units, name=name)
             except ValueError as exc:  # too short a window for one frame, etc.
+                if "above the highest analysed order" in str(exc):
+                    continue  # a window too short to resolve the orders: levels stay NaN
                 raise ValueError(f"order levels of {label}: {exc}") from exc
             v = cut.values.copy()
             top = (orders[:, None] + 0.5 * cut.bandwidth) * cut.rpm[None, :] / 60.0
