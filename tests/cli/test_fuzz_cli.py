@@ -246,7 +246,7 @@ class CliOutcome(Exception):
     """An outcome that breaks the command line's promises."""
 
 
-@settings(max_examples=fz.examples(500), deadline=None, database=None,
+@settings(max_examples=fz.examples(250), deadline=None, database=None,
           derandomize=fz.derandomize(),
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 @given(args=argv)

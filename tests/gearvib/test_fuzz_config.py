@@ -192,7 +192,7 @@ def test_every_preset_builds_unmutated():
     assert len(PRESETS) >= 8
 
 
-@settings(max_examples=fz.examples(1000), deadline=None, database=None,
+@settings(max_examples=fz.examples(400), deadline=None, database=None,
           derandomize=fz.derandomize(),
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 @given(name=st.sampled_from(sorted(PRESETS)), mutations=st.lists(mutation, min_size=1,

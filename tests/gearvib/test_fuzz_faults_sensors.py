@@ -14,7 +14,7 @@ The result goes the way of ``gearvib simulate``: :func:`gearset_from_dict`, :fun
 signals and :meth:`to_dataset`, and the catalogue with the bearings' defect lines. Property:
 only documented errors (:mod:`tests.gearvib.fuzz_support`), each within 60 s.
 
-``GEARVIB_FUZZ_EXAMPLES`` sets the number of examples (default 300 here, fixed seed).
+``GEARVIB_FUZZ_EXAMPLES`` sets the number of examples (default 100 here, fixed seed).
 """
 
 from __future__ import annotations
@@ -188,7 +188,7 @@ def test_the_base_description_runs_with_every_fault_sensor_and_bearing():
     fz.record("faults, sensors, bearings: base", None)
 
 
-@settings(max_examples=fz.examples(300), deadline=None, database=None,
+@settings(max_examples=fz.examples(100), deadline=None, database=None,
           derandomize=fz.derandomize(),
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 @given(changes=st.lists(change, min_size=1, max_size=4))

@@ -105,7 +105,7 @@ def _report():
     fz.write_report()
 
 
-@settings(max_examples=fz.examples(500), deadline=None, database=None,
+@settings(max_examples=fz.examples(200), deadline=None, database=None,
           derandomize=fz.derandomize(),
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 @given(name=st.sampled_from(sorted(CONFIGS)), edits=st.lists(edit, min_size=1, max_size=4),
