@@ -228,7 +228,7 @@ def family_chance(axis: Any, check: LineCheck, lines: np.ndarray,
 def explained_positions(check: LineCheck, top: float) -> np.ndarray:
     """Positions a detected family explains: ``h f_1`` (the harmonics, at multiples of the
     fundamental found) and, with a sideband spacing ``d``, ``|h f_1 + k d|`` up to ``top``
-    (the lattice of a fault modulated at ``d``; e.g. BPFO = |BPFI - Z f_r| of a ball
+    (the lattice of a fault modulated at ``d``; e.g. BPFO = abs(BPFI - Z f_r) of a ball
     bearing).
 
     Parameters
