@@ -605,6 +605,9 @@ class Diagnosis:
         Reference shaft of the orders.
     attrs : dict
         Provenance (written to the Dataset's attributes).
+    line_check : object, optional
+        A check of fault lines at their own positions behind causes that were not simulated
+        (with ``plot()`` and ``to_dataset()``; gearvib's rolling-bearing check), or None.
     timing : dict
         Wall times [s] and run counts (not written: the same input gives the same output).
     """
@@ -622,6 +625,7 @@ class Diagnosis:
     notes: list[str] = field(default_factory=list)
     reference: str = "carrier"
     attrs: dict[str, Any] = field(default_factory=dict)
+    line_check: Any = None
     timing: dict[str, float] = field(default_factory=dict)
 
     @property

@@ -98,8 +98,7 @@ def gear_set_catalogue(
 
             model = assemble(gear_set)
         name = gear_set.name
-        members = {b.name: b.carrier if b.role == "planet" else None for b in gear_set.bodies}
-        bearings = [*(b.resolve(members) for b in gear_set.rolling_bearings), *bearings]
+        bearings = [*gear_set.bearings(), *bearings]
     elif isinstance(gear_set, AssembledModel):
         model = gear_set
         meshes, angles = _from_model(model)

@@ -451,6 +451,13 @@ class GearSet:
                 if g not in known:
                     raise ValueError(f"coupling: unknown body {g!r}")
 
+    def bearings(self) -> list:
+        """The ``[[rolling_bearing]]`` tables with their rings' members resolved (a planet's
+        bearing turns with its carrier), in the catalogue form
+        (:class:`analysis.catalogue.RollingBearing`), as :meth:`gearvib.rig.ShaftRig.bearings`."""
+        members = {b.name: b.carrier if b.role == "planet" else None for b in self.bodies}
+        return [b.resolve(members) for b in self.rolling_bearings]
+
     def body(self, name: str) -> Body:
         """The body called ``name``."""
         for b in self.bodies:

@@ -2,6 +2,7 @@
 
 ==============  =========================================================================
 ``candidates``  the candidate faults of a gear set (``[[fault]]`` tables with typical sizes)
+``bearings``    the declared rolling bearings' faults, judged by their lines (not simulated)
 ``engine``      :func:`diagnose`: simulate every candidate (sweep machinery), rank them
 ``report``      HTML/PDF report and netCDF of a diagnosis
 ==============  =========================================================================

@@ -20,7 +20,7 @@ import re
 import tempfile
 import time as _time
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -48,6 +48,7 @@ from analysis.diagnosis import (
 )
 from gearvib import tempfiles
 from gearvib.config import ConfigError, gearset_from_dict
+from gearvib.diagnosis.bearings import bearing_causes, bearing_fault_lines
 from gearvib.diagnosis.candidates import (
     KINDS,
     LOCAL_KINDS,
@@ -154,6 +155,11 @@ class Record:
         The shaft the speed belongs to (default: the gear set's input member).
     units : str
     name : str
+    channel : str, optional
+        The channel of ``measurement`` the signal is.
+    measurement : Measurement, optional
+        The measurement the record was taken from (:meth:`from_measurement`): the bearing
+        check uses its speed reference (tacho angle, stated speed) as it is.
     """
 
     signal: np.ndarray
@@ -162,6 +168,8 @@ class Record:
     member: str | None = None
     units: str = "m s-2"
     name: str = "measured"
+    channel: str | None = None
+    measurement: Any = field(default=None, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         s = np.asarray(self.signal, float)
@@ -199,7 +207,28 @@ class Record:
             if ch and ch in m.signals:
                 member = str(m.signals[ch].attrs.get("member", "")) or None
         return cls(np.asarray(x.values, float), float(fs), rpm, member,
-                   str(x.attrs.get("units", "1")), name)
+                   str(x.attrs.get("units", "1")), name, str(x.name), m)
+
+    def to_measurement(self) -> Any:
+        """The record as an :class:`analysis.measurement.Measurement`: the one it was taken
+        from, else its signal with its speed (a stated constant speed when the speed does not
+        vary, a speed channel otherwise)."""
+        if self.measurement is not None:
+            return self.measurement
+        import xarray as xr
+
+        from analysis.measurement import load_measurement
+
+        t = np.arange(self.signal.size) / self.fs
+        ch = self.channel or self.name
+        ds = xr.Dataset({ch: ("time", np.asarray(self.signal, float),
+                              {"units": self.units, "long_name": f"{self.name} signal"})},
+                        coords={"time": ("time", t, {"units": "s", "long_name": "time"})})
+        rpm = np.abs(np.asarray(self.speed_rpm, float))
+        if float(np.ptp(rpm)) == 0.0:
+            return load_measurement(ds, channel=ch, rpm=float(rpm[0]))
+        ds["speed"] = ("time", rpm, {"units": "min-1", "long_name": "shaft speed"})
+        return load_measurement(ds, channel=ch, speed="speed")
 
 
 def order_reference(gs: Any, model: Any) -> str:
@@ -606,6 +635,9 @@ def diagnose(measured: Record, config: str, *, baseline: Record | None = None,
     if keep_runs and work_dir is None:
         raise ValueError("keep_runs = True needs work_dir (the folder of the run files)")
     cfg, base = load_config(config)
+    if cfg.get("type") == "shafts":  # a machine without gears: its bearings' lines only
+        return _diagnose_rig(measured, cfg, base, config=str(config), baseline=baseline,
+                             threshold=float(threshold), revolutions=int(revolutions))
     candidates = candidate_faults(cfg, kinds, base=base)
     kin = _kinematics(cfg, base)
     ms = kin.ms
@@ -726,6 +758,12 @@ def diagnose(measured: Record, config: str, *, baseline: Record | None = None,
             ev.append("the planets are interchangeable (equally spaced): which planet cannot "
                       "be told without a carrier phase reference")
         causes.append(Cause(cause, mem, float(s), tuple(ev), c.label))
+    fault_lines = None
+    if kin.gs.rolling_bearings:  # the declared bearings, judged by their lines
+        fault_lines = bearing_fault_lines(measured.to_measurement(), kin.gs,
+                                          channel=measured.channel, reference=member)
+        if fault_lines is not None:
+            causes.extend(bearing_causes(fault_lines, float(threshold)))
     causes = rank_causes(causes, float(threshold), families=cause_fams, mismatch=mismatch,
                          local_kinds=LOCAL_KINDS, none_evidence=(
                              f"{peaks.size} rising peaks above the noise deadband of "
@@ -780,7 +818,67 @@ def diagnose(measured: Record, config: str, *, baseline: Record | None = None,
              "baseline": "measured" if baseline is not None else "simulated healthy gear set",
              "candidates_json": json.dumps([c.fault for c in candidates])}
     d = Diagnosis(causes, float(threshold), order, cut(meas), cut(base_prof), d_meas, dead,
-                  signatures, fam_ev, nxt, notes, kin.reference, attrs)
+                  signatures, fam_ev, nxt, notes, kin.reference, attrs,
+                  line_check=fault_lines)
     # timing: not part of the report or the Dataset (same input, same output)
     d.timing = {"simulation_s": sim_time, "total_s": _time.perf_counter() - t0, **counts}
+    return d
+
+
+def _diagnose_rig(measured: Record, cfg: dict, base: Path | None, *, config: str,
+                  baseline: Record | None, threshold: float, revolutions: int) -> Diagnosis:
+    """Diagnosis of a machine without gears (``type = "shafts"``): the causes are the faults of
+    its declared rolling bearings, judged by their lines (:mod:`gearvib.diagnosis.bearings`);
+    nothing is simulated. The order profiles (measured, baseline) are kept for the report."""
+    from gearvib.config import description_from_dict
+
+    t0 = _time.perf_counter()
+    rig = description_from_dict(cfg, base=base)
+    ref = measured.member or rig.input
+    fl = bearing_fault_lines(measured.to_measurement(), rig, channel=measured.channel,
+                             reference=ref)
+    if fl is None:
+        raise ConfigError(f"diagnosis: {rig.name!r} has no gears and declares no rolling "
+                          "bearing; a machine without gears is diagnosed by its bearings' "
+                          "lines: add [[rolling_bearing]] tables")
+    names = ", ".join(b.name for b in rig.bearings())
+    causes = rank_causes(bearing_causes(fl, threshold), threshold, families={}, mismatch={},
+                         local_kinds=(), none_reason=(
+                             f"no fault family of {names} is detected in the envelope "
+                             "spectrum, and none is possible"))
+    top_line = max(f.harmonics * f.order + f.sidebands * f.sideband_order for f in fl.families)
+
+    def profile(r: Record, name: str) -> OrderProfile:
+        rpm = np.abs(r.speed_rpm)
+        nyq = 0.45 * r.fs / (float(rpm.max()) / 60.0)
+        return order_profile(r.signal, r.fs, rpm, max_order=min(nyq, 1.3 * top_line + 2.0),
+                             revolutions=revolutions, name=name, units=r.units)
+
+    meas = profile(measured, "measured")
+    base_prof = profile(baseline, "baseline") if baseline is not None else meas
+    n = min(meas.order.size, base_prof.order.size)
+
+    def cut(p: OrderProfile) -> OrderProfile:
+        return OrderProfile(p.order[:n], p.amplitude[:n], p.units, p.revolutions, p.segments,
+                            p.speed_rpm, p.name)
+
+    meas, base_prof = cut(meas), cut(base_prof)
+    d_meas = prominence_db(meas) - prominence_db(base_prof)
+    lead = causes[0]
+    nxt = []
+    if lead.verdict != "likely" and any(c.verdict == "possible" for c in causes):
+        nxt.append("a longer record (finer envelope spectrum, lower chance of a coincidence) "
+                   "and a sensor nearer the bearing")
+    notes = [f"{rig.name} is a machine without gears: the causes are the faults of its "
+             "declared rolling bearings, judged by their lines in the envelope spectrum; "
+             "nothing is simulated", *fl.notes]
+    if baseline is not None:
+        notes.append("the baseline's order profile is shown; the bearing check uses the "
+                     "measurement alone")
+    attrs = {"gear_set": config, "speed_member": ref,
+             "baseline": "measured" if baseline is not None else "none (machine without gears)",
+             "machine": "shafts and rolling bearings, no gears"}
+    d = Diagnosis(causes, threshold, meas.order, meas, base_prof, d_meas,
+                  deadband_db(d_meas), {}, [], nxt, notes, ref, attrs, line_check=fl)
+    d.timing = {"simulation_s": 0.0, "total_s": _time.perf_counter() - t0}
     return d

@@ -16,7 +16,10 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from analysis.diagnosis import Diagnosis, prominence_db
+from gearvib.diagnosis.bearings import BEARING_CAUSES
+from gearvib.fault_lines import FaultLines
 from gearvib.io import atomic_write, write_netcdf
+from gearvib.report.bearings import ENVELOPE_HEADER, envelope_rows, summary
 from gearvib.report.document import FigureImages
 from gearvib.report.html import render_html
 from gearvib.report.pdf import write_pdf
@@ -58,7 +61,10 @@ def scores_figure(d: Diagnosis, *, figsize: tuple[float, float] = (8.0, 4.2)) ->
             va="bottom")
     ax.set_xlim(0, 1)
     ax.set_ylim(-0.6, len(cs) + 0.2)
-    ax.set_xlabel("score (how well the simulated fault explains the measured difference)")
+    ax.set_xlabel("score (simulated faults: how well the signature explains the measured "
+                  "difference;\nbearings: how unlikely their lines are by chance)"
+                  if any(c.cause in BEARING_CAUSES.values() for c in cs) else
+                  "score (how well the simulated fault explains the measured difference)")
     return fig
 
 
@@ -114,6 +120,9 @@ def _sections(d: Diagnosis, title_name: str) -> list[Section]:
         verdict = (f"Possible: {_what(lead)} (score {lead.score:.2f}, below the threshold "
                    f"{d.threshold:.2f}; {lead.evidence[-1] if lead.evidence else ''}). "
                    "Nothing is likely; see What to measure next.")
+    elif not d.signatures:
+        verdict = ("Nothing stands out: no fault family of the declared rolling bearings is "
+                   "detected in the envelope spectrum.")
     else:
         best = next((c for c in d.causes if c.cause != "none"), None)
         verdict = ("Nothing stands out: no candidate explains the measured differences (best "
@@ -131,6 +140,52 @@ def _sections(d: Diagnosis, title_name: str) -> list[Section]:
               "dashed), orange: possible.",
               figure=lambda: scores_figure(d)),
     )
+    if not d.signatures:  # nothing simulated (a machine without gears)
+        evidence: tuple[Block, ...] = tuple(Block("text", n) for n in d.notes)
+    else:
+        evidence = _simulation_evidence(d)
+    nxt = (tuple(Block("text", f"• {s}") for s in d.next_steps) if d.next_steps else
+           (Block("text", "The evidence is clear; no further measurement is needed for the "
+                  "ranking."),))
+    prov = tuple(Block("text", f"{k}: {v}") for k, v in sorted(d.attrs.items())
+                 if k not in ("candidates_json",))
+    sections = [Section("verdict", f"Diagnosis of {title_name}", verdict_blocks),
+                Section("evidence", "Evidence", evidence)]
+    if d.line_check is not None:
+        sections.append(Section("bearings", "Rolling bearings: their lines in the envelope "
+                                "spectrum", _bearing_blocks(d.line_check, title_name)))
+    return [*sections, Section("next", "What to measure next", nxt),
+            Section("provenance", "Provenance", prov)]
+
+
+def _bearing_blocks(fl: FaultLines, name: str) -> tuple[Block, ...]:
+    """The declared bearings' families in the envelope spectrum: sentences, figure, table."""
+    from analysis.envelope_plots import line_evidence_figure
+
+    b = fl.envelope.band
+    unit = "Hz" if fl.domain == "frequency" else "orders"
+
+    def figure() -> Figure:
+        fig = Figure(figsize=(8.0, 5.0), layout="constrained", dpi=100)
+        line_evidence_figure(fl.envelope_evidence, ax=fig.add_subplot(),
+                             title=f"{name}: squared envelope spectrum, band {b.low:.5g}-"
+                             f"{b.high:.5g} Hz")
+        return fig
+
+    rows = tuple(tuple(str(c) for c in r) for r in envelope_rows(fl))
+    return (Block("text", summary(fl, name)),
+            Block("figure", f"{name}: squared envelope {'order ' if unit == 'orders' else ''}"
+                  "spectrum with the declared bearings' fault families (dashed: their "
+                  "harmonics; triangles: harmonics found, dots: sidebands found).",
+                  figure=figure),
+            Block("table", f"Bearing fault families in the squared envelope spectrum (axis: "
+                  f"{unit}); a family detected here makes its fault likely", ENVELOPE_HEADER,
+                  rows),
+            *(Block("text", f"Note: {t}") for t in fl.notes))
+
+
+def _simulation_evidence(d: Diagnosis) -> tuple[Block, ...]:
+    """Evidence of the simulated causes: differences, spectrum, families, notes."""
     fam_rows = tuple((f.family, f"{f.fundamental:.4g}", str(f.hits), str(f.rising),
                       f"{f.coverage:.3f}", f"{f.chance:.2g}") for f in d.families)
     evidence = (
@@ -148,15 +203,7 @@ def _sections(d: Diagnosis, title_name: str) -> list[Section]:
                                                "coverage", "chance"), fam_rows),
         *[Block("text", n) for n in d.notes],
     )
-    nxt = (tuple(Block("text", f"• {s}") for s in d.next_steps) if d.next_steps else
-           (Block("text", "The evidence is clear; no further measurement is needed for the "
-                  "ranking."),))
-    prov = tuple(Block("text", f"{k}: {v}") for k, v in sorted(d.attrs.items())
-                 if k not in ("candidates_json",))
-    return [Section("verdict", f"Diagnosis of {title_name}", verdict_blocks),
-            Section("evidence", "Evidence", evidence),
-            Section("next", "What to measure next", nxt),
-            Section("provenance", "Provenance", prov)]
+    return evidence
 
 
 def write_diagnosis_report(d: Diagnosis, out_dir: str | os.PathLike, *,

@@ -87,13 +87,16 @@ def _verdict(c: Cause, threshold: float, fam: FamilyEvidence | None) -> tuple[st
 def rank_causes(causes: Sequence[Cause], threshold: float, *,
                 families: Mapping[tuple[str, str], FamilyEvidence | None],
                 mismatch: Mapping[tuple[str, str], float],
-                local_kinds: Sequence[str], none_evidence: Sequence[str] = ()) -> list[Cause]:
+                local_kinds: Sequence[str], none_evidence: Sequence[str] = (),
+                none_reason: str | None = None) -> list[Cause]:
     """The causes with their verdicts, best first, with ``none`` or the kind fallback first.
 
     Parameters
     ----------
     causes : sequence of Cause
-        One per (cause, member), scored; their verdicts are set here.
+        One per (cause, member), scored; their verdicts are set here, but for causes that
+        come with a verdict of their own (the bearing faults of
+        :mod:`gearvib.diagnosis.bearings`, judged by their lines).
     threshold : float
         Score above which a cause is likely.
     families : mapping
@@ -105,6 +108,9 @@ def rank_causes(causes: Sequence[Cause], threshold: float, *,
         The local tooth-fault kinds (crack, pitting, broken tooth).
     none_evidence : sequence of str
         Evidence lines of the ``none`` entry.
+    none_reason : str, optional
+        Its first evidence line (default: no simulated candidate explains the measured
+        differences and no fault family carries the measured rises, with the best score).
 
     Returns
     -------
@@ -127,15 +133,18 @@ def rank_causes(causes: Sequence[Cause], threshold: float, *,
     """
     ranked = []
     for c in causes:
+        if c.verdict:  # judged by its own evidence (a bearing's lines)
+            ranked.append(c)
+            continue
         v, why = _verdict(c, threshold, families.get((c.cause, c.member)))
         ranked.append(replace(c, verdict=v, evidence=(*c.evidence, why) if why else c.evidence))
     ranked.sort(key=lambda c: (_ORDER[c.verdict], -c.score, c.cause, c.member))
     best = max((c.score for c in ranked), default=0.0)
     if not ranked or ranked[0].verdict == "unlikely":
-        return [Cause("none", "", 1.0 - best, (
+        why = none_reason or (
             f"no candidate explains the measured differences (best score {best:.2f} < "
-            f"threshold {threshold:.2f}) and no fault family carries the measured rises",
-            *none_evidence), "", ""), *ranked]
+            f"threshold {threshold:.2f}) and no fault family carries the measured rises")
+        return [Cause("none", "", 1.0 - best, (why, *none_evidence), "", ""), *ranked]
     top = ranked[0]
     if top.cause in local_kinds:
         kinds = [c for c in ranked if c.member == top.member and c.cause in local_kinds]

@@ -522,7 +522,7 @@ def analyse_measurement(measurement: Measurement, *, gearset: Any = None,
 
     # bearing and gear-fault lines at their own positions (envelope and order spectra); a
     # bearing line labels a peak only when its family is detected there
-    bearings = rig.bearings() if rig is not None else _bearings_of(gs)
+    bearings = rig.bearings() if rig is not None else (gs.bearings() if gs is not None else [])
     fault = fault_lines_of(m, cat, bearings, channel=ch, band=envelope_band,
                            min_bandwidth=min_bandwidth, notes=notes)
     label_cat = confirmed_catalogue(cat, fault) if cat is not None else None
@@ -661,14 +661,6 @@ def analyse_measurement(measurement: Measurement, *, gearset: Any = None,
 
 
 _BEARING_FAMILIES = frozenset(("bearing_ftf", "bearing_bpfo", "bearing_bpfi", "bearing_bsf"))
-
-
-def _bearings_of(gs: GearSet | None) -> list:
-    """The rolling bearings of a gear set with their rings' members (catalogue form)."""
-    if gs is None:
-        return []
-    members = {b.name: b.carrier if b.role == "planet" else None for b in gs.bodies}
-    return [b.resolve(members) for b in gs.rolling_bearings]
 
 
 def _rig_reference(rig: ShaftRig, m: Measurement, reference: str | None

@@ -20,6 +20,7 @@ SCRIPTS = sorted(BENCHMARKS.glob("bench_*.py"))
 
 #: A line every benchmark's ``--quick`` output must hold (its ratio or its last table).
 EXPECTED = {
+    "bench_bearing_alarms.py": "false alarms (a bearing cause likely)",
     "bench_cli.py": "gearvib simulate paper-case1",
     "bench_envelope.py": "x faster;",
     "bench_faults.py": "1 sensor + planet pin error 10 um",
