@@ -372,6 +372,18 @@ def _per_channel(pairs: Sequence[tuple[str | None, object]], option: str) -> obj
     return dict(pairs)
 
 
+def _fault_kinds(text: str) -> tuple[str, ...]:
+    """An argparse type: ``"crack,eccentricity"``, candidate kinds of a diagnosis, each once."""
+    from gearvib.diagnosis.candidates import KINDS
+
+    parts = tuple(p.strip() for p in text.split(","))
+    if any(p not in KINDS for p in parts) or len(set(parts)) != len(parts):
+        raise argparse.ArgumentTypeError(
+            f"{text[:40]!r} is not admissible (admissible: a comma-separated list of "
+            f"{', '.join(KINDS)}, each at most once)")
+    return parts
+
+
 def _calibration(text: str) -> tuple[str | None, float]:
     """``CH=VALUE`` or ``VALUE``: a factor in the channel's unit per file unit."""
     ch, sep, value = text.rpartition("=")
@@ -489,6 +501,7 @@ def _cmd_diagnose(args: argparse.Namespace) -> int:
     _report_removed(check_output_folder(out, REPORT_FILES, overwrite=args.overwrite)[1])
     with removed_if_left_empty(out):
         d = diagnose(rec, args.gearset, baseline=base,
+                     **({"kinds": args.kinds} if args.kinds else {}),
                      library=False if args.no_library else args.library,
                      work_dir=out / "candidates" if args.keep_runs else None,
                      keep_runs=args.keep_runs, workers=args.workers,
@@ -787,6 +800,9 @@ def _parser() -> argparse.ArgumentParser:
                    help="revolutions of the reference shaft (the carrier of a planetary set; "
                    "docs/diagnosis.md) per averaged segment, 4..256 (resolution 1/N orders; "
                    "default 16)")
+    g.add_argument("--kinds", type=_fault_kinds, metavar="K[,K...]", help="candidate gear "
+                   "faults to simulate, from crack, pitting, broken_tooth, eccentricity, "
+                   "pin_error (default: all; declared bearings are always checked)")
     lib = g.add_mutually_exclusive_group()
     lib.add_argument("--library", metavar="DIR", help="folder of the candidate library, private "
                      "to the user (default: $GEARVIB_DIAGNOSIS_LIBRARY, else "

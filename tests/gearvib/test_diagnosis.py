@@ -19,6 +19,9 @@ from gearvib.diagnosis.candidates import planets_equivalent
 from gearvib.diagnosis.synthetic import record_from_run, synthetic_measurement
 from gearvib.io import write_netcdf
 
+# module fixtures computed once: the module's tests on one xdist worker
+pytestmark = pytest.mark.xdist_group("diagnosis")
+
 LOCAL = ("crack", "pitting", "broken_tooth")
 FAULTS = {
     "crack-sun": ({"kind": "crack", "member": "sun", "tooth": 5, "severity": 0.4}, "sun"),
@@ -271,13 +274,21 @@ def test_cli_json_report_and_output_rule(tmp_path, work):
         assert (out / f).stat().st_size > 1000
     html = (out / "report.html").read_text()
     assert "pin_error" in html and "What to measure next" in html
+    # --kinds: only those candidates (from the same library entries)
+    r = _cli("diagnose", "meas.nc", "--gearset", "paper-case1", "-o", "out_k", "--json",
+             "--kinds", "crack,pin_error", cwd=tmp_path, library=work)
+    assert r.returncode == 0, r.stderr
+    got = {c["cause"] for c in json.loads(r.stdout)["causes"]}
+    assert "pin_error" in got and got <= {"crack", "pin_error", "none", "local_tooth_fault"}
+    assert sorted(p.name for p in work.rglob("*.npz")) == entries
     # outputs exist: refused before any work, replaced with --overwrite
     r = _cli("diagnose", "meas.nc", "--gearset", "paper-case1", "-o", "out", cwd=tmp_path)
     assert r.returncode == 2 and "--overwrite" in r.stderr
     # range-checked options, one-line errors
     for bad, key in ((["--threshold", "1.2"], "threshold"), (["--threshold", "nan"], "threshold"),
                      (["--revolutions", "2"], "revolutions"), (["--workers", "0"], "workers"),
-                     (["--pulses-per-rev", "0"], "pulses-per-rev")):
+                     (["--pulses-per-rev", "0"], "pulses-per-rev"),
+                     (["--kinds", "crack,wear"], "kinds")):
         r = _cli("diagnose", "meas.nc", "--gearset", "paper-case1", "-o", "o2", *bad,
                  cwd=tmp_path)
         assert r.returncode == 2 and key in r.stderr and "Traceback" not in r.stderr, r.stderr

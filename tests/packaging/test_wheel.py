@@ -20,7 +20,7 @@ from pathlib import Path
 
 import pytest
 
-pytestmark = pytest.mark.slow
+pytestmark = [pytest.mark.xdist_group("wheel"), pytest.mark.slow]
 
 ROOT = Path(__file__).resolve().parents[2]
 SENSOR_TABLES = """
@@ -155,7 +155,7 @@ def test_every_command_runs_from_an_unrelated_folder(venv, tmp_path):
     ok("report", "run.nc", "-o", "rep", "-q")
     ok("compare", "meas.nc", "run.nc", "-o", "cmp")
     ok("diagnose", "meas.nc", "--gearset", "paper-case1", "-o", "dg", "-q", "--workers", "2",
-       "--revolutions", "4", "--json")
+       "--revolutions", "4", "--kinds", "crack", "--json")
     (work / "study.toml").write_text(SWEEP)
     ok("sweep", "study.toml", "-o", "sw", "--workers", "1", "-q")
     ok("demo", "-o", "demo", "--duration", "0.25", "-q")
