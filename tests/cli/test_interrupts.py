@@ -35,9 +35,8 @@ from gearvib import tempfiles
 from gearvib.io import read_run
 from tests.cli.signal_helpers import handlers_installed, run_and_signal, temp_files
 
-pytestmark = [pytest.mark.xdist_group("interrupts"),
-              pytest.mark.skipif(not Path("/proc/self/status").exists(),
-                                 reason="needs Linux /proc to see when the handlers are active")]
+pytestmark = pytest.mark.skipif(not Path("/proc/self/status").exists(),
+                                reason="needs Linux /proc to see when the handlers are active")
 
 SEED = int(os.environ.get("GEARVIB_SIGNAL_SEED", "11"))
 EXIT = {signal.SIGINT: 130, signal.SIGTERM: 143}

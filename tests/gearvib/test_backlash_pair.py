@@ -38,9 +38,6 @@ from gearvib.assembly import assemble
 from gearvib.config import gearset_from_dict
 from gearvib.simulate import TorqueDriven, simulate
 
-# module fixtures computed once: the module's tests on one xdist worker
-pytestmark = pytest.mark.xdist_group("backlash-pair")
-
 INERTIA, RADIUS, K_MESH, HALF_BACKLASH = 1.15e-3, 0.05, 3.8e8, 1e-4
 ZETA, F_MEAN, F_ALT = 0.05, 0.1, 0.015  # F in units of k b
 M_E = INERTIA / (2 * RADIUS**2)

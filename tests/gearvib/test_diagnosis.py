@@ -19,9 +19,6 @@ from gearvib.diagnosis.candidates import planets_equivalent
 from gearvib.diagnosis.synthetic import record_from_run, synthetic_measurement
 from gearvib.io import write_netcdf
 
-# module fixtures computed once: the module's tests on one xdist worker
-pytestmark = pytest.mark.xdist_group("diagnosis")
-
 LOCAL = ("crack", "pitting", "broken_tooth")
 FAULTS = {
     "crack-sun": ({"kind": "crack", "member": "sun", "tooth": 5, "severity": 0.4}, "sun"),

@@ -17,9 +17,6 @@ from gearvib.diagnosis import Record, diagnose
 from gearvib.diagnosis.verdict import LOCAL_FAULT
 from tests.independent.planetary_signals import PAPER_CASE1, RecordSpec, write_record
 
-# module fixtures computed once: the module's tests on one xdist worker
-pytestmark = pytest.mark.xdist_group("diagnosis-independent")
-
 LOCAL = ("crack", "pitting", "broken_tooth", LOCAL_FAULT)
 
 

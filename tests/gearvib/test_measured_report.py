@@ -30,9 +30,6 @@ from gearvib.sensors import HousingMode, HousingSensor, Tacho
 from gearvib.simulate import SpeedRamp, simulate
 from tests.gearvib.preset_drive import preset_coupling
 
-# module fixtures computed once: the module's tests on one xdist worker
-pytestmark = pytest.mark.xdist_group("measured-report")
-
 UFF = Path("/work/shared/data/uff")
 UFF_FILES = sorted(UFF.glob("*.uff")) if UFF.is_dir() else []
 MESH_ORDER = 0.426531 * 60  # paper-case1: mesh cycles per sun revolution (25.59)

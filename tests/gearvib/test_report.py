@@ -30,9 +30,6 @@ from gearvib.report import (
 from gearvib.report.case import analyse_case, summed_sun_stiffness
 from gearvib.report.wording import count
 
-# module fixtures computed once: the module's tests on one xdist worker
-pytestmark = pytest.mark.xdist_group("demo-study")
-
 REPO = Path(__file__).resolve().parents[2]
 QUICK = AnalysisSettings(stability_points=120, map_resolution_hz=40.0)
 

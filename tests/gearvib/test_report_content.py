@@ -31,9 +31,6 @@ from gearvib.report.figures import (
 )
 from gearvib.report.sections import report_sections
 
-# module fixtures computed once: the module's tests on one xdist worker
-pytestmark = pytest.mark.xdist_group("demo-study")
-
 REPO = Path(__file__).resolve().parents[2]
 COARSE = AnalysisSettings(stability="coarse", map_resolution_hz=40.0)
 

@@ -23,9 +23,6 @@ from gearvib.report.study import AnalysisSettings
 from gearvib.report.verdict import readable, settings_rows
 from gearvib.report.wording import span
 
-# module fixtures computed once: the module's tests on one xdist worker
-pytestmark = pytest.mark.xdist_group("report-nvh")
-
 SENSOR = '''
 [[sensor]]
 name = "top"

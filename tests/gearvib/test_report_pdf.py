@@ -35,9 +35,6 @@ from gearvib.report.pdf import PAGE, column_widths, write_pdf
 from gearvib.report.sections import Block, Section, report_sections
 from gearvib.report.wording import count
 
-# module fixtures computed once: the module's tests on one xdist worker
-pytestmark = pytest.mark.xdist_group("demo-study")
-
 DEMO_MAX_PAGES = 24  # the demo report has 21 pages with the summary and the NVH pages
 # (13 before them; matplotlib pages before: 50)
 TOL = 0.5  # pt
