@@ -38,7 +38,7 @@ from gearvib.report.verdict import (
 from gearvib.report.wording import count, span
 
 if TYPE_CHECKING:
-    from gearvib.report.measured import MeasuredCase
+    from gearvib.report.measured_case import MeasuredCase
 
 __all__ = ["MAX_RAY_CUTS", "measured_levels", "measured_summary", "with_level_pages"]
 
