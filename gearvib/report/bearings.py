@@ -37,7 +37,7 @@ if TYPE_CHECKING:
 
     from analysis.catalogue import KinematicCatalogue, RollingBearing
     from analysis.measurement import Measurement
-    from gearvib.report.measured import MeasuredCase
+    from gearvib.report.measured_case import MeasuredCase
     from gearvib.rig import ShaftRig
 
 __all__ = [

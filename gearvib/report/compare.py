@@ -26,7 +26,8 @@ from typing import Any
 
 import numpy as np
 
-from gearvib.report.case import CaseAnalysis, ResonanceRegion
+from gearvib.report.case_analysis import CaseAnalysis
+from gearvib.report.rises import ResonanceRegion
 from gearvib.report.wording import count, span
 
 __all__ = ["Comparison", "FloquetChange", "RegionChange", "compare_cases"]

@@ -22,7 +22,8 @@ import numpy as np
 from analysis.instability import FORCED, PARAMETRIC, UNEXPLAINED
 from analysis.plots import rpm_frequency_map_figure, rpm_order_map_figure
 from analysis.spectrum import to_db
-from gearvib.report.case import MARKER_BUDGET, CaseAnalysis, signed_force
+from gearvib.report.case_analysis import MARKER_BUDGET, CaseAnalysis
+from gearvib.report.case_run import signed_force
 from gearvib.report.wording import count
 
 if TYPE_CHECKING:
@@ -376,7 +377,7 @@ def sonogram_figure(ca: CaseAnalysis, *, level_max: float | None = None,
     vertical lines are the natural frequencies, labelled at the bottom (``f3=f4`` for a
     repeated pair); red bands the Floquet-unstable speeds. Only explained rises are marked
     (circles: forced resonances, squares: parametric instabilities; at most
-    :data:`~gearvib.report.case.MARKER_BUDGET`, the strongest); the tables list every rise.
+    :data:`~gearvib.report.case_analysis.MARKER_BUDGET`, the strongest); the tables list every rise.
     ``level_max`` gives every case the same colour scale.
     """
     several = ca.several_mesh_frequencies

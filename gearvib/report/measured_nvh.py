@@ -17,7 +17,6 @@ import numpy as np
 
 from gearvib import __version__
 from gearvib.report.blocks import Section
-from gearvib.report.case import merged_modes
 from gearvib.report.nvh import (
     LEVELS_SECTION_ID,
     LEVELS_TITLE,
@@ -25,6 +24,7 @@ from gearvib.report.nvh import (
     levels_blocks,
     signal_levels,
 )
+from gearvib.report.rises import merged_modes
 from gearvib.report.verdict import (
     SUMMARY_ID,
     SUMMARY_TITLE,
@@ -38,7 +38,7 @@ from gearvib.report.verdict import (
 from gearvib.report.wording import count, span
 
 if TYPE_CHECKING:
-    from gearvib.report.measured import MeasuredCase
+    from gearvib.report.measured_case import MeasuredCase
 
 __all__ = ["MAX_RAY_CUTS", "measured_levels", "measured_summary", "with_level_pages"]
 

@@ -34,7 +34,9 @@ from gearvib.assembly import assemble
 from gearvib.config import gearset_from_dict
 from gearvib.io import GearvibFileError, atomic_write, read_run, write_netcdf
 from gearvib.modal import modal_analysis
-from gearvib.report.case import CaseAnalysis, analyse_case, run_description
+from gearvib.report.case import analyse_case
+from gearvib.report.case_analysis import CaseAnalysis
+from gearvib.report.case_run import run_description
 from gearvib.report.compare import Comparison, compare_cases
 from gearvib.report.document import FigureImages
 from gearvib.report.html import render_html

@@ -15,16 +15,8 @@ from collections.abc import Sequence
 from typing import Any
 
 from gearvib.report.blocks import Block, Section
-from gearvib.report.case import (
-    MARKER_BUDGET,
-    PLANET_SIGNAL_GROWTH_DB,
-    REGION_HEADER,
-    RISE_HEADER,
-    SPOT_RANGE_DB,
-    CaseAnalysis,
-    key_speed_rows,
-    merged_modes,
-)
+from gearvib.report.case import PLANET_SIGNAL_GROWTH_DB, SPOT_RANGE_DB
+from gearvib.report.case_analysis import MARKER_BUDGET, CaseAnalysis, key_speed_rows
 from gearvib.report.figures import (
     force_limit,
     map_level_max,
@@ -37,6 +29,7 @@ from gearvib.report.figures import (
     tooth_force_figure,
 )
 from gearvib.report.nvh import LEVELS_SECTION_ID, LEVELS_TITLE, levels_blocks
+from gearvib.report.rises import REGION_HEADER, RISE_HEADER, merged_modes
 from gearvib.report.verdict import (
     SUMMARY_ID,
     SUMMARY_TITLE,

@@ -21,7 +21,8 @@ from gearvib.fault_lines import (
     confirmed_catalogue,
     known_families,
 )
-from gearvib.report.measured import MAX_LABEL_CHANCE, analyse_measurement
+from gearvib.report.measured_analysis import analyse_measurement
+from gearvib.report.measured_peaks import MAX_LABEL_CHANCE
 
 REPO = Path(__file__).resolve().parents[2]
 CWRU = Path("/work/shared/data/cwru")

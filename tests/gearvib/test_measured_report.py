@@ -21,11 +21,9 @@ from gearvib.assembly import assemble
 from gearvib.cli import main
 from gearvib.config import load_gearset
 from gearvib.report.crosscheck import cross_check, parse_report
-from gearvib.report.measured import (
-    MEASURED_SECTION_IDS,
-    analyse_measurement,
-    build_measured_report,
-)
+from gearvib.report.measured import build_measured_report
+from gearvib.report.measured_analysis import analyse_measurement
+from gearvib.report.measured_sections import MEASURED_SECTION_IDS
 from gearvib.sensors import HousingMode, HousingSensor, Tacho
 from gearvib.simulate import SpeedRamp, simulate
 from tests.gearvib.preset_drive import preset_coupling

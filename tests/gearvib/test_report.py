@@ -27,7 +27,8 @@ from gearvib.report import (
     load_study,
     run_study,
 )
-from gearvib.report.case import analyse_case, summed_sun_stiffness
+from gearvib.report.case import analyse_case
+from gearvib.report.case_stiffness import summed_sun_stiffness
 from gearvib.report.wording import count
 
 REPO = Path(__file__).resolve().parents[2]

@@ -20,7 +20,8 @@ import pytest
 from gearvib.config import ConfigError
 from gearvib.io import read_run
 from gearvib.report import AnalysisSettings, Study, build_report, load_study, run_study
-from gearvib.report.case import MARKER_BUDGET, analyse_case
+from gearvib.report.case import analyse_case
+from gearvib.report.case_analysis import MARKER_BUDGET
 from gearvib.report.crosscheck import cross_check, parse_report
 from gearvib.report.figures import (
     order_map_figure,

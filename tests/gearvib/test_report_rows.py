@@ -7,15 +7,15 @@ from types import SimpleNamespace
 import numpy as np
 
 from analysis.instability import Crossing
-from gearvib.report.case import (
+from gearvib.report.case_analysis import CaseAnalysis
+from gearvib.report.measured_case import MeasuredCase
+from gearvib.report.rises import (
     REGION_HEADER,
     RISE_HEADER,
-    CaseAnalysis,
     ResonanceRegion,
     crossing_table_rows,
     rise_table_rows,
 )
-from gearvib.report.measured import MeasuredCase
 
 
 class _Rises(SimpleNamespace):

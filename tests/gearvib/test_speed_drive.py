@@ -355,16 +355,16 @@ def test_run_file_states_the_drive_and_the_report_uses_it():
     controller; an input coupling's file is as before, without it), and the report's stability
     chart takes the drive of the run it analyses (a file from before the controller existed:
     the coupling on the input member it was run with)."""
-    from gearvib.report.case import _run_drive
+    from gearvib.report.case_run import run_drive
 
     model = rippled_case1(0.0)
     res = simulate(model, SpeedRamp(1000.0, 1000.0, 0.01, input_torque=TORQUE))
     ds = res.to_dataset()
     assert ds.attrs["drive_coupling_sensing"] == "rigid-body"
-    assert _run_drive(ds) == res.coupling == default_coupling(model)
+    assert run_drive(ds) == res.coupling == default_coupling(model)
     del ds.attrs["drive_coupling_sensing"]
-    assert _run_drive(ds) == DriveCoupling(res.coupling.stiffness, res.coupling.damping)
+    assert run_drive(ds) == DriveCoupling(res.coupling.stiffness, res.coupling.damping)
     phys = simulate(model, SpeedRamp(1000.0, 1000.0, 0.01, input_torque=TORQUE,
                                      coupling=DriveCoupling(3000.0, 5.0))).to_dataset()
     assert "drive_coupling_sensing" not in phys.attrs
-    assert _run_drive(phys) == DriveCoupling(3000.0, 5.0)
+    assert run_drive(phys) == DriveCoupling(3000.0, 5.0)

@@ -10,7 +10,7 @@ import pytest
 from gearvib.assembly import assemble
 from gearvib.config import gearset_from_dict, list_presets, load_config
 from gearvib.modal import modal_analysis
-from gearvib.report.case import summed_sun_stiffness
+from gearvib.report.case_stiffness import summed_sun_stiffness
 
 CASE2_ANGLES = [0.0, 360.0 * 50 / 147, 360.0 * 100 / 147]
 
