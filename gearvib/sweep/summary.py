@@ -9,8 +9,8 @@ What is summarised is set by :class:`SummarySettings` (the ``[summary]`` table o
 
 Virtual sensors
 ---------------
-The simulator has no virtual sensor yet. The hook: every variable of the run whose
-``gearvib_quantity`` attribute is :data:`VIRTUAL_SENSOR_QUANTITY` is summarised as
+Every variable of the run whose ``gearvib_quantity`` attribute is
+:data:`VIRTUAL_SENSOR_QUANTITY` (the ``[[sensor]]`` tables' accelerations) is summarised as
 ``<name>_rms`` (rms over the window) and, when orders are asked, as order levels, without any
 setting. Runs without such variables give none of these summaries.
 """
