@@ -32,8 +32,8 @@ damping law), it prints side by side:
 Every time is CPU time of a fixed window (the machine is shared), numba compilation excluded;
 the C comparison reports the best of several repetitions. Without ``gcc`` on the path the C
 comparison is skipped with a message. ``--quick`` is a smoke run: 5 ms windows from t = 0.05 s
-(~200 min^-1), one repetition and one round (every check of bit-identity still made; its
-ratios mean little).
+(~200 min^-1), one repetition and one round, the gcc -O2 build only and the first batched row
+(every check of bit-identity of those still made; its ratios mean little).
 """
 
 from __future__ import annotations
@@ -364,14 +364,16 @@ def main() -> None:
         print("gcc not found: the comparison with the C kernel (benchmarks/c/rk4_kernel.c) is "
               "skipped")
     else:
-        print_c_comparison(cond, window, repeat, t_start)
-    print_batched(cond, window, rounds, t_start)
+        print_c_comparison(cond, window, repeat, t_start, quick=args.quick)
+    print_batched(cond, window, rounds, t_start, quick=args.quick)
 
 
-def print_c_comparison(cond, window: float, repeat: int, t_start: float) -> None:
-    """The numba-against-C tables (gcc -O2, then with the host's instruction set)."""
+def print_c_comparison(cond, window: float, repeat: int, t_start: float,
+                       quick: bool = False) -> None:
+    """The numba-against-C tables (gcc -O2, then with the host's instruction set; ``quick``:
+    -O2 only)."""
     with tempfile.TemporaryDirectory() as tmp:
-        builds = [("O2", CFLAGS), ("native", CFLAGS_NATIVE)]
+        builds = [("O2", CFLAGS), ("native", CFLAGS_NATIVE)][:1 if quick else None]
         libs = {name: build_c(tmp, flags, name) for name, flags in builds}
         cases = {}
         for name, flags in builds:
@@ -395,8 +397,9 @@ def print_c_comparison(cond, window: float, repeat: int, t_start: float) -> None
             print("(records of the C loop and of the numba kernel bit-identical)")
 
 
-def print_batched(cond, window: float, rounds: int, t_start: float = T_BATCH) -> None:
-    """The batched-against-single table."""
+def print_batched(cond, window: float, rounds: int, t_start: float = T_BATCH,
+                  quick: bool = False) -> None:
+    """The batched-against-single table (``quick``: its first row, the rigid-bearing set)."""
     load = os.getloadavg()[0]
     print(f"\nbatched kernel ({N_BATCH} variants in one call) against {N_BATCH} single runs, "
           f"{window} s from t = {t_start} s (~{4000 * t_start:.0f} min^-1): CPU time, median "
@@ -404,8 +407,9 @@ def print_batched(cond, window: float, rounds: int, t_start: float = T_BATCH) ->
     print(f"{'model':22s} {'variants':16s} {'throughput':>17s} {'generic kernel':>17s} "
           f"{'same sub-steps':>17s} {'RHS alone':>17s} {'ns/RHS single':>14s} "
           f"{'batch/lane':>11s}")
-    for preset, which in (("paper-case1", "damping"), ("paper-case1-elastic", "damping"),
-                          ("paper-case1-elastic", "damping+bearing")):
+    rows = (("paper-case1", "damping"), ("paper-case1-elastic", "damping"),
+            ("paper-case1-elastic", "damping+bearing"))
+    for preset, which in rows[:1 if quick else None]:
         r = batched_vs_single(preset, which, cond, window, rounds, t_start)
         print(f"{preset:22s} {which:16s} {_spread(r['ratio']):>17s} "
               f"{_spread(r['generic']):>17s} {_spread(r['same']):>17s} "
