@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from analysis.checks import require_instance
 from analysis.inputs import select_channel
 
 if TYPE_CHECKING:
@@ -86,6 +87,11 @@ def tsa_figure(
     figsize : (float, float)
         Size in inches of a new figure.
     """
+    from analysis.tsa import TSA
+
+    require_instance(tsa, TSA, "tsa")
+    if ax is not None and (not hasattr(ax, "figure") or not hasattr(ax, "plot")):
+        raise TypeError(f"ax must be matplotlib Axes; got {type(ax).__name__}")
     if ax is None:
         fig = _new(figsize)
         ax = fig.add_subplot()
@@ -138,6 +144,9 @@ def planetary_figure(
     figsize : (float, float), optional
         Default ``(8, 1.6 per panel + 0.6)``.
     """
+    from analysis.planetary_tsa import PlanetarySeparation
+
+    require_instance(separation, PlanetarySeparation, "separation")
     gears = [*separation.planets, separation.sun]
     if gears[0].values.ndim > 1 and channel is None:
         raise ValueError("the record has several channels: choose one with channel=")
@@ -184,6 +193,9 @@ def gear_signals_figure(
     figsize : (float, float)
         Figure size in inches.
     """
+    from analysis.gear_signals import GearSignals
+
+    require_instance(signals, GearSignals, "signals")
     if signals.tsa.ndim > 1 and channel is None:
         raise ValueError("the signals have several channels: choose one with channel=")
 
@@ -275,6 +287,13 @@ def trend_figure(
     figsize : (float, float), optional
         Default ``(10, 1.9 per row + 0.8)`` with three panels per row.
     """
+    import xarray
+
+    from analysis.alarm_limits import AlarmLimits
+
+    require_instance(indicators, xarray.Dataset, "indicators")
+    if limits is not None:
+        require_instance(limits, AlarmLimits, "limits")
     if x not in ("record", "time"):
         raise ValueError(f"x = {x!r} is not admissible: 'record' or 'time'")
     names = list(variables) if variables is not None else (

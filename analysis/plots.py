@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from analysis.checks import require_colormap, require_instance, require_positive, require_real
 from analysis.levels import to_db
 
 if TYPE_CHECKING:
@@ -127,6 +128,9 @@ def spectrum_figure(
     figsize : (float, float)
         Size in inches of a new figure.
     """
+    from analysis.spectrum import Spectrum
+
+    require_instance(spectrum, Spectrum, "spectrum")
     fig, ax = _axes(ax, figsize)
     if isinstance(channel, tuple):  # an index into several leading dimensions
         spectrum = dataclasses.replace(
@@ -168,6 +172,9 @@ def order_spectrum_figure(
     figsize: tuple[float, float] = (8.0, 4.0),
 ) -> Figure:
     """Order spectrum (level vs order), one line per channel; ``ax`` to draw into."""
+    from analysis.orders import OrderSpectrum
+
+    require_instance(spectrum, OrderSpectrum, "spectrum")
     fig, ax = _axes(ax, figsize)
     rows = _rows(spectrum.values, spectrum.dims, spectrum.coords, spectrum.name)
     for label, row in rows:
@@ -185,6 +192,7 @@ def order_spectrum_figure(
 
 
 def _map_levels(m: RpmFrequencyMap | RpmOrderMap, dynamic_range_db: float) -> np.ndarray:
+    require_positive(require_real(dynamic_range_db, "dynamic_range_db"), "dynamic_range_db")
     if m.scale == "dB":
         lv = np.asarray(m.values, dtype=float)
     else:
@@ -195,7 +203,8 @@ def _map_levels(m: RpmFrequencyMap | RpmOrderMap, dynamic_range_db: float) -> np
 def _colourmap(
     fig: Figure, ax: Any, x: np.ndarray, y: np.ndarray, levels: np.ndarray, label: str, cmap: str
 ) -> None:
-    mesh = ax.pcolormesh(x, y, levels, shading="nearest", cmap=cmap, rasterized=True)
+    mesh = ax.pcolormesh(x, y, levels, shading="nearest", cmap=require_colormap(cmap),
+                         rasterized=True)
     fig.colorbar(mesh, ax=ax, label=label)
 
 
@@ -244,6 +253,9 @@ def rpm_frequency_map_figure(
     figsize : (float, float)
         Size in inches of a new figure.
     """
+    from analysis.maps import RpmFrequencyMap
+
+    require_instance(m, RpmFrequencyMap, "m")
     m = _one_channel(m, channel)
     fig, ax = _axes(ax, figsize)
     levels = _map_levels(m, dynamic_range_db)
@@ -299,6 +311,9 @@ def rpm_order_map_figure(
 
     ``channel`` chooses the channel of a multi-channel map; ``ax`` are axes to draw into.
     """
+    from analysis.maps import RpmOrderMap
+
+    require_instance(m, RpmOrderMap, "m")
     m = _one_channel(m, channel)
     fig, ax = _axes(ax, figsize)
     levels = _map_levels(m, dynamic_range_db)
@@ -335,6 +350,9 @@ def order_cuts_figure(
     ``db`` defaults to the cut's own scale; a linear cut can be shown in dB. A multi-channel
     cut draws every channel (``channel=`` chooses one); ``ax`` are axes to draw into.
     """
+    from analysis.orders import OrderCut
+
+    require_instance(cut, OrderCut, "cut")
     fig, ax = _axes(ax, figsize)
     if channel is not None:
         cut = cut.select(channel)
@@ -373,6 +391,9 @@ def overall_level_figure(
     level: OverallLevel, *, ax: Any = None, figsize: tuple[float, float] = (8.0, 4.0)
 ) -> Figure:
     """Overall rms level vs speed (one line per channel); ``ax`` to draw into."""
+    from analysis.maps import OverallLevel
+
+    require_instance(level, OverallLevel, "level")
     fig, ax = _axes(ax, figsize)
     rows = _rows(level.values, level.dims, level.coords, level.name)
     for label, row in rows:
@@ -400,6 +421,9 @@ def campbell_figure(
     figsize: tuple[float, float] = (7.0, 5.0),
 ) -> Figure:
     """Campbell diagram: order rays, natural-frequency lines and critical speeds."""
+    from analysis.maps import Campbell
+
+    require_instance(c, Campbell, "c")
     fig, ax = _axes(ax, figsize)
     text = list(order_labels) if order_labels is not None else [f"{o:g}×" for o in c.orders]
     if len(text) != c.orders.size:
