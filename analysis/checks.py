@@ -131,13 +131,17 @@ def require_real_array(
     if arr.size < min_size:
         raise ValueError(f"{name} needs at least {min_size} value(s); got {arr.size}")
     arr = arr.astype(np.float64, copy=False)
-    bad = ~np.isfinite(arr) if finite else np.zeros(0, dtype=bool)
-    if bad.any():
-        first = int(np.flatnonzero(bad.ravel())[0])
+    if not arr.size or not (finite or max_abs is not None):
+        return arr
+    # the extremes in two passes without a temporary array (NaN and inf propagate to them);
+    # the position of a bad value is searched for on failure only
+    hi, lo = float(arr.max()), float(arr.min())
+    if finite and not (np.isfinite(hi) and np.isfinite(lo)):
+        first = int(np.flatnonzero(~np.isfinite(arr.ravel()))[0])
         raise ValueError(f"{name}: non-finite value (NaN or inf) at flat index {first}; only "
                          "finite values are admissible")
-    if max_abs is not None and arr.size and float(np.max(np.abs(arr))) > max_abs:
-        first = int(np.flatnonzero(np.abs(arr.ravel()) > max_abs)[0])
+    if max_abs is not None and not max(hi, -lo) <= max_abs:
+        first = int(np.flatnonzero(~(np.abs(arr.ravel()) <= max_abs))[0])
         raise ValueError(f"{name}: a magnitude above {max_abs:g} at flat index {first}; "
                          f"admissible: |value| <= {max_abs:g} (check the units)")
     return arr
@@ -253,7 +257,7 @@ def _class_name(cls: type) -> str:
     return f"{module}.{cls.__qualname__}"
 
 
-def require_instance(value: Any, cls: type | tuple[type, ...], name: str) -> Any:
+def require_instance(value: Any, cls: type | str | tuple[type | str, ...], name: str) -> Any:
     """Return ``value``; raise :class:`TypeError` unless it is an instance of ``cls``.
 
     The message names the parameter and the expected type, e.g. ``"spectrum must be an
@@ -264,15 +268,19 @@ def require_instance(value: Any, cls: type | tuple[type, ...], name: str) -> Any
     ----------
     value : object
         The argument.
-    cls : type or tuple of type
-        The admissible class(es).
+    cls : type, str or tuple of them
+        The admissible class(es); a dotted name (``"analysis.maps.Campbell"``) matches a
+        value whose class or one of its bases has that module and name, for a module that
+        must not import the class's module at run time (the figure modules).
     name : str
         Name of the parameter in the message.
     """
-    if isinstance(value, cls):
-        return value
     classes = cls if isinstance(cls, tuple) else (cls,)
-    expected = " or ".join(_class_name(c) for c in classes)
+    dotted = {f"{c.__module__}.{c.__qualname__}" for c in type(value).__mro__}
+    for c in classes:
+        if (isinstance(c, str) and c in dotted) or (isinstance(c, type) and isinstance(value, c)):
+            return value
+    expected = " or ".join(c if isinstance(c, str) else _class_name(c) for c in classes)
     article = "an" if expected[0] in "aeiouxAEIOUX" else "a"  # "an xarray.Dataset"
     raise TypeError(f"{name} must be {article} {expected}; got {type(value).__name__}")
 

@@ -87,9 +87,7 @@ def tsa_figure(
     figsize : (float, float)
         Size in inches of a new figure.
     """
-    from analysis.tsa import TSA
-
-    require_instance(tsa, TSA, "tsa")
+    require_instance(tsa, "analysis.tsa.TSA", "tsa")
     if ax is not None and (not hasattr(ax, "figure") or not hasattr(ax, "plot")):
         raise TypeError(f"ax must be matplotlib Axes; got {type(ax).__name__}")
     if ax is None:
@@ -144,9 +142,7 @@ def planetary_figure(
     figsize : (float, float), optional
         Default ``(8, 1.6 per panel + 0.6)``.
     """
-    from analysis.planetary_tsa import PlanetarySeparation
-
-    require_instance(separation, PlanetarySeparation, "separation")
+    require_instance(separation, "analysis.planetary_tsa.PlanetarySeparation", "separation")
     gears = [*separation.planets, separation.sun]
     if gears[0].values.ndim > 1 and channel is None:
         raise ValueError("the record has several channels: choose one with channel=")
@@ -193,9 +189,7 @@ def gear_signals_figure(
     figsize : (float, float)
         Figure size in inches.
     """
-    from analysis.gear_signals import GearSignals
-
-    require_instance(signals, GearSignals, "signals")
+    require_instance(signals, "analysis.gear_signals.GearSignals", "signals")
     if signals.tsa.ndim > 1 and channel is None:
         raise ValueError("the signals have several channels: choose one with channel=")
 
@@ -289,11 +283,9 @@ def trend_figure(
     """
     import xarray
 
-    from analysis.alarm_limits import AlarmLimits
-
     require_instance(indicators, xarray.Dataset, "indicators")
     if limits is not None:
-        require_instance(limits, AlarmLimits, "limits")
+        require_instance(limits, "analysis.alarm_limits.AlarmLimits", "limits")
     if x not in ("record", "time"):
         raise ValueError(f"x = {x!r} is not admissible: 'record' or 'time'")
     names = list(variables) if variables is not None else (

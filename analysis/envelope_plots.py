@@ -93,10 +93,8 @@ def envelope_spectrum_figure(
     figsize : (float, float)
         Size of a new figure [in].
     """
-    from analysis.envelope import EnvelopeSpectrum
-    from analysis.envelope_orders import EnvelopeOrderSpectrum
-
-    require_instance(result, (EnvelopeSpectrum, EnvelopeOrderSpectrum), "result")
+    require_instance(result, ("analysis.envelope.EnvelopeSpectrum",
+                              "analysis.envelope_orders.EnvelopeOrderSpectrum"), "result")
     fams = _families(families)
     fig, ax = _axes(ax, figsize)
     is_order = hasattr(result, "order")
@@ -169,9 +167,7 @@ def kurtogram_figure(
     figsize : (float, float)
         Size of a new figure [in].
     """
-    from analysis.kurtogram import Kurtogram
-
-    require_instance(kurtogram, Kurtogram, "kurtogram")
+    require_instance(kurtogram, "analysis.kurtogram.Kurtogram", "kurtogram")
     from matplotlib.patches import Rectangle
 
     fig, ax = _axes(ax, figsize)
@@ -221,9 +217,7 @@ def spectral_kurtosis_figure(
     figsize : (float, float)
         Size of a new figure [in].
     """
-    from analysis.kurtogram import SpectralKurtosis
-
-    require_instance(sk, SpectralKurtosis, "sk")
+    require_instance(sk, "analysis.kurtogram.SpectralKurtosis", "sk")
     fig, ax = _axes(ax, figsize)
     ax.plot(sk.frequency, sk.kurtosis, lw=0.9, color="C0", label="K(f)")
     thr = sk.threshold(probability)
@@ -260,9 +254,7 @@ def squared_envelope_figure(
     figsize : (float, float)
         Size of a new figure [in].
     """
-    from analysis.envelope import SquaredEnvelope
-
-    require_instance(env, SquaredEnvelope, "env")
+    require_instance(env, "analysis.envelope.SquaredEnvelope", "env")
     fig, ax = _axes(ax, figsize)
     t = env.time
     keep = slice(None) if duration is None else t <= t[0] + float(duration)
@@ -308,9 +300,7 @@ def line_evidence_figure(
     sidebands found with a dot; the legend (below the axes) gives every family's status,
     harmonics found and, for a family whose lines were found, its chance of a coincidence.
     """
-    from analysis.line_evidence import LineEvidence
-
-    require_instance(evidence, LineEvidence, "evidence")
+    require_instance(evidence, "analysis.line_evidence.LineEvidence", "evidence")
     fig, ax = _axes(ax, figsize)
     x = evidence.axis
     status = evidence.status

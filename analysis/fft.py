@@ -54,6 +54,8 @@ from typing import Any
 
 import numpy as np
 
+from analysis.checks import require_size
+
 __all__ = [
     "RfftPlan",
     "RowIfft",
@@ -252,8 +254,6 @@ def empty_aligned(shape: int | tuple[int, ...], dtype: Any = np.float64) -> np.n
         A shape that is not integers >= 0, a dtype numpy does not know, or an array larger
         than the memory this process can use (checked before allocating).
     """
-    from analysis.checks import require_size
-
     dims = (shape,) if not isinstance(shape, tuple | list) else tuple(shape)
     for d in dims:
         if isinstance(d, bool | np.bool_) or not isinstance(d, int | np.integer):

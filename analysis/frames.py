@@ -129,7 +129,7 @@ def _finite_peak(a: np.ndarray, name: str) -> float:
     """``max|a|`` of a non-empty array; raise if it holds NaN/inf."""
     if a.size == 0:
         return 0.0
-    top = float(np.max(np.abs(a)))
+    top = max(float(a.max()), -float(a.min()))  # no temporary array (NaN propagates)
     if not np.isfinite(top):
         raise ValueError(f"{name}: non-finite value (NaN or inf); only finite values are "
                          "admissible")
@@ -193,10 +193,11 @@ def window_length(window: WindowSpec, rate: float, resolution: float, n: int, na
 def values_at(frac_index: np.ndarray, v: np.ndarray) -> np.ndarray:
     """Linear interpolation of ``v`` at fractional indices.
 
-    ``v`` is 1-D with at least two finite values of magnitude <= 1e300; the indices are
-    finite and within ``[-1, len(v)]`` (the end segments are extended by one sample).
+    ``v`` is 1-D with at least two real values (taken as they are: it may be a whole record,
+    not scanned here); the indices are finite and within ``[-1, len(v)]`` (the end segments
+    are extended by one sample).
     """
-    v = require_real_array(v, "v", ndim=1, min_size=2, max_abs=1e300)
+    v = require_real_array(v, "v", ndim=1, min_size=2, finite=False)  # O(1): v is long
     frac_index = require_real_array(frac_index, "frac_index", min_size=0)
     if frac_index.size and not (frac_index.min() >= -1.0 and frac_index.max() <= v.size):
         raise ValueError(f"frac_index must lie within [-1, {v.size}] (indices into v); got "

@@ -139,9 +139,7 @@ def catalogue_lines(catalogue: Any, *, speed_rpm: float | None = None, axis: str
         With several mesh frequencies (stages, stepped planets) an expression that does not
         name its member gets it in brackets: ``"2 f_mesh [stage2.pinion-wheel]"``.
     """
-    from analysis.catalogue import KinematicCatalogue
-
-    require_instance(catalogue, KinematicCatalogue, "catalogue")
+    require_instance(catalogue, "analysis.catalogue.KinematicCatalogue", "catalogue")
     axis = _axis(axis)
     u = require_positive(speed_uncertainty, "speed_uncertainty", allow_zero=True)
     cat = catalogue.select(families=families, visible_only=visible_only)

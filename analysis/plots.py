@@ -128,9 +128,7 @@ def spectrum_figure(
     figsize : (float, float)
         Size in inches of a new figure.
     """
-    from analysis.spectrum import Spectrum
-
-    require_instance(spectrum, Spectrum, "spectrum")
+    require_instance(spectrum, "analysis.spectrum.Spectrum", "spectrum")
     fig, ax = _axes(ax, figsize)
     if isinstance(channel, tuple):  # an index into several leading dimensions
         spectrum = dataclasses.replace(
@@ -172,9 +170,7 @@ def order_spectrum_figure(
     figsize: tuple[float, float] = (8.0, 4.0),
 ) -> Figure:
     """Order spectrum (level vs order), one line per channel; ``ax`` to draw into."""
-    from analysis.orders import OrderSpectrum
-
-    require_instance(spectrum, OrderSpectrum, "spectrum")
+    require_instance(spectrum, "analysis.orders.OrderSpectrum", "spectrum")
     fig, ax = _axes(ax, figsize)
     rows = _rows(spectrum.values, spectrum.dims, spectrum.coords, spectrum.name)
     for label, row in rows:
@@ -253,9 +249,7 @@ def rpm_frequency_map_figure(
     figsize : (float, float)
         Size in inches of a new figure.
     """
-    from analysis.maps import RpmFrequencyMap
-
-    require_instance(m, RpmFrequencyMap, "m")
+    require_instance(m, "analysis.maps.RpmFrequencyMap", "m")
     m = _one_channel(m, channel)
     fig, ax = _axes(ax, figsize)
     levels = _map_levels(m, dynamic_range_db)
@@ -311,9 +305,7 @@ def rpm_order_map_figure(
 
     ``channel`` chooses the channel of a multi-channel map; ``ax`` are axes to draw into.
     """
-    from analysis.maps import RpmOrderMap
-
-    require_instance(m, RpmOrderMap, "m")
+    require_instance(m, "analysis.maps.RpmOrderMap", "m")
     m = _one_channel(m, channel)
     fig, ax = _axes(ax, figsize)
     levels = _map_levels(m, dynamic_range_db)
@@ -350,9 +342,7 @@ def order_cuts_figure(
     ``db`` defaults to the cut's own scale; a linear cut can be shown in dB. A multi-channel
     cut draws every channel (``channel=`` chooses one); ``ax`` are axes to draw into.
     """
-    from analysis.orders import OrderCut
-
-    require_instance(cut, OrderCut, "cut")
+    require_instance(cut, "analysis.orders.OrderCut", "cut")
     fig, ax = _axes(ax, figsize)
     if channel is not None:
         cut = cut.select(channel)
@@ -391,9 +381,7 @@ def overall_level_figure(
     level: OverallLevel, *, ax: Any = None, figsize: tuple[float, float] = (8.0, 4.0)
 ) -> Figure:
     """Overall rms level vs speed (one line per channel); ``ax`` to draw into."""
-    from analysis.maps import OverallLevel
-
-    require_instance(level, OverallLevel, "level")
+    require_instance(level, "analysis.maps.OverallLevel", "level")
     fig, ax = _axes(ax, figsize)
     rows = _rows(level.values, level.dims, level.coords, level.name)
     for label, row in rows:
@@ -421,9 +409,7 @@ def campbell_figure(
     figsize: tuple[float, float] = (7.0, 5.0),
 ) -> Figure:
     """Campbell diagram: order rays, natural-frequency lines and critical speeds."""
-    from analysis.maps import Campbell
-
-    require_instance(c, Campbell, "c")
+    require_instance(c, "analysis.maps.Campbell", "c")
     fig, ax = _axes(ax, figsize)
     text = list(order_labels) if order_labels is not None else [f"{o:g}×" for o in c.orders]
     if len(text) != c.orders.size:

@@ -86,9 +86,7 @@ def order_waveform_figure(
     figsize : tuple of float
         Figure size [in].
     """
-    from analysis.vold_kalman_results import OrderWaveforms
-
-    require_instance(res, OrderWaveforms, "res")
+    require_instance(res, "analysis.vold_kalman_results.OrderWaveforms", "res")
     max_points = require_int(max_points, "max_points", 2)
     res = _one(res, channel)
     x, xlabel = _abscissa(res, xaxis)
@@ -157,9 +155,7 @@ def order_removal_figure(
     figsize : tuple of float
         Figure size [in].
     """
-    from analysis.vold_kalman_results import OrderRemoval
-
-    require_instance(rem, OrderRemoval, "rem")
+    require_instance(rem, "analysis.vold_kalman_results.OrderRemoval", "rem")
     ex = rem.extraction
     signal, residual = rem.signal, rem.residual
     if ex.envelope.ndim > 2:
