@@ -276,6 +276,9 @@ def require_instance(value: Any, cls: type | str | tuple[type | str, ...], name:
         Name of the parameter in the message.
     """
     classes = cls if isinstance(cls, tuple) else (cls,)
+    if not classes or not all(isinstance(c, type | str) for c in classes):
+        raise TypeError("require_instance: cls must be a class, a dotted class name or a "
+                        "tuple of them")
     dotted = {f"{c.__module__}.{c.__qualname__}" for c in type(value).__mro__}
     for c in classes:
         if (isinstance(c, str) and c in dotted) or (isinstance(c, type) and isinstance(value, c)):
