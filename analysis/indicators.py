@@ -105,22 +105,33 @@ def _values(x: Any, name: str) -> np.ndarray:
     return arr.astype(float)
 
 
-def _pow2(v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``(u, e)`` with ``v = u 2**e`` per row and ``max|u|`` in [0.5, 1) (a zero row stays
-    zero): powers of ``u`` neither overflow nor lose the row to underflow. The scaling by a
-    power of two is exact, so a moment computed from ``u`` and scaled back has the same bits
-    as one computed from ``v``."""
-    top = np.max(np.abs(v), axis=-1, keepdims=True)
+#: Rows whose largest magnitude lies in ``[2**-32, 2**32]`` are used as they are (the 16th
+#: power of such samples, summed, stays within float64); others are scaled by a power of two.
+_SAFE_EXPONENT = 32
+
+
+def _pow2(v: np.ndarray, top: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """``(u, e)`` with ``v = u 2**e`` per row: ``e = 0`` (``u`` is ``v``, the plain formulas'
+    bits) for a row whose ``max|v|`` lies in ``[2**-32, 2**32]``, else ``max|u|`` in
+    [0.5, 1), so that powers of ``u`` neither overflow nor lose the row to underflow (a zero
+    row stays zero). The scaling by a power of two is exact. ``top``: ``max|v|`` per row,
+    if known."""
+    if top is None:
+        top = np.max(np.abs(v), axis=-1)
     _, e = np.frexp(np.where(top > 0.0, top, 1.0))
-    return np.ldexp(v, -e), e[..., 0]
+    e = np.where(np.abs(e) <= _SAFE_EXPONENT, 0, e)
+    if not np.any(e):
+        return v, e
+    return np.ldexp(v, -e[..., None]), e
 
 
 def _scaled(v: np.ndarray, name: str) -> tuple[np.ndarray, np.ndarray]:
     """:func:`_pow2`, refusing a row of zeros (its scale-free indicators are 0/0)."""
-    if np.any(np.max(np.abs(v), axis=-1) == 0.0):
+    top = np.max(np.abs(v), axis=-1)
+    if np.any(top == 0.0):
         raise ValueError(f"{name} is zero throughout (a row of zeros): the indicator is "
                          "undefined")
-    return _pow2(v)
+    return _pow2(v, top)
 
 
 def _finite(result: np.ndarray, what: str) -> np.ndarray:
@@ -134,14 +145,14 @@ def _finite(result: np.ndarray, what: str) -> np.ndarray:
 def _central(v: np.ndarray, name: str) -> tuple[np.ndarray, np.ndarray]:
     """Scaled central values ``c`` (``(v - mean) = c 2**e``) and their mean square; raise
     for a constant row (its normalised moments are 0/0)."""
-    u, e = _scaled(v, name)
+    u, _ = _scaled(v, name)
     c = u - u.mean(axis=-1, keepdims=True)
     with np.errstate(under="ignore"):
         m2 = np.mean(c * c, axis=-1)
     if np.any(m2 == 0.0):
         raise ValueError(f"{name} is constant along its last axis (zero variance): the "
                          "normalised moment is undefined")
-    return c, e
+    return c, m2
 
 
 def rms(x: Any) -> np.ndarray:
@@ -178,9 +189,8 @@ def normalized_moment(x: Any, order: int) -> np.ndarray:
     ) or (order % 2):
         raise ValueError(f"order = {order!r} is not admissible: an even integer in 2 .. "
                          f"{MAX_MOMENT_ORDER}")
-    c, _ = _central(_values(x, "x"), "x")
+    c, m2 = _central(_values(x, "x"), "x")
     with np.errstate(under="ignore"):
-        m2 = np.mean(c * c, axis=-1)
         return np.mean(c**order, axis=-1) / m2 ** (order // 2)
 
 

@@ -20,6 +20,7 @@ alone or with others, bit for bit.
 from __future__ import annotations
 
 import functools
+import math
 
 import numba
 import numpy as np
@@ -45,6 +46,8 @@ MAX_INDEX = 2**52
 
 def _bounded_int(value: object, name: str, low: int, high: int) -> int:
     """``value`` as an int in ``[low, high]``; a ValueError naming ``name`` otherwise."""
+    if type(value) is int and low <= value <= high:  # the per-block calls: no further work
+        return value
     v = require_int(value, name, low)
     if v > high:
         raise ValueError(f"{name} = {value!r} is not admissible: an integer in {low} .. {high}")
@@ -53,6 +56,9 @@ def _bounded_int(value: object, name: str, low: int, high: int) -> int:
 
 def _real(a: object, name: str, ndims: tuple[int, ...]) -> np.ndarray:
     """``a`` as a C-contiguous float64 array of one of ``ndims`` dimensions (no NaN check)."""
+    if (type(a) is np.ndarray and a.dtype == np.float64 and a.ndim in ndims
+            and a.flags.c_contiguous):
+        return a  # the per-block calls: nothing to convert
     arr = require_real_array(a, name, min_size=0, finite=False)
     if arr.ndim not in ndims:
         raise ValueError(f"{name} must have {' or '.join(map(str, ndims))} dimension(s); got "
@@ -252,8 +258,9 @@ def positions(
                          f"{ta.size}")
     count = _bounded_int(count, "count", 0, MAX_INDEX)
     f0 = _bounded_int(f0, "f0", -MAX_INDEX, MAX_INDEX)
-    first, dphi, t_first, fs = (require_real(v, k) for k, v in (
-        ("first", first), ("dphi", dphi), ("t_first", t_first), ("fs", fs)))
+    first, dphi, t_first, fs = (v if type(v) is float and math.isfinite(v) else require_real(v, k)
+                                for k, v in (("first", first), ("dphi", dphi),
+                                             ("t_first", t_first), ("fs", fs)))
     require_size(16.0 * count, f"{count} positions and instants", "count")
     pos = np.empty(count)
     tq = np.empty(count)
