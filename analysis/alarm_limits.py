@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from analysis.cf import cf_dataset
-from analysis.checks import require_choice, require_real
+from analysis.checks import require_choice, require_instance, require_real
 from analysis.cm_plots import trend_figure
 
 if TYPE_CHECKING:
@@ -136,6 +136,9 @@ def learn_limits(
         Naming the parameter: fewer than 3 healthy records, ``k`` not a positive number,
         unknown variables or ``sides``.
     """
+    import xarray
+
+    require_instance(indicators, xarray.Dataset, "indicators")
     if "record" not in indicators.dims:
         raise ValueError("indicators needs a 'record' dimension (condition_indicators output)")
     kk = require_real(k, "k")

@@ -37,10 +37,18 @@ from __future__ import annotations
 import math
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numba
 import numpy as np
 
+from analysis.checks import (
+    require_finite_blocks,
+    require_instance,
+    require_int,
+    require_positive,
+    require_real,
+)
 from analysis.fft import RowIfft, next_fast_len, rfft_plan
 from analysis.jit import prepare_cache
 
@@ -288,6 +296,30 @@ class BlockSpectra:
             yield plan.execute()[0], b * self.hop, min(self.hop, self.n - b * self.hop)
 
 
+#: Largest sample magnitude :func:`band_moments` takes (``|z|^4`` summed stays finite).
+MAX_MOMENT_SAMPLE = 1e70
+#: Largest sample magnitude :func:`squared_envelope_samples` takes.
+MAX_ENVELOPE_SAMPLE = 1e140
+
+
+def _record(x: Any, fs: Any, bound: float) -> float:
+    """Check the record ``x`` (1-D, real, finite, ``|x| <= bound``) and return ``fs``."""
+    require_instance(x, np.ndarray, "x")
+    if x.dtype.kind not in "iuf":
+        raise TypeError(f"x must hold real numbers; got dtype {x.dtype}")
+    if x.ndim != 1 or x.size < 2:
+        raise ValueError(f"x must be a 1-D record of at least 2 samples; got shape {x.shape}")
+    require_finite_blocks(x, "x", bound)
+    return require_positive(require_real(fs, "fs"), "fs")
+
+
+def _decimation(d: Any, n: int, name: str) -> int:
+    v = require_int(d, name, 1)
+    if v > n:
+        raise ValueError(f"{name} = {d!r} is not admissible: 1 .. {n} (the record's length)")
+    return v
+
+
 def _check_ringing(margin: int, n: int, fs: float, band: Band) -> None:
     """Refuse a band whose filter rings longer than the record (checked before the blocks,
     whose size follows from it, are allocated)."""
@@ -353,7 +385,21 @@ def band_moments(
     ValueError
         A level keeps no sample between its end guards.
     """
-    unit = math.lcm(*(int(d) for d in decimations))
+    fs = _record(x, fs, MAX_MOMENT_SAMPLE)
+    if not isinstance(levels, Sequence) or not isinstance(decimations, Sequence) or not levels \
+            or len(levels) != len(decimations):
+        raise ValueError("levels and decimations must be sequences of equal, non-zero length "
+                         "(one decimation per level)")
+    decimations = [_decimation(d, x.size, f"decimations[{k}]") for k, d in enumerate(decimations)]
+    for k, bands in enumerate(levels):
+        if not isinstance(bands, Sequence) or not bands:
+            raise ValueError(f"levels[{k}] must be a non-empty sequence of Band")
+        for j, b in enumerate(bands):
+            require_instance(b, Band, f"levels[{k}][{j}]")
+    unit = math.lcm(*decimations)
+    if unit > x.size:
+        raise ValueError(f"decimations {decimations}: their least common multiple {unit} "
+                         f"exceeds the record's {x.size} samples")
     narrowest = min((b for bands in levels for b in bands), key=lambda b: b.transition)
     margin = math.ceil(MARGIN_TRANSITIONS * fs / narrowest.transition)
     _check_ringing(margin, x.shape[-1], fs, narrowest)
@@ -400,7 +446,13 @@ def band_moments(
 
 def envelope_decimation(band: Band, fs: float) -> int:
     """Largest 5-smooth decimation ``D`` whose rate ``fs / D`` carries the squared envelope
-    of ``band`` without aliasing (``fs / D >= 2 * support width``)."""
+    of ``band`` without aliasing (``fs / D >= 2 * support width``); the band must start
+    below the Nyquist frequency ``fs / 2``."""
+    require_instance(band, Band, "band")
+    fs = require_positive(require_real(fs, "fs"), "fs")
+    if not band.support[0] < 0.5 * fs:
+        raise ValueError(f"band = ({band.low:g}, {band.high:g}) Hz is not admissible for fs = "
+                         f"{fs:g} Hz: it must start below fs / 2")
     lo, hi = band.support
     width = min(hi, 0.5 * fs) - max(lo, 0.0)
     return _smooth_below(max(1, math.floor(fs / (2.0 * width))))
@@ -429,7 +481,9 @@ def squared_envelope_samples(
     numpy.ndarray
         ``ceil(n / D)`` samples, in the squared units of ``x``.
     """
-    d = int(decimation)
+    fs = _record(x, fs, MAX_ENVELOPE_SAMPLE)
+    require_instance(band, Band, "band")
+    d = _decimation(decimation, x.size, "decimation")
     margin = math.ceil(MARGIN_TRANSITIONS * fs / band.transition)
     _check_ringing(margin, x.shape[-1], fs, band)
     blocks = BlockSpectra(x, unit=d, margin=margin, workers=workers)

@@ -32,7 +32,7 @@ from typing import Any
 import numpy as np
 
 from analysis.cf import cf_dataset
-from analysis.checks import require_finite, require_positive
+from analysis.checks import require_finite, require_instance, require_positive, require_real
 
 __all__ = [
     "FAMILIES",
@@ -568,6 +568,16 @@ def kinematic_catalogue(
     Orders are ``rate / f_ref``. Lines with zero frequency (e.g. the planet pass of a fixed
     carrier) are left out, with a note.
     """
+    require_instance(speeds, Mapping, "speeds")
+    for name, items, cls in (("meshes", meshes, ToothMesh), ("bearings", bearings,
+                                                            RollingBearing)):
+        if isinstance(items, str) or not isinstance(items, Sequence):
+            raise TypeError(f"{name} must be a sequence of {cls.__name__}; got "
+                            f"{type(items).__name__}")
+        for k, item in enumerate(items):
+            require_instance(item, cls, f"{name}[{k}]")
+    for k, v in speeds.items():
+        require_real(v, f"speeds[{k!r}]")
     sp = {str(k): float(v) for k, v in dict(speeds).items()}
     for k, v in sp.items():
         if not math.isfinite(v):

@@ -44,6 +44,8 @@ from typing import Any
 
 import numpy as np
 
+from analysis.checks import require_instance
+
 __all__ = [
     "CONVENTIONS",
     "EPOCH",
@@ -83,6 +85,9 @@ def time_attrs(long_name: str, reference: str | None = None) -> dict[str, str]:
     reference : str, optional
         ISO 8601 instant of time 0 (``time_coverage_start``); default :data:`EPOCH`.
     """
+    require_instance(long_name, str, "long_name")
+    if reference is not None:
+        require_instance(reference, str, "reference")
     ref = reference.strip() if reference else EPOCH
     return {
         "units": f"seconds since {ref}",
@@ -142,6 +147,12 @@ def label_encoding(dim: str) -> dict[str, str]:
     return {"dtype": "S1", "char_dim_name": f"{dim}{STRLEN_SUFFIX}"}
 
 
+def _require_dataset(ds: Any) -> None:
+    import xarray as xr
+
+    require_instance(ds, xr.Dataset, "ds")
+
+
 def _is_label(ds: Any, name: Any) -> bool:
     var = ds.variables[name]
     return var.dims == (name,) and var.dtype.kind in "USO"
@@ -155,6 +166,7 @@ def labels_to_cf(ds: Any) -> Any:
     ``char <dim>(<dim>, <dim>_strlen)``; values stay ``str`` in memory. Inverse:
     :func:`labels_from_cf`.
     """
+    _require_dataset(ds)
     out = ds.copy(deep=False)
     for name in list(out.coords):
         if not _is_label(out, name):
@@ -178,6 +190,7 @@ def labels_from_cf(ds: Any) -> Any:
     arrays. Label variables ``<dim>_label(<dim>)`` of files written by earlier versions become
     the coordinate of their dimension again.
     """
+    _require_dataset(ds)
     out = ds
     for name in list(ds.variables):
         name = str(name)
@@ -306,6 +319,7 @@ def cf_dataset(ds: Any, *, title: str, producer: str, inputs: Any = None) -> Any
           written as label arrays (:func:`labels_to_cf`);
         * attributes netCDF can store (:func:`clean_attr_value`).
     """
+    _require_dataset(ds)
     out = labels_to_cf(ds)
     attrs: dict[str, Any] = {"Conventions": CONVENTIONS, "title": title}
     attrs.update(provenance_attrs(producer, inputs))

@@ -16,13 +16,16 @@ __all__ = [
     "renamed",
     "require_block_size",
     "require_choice",
+    "require_colormap",
     "require_finite",
     "require_finite_blocks",
+    "require_instance",
     "require_int",
     "require_mass_matrix",
     "require_monotonic",
     "require_positive",
     "require_real",
+    "require_real_array",
     "require_same_length",
     "require_size",
     "require_square",
@@ -33,6 +36,7 @@ __all__ = [
 
 #: Default ``block_size`` of the block-wise order analysis (samples per block).
 BLOCK_SAMPLES = 1 << 15
+_SMALL_BYTES = 1 << 20
 
 
 def require_finite(values: np.ndarray, name: str) -> np.ndarray:
@@ -87,6 +91,62 @@ def require_real(value: Any, name: str) -> float:
     return v
 
 
+def require_real_array(
+    values: Any, name: str, *, ndim: int | None = None, min_size: int = 1,
+    max_abs: float | None = None, finite: bool = True,
+) -> np.ndarray:
+    """Return ``values`` as a finite float64 array, checked before any arithmetic on it.
+
+    Parameters
+    ----------
+    values : array_like
+        The argument.
+    name : str
+        Name of the parameter in messages.
+    ndim : int, optional
+        Required number of dimensions.
+    min_size : int
+        Fewest values admissible (an empty array has none).
+    max_abs : float, optional
+        Largest magnitude admissible (products or powers of larger values would overflow).
+    finite : bool
+        Refuse NaN and inf (a pass over the values); ``False`` leaves them to the caller.
+
+    Raises
+    ------
+    TypeError
+        Not real numbers: bool, complex, str or object dtype (no silent conversion).
+    ValueError
+        Wrong number of dimensions, too few values, NaN/inf, or a magnitude above
+        ``max_abs``.
+    """
+    try:
+        arr = np.asarray(values)
+    except ValueError:  # a ragged nesting
+        raise ValueError(f"{name} must be a rectangular array of real numbers") from None
+    if arr.dtype.kind not in "iuf":
+        raise TypeError(f"{name} must hold real numbers; got dtype {arr.dtype}")
+    if ndim is not None and arr.ndim != ndim:
+        raise ValueError(f"{name} must be a {ndim}-D array; got shape {arr.shape}")
+    if arr.size < min_size:
+        raise ValueError(f"{name} needs at least {min_size} value(s); got {arr.size}")
+    arr = arr.astype(np.float64, copy=False)
+    if not arr.size or not (finite or max_abs is not None):
+        return arr
+    # the extremes in two passes without a temporary array (NaN and inf propagate to them);
+    # the position of a bad value is searched for on failure only
+    hi, lo = float(arr.max()), float(arr.min())
+    if finite and not (np.isfinite(hi) and np.isfinite(lo)):
+        first = int(np.flatnonzero(~np.isfinite(arr.ravel()))[0])
+        raise ValueError(f"{name}: non-finite value (NaN or inf) at flat index {first}; only "
+                         "finite values are admissible")
+    if max_abs is not None and not max(hi, -lo) <= max_abs:
+        first = int(np.flatnonzero(~(np.abs(arr.ravel()) <= max_abs))[0])
+        raise ValueError(f"{name}: a magnitude above {max_abs:g} at flat index {first}; "
+                         f"admissible: |value| <= {max_abs:g} (check the units)")
+    return arr
+
+
 def require_size(nbytes: float, what: str, parameters: str) -> None:
     """Raise unless ``nbytes`` (computed from the arguments) fit into the usable memory.
 
@@ -108,8 +168,10 @@ def require_size(nbytes: float, what: str, parameters: str) -> None:
     -----
     The limit is :func:`analysis.readers.integrity.memory_budget`: 80 % of the smallest of
     the free memory, the cgroup limit and the address-space limit (``RLIMIT_AS``), the same
-    rule the readers apply to a file's declared sizes.
+    rule the readers apply to a file's declared sizes. Sizes up to 1 MiB pass unchecked.
     """
+    if nbytes <= _SMALL_BYTES:  # no system calls for the small buffers of block loops
+        return
     from analysis.readers.integrity import format_bytes, memory_budget
 
     budget = memory_budget()
@@ -136,7 +198,13 @@ def require_monotonic(values: np.ndarray, name: str, *, strict: bool = True) -> 
 
 def require_same_length(arrays: Sequence[np.ndarray], names: Sequence[str]) -> int:
     """Raise unless all arrays have the same length along their last axis."""
-    lengths = [np.shape(a)[-1] for a in arrays]
+    shapes = [np.shape(a) for a in arrays]
+    for a, shape in zip(names, shapes, strict=True):
+        if not shape:
+            raise ValueError(f"{a} must be an array with a time axis; got a scalar")
+    lengths = [shape[-1] for shape in shapes]
+    if not lengths:
+        raise ValueError("require_same_length: no arrays given")
     if len(set(lengths)) > 1:
         desc = ", ".join(f"{n}: {k}" for n, k in zip(names, lengths, strict=True))
         raise ValueError(f"sample-count mismatch ({desc}); channels must have equal length")
@@ -175,6 +243,69 @@ def require_int(value: Any, name: str, minimum: int) -> int:
     if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < minimum:
         raise ValueError(f"{name} = {value!r} is not admissible: must be an integer >= {minimum}")
     return int(value)
+
+
+def _class_name(cls: type) -> str:
+    """``module.Name`` of a class as users import it (``xarray.Dataset``, not its home)."""
+    module = cls.__module__
+    if module == "builtins":
+        return cls.__qualname__
+    top = module.split(".")[0]
+    if top in ("xarray", "numpy", "concurrent"):
+        public = {"numpy": "numpy", "xarray": "xarray", "concurrent": "concurrent.futures"}[top]
+        return f"{public}.{cls.__qualname__}"
+    return f"{module}.{cls.__qualname__}"
+
+
+def require_instance(value: Any, cls: type | str | tuple[type | str, ...], name: str) -> Any:
+    """Return ``value``; raise :class:`TypeError` unless it is an instance of ``cls``.
+
+    The message names the parameter and the expected type, e.g. ``"spectrum must be an
+    analysis.spectrum.Spectrum; got int"``, instead of the ``AttributeError`` a missing
+    attribute would give deep inside the function.
+
+    Parameters
+    ----------
+    value : object
+        The argument.
+    cls : type, str or tuple of them
+        The admissible class(es); a dotted name (``"analysis.maps.Campbell"``) matches a
+        value whose class or one of its bases has that module and name, for a module that
+        must not import the class's module at run time (the figure modules).
+    name : str
+        Name of the parameter in the message.
+    """
+    classes = cls if isinstance(cls, tuple) else (cls,)
+    if not classes or not all(isinstance(c, type | str) for c in classes):
+        raise TypeError("require_instance: cls must be a class, a dotted class name or a "
+                        "tuple of them")
+    dotted = {f"{c.__module__}.{c.__qualname__}" for c in type(value).__mro__}
+    for c in classes:
+        if (isinstance(c, str) and c in dotted) or (isinstance(c, type) and isinstance(value, c)):
+            return value
+    expected = " or ".join(c if isinstance(c, str) else _class_name(c) for c in classes)
+    article = "an" if expected[0] in "aeiouxAEIOUX" else "a"  # "an xarray.Dataset"
+    raise TypeError(f"{name} must be {article} {expected}; got {type(value).__name__}")
+
+
+def require_colormap(cmap: Any, name: str = "cmap") -> Any:
+    """Return ``cmap``; raise unless it names a registered matplotlib colormap (or is one).
+
+    matplotlib's own error lists every colormap on several lines; this one is one line.
+    """
+    from matplotlib import colormaps
+    from matplotlib.colors import Colormap
+
+    if isinstance(cmap, Colormap):
+        return cmap
+    if not isinstance(cmap, str):
+        raise TypeError(f"{name} must be the name of a matplotlib colormap; got "
+                        f"{type(cmap).__name__}")
+    if cmap not in colormaps:
+        shown = cmap if len(cmap) <= 40 else cmap[:40] + "..."
+        raise ValueError(f"{name} = {shown!r} is not a matplotlib colormap (e.g. 'viridis', "
+                         "'magma', 'gray'; see matplotlib.colormaps)")
+    return cmap
 
 
 def require_block_size(block_size: int | None) -> int:
@@ -269,6 +400,11 @@ def require_finite_blocks(x: np.ndarray, name: str, bound: float | None = None) 
     With ``bound``, a magnitude above it is refused too (its powers would overflow float64).
     The message names the channel (its index for a multi-channel array) and the time sample.
     """
+    require_instance(x, np.ndarray, name)
+    if x.ndim == 0:
+        raise ValueError(f"{name} must be an array with a time axis; got a 0-d array")
+    if x.dtype.kind not in "biufc":
+        raise TypeError(f"{name} must hold real numbers; got dtype {x.dtype}")
     if x.size == 0:
         raise ValueError(f"{name}: channel is empty (needs at least one sample)")
     n = x.shape[-1]

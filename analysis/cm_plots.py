@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from analysis.checks import require_instance
 from analysis.inputs import select_channel
 
 if TYPE_CHECKING:
@@ -86,6 +87,9 @@ def tsa_figure(
     figsize : (float, float)
         Size in inches of a new figure.
     """
+    require_instance(tsa, "analysis.tsa.TSA", "tsa")
+    if ax is not None and (not hasattr(ax, "figure") or not hasattr(ax, "plot")):
+        raise TypeError(f"ax must be matplotlib Axes; got {type(ax).__name__}")
     if ax is None:
         fig = _new(figsize)
         ax = fig.add_subplot()
@@ -138,6 +142,7 @@ def planetary_figure(
     figsize : (float, float), optional
         Default ``(8, 1.6 per panel + 0.6)``.
     """
+    require_instance(separation, "analysis.planetary_tsa.PlanetarySeparation", "separation")
     gears = [*separation.planets, separation.sun]
     if gears[0].values.ndim > 1 and channel is None:
         raise ValueError("the record has several channels: choose one with channel=")
@@ -184,6 +189,7 @@ def gear_signals_figure(
     figsize : (float, float)
         Figure size in inches.
     """
+    require_instance(signals, "analysis.gear_signals.GearSignals", "signals")
     if signals.tsa.ndim > 1 and channel is None:
         raise ValueError("the signals have several channels: choose one with channel=")
 
@@ -275,6 +281,11 @@ def trend_figure(
     figsize : (float, float), optional
         Default ``(10, 1.9 per row + 0.8)`` with three panels per row.
     """
+    import xarray
+
+    require_instance(indicators, xarray.Dataset, "indicators")
+    if limits is not None:
+        require_instance(limits, "analysis.alarm_limits.AlarmLimits", "limits")
     if x not in ("record", "time"):
         raise ValueError(f"x = {x!r} is not admissible: 'record' or 'time'")
     names = list(variables) if variables is not None else (

@@ -43,6 +43,7 @@ import xarray as xr
 from scipy.signal import find_peaks as _scipy_peaks
 
 from analysis.cf import cf_dataset
+from analysis.checks import require_instance
 from analysis.maps import rpm_frequency_map, rpm_order_map
 from analysis.measurement import Measurement
 from analysis.runup import map_features
@@ -462,6 +463,7 @@ def simulated_channel_name(simulated: Measurement, name: str | None = None,
         ``name`` is not a vibration channel of the simulated record (one line naming the
         admissible channels), or the record has none.
     """
+    require_instance(simulated, Measurement, "simulated")
     vib = simulated.vibration_channels
     if name is None:
         if measured_channel is not None and measured_channel in vib:

@@ -43,6 +43,12 @@ import xarray as xr
 from scipy import ndimage, signal, stats
 
 from analysis.cf import cf_dataset
+from analysis.checks import (
+    require_instance,
+    require_positive,
+    require_real,
+    require_real_array,
+)
 from analysis.resample import resample_to_angle
 
 __all__ = [
@@ -200,16 +206,30 @@ def prominence_db(profile: OrderProfile, *, width: float = 6.0,
     ``dynamic_range`` dB below the running maximum (so a noise-free simulation has the same
     dynamic range as a measurement). A slowly varying transfer function cancels.
     """
+    _profile(profile)
+    dr = require_real(dynamic_range, "dynamic_range")
+    if dr < 0:
+        raise ValueError(f"dynamic_range = {dynamic_range!r} is not admissible: dB >= 0")
     lv = profile.level_db
-    n = _window(width, profile.revolutions)
+    n = _window(width, profile.revolutions, profile.order.size)
     med = ndimage.median_filter(lv, size=n, mode="nearest")
     top = ndimage.maximum_filter1d(lv, size=n, mode="nearest")
     floor = np.maximum(med, top - dynamic_range)
     return np.clip(lv - floor, 0.0, dynamic_range)
 
 
-def _window(width: float, revolutions: int) -> int:
-    return max(3, round(2 * width * revolutions) | 1)
+def _window(width: float, revolutions: int, size: int) -> int:
+    """Odd filter length [bins] of ``±width`` orders; a width beyond the profile is refused
+    (a filter longer than the profile costs time and says nothing)."""
+    w = require_real(width, "width")
+    if not 0.0 < w * revolutions <= 2 * size + 2:
+        raise ValueError(f"width = {width!r} is not admissible: orders in (0, "
+                         f"{(2 * size + 2) / revolutions:g}] (about the profile's span)")
+    return max(3, round(2 * w * revolutions) | 1)
+
+
+def _profile(profile: Any, name: str = "profile") -> None:
+    require_instance(profile, OrderProfile, name)
 
 
 def dynamic_range_db(profile: OrderProfile, *, width: float = 6.0,
@@ -220,12 +240,13 @@ def dynamic_range_db(profile: OrderProfile, *, width: float = 6.0,
     level between the lines (noise of the measuring chain, unmodelled vibration). The result
     says how far below the strongest local line a measurement can see anything.
     """
-    q = float(percentile)
+    _profile(profile)
+    q = require_real(percentile, "percentile")
     if not 0.0 < q < 50.0:
         raise ValueError(f"percentile = {percentile!r} is not admissible (admissible: 0 < "
                          "percentile < 50)")
     lv = profile.level_db
-    n = _window(width, profile.revolutions)
+    n = _window(width, profile.revolutions, profile.order.size)
     top = ndimage.maximum_filter1d(lv, size=n, mode="nearest")
     floor = ndimage.percentile_filter(lv, q, size=n, mode="nearest")
     return np.maximum(top - floor, 0.0)
@@ -240,14 +261,21 @@ def with_noise_floor(profile: OrderProfile, dynamic_range: Any, *,
     noise-free simulation shows only what the measurement could show: lines that would lie
     under the measured noise floor do not count as rises (``docs/diagnosis.md``).
     """
-    dr = np.broadcast_to(np.asarray(dynamic_range, float), profile.amplitude.shape)
-    if not np.all(np.isfinite(dr)) or np.any(dr < 0):
+    _profile(profile)
+    dr = require_real_array(dynamic_range, "dynamic_range", min_size=1, max_abs=1e4)
+    try:
+        dr = np.broadcast_to(dr, profile.amplitude.shape)
+    except ValueError:
+        raise ValueError(f"dynamic_range must be one value or one per bin "
+                         f"({profile.amplitude.size}); got shape {dr.shape}") from None
+    if np.any(dr < 0):
         raise ValueError("dynamic_range must be finite and >= 0 dB in every bin")
     lv = profile.level_db
-    top = ndimage.maximum_filter1d(lv, size=_window(width, profile.revolutions),
-                                   mode="nearest")
-    floor_amp = 10.0 ** ((top - dr) / 20.0)
-    amp = np.sqrt(profile.amplitude ** 2 + floor_amp ** 2)
+    top = ndimage.maximum_filter1d(
+        lv, size=_window(width, profile.revolutions, profile.order.size), mode="nearest")
+    with np.errstate(under="ignore"):
+        floor_amp = 10.0 ** ((top - dr) / 20.0)
+        amp = np.sqrt(profile.amplitude ** 2 + floor_amp ** 2)
     return OrderProfile(profile.order, amp, profile.units, profile.revolutions,
                         profile.segments, profile.speed_rpm, profile.name)
 
@@ -269,12 +297,22 @@ def signature_score(measured_diff: np.ndarray, signature: np.ndarray, *,
     Both are differences of prominence [dB] on the same order bins; only rises above the
     deadbands count. 0 when either has no rise.
     """
-    a = np.clip(np.asarray(measured_diff, float) - deadband, 0.0, None)
-    b = np.clip(np.asarray(signature, float) - signature_deadband, 0.0, None)
-    na, nb = float(np.linalg.norm(a)), float(np.linalg.norm(b))
-    if na == 0.0 or nb == 0.0:
-        return 0.0
-    return float(min(1.0, max(0.0, np.dot(a, b) / (na * nb))))
+    md = require_real_array(measured_diff, "measured_diff", ndim=1, min_size=0, finite=False)
+    sg = require_real_array(signature, "signature", ndim=1, min_size=0, finite=False)
+    if md.size != sg.size:
+        raise ValueError(f"measured_diff and signature have {md.size} and {sg.size} bins; they "
+                         "must be on the same order axis")
+    a = np.clip(md - require_real(deadband, "deadband"), 0.0, None)
+    b = np.clip(sg - require_real(signature_deadband, "signature_deadband"), 0.0, None)
+    # cosine similarity is scale-free: both scaled by a power of two (exact, so the same bits)
+    # to keep the dot product and the norms finite for any finite input
+    with np.errstate(under="ignore", invalid="ignore"):
+        a = np.ldexp(a, -np.frexp(max(float(np.max(a, initial=0.0)), 1e-300))[1])
+        b = np.ldexp(b, -np.frexp(max(float(np.max(b, initial=0.0)), 1e-300))[1])
+        na, nb = float(np.linalg.norm(a)), float(np.linalg.norm(b))
+        if na == 0.0 or nb == 0.0:
+            return 0.0
+        return float(min(1.0, max(0.0, np.dot(a, b) / (na * nb))))
 
 
 def sideband_ratios(profile: OrderProfile, fundamental: float, mesh_order: float, *,
@@ -316,6 +354,7 @@ def sideband_ratios(profile: OrderProfile, fundamental: float, mesh_order: float
         largest bin within one bin of the line) and the noise floor there over the same mesh
         amplitude. Empty when no mesh harmonic with its sidebands fits into the band.
     """
+    _profile(profile)
     f = _check_positive(fundamental, "fundamental")
     fm = _check_positive(mesh_order, "mesh_order")
     order = np.asarray(profile.order, float)
@@ -327,8 +366,8 @@ def sideband_ratios(profile: OrderProfile, fundamental: float, mesh_order: float
     if k_max < 1:
         return np.empty(0), np.empty(0)
     ks = np.concatenate((np.arange(-k_max, 0), np.arange(1, k_max + 1)))
-    floor = (ndimage.percentile_filter(amp, float(floor_percentile),
-                                       size=_window(width, profile.revolutions), mode="nearest")
+    size = _window(width, profile.revolutions, profile.order.size)
+    floor = (ndimage.percentile_filter(amp, float(floor_percentile), size=size, mode="nearest")
              if with_noise else None)
 
     def index(o: float) -> int:
@@ -384,9 +423,14 @@ def impulse_mismatch_db(measured: np.ndarray, noise: np.ndarray,
 
 def rising_peaks(order: np.ndarray, diff: np.ndarray, deadband: float) -> np.ndarray:
     """Orders of the local maxima of ``diff`` above ``deadband`` (the measured rises)."""
-    d = np.asarray(diff, float)
-    idx, _ = signal.find_peaks(np.concatenate(([-np.inf], d, [-np.inf])), height=deadband)
-    return np.asarray(order)[idx - 1]
+    o = require_real_array(order, "order", ndim=1, min_size=0)
+    d = require_real_array(diff, "diff", ndim=1, min_size=0, finite=False)
+    if o.size != d.size:
+        raise ValueError(f"order and diff have {o.size} and {d.size} bins; give one diff per "
+                         "order bin")
+    idx, _ = signal.find_peaks(np.concatenate(([-np.inf], d, [-np.inf])),
+                               height=require_real(deadband, "deadband"))
+    return o[idx - 1]
 
 
 def family_lines(fundamental: float, *, mesh_order: float, mesh_harmonics: int,
@@ -455,7 +499,14 @@ def family_evidence(order: np.ndarray, diff: np.ndarray, deadband: float,
     tolerance : float, optional
         Half-width of a hit [orders]; default one bin.
     """
-    order = np.asarray(order, float)
+    order = require_real_array(order, "order", ndim=1, min_size=1)
+    require_instance(families, Mapping, "families")
+    for name, value in families.items():
+        if not isinstance(value, tuple | list) or len(value) != 2:
+            raise TypeError(f"families[{name!r}] must be (fundamental order, line orders)")
+        require_real_array(value[1], f"families[{name!r}] lines", min_size=0)
+    if tolerance is not None:
+        require_positive(require_real(tolerance, "tolerance"), "tolerance")
     step = float(order[1] - order[0]) if order.size > 1 else 1.0
     tol = step * 1.01 if tolerance is None else float(tolerance)
     lo, hi = float(order[0]), float(order[-1])
@@ -500,6 +551,7 @@ def order_locking(profile_orders: OrderProfile, x: Any, fs: float, rpm: Any,
     fixed frequency (a resonance, an electrical line) does the opposite. With the speed
     constant within 3 % the two cannot be told apart and the answer says so.
     """
+    _profile(profile_orders, "profile_orders")
     lo, mean, hi = profile_orders.speed_rpm
     spread = (hi - lo) / mean if mean > 0 else 0.0
     if not len(peak_orders):
@@ -527,6 +579,12 @@ def order_locking(profile_orders: OrderProfile, x: Any, fs: float, rpm: Any,
 def near_modes(orders: Sequence[float], reference_hz: float, natural_hz: Mapping[str, float],
                *, rtol: float = 0.05) -> list[str]:
     """Lines (orders at the reference frequency) within ``rtol`` of a natural frequency."""
+    require_instance(natural_hz, Mapping, "natural_hz")
+    orders = require_real_array(orders, "orders", min_size=0).ravel()
+    reference_hz = require_real(reference_hz, "reference_hz")
+    require_real(rtol, "rtol")
+    for name, fn in natural_hz.items():
+        require_real(fn, f"natural_hz[{name!r}]")
     out = []
     for o in orders:
         f = float(o) * reference_hz

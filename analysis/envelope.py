@@ -42,7 +42,15 @@ import numpy as np
 
 from analysis.bands import Band, envelope_decimation, squared_envelope_samples
 from analysis.cf import time_attrs
-from analysis.checks import require_real, time_or_rate
+from analysis.checks import (
+    require_choice,
+    require_instance,
+    require_int,
+    require_positive,
+    require_real,
+    require_real_array,
+    time_or_rate,
+)
 from analysis.envelope_plots import envelope_spectrum_figure, squared_envelope_figure
 from analysis.inputs import one_channel, signal_input
 from analysis.kurtogram import Kurtogram, fast_kurtogram
@@ -329,15 +337,26 @@ class EnvelopeSpectrum:
 
 def line_power(values: np.ndarray, amplitude: str) -> np.ndarray:
     """Power-like values of spectral lines in ``amplitude`` (amplitudes squared, power and
-    density as they are): what :func:`analysis.lines.check_lines` compares."""
+    density as they are): what :func:`analysis.lines.check_lines` compares.
+
+    Amplitudes above 1e150 are refused (their squares would overflow float64).
+    """
+    require_choice(amplitude, AMPLITUDES, "amplitude")
     if amplitude in ("power", "density"):
         return values
-    return np.square(values)
+    v = require_real_array(values, "values", min_size=0, max_abs=1e150)
+    with np.errstate(under="ignore"):
+        return np.square(v)
 
 
 def band_attributes(band: Band, kg: Kurtogram | None, decimation: int, fs: float) -> dict:
     """Dataset attributes that say which band was demodulated, how it was chosen and at
     which rate the squared envelope was sampled."""
+    require_instance(band, Band, "band")
+    if kg is not None:
+        require_instance(kg, Kurtogram, "kg")
+    decimation = require_int(decimation, "decimation", 1)
+    fs = require_positive(require_real(fs, "fs"), "fs")
     attrs: dict[str, Any] = {
         "band_low_hz": band.low,
         "band_high_hz": band.high,

@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from analysis.checks import require_colormap, require_instance
 from analysis.levels import to_db
 from analysis.lines import LineFamily
 
@@ -92,6 +93,8 @@ def envelope_spectrum_figure(
     figsize : (float, float)
         Size of a new figure [in].
     """
+    require_instance(result, ("analysis.envelope.EnvelopeSpectrum",
+                              "analysis.envelope_orders.EnvelopeOrderSpectrum"), "result")
     fams = _families(families)
     fig, ax = _axes(ax, figsize)
     is_order = hasattr(result, "order")
@@ -164,6 +167,7 @@ def kurtogram_figure(
     figsize : (float, float)
         Size of a new figure [in].
     """
+    require_instance(kurtogram, "analysis.kurtogram.Kurtogram", "kurtogram")
     from matplotlib.patches import Rectangle
 
     fig, ax = _axes(ax, figsize)
@@ -172,7 +176,8 @@ def kurtogram_figure(
     nyq = 0.5 * kurtogram.fs
     edges_f = np.linspace(0.0, nyq, freq.size + 1)
     edges_r = np.arange(rows + 1) - 0.5
-    mesh = ax.pcolormesh(edges_f, edges_r, image, cmap=cmap, shading="flat", rasterized=True)
+    mesh = ax.pcolormesh(edges_f, edges_r, image, cmap=require_colormap(cmap), shading="flat",
+                         rasterized=True)
     fig.colorbar(mesh, ax=ax, label="spectral kurtosis K [-]")
     ax.set_ylim(rows - 0.5, -0.5)
     ax.set_yticks(np.arange(rows))
@@ -212,6 +217,7 @@ def spectral_kurtosis_figure(
     figsize : (float, float)
         Size of a new figure [in].
     """
+    require_instance(sk, "analysis.kurtogram.SpectralKurtosis", "sk")
     fig, ax = _axes(ax, figsize)
     ax.plot(sk.frequency, sk.kurtosis, lw=0.9, color="C0", label="K(f)")
     thr = sk.threshold(probability)
@@ -248,6 +254,7 @@ def squared_envelope_figure(
     figsize : (float, float)
         Size of a new figure [in].
     """
+    require_instance(env, "analysis.envelope.SquaredEnvelope", "env")
     fig, ax = _axes(ax, figsize)
     t = env.time
     keep = slice(None) if duration is None else t <= t[0] + float(duration)
@@ -293,6 +300,7 @@ def line_evidence_figure(
     sidebands found with a dot; the legend (below the axes) gives every family's status,
     harmonics found and, for a family whose lines were found, its chance of a coincidence.
     """
+    require_instance(evidence, "analysis.line_evidence.LineEvidence", "evidence")
     fig, ax = _axes(ax, figsize)
     x = evidence.axis
     status = evidence.status

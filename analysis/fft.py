@@ -54,6 +54,8 @@ from typing import Any
 
 import numpy as np
 
+from analysis.checks import require_size
+
 __all__ = [
     "RfftPlan",
     "RowIfft",
@@ -245,7 +247,30 @@ def empty_aligned(shape: int | tuple[int, ...], dtype: Any = np.float64) -> np.n
     numpy.ndarray
         C-contiguous array; pass it as ``out=`` to :func:`rfft` / :func:`irfft` so that FFTW
         writes into it directly.
+
+    Raises
+    ------
+    TypeError, ValueError
+        A shape that is not integers >= 0, a dtype numpy does not know, or an array larger
+        than the memory this process can use (checked before allocating).
     """
+    dims = (shape,) if not isinstance(shape, tuple | list) else tuple(shape)
+    for d in dims:
+        if isinstance(d, bool | np.bool_) or not isinstance(d, int | np.integer):
+            raise TypeError(f"shape must be an integer or a tuple of integers; got {shape!r}"[:200])
+        if d < 0:
+            raise ValueError(f"shape = {shape!r} is not admissible: sizes >= 0")
+    dt = np.dtype(dtype)
+    nbytes = float(dt.itemsize)
+    for d in dims:
+        nbytes *= float(d)
+    require_size(nbytes, f"an array of shape {tuple(int(d) for d in dims)}", "shape")
+    shape = tuple(int(d) for d in dims) if isinstance(shape, tuple | list) else int(shape)
+    return _empty_aligned(shape, dt)
+
+
+def _empty_aligned(shape: int | tuple[int, ...], dtype: Any) -> np.ndarray:
+    """:func:`empty_aligned` without the checks (internal buffers of checked sizes)."""
     if _fftw() is None:
         return np.empty(shape, dtype)
     return _fftw().empty_aligned(shape, dtype)
@@ -319,7 +344,7 @@ def _execute(obj: Any, a: np.ndarray, out: np.ndarray | None) -> np.ndarray:
         or target.strides != expected.strides
         or target.ctypes.data % obj.output_alignment != 0
     ):
-        target = empty_aligned(expected.shape, expected.dtype)
+        target = _empty_aligned(expected.shape, expected.dtype)
     if internal.shape == a.shape:
         internal[...] = a
         obj(output_array=target)
@@ -382,11 +407,11 @@ class RfftPlan:
         self.rows = rows
         self.n = n
         self.workers = threads
-        self.input = empty_aligned((rows, n), np.float64)
+        self.input = _empty_aligned((rows, n), np.float64)
         self._output: np.ndarray | None = None
         self._fftw: Any = None
         if _fftw() is not None:
-            self._output = empty_aligned((rows, n // 2 + 1), np.complex128)
+            self._output = _empty_aligned((rows, n // 2 + 1), np.complex128)
             self._fftw = _fftw().FFTW(
                 self.input,
                 self._output,
@@ -576,7 +601,7 @@ class RowIfft:
     def __init__(self, size: int, *, workers: int | None = None) -> None:
         self.size = _check_size(size, "size")
         self.workers = _workers if workers is None else _check_workers(workers)
-        self.buffer = empty_aligned(self.size, np.complex128)
+        self.buffer = _empty_aligned(self.size, np.complex128)
         self._plans: dict[int, Any] = {}
 
     def rows(self, rows: int) -> np.ndarray:

@@ -15,10 +15,16 @@ from typing import Any
 
 import numpy as np
 
-from analysis.checks import require_block_size
+from analysis.checks import (
+    require_block_size,
+    require_choice,
+    require_instance,
+    require_int,
+    require_real_array,
+)
 from analysis.fft import rfft
 from analysis.inputs import Reference, Signal, moving_range, reference_input, signal_input
-from analysis.levels import line_factors
+from analysis.levels import AMPLITUDES, line_factors
 from analysis.order_resolution import (
     choose_order_resolution,
     default_frequency_resolution,
@@ -82,10 +88,60 @@ def stft_into(
 
     Channel by channel, each exactly as a single channel, and block-wise. ``out`` may hold
     fewer lines than ``len(w) // 2 + 1`` (the first ones are kept).
+
+    ``x`` and ``w`` must be finite real arrays whose product stays below 1e150 per frame
+    (its squared spectrum would overflow), ``out`` a float array of shape
+    ``(*x.shape[:-1], frames, lines)`` with every frame inside ``x``.
     """
+    for name, a in (("x", x), ("w", w), ("out", out)):
+        require_instance(a, np.ndarray, name)
+    if x.dtype.kind not in "iuf" or w.dtype.kind not in "iuf" or out.dtype.kind != "f":
+        raise TypeError(f"x and w must hold real numbers and out floats; got dtypes {x.dtype}, "
+                        f"{w.dtype}, {out.dtype}")
+    step = require_int(step, "step", 1)
+    require_choice(amplitude, AMPLITUDES, "amplitude")
+    require_choice(scale, ("linear", "dB"), "scale")
+    if w.ndim != 1 or w.size < 2:
+        raise ValueError(f"w must be a 1-D window of at least 2 samples; got shape {w.shape}")
+    if x.ndim < 1 or out.shape[:-2] != x.shape[:-1] or out.ndim != x.ndim + 1:
+        raise ValueError(f"out must have shape (*x.shape[:-1], frames, lines) = "
+                         f"({', '.join(map(str, x.shape[:-1]))}{', ' if x.ndim > 1 else ''}"
+                         f"frames, lines); got {out.shape} for x of shape {x.shape}")
+    n_frames, n_lines = out.shape[-2:]
+    if not 1 <= n_lines <= w.size // 2 + 1:
+        raise ValueError(f"out has {n_lines} lines; admissible: 1 .. {w.size // 2 + 1} for a "
+                         f"window of {w.size} samples")
+    if n_frames and (x.shape[-1] < w.size or n_frames > (x.shape[-1] - w.size) // step + 1):
+        raise ValueError(f"out has {n_frames} frames; x of {x.shape[-1]} samples holds "
+                         f"{max(0, (x.shape[-1] - w.size) // step + 1)} frames of {w.size} "
+                         f"samples every {step}")
+    top_x = _finite_peak(x, "x")
+    top_w = _finite_peak(w, "w")
+    if not top_x * top_w * w.size <= 1e150:
+        raise ValueError(f"x and w: samples up to {top_x:.3g} times a window up to {top_w:.3g} "
+                         "would overflow the squared spectrum; admissible: max|x| max|w| "
+                         "len(w) <= 1e150 (check the units)")
+    with np.errstate(under="ignore"):
+        _stft_into(x, w, step, out, amplitude, scale)
+
+
+def _finite_peak(a: np.ndarray, name: str) -> float:
+    """``max|a|`` of a non-empty array; raise if it holds NaN/inf."""
+    if a.size == 0:
+        return 0.0
+    top = max(float(a.max()), -float(a.min()))  # no temporary array (NaN propagates)
+    if not np.isfinite(top):
+        raise ValueError(f"{name}: non-finite value (NaN or inf); only finite values are "
+                         "admissible")
+    return top
+
+
+def _stft_into(
+    x: np.ndarray, w: np.ndarray, step: int, out: np.ndarray, amplitude: str, scale: str
+) -> None:
     if x.ndim > 1:
         for ch in np.ndindex(*x.shape[:-1]):
-            stft_into(x[ch], w, step, out[ch], amplitude, scale)
+            _stft_into(x[ch], w, step, out[ch], amplitude, scale)
         return
     seg = w.size
     n_lines = out.shape[1]  # may stop below the Nyquist line (an axis ending at max_order)
@@ -135,7 +191,17 @@ def window_length(window: WindowSpec, rate: float, resolution: float, n: int, na
 
 
 def values_at(frac_index: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """Linear interpolation of ``v`` at fractional indices."""
+    """Linear interpolation of ``v`` at fractional indices.
+
+    ``v`` is 1-D with at least two real values (taken as they are: it may be a whole record,
+    not scanned here); the indices are finite and within ``[-1, len(v)]`` (the end segments
+    are extended by one sample).
+    """
+    v = require_real_array(v, "v", ndim=1, min_size=2, finite=False)  # O(1): v is long
+    frac_index = require_real_array(frac_index, "frac_index", min_size=0)
+    if frac_index.size and not (frac_index.min() >= -1.0 and frac_index.max() <= v.size):
+        raise ValueError(f"frac_index must lie within [-1, {v.size}] (indices into v); got "
+                         f"{frac_index.min():.6g} .. {frac_index.max():.6g}")
     i = np.clip(np.floor(frac_index).astype(np.int64), 0, v.size - 2)
     u = frac_index - i
     return v[i] * (1.0 - u) + v[i + 1] * u

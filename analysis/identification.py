@@ -31,7 +31,7 @@ from typing import Any
 import numpy as np
 
 from analysis.cf import cf_dataset
-from analysis.checks import require_finite, require_positive
+from analysis.checks import require_finite, require_instance, require_int, require_positive
 
 __all__ = [
     "CandidateLines",
@@ -139,6 +139,7 @@ def catalogue_lines(catalogue: Any, *, speed_rpm: float | None = None, axis: str
         With several mesh frequencies (stages, stepped planets) an expression that does not
         name its member gets it in brackets: ``"2 f_mesh [stage2.pinion-wheel]"``.
     """
+    require_instance(catalogue, "analysis.catalogue.KinematicCatalogue", "catalogue")
     axis = _axis(axis)
     u = require_positive(speed_uncertainty, "speed_uncertainty", allow_zero=True)
     cat = catalogue.select(families=families, visible_only=visible_only)
@@ -210,6 +211,10 @@ def _clusters(f: np.ndarray, rtol: float) -> list[list[int]]:
     return out
 
 
+#: Largest ``n`` of :func:`modal_lines` (regions of order ``n`` are ``O(eps^n)`` narrow).
+MAX_N = 100
+
+
 def modal_lines(natural_frequencies_hz: Any, *, names: Sequence[str] | None = None,
                 n_max: int = 4, kinds: Sequence[str] = MODAL_FAMILIES,
                 uncertainty: float = 0.01, repeat_rtol: float = 1e-6, axis: str = "frequency",
@@ -257,8 +262,8 @@ def modal_lines(natural_frequencies_hz: Any, *, names: Sequence[str] | None = No
     f = require_finite(natural_frequencies_hz, "natural_frequencies_hz").ravel()
     if f.size == 0 or np.any(f <= 0):
         raise ValueError("natural_frequencies_hz must be > 0 (remove rigid-body modes first)")
-    if int(n_max) != n_max or n_max < 1:
-        raise ValueError(f"n_max = {n_max!r} is not admissible: an integer >= 1")
+    if require_int(n_max, "n_max", 1) > MAX_N:
+        raise ValueError(f"n_max = {n_max!r} is not admissible: an integer in 1 .. {MAX_N}")
     kinds = tuple(kinds)
     bad = [k for k in kinds if k not in MODAL_FAMILIES]
     if bad or not kinds:
@@ -642,6 +647,9 @@ def plot_identification(ident: PeakIdentification, frequency: Any = None, amplit
     -------
     matplotlib.figure.Figure
     """
+    require_instance(ident, PeakIdentification, "ident")
+    if ax is not None and (not hasattr(ax, "figure") or not hasattr(ax, "plot")):
+        raise TypeError(f"ax must be matplotlib Axes; got {type(ax).__name__}")
     if ax is None:
         from matplotlib.figure import Figure
 

@@ -47,6 +47,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from analysis.cf import cf_dataset, time_attrs
+from analysis.checks import require_instance, require_real_array
 from analysis.gear_signals import GearSignals, gear_signals
 from analysis.inputs import channel_coords
 from analysis.tsa import TSA
@@ -104,10 +105,61 @@ def _values(x: Any, name: str) -> np.ndarray:
     return arr.astype(float)
 
 
+#: Rows whose largest magnitude lies in ``[2**-32, 2**32]`` are used as they are (the 16th
+#: power of such samples, summed, stays within float64); others are scaled by a power of two.
+_SAFE_EXPONENT = 32
+
+
+def _pow2(v: np.ndarray, top: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """``(u, e)`` with ``v = u 2**e`` per row: ``e = 0`` (``u`` is ``v``, the plain formulas'
+    bits) for a row whose ``max|v|`` lies in ``[2**-32, 2**32]``, else ``max|u|`` in
+    [0.5, 1), so that powers of ``u`` neither overflow nor lose the row to underflow (a zero
+    row stays zero). The scaling by a power of two is exact. ``top``: ``max|v|`` per row,
+    if known."""
+    if top is None:
+        top = np.max(np.abs(v), axis=-1)
+    _, e = np.frexp(np.where(top > 0.0, top, 1.0))
+    e = np.where(np.abs(e) <= _SAFE_EXPONENT, 0, e)
+    if not np.any(e):
+        return v, e
+    return np.ldexp(v, -e[..., None]), e
+
+
+def _scaled(v: np.ndarray, name: str) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`_pow2`, refusing a row of zeros (its scale-free indicators are 0/0)."""
+    top = np.max(np.abs(v), axis=-1)
+    if np.any(top == 0.0):
+        raise ValueError(f"{name} is zero throughout (a row of zeros): the indicator is "
+                         "undefined")
+    return _pow2(v, top)
+
+
+def _finite(result: np.ndarray, what: str) -> np.ndarray:
+    """``result``; raise if an element overflowed (or is undefined)."""
+    if not np.all(np.isfinite(result)):
+        raise ValueError(f"{what} is not representable in float64 (overflow or 0/0); check "
+                         "the scaling of the inputs")
+    return result
+
+
+def _central(v: np.ndarray, name: str) -> tuple[np.ndarray, np.ndarray]:
+    """Scaled central values ``c`` (``(v - mean) = c 2**e``) and their mean square; raise
+    for a constant row (its normalised moments are 0/0)."""
+    u, _ = _scaled(v, name)
+    c = u - u.mean(axis=-1, keepdims=True)
+    with np.errstate(under="ignore"):
+        m2 = np.mean(c * c, axis=-1)
+    if np.any(m2 == 0.0):
+        raise ValueError(f"{name} is constant along its last axis (zero variance): the "
+                         "normalised moment is undefined")
+    return c, m2
+
+
 def rms(x: Any) -> np.ndarray:
     """Root mean square along the last axis, :math:`\\sqrt{\\overline{x^2}}`."""
-    v = _values(x, "x")
-    return np.sqrt(np.mean(v * v, axis=-1))
+    u, e = _pow2(_values(x, "x"))
+    with np.errstate(under="ignore"):
+        return np.ldexp(np.sqrt(np.mean(u * u, axis=-1)), e)
 
 
 def peak(x: Any) -> np.ndarray:
@@ -117,22 +169,29 @@ def peak(x: Any) -> np.ndarray:
 
 def crest_factor(x: Any) -> np.ndarray:
     """Peak / rms along the last axis."""
-    v = _values(x, "x")
-    return np.max(np.abs(v), axis=-1) / np.sqrt(np.mean(v * v, axis=-1))
+    u, _ = _scaled(_values(x, "x"), "x")
+    with np.errstate(under="ignore"):
+        return np.max(np.abs(u), axis=-1) / np.sqrt(np.mean(u * u, axis=-1))
+
+
+#: Highest order of :func:`normalized_moment` (its powers stay within float64).
+MAX_MOMENT_ORDER = 16
 
 
 def normalized_moment(x: Any, order: int) -> np.ndarray:
     """:math:`N^{k/2 - 1} \\sum (x - \\bar x)^k / [\\sum (x - \\bar x)^2]^{k/2}` along the
-    last axis (``k = order``, even >= 2): the k-th central moment over the variance to the
-    power ``k / 2``; for Gaussian samples ``(k - 1)!!`` (3, 15, 105 for k = 4, 6, 8)."""
-    if isinstance(order, bool) or not isinstance(order, int | np.integer) or order < 2 or (
-        order % 2
-    ):
-        raise ValueError(f"order = {order!r} is not admissible: an even integer >= 2")
-    v = _values(x, "x")
-    c = v - v.mean(axis=-1, keepdims=True)
-    m2 = np.mean(c * c, axis=-1)
-    return np.mean(c**order, axis=-1) / m2 ** (order // 2)
+    last axis (``k = order``, even, 2 .. :data:`MAX_MOMENT_ORDER`): the k-th central moment
+    over the variance to the power ``k / 2``; for Gaussian samples ``(k - 1)!!`` (3, 15, 105
+    for k = 4, 6, 8). Scale-free: computed on the samples scaled by a power of two (exact),
+    so samples of any finite magnitude give a finite result; a constant row is refused."""
+    if isinstance(order, bool) or not isinstance(order, int | np.integer) or not (
+        2 <= order <= MAX_MOMENT_ORDER
+    ) or (order % 2):
+        raise ValueError(f"order = {order!r} is not admissible: an even integer in 2 .. "
+                         f"{MAX_MOMENT_ORDER}")
+    c, m2 = _central(_values(x, "x"), "x")
+    with np.errstate(under="ignore"):
+        return np.mean(c**order, axis=-1) / m2 ** (order // 2)
 
 
 def kurtosis(x: Any) -> np.ndarray:
@@ -163,16 +222,28 @@ def fm0(x: Any, mesh_amplitudes: Any) -> np.ndarray:
     x : array_like
         The TSA (last axis: one revolution).
     mesh_amplitudes : array_like
-        Peak amplitudes of the mesh harmonics, shape ``(*channels, harmonics)``.
+        Peak amplitudes of the mesh harmonics (finite, >= 0, not all zero), shape
+        ``(*channels, harmonics)``.
     """
     v = _values(x, "x")
-    a = np.asarray(mesh_amplitudes, dtype=float)
-    return (np.max(v, axis=-1) - np.min(v, axis=-1)) / np.sum(a, axis=-1)
+    a = require_real_array(mesh_amplitudes, "mesh_amplitudes")
+    if a.ndim == 0 or np.any(a < 0):
+        raise ValueError("mesh_amplitudes must be an array of amplitudes >= 0 (last axis: the "
+                         "harmonics)")
+    total = np.sum(a, axis=-1)
+    if np.any(total == 0.0):
+        raise ValueError("mesh_amplitudes are all zero: FM0 is undefined")
+    with np.errstate(over="ignore", under="ignore"):
+        return _finite((np.max(v, axis=-1) - np.min(v, axis=-1)) / total, "FM0")
 
 
 def energy_ratio(d: Any, regular: Any) -> np.ndarray:
     """Energy ratio rms(d) / rms(regular) along the last axis."""
-    return rms(d) / rms(regular)
+    den = rms(regular)
+    if np.any(den == 0.0):
+        raise ValueError("regular is zero throughout: the energy ratio is undefined")
+    with np.errstate(over="ignore", under="ignore"):
+        return _finite(rms(d) / den, "the energy ratio")
 
 
 def sideband_level_factor(lower: Any, upper: Any, x: Any) -> np.ndarray:
@@ -183,17 +254,29 @@ def sideband_level_factor(lower: Any, upper: Any, x: Any) -> np.ndarray:
     )
 
 
+#: Range of the run-to-date mean variance :func:`na4` accepts (its square stays finite).
+MEAN_VARIANCE_RANGE = (1e-150, 1e150)
+
+
 def na4(r: Any, mean_variance: Any) -> np.ndarray:
     """NA4 of a residual ``r`` given the run-to-date mean variance of the residuals.
 
     :math:`N \\sum (r - \\bar r)^4 / (N \\bar v)^2 = \\overline{(r - \\bar r)^4} / \\bar v^2`
     with :math:`\\bar v = \\frac{1}{M} \\sum_j \\frac{1}{N} \\sum_i (r_{ij} - \\bar r_j)^2`
-    (records of ``N`` samples). :class:`RunToDate` keeps :math:`\\bar v`.
+    (records of ``N`` samples). :class:`RunToDate` keeps :math:`\\bar v`, which must lie in
+    :data:`MEAN_VARIANCE_RANGE`.
     """
     v = _values(r, "r")
-    c = v - v.mean(axis=-1, keepdims=True)
-    mv = np.asarray(mean_variance, dtype=float)
-    return np.mean(c**4, axis=-1) / mv**2
+    mv = require_real_array(mean_variance, "mean_variance")
+    lo, hi = MEAN_VARIANCE_RANGE
+    if np.any(mv < lo) or np.any(mv > hi):
+        raise ValueError(f"mean_variance must lie in [{lo:g}, {hi:g}] (a variance of the "
+                         "residuals; 0 for constant records)")
+    u, e = _pow2(v)
+    c = u - u.mean(axis=-1, keepdims=True)
+    with np.errstate(over="ignore", under="ignore"):
+        m4 = np.ldexp(np.mean(c**4, axis=-1), 4 * e)
+        return _finite(m4 / mv**2, "NA4")
 
 
 class RunToDate:
@@ -235,7 +318,9 @@ class RunToDate:
     def add(self, r: Any) -> np.ndarray:
         """Add record ``r`` and return its NA4 (per channel)."""
         v = _values(r, "r")
-        var = np.var(v, axis=-1)
+        u, e = _pow2(v)
+        with np.errstate(over="ignore", under="ignore"):
+            var = _finite(np.ldexp(np.var(u, axis=-1), 2 * e), "the variance of r")
         if self._sum is not None and self._sum.shape != var.shape:
             raise ValueError(
                 f"r has channels {var.shape}; the history has {self._sum.shape}: one history "
@@ -271,6 +356,9 @@ def gear_indicators(
     """
     if not isinstance(signals, GearSignals):
         raise TypeError(f"signals must be GearSignals; got {type(signals).__name__}")
+    for name, history in (("na4_history", na4_history), ("nb4_history", nb4_history)):
+        if history is not None:
+            require_instance(history, RunToDate, name)
     x, d, r = signals.tsa, signals.difference, signals.residual
     amp = signals.amplitudes
     z = signals.mesh_orders[0]

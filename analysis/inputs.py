@@ -26,6 +26,7 @@ One set of rules for every function of :mod:`analysis.spectrum`, :mod:`analysis.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -35,7 +36,9 @@ from analysis.cf import elapsed_seconds
 from analysis.checks import (
     BLOCK_SAMPLES,
     require_finite_blocks,
+    require_instance,
     require_int,
+    require_positive,
     require_real,
     uniform_rate,
 )
@@ -159,6 +162,12 @@ def _is_dataarray(x: Any) -> bool:
     return isinstance(x, xr.DataArray)
 
 
+def _require_dataset(ds: Any) -> None:
+    import xarray as xr
+
+    require_instance(ds, xr.Dataset, "ds")
+
+
 def _speed_factor(name: str, attrs: dict[str, Any]) -> float | None:
     """Factor to min-1 if a variable with these attributes is a shaft speed, else ``None``."""
     units = str(attrs.get("units", "")).strip()
@@ -196,6 +205,9 @@ def find_reference(obj: Any, speed: str | None = None, angle: str | None = None)
         so that e.g. a mesh frequency is not taken). Several candidates of the winning kind
         raise an error that lists them.
     """
+    import xarray as xr
+
+    require_instance(obj, (xr.Dataset, xr.DataArray), "obj")
     if speed is not None and angle is not None:
         raise ValueError("give speed= or angle=, not both")
     pool = dict(obj.coords.items())
@@ -258,12 +270,16 @@ def find_reference(obj: Any, speed: str | None = None, angle: str | None = None)
 def dataset_reference(ds: Any, speed: str | None, angle: str | None) -> dict[str, Any]:
     """``{"rpm": ds[name]}`` or ``{"angle": ds[name]}``: the speed reference of a Dataset,
     named or found by its attributes (:func:`find_reference`), as keyword arguments."""
+    _require_dataset(ds)
     ref = find_reference(ds, speed=speed, angle=angle)
     return {ref.kind: ds[ref.variable]}
 
 
 def dataset_variable(ds: Any, variable: str) -> Any:
     """``ds[variable]`` with the Dataset's coordinates along time, checked."""
+    _require_dataset(ds)
+    if not isinstance(variable, str):
+        raise TypeError(f"variable must be a str (a variable name); got {type(variable).__name__}")
     if variable not in ds.data_vars and variable not in ds.coords:
         raise ValueError(f"variable = {variable!r} is not in the dataset ({list(ds.data_vars)})")
     da = ds[variable]
@@ -397,6 +413,7 @@ def signal_input(
 def one_channel(sig: Signal, function: str) -> np.ndarray:
     """The samples of a one-channel :class:`Signal` as a 1-D array; raise for several
     channels (the functions that choose a band or an alarm per channel take one at a time)."""
+    require_instance(sig, Signal, "sig")
     if int(np.prod(sig.lead, dtype=np.int64)) != 1:
         raise ValueError(
             f"{function} analyses one channel; x has {int(np.prod(sig.lead))} channels "
@@ -489,6 +506,9 @@ def moving_range(
     ValueError
         A negative speed (decreasing angle) anywhere, or no sample above the threshold.
     """
+    require_instance(ref, Reference, "ref")
+    require_positive(require_real(fs, "fs"), "fs")
+    require_real(t0, "t0")
     n = ref.values.size
     top = 0.0
     for s in range(0, n, BLOCK_SAMPLES):
@@ -567,6 +587,11 @@ def select_channel(
 
     ``key`` is a label of the first leading dimension's coordinate, or an integer index.
     """
+    require_instance(values, np.ndarray, "values")
+    require_instance(dims, (tuple, list), "dims")
+    require_instance(coords, Mapping, "coords")
+    if values.ndim == 0:
+        raise ValueError(f"values must have a channel axis; got shape {values.shape}")
     if not dims:
         raise ValueError("the result has a single channel; there is nothing to select")
     d = dims[0]

@@ -14,7 +14,13 @@ from typing import Any
 
 import numpy as np
 
-from analysis.checks import renamed, require_choice
+from analysis.checks import (
+    renamed,
+    require_choice,
+    require_int,
+    require_real_array,
+    require_size,
+)
 
 __all__ = [
     "AMPLITUDES",
@@ -30,6 +36,10 @@ __all__ = [
 AMPLITUDES = ("peak", "rms", "power", "density")
 #: Deprecated: the conventions with the old name ``"psd"`` for ``"density"``.
 SCALINGS = ("peak", "rms", "power", "psd")
+#: Highest level [dB] :func:`power_of` converts (1e300 as a power).
+MAX_DB = 3000.0
+#: Highest power per line :func:`power_of` returns (float64 ends near 1.8e308).
+MAX_POWER = 1e300
 
 
 def amplitude_choice(
@@ -68,6 +78,9 @@ def to_db(values: np.ndarray, scaling: str, ref: float = 1.0) -> np.ndarray:
 def line_factors(n_lines: int, nfft: int) -> np.ndarray:
     """One-sided factors of the first ``n_lines`` lines of an ``nfft``-point real transform
     (1 for DC and, when it is among them, the Nyquist line of an even ``nfft``; 2 else)."""
+    n_lines = require_int(n_lines, "n_lines", 1)
+    nfft = require_int(nfft, "nfft", 1)
+    require_size(8.0 * n_lines, f"{n_lines} line factors", "n_lines")
     f = np.full(n_lines, 2.0)
     f[0] = 1.0
     if nfft % 2 == 0 and n_lines == nfft // 2 + 1:
@@ -76,15 +89,32 @@ def line_factors(n_lines: int, nfft: int) -> np.ndarray:
 
 
 def power_of(values: np.ndarray, amplitude: str, scale: str, nfft: int) -> np.ndarray:
-    """Lines ``values(..., line)`` of a map in ``amplitude``/``scale`` as power per line."""
-    v = values
-    if scale == "dB":
-        v = 10.0 ** (v / (10.0 if amplitude == "power" else 20.0))
-    if amplitude == "power":
-        return np.array(v, dtype=float, copy=True)
-    p = np.asarray(v, dtype=float) ** 2
-    if amplitude == "peak":
-        p = p * (1.0 / line_factors(p.shape[-1], nfft))
+    """Lines ``values(..., line)`` of a map in ``amplitude``/``scale`` as power per line.
+
+    Levels in dB must lie at or below :data:`MAX_DB`, linear amplitudes at or below
+    ``sqrt(MAX_POWER)`` (their power would overflow float64 otherwise).
+    """
+    v = require_real_array(values, "values", min_size=1)
+    require_choice(amplitude, AMPLITUDES, "amplitude")
+    require_choice(scale, ("linear", "dB"), "scale")
+    nfft = require_int(nfft, "nfft", 1)
+    if v.ndim == 0:
+        raise ValueError("values must be an array of lines (last axis); got a scalar")
+    top = float(v.max())
+    if scale == "dB" and top > MAX_DB:
+        raise ValueError(f"values: a level of {top:g} dB; admissible: <= {MAX_DB:g} dB (its power "
+                         "would overflow)")
+    if scale != "dB" and amplitude != "power" and max(top, -float(v.min())) > MAX_POWER ** 0.5:
+        raise ValueError(f"values: a magnitude above {MAX_POWER ** 0.5:g}; admissible: "
+                         f"|value| <= {MAX_POWER ** 0.5:g} (its square would overflow)")
+    with np.errstate(under="ignore"):
+        if scale == "dB":
+            v = 10.0 ** (v / (10.0 if amplitude == "power" else 20.0))
+        if amplitude == "power":
+            return np.array(v, dtype=float, copy=True)
+        p = v**2
+        if amplitude == "peak":
+            p = p * (1.0 / line_factors(p.shape[-1], nfft))
     return p
 
 

@@ -54,7 +54,14 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from analysis.cf import cf_dataset
-from analysis.checks import require_finite, require_real
+from analysis.checks import (
+    require_finite,
+    require_instance,
+    require_positive,
+    require_real,
+    require_real_array,
+    require_size,
+)
 from analysis.envelope_plots import line_evidence_figure
 from analysis.identification import covered_fraction
 from analysis.lines import (
@@ -155,6 +162,7 @@ def strength(check: LineCheck) -> float:
     """The weakest prominence [dB] among the lines a detection rests on: the fundamental and
     the ``min_harmonics - 1`` most prominent other harmonics (the threshold when the family
     is not detected)."""
+    require_instance(check, LineCheck, "check")
     if not check.detected:
         return float(check.threshold_db)
     harm = check.sideband == 0
@@ -190,7 +198,14 @@ def family_chance(axis: Any, check: LineCheck, lines: np.ndarray,
         ``q_1 P(at least m - 1 of q_2..q_H)`` (module docstring); NaN when the fundamental's
         prominence is NaN (outside the spectrum).
     """
-    ax = np.asarray(axis, dtype=float)
+    ax = require_real_array(axis, "axis", ndim=1, min_size=3)
+    require_instance(check, LineCheck, "check")
+    lines = require_real_array(lines, "lines", ndim=1, min_size=0)
+    if prominence_db is not None:
+        prominence_db = require_real_array(prominence_db, "prominence_db", ndim=1, min_size=0)
+        if prominence_db.size != lines.size:
+            raise ValueError(f"prominence_db has {prominence_db.size} values for {lines.size} "
+                             "lines; give one per line")
     lw = require_real(local_width, "local_width")
     if not 0.0 < lw < 1.0:
         raise ValueError(f"local_width = {local_width!r} is not admissible: 0 < lw < 1")
@@ -243,12 +258,16 @@ def explained_positions(check: LineCheck, top: float) -> np.ndarray:
     numpy.ndarray
         Sorted positions.
     """
+    require_instance(check, LineCheck, "check")
+    top = require_positive(require_real(top, "top"), "top")
     first = (check.harmonic == 1) & (check.sideband == 0)
     f1 = float(check.position[first][0])
     h = np.arange(1, check.family.harmonics + 1, dtype=float)
     d = float(check.family.sideband_spacing)
     if d <= 0:
         return h * f1
+    count = h.size * (top / d + h[-1] * abs(f1) / d + 3.0)  # float: inf for a tiny spacing
+    require_size(24.0 * count, f"{count:.3g} candidate line positions", "top")
     k = np.arange(-int(np.ceil(h[-1] * f1 / d)) - 1, int(np.ceil(top / d)) + 1)
     v = np.abs(h[:, None] * f1 + k[None, :] * d).ravel()
     return np.unique(v[(v > 0) & (v <= top)])

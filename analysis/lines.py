@@ -40,7 +40,13 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from analysis.checks import require_finite, require_int, require_positive, require_real
+from analysis.checks import (
+    require_finite,
+    require_instance,
+    require_int,
+    require_positive,
+    require_real,
+)
 
 if TYPE_CHECKING:
     import xarray as xr
@@ -286,6 +292,7 @@ def check_lines(
     LineCheck
         Per line: position and prominence (NaN when the floor window leaves the spectrum).
     """
+    require_instance(family, LineFamily, "family")
     ax = require_finite(axis, "axis")
     pw = require_finite(power, "power")
     if ax.ndim != 1 or pw.shape != ax.shape or ax.size < 2 * _MIN_FLOOR_LINES + 3:

@@ -42,7 +42,7 @@ import numpy as np
 import xarray as xr
 
 from analysis.cf import cf_dataset, elapsed_seconds, labels_from_cf
-from analysis.checks import require_finite_blocks, uniform_rate
+from analysis.checks import require_finite_blocks, require_instance, uniform_rate
 from analysis.inputs import ANGLE_UNITS, find_reference
 from analysis.measurement_options import (
     apply_calibration,
@@ -464,6 +464,10 @@ def tacho_reference(signals: Any, name: str, pulses_per_rev: Any, t: np.ndarray
         saying how it was obtained, e.g. ``"tacho channel 'tacho' (sun shaft), 60 pulses/rev
         (given), 1234 pulses"``.
     """
+    require_instance(signals, (xr.Dataset, xr.DataArray), "signals")
+    t = np.asarray(t)
+    if t.ndim != 1 or t.size < 2 or t.dtype.kind not in "iuf" or not np.all(np.isfinite(t)):
+        raise ValueError("t must be a 1-D array of at least two finite times [s]")
     ch = _require_channel(signals, name, "tacho")
     n, origin = _ppr(pulses_per_rev, ch)
     fs = (t.size - 1) / float(t[-1] - t[0])  # the mean step (a decoded axis: rounded steps)
@@ -524,6 +528,7 @@ def reference_channel(signals: Any) -> tuple[str, str] | None:
         whose units are an angle or a rotational speed
         (:func:`analysis.inputs.find_reference`); ``None`` when there is none.
     """
+    require_instance(signals, (xr.Dataset, xr.DataArray), "signals")
     names = _channels_along_time(signals)
     for wanted in ("tacho", "speed"):
         for k in names:

@@ -27,7 +27,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from analysis.checks import require_real, uniform_rate
+from analysis.checks import require_instance, require_real, uniform_rate
 from analysis.readers import FORMATS, to_udunits
 
 __all__ = [
@@ -97,6 +97,10 @@ def reader_options(suffix: str, options: dict | None, fs: float | None,
         ``fs`` or ``time_column`` also in ``options``; ``time_column`` for a format without
         one.
     """
+    require_instance(suffix, str, "suffix")
+    if options is not None:
+        require_instance(options, Mapping, "options")
+    fs = check_fs(fs)
     opts = dict(options or {})
     fmt = _format_of(suffix)
     compare = False
@@ -133,6 +137,8 @@ def check_rate(ds: xr.Dataset, fs: float, where: str) -> None:
     Used for the formats that state their own rate (WAV, UFF, netCDF, a Dataset): a different
     ``fs`` is refused, not applied silently.
     """
+    require_instance(ds, xr.Dataset, "ds")
+    fs = require_real(fs, "fs")
     if "time" not in ds.coords:
         return
     rate = uniform_rate(ds["time"].values, f"{where}: time")
@@ -152,6 +158,7 @@ def scalar_variables(ds: xr.Dataset) -> dict[str, float]:
     dict
         Name -> value.
     """
+    require_instance(ds, xr.Dataset, "ds")
     out: dict[str, float] = {}
     for k, v in ds.attrs.items():
         if isinstance(v, bool | np.bool_) or k in _LAYOUT_ATTRS:
@@ -177,6 +184,8 @@ def scalar_speed(ds: xr.Dataset, name: Any, max_rpm: float) -> float:
     TypeError
         ``name`` is not a string.
     """
+    require_instance(ds, xr.Dataset, "ds")
+    require_real(max_rpm, "max_rpm")
     if not isinstance(name, str) or not name:
         raise TypeError(f"rpm_from = {name!r} is not admissible: the name of a scalar variable "
                         "of the file")
@@ -246,6 +255,7 @@ def apply_calibration(signals: xr.Dataset, calibration: Any = None,
     -----
     ``x_out = x_file * calibration * k(unit)``, ``k`` the SI factor of the unit.
     """
+    require_instance(signals, xr.Dataset, "signals")
     names = [str(k) for k in signals.data_vars]
     cal = {c: _factor(v, c) for c, v in _per_channel(calibration, names, "calibration").items()}
     uni = {c: _unit(v, c) for c, v in _per_channel(units, names, "units").items()}

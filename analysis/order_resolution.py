@@ -46,7 +46,7 @@ from typing import Any
 
 import numpy as np
 
-from analysis.checks import require_finite
+from analysis.checks import require_finite, require_positive, require_real
 
 __all__ = [
     "DEFAULT_ORDER_RESOLUTION",
@@ -118,6 +118,8 @@ def smallest_spacing(orders: np.ndarray) -> float:
 
 def default_order_resolution(orders: np.ndarray | None, max_order: float | None) -> float:
     """``min(1/4, d_min / 4, max_order / 64)`` [orders] (see the module docstring)."""
+    orders = requested_orders(orders, "orders")
+    max_order = optional_positive(max_order, "max_order", "orders")
     res = DEFAULT_ORDER_RESOLUTION
     if orders is not None and orders.size:
         res = min(res, smallest_spacing(orders) / RESOLUTIONS_BETWEEN_ORDERS)
@@ -140,9 +142,15 @@ def choose_order_resolution(
     ``revolutions / MIN_FRAMES``.
     """
     if resolution is not None:
-        return float(resolution), ""
+        return optional_positive(resolution, "resolution", "orders"), ""
     res = default_order_resolution(orders, max_order)
+    revolutions = require_positive(require_real(revolutions, "revolutions"), "revolutions",
+                                   allow_zero=True)
+    enbw_lines = require_positive(require_real(enbw_lines, "enbw_lines"), "enbw_lines")
     floor = enbw_lines * MIN_FRAMES / max(revolutions, 1e-300)
+    if not np.isfinite(floor):
+        raise ValueError(f"enbw_lines = {enbw_lines:g} over revolutions = {revolutions:g} give "
+                         "no finite resolution; check them")
     if res >= floor:
         return res, ""
     note = (
@@ -176,11 +184,26 @@ def default_frequency_resolution(
       run-up, an order map does not);
     * frames of at most ``1 / MIN_FRAMES`` of the record.
     """
+    shaft_hz_min, shaft_hz_max, duration_s, enbw_lines = (
+        require_positive(require_real(v, k), k, allow_zero=True) for k, v in (
+            ("shaft_hz_min", shaft_hz_min), ("shaft_hz_max", shaft_hz_max),
+            ("duration_s", duration_s), ("enbw_lines", enbw_lines)))
+    with np.errstate(over="ignore"):
+        res = _finite_resolution(shaft_hz_min, shaft_hz_max, duration_s, enbw_lines, orders)
+    return res
+
+
+def _finite_resolution(shaft_hz_min: float, shaft_hz_max: float, duration_s: float,
+                       enbw_lines: float, orders: Any) -> float:
     res = default_order_resolution(orders, None) * shaft_hz_min
     duration = max(duration_s, 1e-300)
     sweep = np.sqrt(enbw_lines * max(shaft_hz_max - shaft_hz_min, 0.0) / duration)
     floor = enbw_lines * MIN_FRAMES / duration
-    return float(max(res, sweep, floor))
+    out = float(max(res, sweep, floor))
+    if not np.isfinite(out):
+        raise ValueError(f"shaft_hz_min .. shaft_hz_max = {shaft_hz_min:g} .. {shaft_hz_max:g} "
+                         f"Hz over {duration_s:g} s give no finite resolution; check the units")
+    return out
 
 
 def main_lobe_band(half_width_lines: float, spacing: float) -> float:

@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from analysis.checks import require_colormap, require_instance, require_positive, require_real
 from analysis.levels import to_db
 
 if TYPE_CHECKING:
@@ -127,6 +128,7 @@ def spectrum_figure(
     figsize : (float, float)
         Size in inches of a new figure.
     """
+    require_instance(spectrum, "analysis.spectrum.Spectrum", "spectrum")
     fig, ax = _axes(ax, figsize)
     if isinstance(channel, tuple):  # an index into several leading dimensions
         spectrum = dataclasses.replace(
@@ -168,6 +170,7 @@ def order_spectrum_figure(
     figsize: tuple[float, float] = (8.0, 4.0),
 ) -> Figure:
     """Order spectrum (level vs order), one line per channel; ``ax`` to draw into."""
+    require_instance(spectrum, "analysis.orders.OrderSpectrum", "spectrum")
     fig, ax = _axes(ax, figsize)
     rows = _rows(spectrum.values, spectrum.dims, spectrum.coords, spectrum.name)
     for label, row in rows:
@@ -185,6 +188,7 @@ def order_spectrum_figure(
 
 
 def _map_levels(m: RpmFrequencyMap | RpmOrderMap, dynamic_range_db: float) -> np.ndarray:
+    require_positive(require_real(dynamic_range_db, "dynamic_range_db"), "dynamic_range_db")
     if m.scale == "dB":
         lv = np.asarray(m.values, dtype=float)
     else:
@@ -195,7 +199,8 @@ def _map_levels(m: RpmFrequencyMap | RpmOrderMap, dynamic_range_db: float) -> np
 def _colourmap(
     fig: Figure, ax: Any, x: np.ndarray, y: np.ndarray, levels: np.ndarray, label: str, cmap: str
 ) -> None:
-    mesh = ax.pcolormesh(x, y, levels, shading="nearest", cmap=cmap, rasterized=True)
+    mesh = ax.pcolormesh(x, y, levels, shading="nearest", cmap=require_colormap(cmap),
+                         rasterized=True)
     fig.colorbar(mesh, ax=ax, label=label)
 
 
@@ -244,6 +249,7 @@ def rpm_frequency_map_figure(
     figsize : (float, float)
         Size in inches of a new figure.
     """
+    require_instance(m, "analysis.maps.RpmFrequencyMap", "m")
     m = _one_channel(m, channel)
     fig, ax = _axes(ax, figsize)
     levels = _map_levels(m, dynamic_range_db)
@@ -299,6 +305,7 @@ def rpm_order_map_figure(
 
     ``channel`` chooses the channel of a multi-channel map; ``ax`` are axes to draw into.
     """
+    require_instance(m, "analysis.maps.RpmOrderMap", "m")
     m = _one_channel(m, channel)
     fig, ax = _axes(ax, figsize)
     levels = _map_levels(m, dynamic_range_db)
@@ -335,6 +342,7 @@ def order_cuts_figure(
     ``db`` defaults to the cut's own scale; a linear cut can be shown in dB. A multi-channel
     cut draws every channel (``channel=`` chooses one); ``ax`` are axes to draw into.
     """
+    require_instance(cut, "analysis.orders.OrderCut", "cut")
     fig, ax = _axes(ax, figsize)
     if channel is not None:
         cut = cut.select(channel)
@@ -373,6 +381,7 @@ def overall_level_figure(
     level: OverallLevel, *, ax: Any = None, figsize: tuple[float, float] = (8.0, 4.0)
 ) -> Figure:
     """Overall rms level vs speed (one line per channel); ``ax`` to draw into."""
+    require_instance(level, "analysis.maps.OverallLevel", "level")
     fig, ax = _axes(ax, figsize)
     rows = _rows(level.values, level.dims, level.coords, level.name)
     for label, row in rows:
@@ -400,6 +409,7 @@ def campbell_figure(
     figsize: tuple[float, float] = (7.0, 5.0),
 ) -> Figure:
     """Campbell diagram: order rays, natural-frequency lines and critical speeds."""
+    require_instance(c, "analysis.maps.Campbell", "c")
     fig, ax = _axes(ax, figsize)
     text = list(order_labels) if order_labels is not None else [f"{o:g}×" for o in c.orders]
     if len(text) != c.orders.size:

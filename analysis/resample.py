@@ -53,6 +53,7 @@ from analysis.checks import (
     require_block_size,
     require_finite,
     require_finite_blocks,
+    require_instance,
     require_monotonic,
     require_positive,
     require_same_length,
@@ -654,6 +655,8 @@ def tracking(
     ``max_order`` lowered to ``samples_per_rev / 2.56`` of the former sampling where ``fs``
     does not reach it at the top speed.
     """
+    require_instance(signal, Signal, "signal")
+    require_instance(reference, Reference, "reference")
     fs = signal.fs
     a, b, _, note = moving_range(reference, fs, signal.t0, min_rpm)
     if b - a < 8:

@@ -20,10 +20,12 @@ alone or with others, bit for bit.
 from __future__ import annotations
 
 import functools
+import math
 
 import numba
 import numpy as np
 
+from analysis.checks import require_int, require_real, require_real_array, require_size
 from analysis.jit import prepare_cache
 
 prepare_cache(__file__)  # before the decorators below: numba resolves its cache folder there
@@ -35,6 +37,33 @@ HALF_TAPS = 12
 _BETA = 7.0
 _PIECES = 256
 _DEGREE = 4
+#: Most pieces and highest degree :func:`kernel_table` accepts.
+MAX_PIECES = 1024
+MAX_DEGREE = 8
+#: Largest magnitude of a position, an index or a count (exact in float64 and int64).
+MAX_INDEX = 2**52
+
+
+def _bounded_int(value: object, name: str, low: int, high: int) -> int:
+    """``value`` as an int in ``[low, high]``; a ValueError naming ``name`` otherwise."""
+    if type(value) is int and low <= value <= high:  # the per-block calls: no further work
+        return value
+    v = require_int(value, name, low)
+    if v > high:
+        raise ValueError(f"{name} = {value!r} is not admissible: an integer in {low} .. {high}")
+    return v
+
+
+def _real(a: object, name: str, ndims: tuple[int, ...]) -> np.ndarray:
+    """``a`` as a C-contiguous float64 array of one of ``ndims`` dimensions (no NaN check)."""
+    if (type(a) is np.ndarray and a.dtype == np.float64 and a.ndim in ndims
+            and a.flags.c_contiguous):
+        return a  # the per-block calls: nothing to convert
+    arr = require_real_array(a, name, min_size=0, finite=False)
+    if arr.ndim not in ndims:
+        raise ValueError(f"{name} must have {' or '.join(map(str, ndims))} dimension(s); got "
+                         f"shape {arr.shape}")
+    return np.ascontiguousarray(arr)
 
 
 def exact_kernel(frac: np.ndarray) -> np.ndarray:
@@ -50,8 +79,11 @@ def kernel_table(pieces: int = _PIECES, degree: int = _DEGREE) -> np.ndarray:
     """Polynomial coefficients ``(pieces, degree + 1, 24)`` of the kernel weights.
 
     On piece ``p`` (``f`` in ``[p / P, (p + 1) / P)``) with ``u = 2 (f P - p) - 1`` in
-    ``[-1, 1)``, weight ``k`` is ``sum_d table[p, d, k] u**d``.
+    ``[-1, 1)``, weight ``k`` is ``sum_d table[p, d, k] u**d``. ``pieces`` lies in
+    ``1 .. MAX_PIECES`` and ``degree`` in ``1 .. MAX_DEGREE`` (a fit costs ~2 ms per piece).
     """
+    pieces = _bounded_int(pieces, "pieces", 1, MAX_PIECES)
+    degree = _bounded_int(degree, "degree", 1, MAX_DEGREE)
     nodes = np.cos(np.pi * (np.arange(3 * degree) + 0.5) / (3 * degree))
     table = np.zeros((pieces, degree + 1, 2 * HALF_TAPS))
     for p in range(pieces):
@@ -149,16 +181,38 @@ def interpolate(
     (``floor(pos) - 11 .. floor(pos) + 12``, clipped to the record); samples beyond the ends of
     the record are taken equal to the end samples.
 
+    The positions are checked before the compiled kernel runs (it has no bounds checks):
+    finite, at most :data:`MAX_INDEX` in magnitude, and every sample they reach inside ``x``
+    (a :class:`ValueError` otherwise).
+
     Returns
     -------
     numpy.ndarray
         Shape ``(channels, len(pos))``, float64.
     """
-    x2 = np.ascontiguousarray(np.asarray(x, dtype=np.float64).reshape(-1, x.shape[-1]))
-    n = start + x2.shape[1] if n_total is None else int(n_total)
-    p = np.ascontiguousarray(pos, dtype=np.float64)
+    xa = _real(x, "x", (1, 2))
+    if xa.shape[-1] < 1:
+        raise ValueError("x holds no samples")
+    x2 = xa.reshape(-1, xa.shape[-1])
+    start = _bounded_int(start, "start", 0, MAX_INDEX)
+    n = start + x2.shape[1] if n_total is None else _bounded_int(n_total, "n_total", 1,
+                                                                  MAX_INDEX)
+    if start + x2.shape[1] > n:
+        raise ValueError(f"x holds samples {start} .. {start + x2.shape[1] - 1}, beyond the "
+                         f"record of n_total = {n} samples")
+    p = _real(pos, "pos", (0, 1)).reshape(-1)
+    if p.size:
+        lo, hi = float(p.min()), float(p.max())
+        if not (lo >= -MAX_INDEX and hi <= MAX_INDEX):  # also NaN
+            raise ValueError(f"pos must be finite positions within +-{MAX_INDEX:g} samples; "
+                             f"got {lo:.6g} .. {hi:.6g}")
+        first = max(0, min(n - 1, int(np.floor(lo)) - HALF_TAPS + 1))
+        last = min(n - 1, max(0, int(np.floor(hi)) + HALF_TAPS))
+        if first < start or last >= start + x2.shape[1]:
+            raise ValueError(f"pos = {lo:.6g} .. {hi:.6g} reaches samples {first} .. {last}; "
+                             f"x holds {start} .. {start + x2.shape[1] - 1} only")
     out = np.empty((x2.shape[0], p.size))
-    _interpolate(x2, int(start), n, p, _default_table(), out)
+    _interpolate(x2, start, n, p, _default_table(), out)
     return out
 
 
@@ -198,12 +252,19 @@ def positions(
     pos, tq : numpy.ndarray
         Positions [samples] and instants [s], ``count`` each.
     """
-    pos = np.empty(int(count))
-    tq = np.empty(int(count))
-    _positions(
-        np.ascontiguousarray(th, dtype=np.float64), np.ascontiguousarray(t, dtype=np.float64),
-        float(first), float(dphi), int(f0), float(t_first), float(fs), pos, tq,
-    )  # fmt: skip
+    tha, ta = _real(th, "th", (1,)), _real(t, "t", (1,))
+    if tha.size < 1 or ta.size != tha.size:
+        raise ValueError(f"th and t must be non-empty and of equal length; got {tha.size} and "
+                         f"{ta.size}")
+    count = _bounded_int(count, "count", 0, MAX_INDEX)
+    f0 = _bounded_int(f0, "f0", -MAX_INDEX, MAX_INDEX)
+    first, dphi, t_first, fs = (v if type(v) is float and math.isfinite(v) else require_real(v, k)
+                                for k, v in (("first", first), ("dphi", dphi),
+                                             ("t_first", t_first), ("fs", fs)))
+    require_size(16.0 * count, f"{count} positions and instants", "count")
+    pos = np.empty(count)
+    tq = np.empty(count)
+    _positions(tha, ta, first, dphi, f0, t_first, fs, pos, tq)
     return pos, tq
 
 
@@ -260,7 +321,17 @@ def decimate(fine: np.ndarray, fir: np.ndarray, over: int, first: int, count: in
     with zeros beyond the ends of ``fine`` (``len(fir)`` odd): samples ``first .. first +
     count - 1`` of ``scipy.signal.resample_poly(fine, 1, over, window=fir)``.
     """
-    f2 = np.ascontiguousarray(fine, dtype=np.float64).reshape(-1, fine.shape[-1])
-    out = np.empty((f2.shape[0], int(count)))
-    _decimate(f2, np.ascontiguousarray(fir, dtype=np.float64), int(over), int(first), out)
+    fa = _real(fine, "fine", (1, 2))
+    f2 = fa.reshape(-1, fa.shape[-1])
+    taps = _real(fir, "fir", (1,))
+    if taps.size % 2 == 0:
+        raise ValueError(f"fir must have an odd number of taps (zero phase); got {taps.size}")
+    over = _bounded_int(over, "over", 1, MAX_INDEX)
+    first = _bounded_int(first, "first", -MAX_INDEX, MAX_INDEX)
+    count = _bounded_int(count, "count", 0, MAX_INDEX)
+    length = count + taps.size // over + 2  # the phase streams of one channel
+    require_size(8.0 * (f2.shape[0] * count + over * length), f"the output ({count} samples) "
+                 f"and {over} phase streams", "count, over")
+    out = np.empty((f2.shape[0], count))
+    _decimate(f2, taps, over, first, out)
     return out

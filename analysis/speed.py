@@ -19,6 +19,7 @@ Wiley 2011, ch. 12) with the missing-pulse/missing-tooth handling that NVH suite
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass, field
+from typing import Any
 
 import numpy as np
 import xarray as xr
@@ -26,7 +27,12 @@ from scipy.interpolate import CubicSpline, PchipInterpolator, make_lsq_spline
 from scipy.ndimage import median_filter
 
 from analysis.cf import cf_dataset, time_attrs
-from analysis.checks import require_finite, require_monotonic, require_positive
+from analysis.checks import (
+    require_finite,
+    require_monotonic,
+    require_positive,
+    require_real_array,
+)
 
 __all__ = ["SpeedAccuracy", "SpeedReference", "from_angle", "from_rpm", "from_tacho"]
 
@@ -174,10 +180,22 @@ def _smooth_rpm(tp: np.ndarray, angle: np.ndarray, t_out: np.ndarray, every: int
     return om * _RAD_PER_S_TO_RPM
 
 
-def _check_time(time: np.ndarray, name: str = "time") -> np.ndarray:
-    t = require_monotonic(time, name, strict=True)
-    if t.ndim != 1 or t.size < 2:
+#: Largest magnitude of a time [s], a speed [min-1] and an angle [rad] :func:`from_rpm` and
+#: :func:`from_angle` take (their interpolants' powers and products stay within float64).
+MAX_TIME_S, MAX_RPM, MAX_ANGLE_RAD = 1e12, 1e12, 1e100
+#: Shortest time step [s] they take (a sample rate above 1 THz is a unit error).
+MIN_STEP_S = 1e-12
+
+
+def _check_time(time: Any, name: str = "time") -> np.ndarray:
+    t = require_real_array(time, name, ndim=1, max_abs=MAX_TIME_S)
+    if t.size < 2:
         raise ValueError(f"{name}: needs a 1-D axis with at least two samples")
+    t = require_monotonic(t, name, strict=True)
+    step = float(np.min(np.diff(t)))
+    if step < MIN_STEP_S:
+        raise ValueError(f"{name}: a step of {step:.3g} s, below {MIN_STEP_S:g} s (a sample rate "
+                         "above 1 THz); check the units")
     return t
 
 
@@ -207,8 +225,8 @@ def from_rpm(time: np.ndarray, rpm: np.ndarray) -> SpeedReference:
     ValueError
         Non-increasing time, NaN, unequal lengths.
     """
-    t = _check_time(np.asarray(time, dtype=float))
-    n = require_finite(rpm, "rpm")
+    t = _check_time(time)
+    n = require_real_array(rpm, "rpm", max_abs=MAX_RPM)
     if n.shape != t.shape:
         raise ValueError(f"rpm has shape {n.shape}, time has {t.shape}; they must match")
     omega = n / _RAD_PER_S_TO_RPM
@@ -240,8 +258,8 @@ def from_angle(time: np.ndarray, angle: np.ndarray) -> SpeedReference:
     ValueError
         Decreasing angle (naming the first sample where it decreases), NaN, unequal lengths.
     """
-    t = _check_time(np.asarray(time, dtype=float))
-    a = require_finite(angle, "angle")
+    t = _check_time(time)
+    a = require_real_array(angle, "angle", max_abs=MAX_ANGLE_RAD)
     if a.shape != t.shape:
         raise ValueError(f"angle has shape {a.shape}, time has {t.shape}; they must match")
     dec = np.flatnonzero(np.diff(a) < 0)

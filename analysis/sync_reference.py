@@ -31,7 +31,13 @@ from typing import Any
 import numpy as np
 from scipy.interpolate import PchipInterpolator
 
-from analysis.checks import BLOCK_SAMPLES, require_finite, require_int, require_real
+from analysis.checks import (
+    BLOCK_SAMPLES,
+    require_finite,
+    require_instance,
+    require_int,
+    require_real,
+)
 from analysis.inputs import Reference, Signal, moving_range, reference_input
 from analysis.resample import Track, check_speed
 from analysis.speed import from_tacho
@@ -208,6 +214,7 @@ def shaft_angle(
         None or several references, wrong lengths, NaN, bool or string values, fewer than 3
         pulses, a reference that does not turn.
     """
+    require_instance(signal, Signal, "signal")
     given = [k for k, v in {"tacho": tacho, "pulse_times": pulse_times, "rpm": rpm,
                             "angle": angle}.items() if v is not None]  # fmt: skip
     if len(given) != 1:

@@ -45,7 +45,13 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from analysis.cf import cf_dataset, processing_attrs
-from analysis.checks import require_block_size, require_int, require_real, time_or_rate
+from analysis.checks import (
+    require_block_size,
+    require_int,
+    require_real,
+    require_real_array,
+    time_or_rate,
+)
 from analysis.cm_plots import tsa_figure
 from analysis.fft import irfft, rfft
 from analysis.inputs import Signal, channel_coords, select_channel, signal_input
@@ -277,6 +283,10 @@ def fractional_shift(values: np.ndarray, shift: float) -> np.ndarray:
     below ``n / 2``; the Nyquist line of an even ``n`` is kept real (scaled by
     ``cos(pi shift)``).
     """
+    values = require_real_array(values, "values", min_size=1)
+    if values.ndim == 0:
+        raise ValueError("values must be an array along the angle (last axis); got a scalar")
+    shift = require_real(shift, "shift")
     n = values.shape[-1]
     k = np.arange(n // 2 + 1)
     spec = rfft(values, axis=-1)

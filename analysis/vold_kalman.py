@@ -77,6 +77,7 @@ from typing import Any
 
 import numpy as np
 
+from analysis.checks import require_positive, require_real, require_real_array
 from analysis.inputs import signal_input
 from analysis.vold_kalman_checks import (
     per_order,
@@ -111,6 +112,7 @@ MAX_BANDWIDTH_FRACTION = 0.1
 #: Largest admissible weight r: rounding errors then stay below about 1e-4 of the amplitude.
 MAX_WEIGHT = 1e12
 _HALF_POWER = np.sqrt(2.0) - 1.0
+_WEIGHT_LIMIT = 1e150  # the largest weight weight_to_bandwidth takes (its square is finite)
 _SINGULAR = 1e-6  # pivot of R below which the envelopes are not determined (measured >= 4)
 
 
@@ -154,8 +156,17 @@ def bandwidth_to_weight(bandwidth: Any, fs: float, filter_order: int = 1) -> np.
     (order 1) and ``(1.727 fs / (2 pi B))^3`` (order 2); Tůma (2005) gives 1.58 and 1.70.
     """
     p = _difference_order(filter_order)
-    b = np.asarray(bandwidth, dtype=float)
-    return np.sqrt(_HALF_POWER) / (2.0 * np.sin(np.pi * b / (2.0 * fs))) ** p
+    f = require_positive(require_real(fs, "fs"), "fs")
+    b = require_real_array(bandwidth, "bandwidth", min_size=0)
+    if b.size and (b.min() <= 0.0 or b.max() > f):
+        raise ValueError(f"bandwidth must lie in (0, fs] = (0, {f:g}] Hz; got {b.min():g} .. "
+                         f"{b.max():g} Hz")
+    with np.errstate(all="ignore"):
+        r = np.sqrt(_HALF_POWER) / (2.0 * np.sin(np.pi * b / (2.0 * f))) ** p
+    if not np.all(np.isfinite(r)):
+        raise ValueError(f"bandwidth = {b.min():g} Hz is too narrow for fs = {f:g} Hz: its "
+                         "weight overflows float64")
+    return r
 
 
 def weight_to_bandwidth(weight: Any, fs: float, filter_order: int = 1) -> np.ndarray:
@@ -176,8 +187,15 @@ def weight_to_bandwidth(weight: Any, fs: float, filter_order: int = 1) -> np.nda
         ``B = (2 fs / pi) arcsin(((sqrt(2) - 1) / r^2)^(1 / (2p)) / 2)`` [Hz].
     """
     p = _difference_order(filter_order)
-    r = np.asarray(weight, dtype=float)
-    return 2.0 * fs / np.pi * np.arcsin(0.5 * (_HALF_POWER / r**2) ** (1.0 / (2 * p)))
+    f = require_positive(require_real(fs, "fs"), "fs")
+    r = require_real_array(weight, "weight", min_size=0)
+    r_min = np.sqrt(_HALF_POWER) / 2.0**p  # the bandwidth fs
+    if r.size and (r.min() < r_min or r.max() > _WEIGHT_LIMIT):
+        raise ValueError(f"weight must lie in [{r_min:.6g}, {_WEIGHT_LIMIT:g}] (bandwidths "
+                         f"fs .. near 0); got {r.min():g} .. {r.max():g}")
+    with np.errstate(under="ignore"):
+        arg = np.minimum(0.5 * (_HALF_POWER / r**2) ** (1.0 / (2 * p)), 1.0)
+    return 2.0 * f / np.pi * np.arcsin(arg)
 
 
 # ---------------------------------------------------------------------------- extraction

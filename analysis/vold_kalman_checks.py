@@ -12,6 +12,7 @@ from typing import Any
 
 import numpy as np
 
+from analysis.checks import require_instance, require_int, require_size
 from analysis.inputs import Signal, reference_input
 from analysis.speed import from_angle, from_rpm, from_tacho
 
@@ -57,7 +58,13 @@ def real_numbers(values: Any, name: str) -> np.ndarray:
 
 def per_order(values: np.ndarray, m: int, name: str) -> np.ndarray:
     """One value per order: ``values`` of one element repeated ``m`` times, or ``m`` values."""
+    require_instance(values, np.ndarray, name)
+    if values.ndim != 1:
+        raise ValueError(f"{name} must be 1-D (one value, or one per order); got shape "
+                         f"{values.shape}")
+    m = require_int(m, "m", 1)
     if values.size == 1:
+        require_size(8.0 * m, f"{m} values per order", "m")
         return np.full(m, values[0])
     if values.size != m:
         raise ValueError(f"{name}: {values.size} values for {m} orders; give one or one per order")
@@ -130,6 +137,7 @@ def speed_references(
     time: np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray, str]:
     """Angles and speeds ``(shaft, time)`` of the speed references, and their description."""
+    require_instance(sig, Signal, "sig")
     given = [k for k, v in (("rpm", rpm), ("angle", angle), ("tacho", tacho)) if v is not None]
     if len(given) > 1:
         raise ValueError(f"give one speed reference (rpm=, angle= or tacho=), not {given}")

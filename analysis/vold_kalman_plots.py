@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from analysis.checks import require_instance, require_int, require_positive, require_real
 from analysis.inputs import select_channel
 
 if TYPE_CHECKING:
@@ -41,6 +42,8 @@ def _one(res: OrderWaveforms, channel: Any) -> OrderWaveforms:
 
 
 def _abscissa(res: OrderWaveforms, xaxis: str) -> tuple[np.ndarray, str]:
+    if not isinstance(xaxis, str):
+        raise TypeError(f"xaxis must be 'time' or 'rpm'; got {type(xaxis).__name__}")
     if xaxis == "time":
         return res.time, "time [s]"
     if xaxis == "rpm":
@@ -83,9 +86,11 @@ def order_waveform_figure(
     figsize : tuple of float
         Figure size [in].
     """
+    require_instance(res, "analysis.vold_kalman_results.OrderWaveforms", "res")
+    max_points = require_int(max_points, "max_points", 2)
     res = _one(res, channel)
     x, xlabel = _abscissa(res, xaxis)
-    step = max(1, -(-x.size // max(int(max_points), 2)))
+    step = max(1, -(-x.size // max_points))
     sl = slice(None, None, step)
     fig = _figure(figsize)
     ax_f, ax_a, ax_p = fig.subplots(3, 1, sharex=True)
@@ -150,6 +155,7 @@ def order_removal_figure(
     figsize : tuple of float
         Figure size [in].
     """
+    require_instance(rem, "analysis.vold_kalman_results.OrderRemoval", "rem")
     ex = rem.extraction
     signal, residual = rem.signal, rem.residual
     if ex.envelope.ndim > 2:
@@ -162,6 +168,11 @@ def order_removal_figure(
     if frame is None:
         slowest = float(np.min(np.median(ex.frequency, axis=1)))
         frame = 4.0 / slowest if slowest > 0 else x.size / ex.fs / 400
+    else:
+        frame = require_positive(require_real(frame, "frame"), "frame")
+        if frame > x.size / ex.fs:
+            raise ValueError(f"frame = {frame:g} s is not admissible: (0, {x.size / ex.fs:g}] s "
+                             "(the record's length)")
     length = max(round(float(frame) * ex.fs), x.size // 400, 1)
     fig = _figure(figsize)
     ax = fig.add_subplot()

@@ -39,6 +39,7 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
+from analysis.checks import require_int, require_real_array, require_size
 from analysis.jit import prepare_cache
 
 prepare_cache(__file__)  # before the decorators below: numba resolves its cache folder there
@@ -48,8 +49,27 @@ __all__ = ["SolvePlan", "difference_coefficients", "minimum_working_bytes", "pla
 _FLOAT = 8  # bytes per float64
 
 
+#: Highest difference order the solver takes (the filter uses 2 or 3).
+MAX_DIFFERENCE_ORDER = 8
+
+
+def _order(p: object) -> int:
+    v = require_int(p, "p", 1)
+    if v > MAX_DIFFERENCE_ORDER:
+        raise ValueError(f"p = {p!r} is not admissible: a difference order in 1 .. "
+                         f"{MAX_DIFFERENCE_ORDER}")
+    return v
+
+
+def _counts(**values: object) -> list[int]:
+    """Integers >= 1 (sample, order and signal counts), checked in the order given."""
+    return [require_int(v, k, 1) for k, v in values.items()]
+
+
 def difference_coefficients(p: int) -> np.ndarray:
-    """Coefficients of the ``p``-th forward difference, ``(-1)^(p-i) C(p, i)``, i = 0..p."""
+    """Coefficients of the ``p``-th forward difference, ``(-1)^(p-i) C(p, i)``, i = 0..p
+    (``p`` in 1 .. :data:`MAX_DIFFERENCE_ORDER`)."""
+    p = _order(p)
     return np.array([(-1) ** (p - i) * math.comb(p, i) for i in range(p + 1)], dtype=float)
 
 
@@ -81,6 +101,8 @@ def _working_bytes(n: int, block: int, q: int, w: int, nrhs: int) -> int:
 
 def minimum_working_bytes(n: int, m: int, p: int, nrhs: int) -> int:
     """Working memory [bytes] of the smallest blocks :func:`plan` uses (``64 p`` samples)."""
+    n, m, nrhs = _counts(n=n, m=m, nrhs=nrhs)
+    p = _order(p)
     q = 2 * m
     return _working_bytes(n, min(n, 64 * p), q, p * q + 1, nrhs)
 
@@ -89,6 +111,12 @@ def plan(n: int, m: int, p: int, nrhs: int, budget: float) -> SolvePlan | None:
     """Block length for ``n`` samples, ``m`` orders, difference order ``p`` and ``nrhs``
     right-hand sides within ``budget`` bytes of working memory; ``None`` if even blocks of
     ``64 p`` samples do not fit."""
+    n, m, nrhs = _counts(n=n, m=m, nrhs=nrhs)
+    p = _order(p)
+    if isinstance(budget, bool | np.bool_) or not isinstance(budget, int | float | np.number):
+        raise TypeError(f"budget must be a number of bytes; got {type(budget).__name__}")
+    if np.isnan(budget):
+        raise ValueError("budget = nan is not admissible: a number of bytes")
     q = 2 * m
     w = p * q + 1
     if _working_bytes(n, n, q, w, nrhs) <= budget:
@@ -259,20 +287,34 @@ def solve(
     smallest_pivot : float
         Smallest diagonal element of ``R`` (0 or tiny: the system is singular).
     """
+    angle = np.ascontiguousarray(require_real_array(angle, "angle", ndim=2))
+    x = np.ascontiguousarray(require_real_array(x, "x", ndim=2))
+    orders = np.ascontiguousarray(require_real_array(orders, "orders", ndim=1))
+    rows = np.ascontiguousarray(require_real_array(rows, "rows", ndim=1))
+    sh = np.asarray(shafts)
+    if sh.dtype.kind not in "iu" or sh.ndim != 1:
+        raise TypeError(f"shafts must be a 1-D array of integers; got dtype {sh.dtype}, shape "
+                        f"{sh.shape}")
     m = orders.size
     nrhs, n = x.shape
+    if angle.shape[1] != n or rows.size != m or sh.size != m:
+        raise ValueError(f"shapes disagree: angle {angle.shape}, x {x.shape} (same number of "
+                         f"samples), orders {orders.shape}, shafts {sh.shape}, rows "
+                         f"{rows.shape} (one per order)")
+    if sh.size and not (sh.min() >= 0 and sh.max() < angle.shape[0]):
+        raise ValueError(f"shafts must index the rows of angle (0 .. {angle.shape[0] - 1})")
+    shafts = np.ascontiguousarray(sh, dtype=np.int64)
+    p = _order(p)
+    block = require_int(block, "block", 1)
     q = 2 * m
     w = p * q + 1
     total = q * n
     coef = difference_coefficients(p)
-    angle = np.ascontiguousarray(angle, dtype=float)
-    x = np.ascontiguousarray(x, dtype=float)
-    orders = np.ascontiguousarray(orders, dtype=float)
-    shafts = np.ascontiguousarray(shafts, dtype=np.int64)
-    rows = np.ascontiguousarray(rows, dtype=float)
-    out = np.empty((nrhs, m, n), dtype=complex)
     block = min(block, n)
     cap = q * block + (w - 1)
+    require_size(16.0 * nrhs * m * n + 8.0 * cap * (w + nrhs), f"the envelopes ({nrhs} x {m} "
+                 f"x {n} complex) and the band of R", "x, orders, block")
+    out = np.empty((nrhs, m, n), dtype=complex)
     rb = np.zeros((cap, w))
     rhs = np.zeros((cap, nrhs))
     if block >= n:

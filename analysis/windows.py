@@ -21,6 +21,8 @@ from typing import Any
 import numpy as np
 import scipy.signal
 
+from analysis.checks import require_real_array
+
 __all__ = [
     "WINDOWS",
     "WindowInfo",
@@ -241,18 +243,26 @@ def window_sums(w: np.ndarray) -> tuple[float, float]:
 
     Not ``np.dot``: above 10 000 samples OpenBLAS splits a dot product over its threads,
     which costs milliseconds on a loaded machine and makes the rounding depend on the thread
-    count.
+    count. ``w`` must be 1-D, finite and at most 1e100 in magnitude (its squares would
+    overflow); squares of tiny samples underflow to zero silently.
     """
-    return float(w.sum()), float(np.square(w).sum())
+    w = require_real_array(w, "w", ndim=1, min_size=1, max_abs=1e100)
+    with np.errstate(under="ignore"):
+        return float(w.sum()), float(np.square(w).sum())
 
 
 def window_info_of(window: WindowSpec, w: np.ndarray) -> WindowInfo:
     """:class:`WindowInfo` of the samples ``w`` of ``window`` (no second evaluation)."""
     name, beta, params = _parse(window)
+    s1, s2 = window_sums(w)  # checks w
+    w = np.asarray(w, dtype=float)
     n = w.size
-    s1, s2 = window_sums(w)
     if not s1 > 0:
         raise ValueError(f"window = {_describe(window)}: its samples sum to {s1:g} (must be > 0)")
+    if not 1e-100 < s1 < 1e100:  # ENBW is scale-free: computed on w / max|w| (no underflow)
+        peak = float(np.max(np.abs(w)))
+        u1, u2 = window_sums(w / peak)
+        return WindowInfo(name, beta, int(n), s1 / n, n * u2 / (u1 * u1), params)
     return WindowInfo(name, beta, int(n), s1 / n, n * s2 / (s1 * s1), params)
 
 

@@ -33,7 +33,13 @@ import numpy as np
 import scipy.optimize
 
 from analysis.cf import cf_dataset
-from analysis.checks import require_finite, require_monotonic, require_positive
+from analysis.checks import (
+    require_finite,
+    require_instance,
+    require_monotonic,
+    require_positive,
+    require_real,
+)
 from analysis.instability.floquet import floquet
 from analysis.instability.theory import Candidates
 from analysis.threads import one_blas_thread
@@ -272,6 +278,7 @@ def terminate_pool(pool: Executor) -> None:
     Python 3.14's ``terminate_workers`` is used where it exists; before, the pool's worker
     processes (its ``_processes`` table, stable since Python 3.3) are terminated.
     """
+    require_instance(pool, Executor, "pool")
     stop = getattr(pool, "terminate_workers", None)
     if callable(stop):
         stop()
@@ -471,11 +478,27 @@ def attribute_region(lower_hz: float, upper_hz: float, candidates: Candidates, *
         order ``n`` is ``O(eps^n)`` wide), then the nearest centre. Without ``shares``: the
         lowest order, then the nearest centre.
     """
+    require_instance(candidates, Candidates, "candidates")
+    lo, hi = require_real(lower_hz, "lower_hz"), require_real(upper_hz, "upper_hz")
+    if not 0.0 <= require_real(rtol, "rtol") < 1.0:
+        raise ValueError(f"rtol = {rtol!r} is not admissible: 0 <= rtol < 1 (relative)")
+    require_real(min_share, "min_share")
+    if factor is not None:
+        require_positive(require_real(factor, "factor"), "factor")
+    n_modes = candidates.natural_frequencies_hz.size
+    if shares is not None:
+        sh = np.asarray(shares)
+        if (sh.dtype.kind not in "iuf" or sh.ndim != 1 or sh.size not in (0, n_modes)
+                or not np.all(np.isfinite(sh))):
+            raise ValueError(f"shares must be a 1-D array of {n_modes} finite real numbers (one "
+                             "per natural frequency)")
+        shares = sh.astype(float)
+    if names is not None and (isinstance(names, str) or len(list(names)) != n_modes):
+        raise ValueError(f"names must be a sequence of {n_modes} mode names")
     if not len(candidates):
         return None, "no theory candidates in range"
     several = _by_speed(candidates, factor)
     centre = (candidates.rpm * factor if several else candidates.f_mesh_hz).astype(float)
-    lo, hi = float(lower_hz), float(upper_hz)
     holds = (candidates.allowed.astype(bool) & np.isfinite(centre)
              & (centre >= lo * (1.0 - rtol)) & (centre <= hi * (1.0 + rtol)))
     labels = list(names) if names is not None else [

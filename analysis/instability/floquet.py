@@ -16,6 +16,7 @@ The monodromy matrix is computed
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -489,10 +490,54 @@ def _midpoint_monodromy(m: np.ndarray, c: np.ndarray, k: PiecewiseSmooth, atol: 
     return bal.unbalance(rich), int(counts.sum()), err
 
 
+#: Largest damping decay over one period, ``T ||M^-1 C||`` (the monodromy's factor
+#: ``exp(-T tr(M^-1 C))`` stays within float64), and largest ``T^2 ||M^-1 K(0)||`` (about
+#: ``(omega T)^2``: 1e8 is 1600 oscillations of the highest mode per period).
+MAX_DAMPING_DECAY = 700.0
+MAX_STIFFNESS_PHASE = 1e8
+
+
+def _check_rates(period: float, minv: np.ndarray, c: np.ndarray, k0: np.ndarray) -> None:
+    """Refuse matrices whose scale would overflow the monodromy (checked before it)."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        decay = period * _frob(minv @ c)
+        phase = period * period * _frob(minv @ k0)
+    if not decay <= MAX_DAMPING_DECAY:
+        raise ValueError(f"M, C: the damping decays by T ||M^-1 C|| = {decay:.3g} per period, "
+                         f"more than {MAX_DAMPING_DECAY:g} (the monodromy would under- or "
+                         "overflow float64); check the units of M, C and the period")
+    if not phase <= MAX_STIFFNESS_PHASE:
+        raise ValueError(f"M, K: T^2 ||M^-1 K(0)|| = {phase:.3g} exceeds "
+                         f"{MAX_STIFFNESS_PHASE:g} (thousands of oscillations per period); "
+                         "check the units of M, K and the period")
+
+
+def _underflow_silent(func: Callable) -> Callable:
+    """Run ``func`` with numpy's underflow warnings off: a tiny entry of M, C or K that
+    underflows to zero in a product is no error (overflow is refused up front)."""
+
+    @functools.wraps(func)
+    def wrapper(*args: Any, **kwargs: Any) -> Any:
+        with np.errstate(under="ignore"):
+            return func(*args, **kwargs)
+
+    return wrapper
+
+
 def _frob(a: np.ndarray) -> float:
-    return float(np.sqrt(np.sum(np.abs(a) ** 2)))
+    """Frobenius norm, scaled by a power of two (exact: the same bits as the plain sum of
+    squares, without its overflow for entries above 1e154)."""
+    mag = np.abs(a)
+    top = float(mag.max()) if mag.size else 0.0
+    if top == 0.0 or not math.isfinite(top):
+        return top
+    e = int(np.frexp(top)[1])
+    u = np.ldexp(mag, -e)
+    with np.errstate(under="ignore", over="ignore"):
+        return float(np.ldexp(np.sqrt(np.sum(u**2)), e))
 
 
+@_underflow_silent
 def floquet(
     M: Any,
     C: Any,
@@ -646,6 +691,7 @@ def floquet(
             )
     else:
         raise ValueError("K must be a callable K(t) -> (n, n) array or a PiecewiseConstant")
+    _check_rates(T, minv, c, require_square(kfun(0.0), "K(0)", n))
 
     err = 0.0
     steps = 0

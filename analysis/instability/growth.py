@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 from analysis.cf import cf_dataset
-from analysis.checks import require_finite, require_positive
+from analysis.checks import require_finite, require_instance, require_positive
 
 __all__ = ["GrowthTable", "UnstableBand", "runup_growth", "unstable_bands"]
 
@@ -216,7 +216,12 @@ def runup_growth(bands: Any, time: Any, rpm: Any, *, threshold_db: float = 6.0,
     """
     if hasattr(bands, "region_table"):
         bands = unstable_bands(bands)
+    if isinstance(bands, UnstableBand) or not isinstance(bands, list | tuple):
+        raise TypeError(f"bands must be a StabilityChart or a sequence of UnstableBand; got "
+                        f"{type(bands).__name__}")
     bands = list(bands)
+    for k, b in enumerate(bands):
+        require_instance(b, UnstableBand, f"bands[{k}]")
     t = require_finite(time, "time").ravel()
     r = np.abs(require_finite(rpm, "rpm").ravel())
     if t.size != r.size or t.size < 2:

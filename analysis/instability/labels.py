@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from analysis.checks import require_positive
+from analysis.checks import require_instance, require_positive
 from analysis.identification import (
     CandidateLines,
     LineMatch,
@@ -63,6 +63,7 @@ def theory_lines(candidates: Candidates, *, names: Sequence[str] | None = None,
     CandidateLines
         Families ``natural``, ``principal``, ``sum`` (and ``difference`` if listed).
     """
+    require_instance(candidates, Candidates, "candidates")
     u = require_positive(uncertainty, "uncertainty", allow_zero=True)
     fn = np.asarray(candidates.natural_frequencies_hz, dtype=float)
     labels = list(names) if names is not None else [f"f{i + 1}" for i in range(fn.size)]

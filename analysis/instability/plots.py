@@ -10,6 +10,8 @@ from typing import Any
 
 import numpy as np
 
+from analysis.checks import require_instance
+
 __all__ = [
     "plot_candidates",
     "plot_chart",
@@ -21,6 +23,8 @@ __all__ = [
 
 def _axes(ax: Any):
     if ax is not None:
+        if not hasattr(ax, "figure") or not hasattr(ax, "plot"):
+            raise TypeError(f"ax must be matplotlib Axes; got {type(ax).__name__}")
         return ax.figure, ax
     from matplotlib.figure import Figure
 
@@ -30,6 +34,9 @@ def _axes(ax: Any):
 
 def plot_floquet(result: Any, ax: Any = None):
     """Floquet multipliers in the complex plane with the unit circle."""
+    from analysis.instability.floquet import FloquetResult
+
+    require_instance(result, FloquetResult, "result")
     fig, ax = _axes(ax)
     th = np.linspace(0, 2 * np.pi, 361)
     ax.plot(np.cos(th), np.sin(th), color="0.6", lw=1, label="|mu| = 1")
@@ -46,6 +53,9 @@ def plot_floquet(result: Any, ax: Any = None):
 
 def plot_candidates(candidates: Any, ax: Any = None):
     """Candidate region centres: mesh frequency (or speed) over order ``n``."""
+    from analysis.instability.theory import Candidates
+
+    require_instance(candidates, Candidates, "candidates")
     fig, ax = _axes(ax)
     use_rpm = candidates.mesh_frequency_per_rpm is not None
     x = candidates.rpm if use_rpm else candidates.f_mesh_hz
@@ -68,6 +78,9 @@ def plot_candidates(candidates: Any, ax: Any = None):
 
 def plot_chart(chart: Any, ax: Any = None):
     """Growth rate over mesh frequency, or an Ince-Strutt chart for two parameters."""
+    from analysis.instability.chart import StabilityChart
+
+    require_instance(chart, StabilityChart, "chart")
     fig, ax = _axes(ax)
     f = chart.mesh_frequencies_hz
     if chart.parameter_values is None:
@@ -94,6 +107,9 @@ def plot_chart(chart: Any, ax: Any = None):
 def plot_peak_labels(labels: Any, frequency_hz: Any = None, amplitude: Any = None,
                      ax: Any = None):
     """Peaks marked and annotated with their theory labels, optionally over a spectrum."""
+    from analysis.identification import PeakIdentification
+
+    require_instance(labels, PeakIdentification, "labels")
     fig, ax = _axes(ax)
     top = 1.0
     if frequency_hz is not None and amplitude is not None:
@@ -117,6 +133,13 @@ def plot_resonances(resonances: Any, map_ds: Any = None, ax: Any = None, *,
     frequencies dotted. Forced resonances are circles, parametric instabilities squares,
     unexplained rises grey crosses.
     """
+    import xarray
+
+    from analysis.instability.resonances import Resonances
+
+    require_instance(resonances, Resonances, "resonances")
+    if map_ds is not None:
+        require_instance(map_ds, xarray.Dataset, "map_ds")
     fig, ax = _axes(ax)
     h = resonances.mesh_frequency_per_rpm
     if map_ds is not None:

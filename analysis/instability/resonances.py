@@ -46,7 +46,7 @@ import scipy.ndimage
 import scipy.signal
 
 from analysis.cf import cf_dataset
-from analysis.checks import require_positive
+from analysis.checks import require_instance, require_positive, require_real
 from analysis.identification import covered_fraction
 from analysis.instability.growth import GrowthTable, runup_growth
 from analysis.instability.theory import Candidates, MeshPhasingRule, natural_frequencies
@@ -332,8 +332,18 @@ def merge_mesh_frequencies(parts: Sequence[tuple[str, Resonances]], *,
     Resonances
         Sorted by speed, then frequency.
     """
+    if not isinstance(parts, list | tuple):
+        raise TypeError(f"parts must be a sequence of (name, Resonances) pairs; got "
+                        f"{type(parts).__name__}")
     if not parts:
         raise ValueError("parts is empty: give one (name, Resonances) per mesh frequency")
+    for k, part in enumerate(parts):
+        if not isinstance(part, tuple | list) or len(part) != 2 or not isinstance(part[0], str):
+            raise TypeError(f"parts[{k}] must be a (name, Resonances) pair")
+        require_instance(part[1], Resonances, f"parts[{k}][1]")
+    for name, value in (("rpm_tolerance", rpm_tolerance),
+                        ("frequency_tolerance", frequency_tolerance)):
+        require_positive(require_real(value, name), name, allow_zero=True)
     if len(parts) == 1:
         return parts[0][1]
     rows: list[tuple[str, Resonances, int]] = []

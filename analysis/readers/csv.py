@@ -421,6 +421,9 @@ def read_csv(
     return build_dataset(channels, fs, source_format="csv", source_file=str(p), start_time=start)
 
 
+_NOT_DELIMITER = "0123456789.+-eE\"\r\n"
+
+
 def write_csv(ds: xr.Dataset, path: str | os.PathLike[str], *, delimiter: str = ",") -> Path:
     """Write ``ds`` as CSV: a header ``time [s],<var> [<units>],...`` and full-precision values.
 
@@ -429,6 +432,12 @@ def write_csv(ds: xr.Dataset, path: str | os.PathLike[str], *, delimiter: str = 
     reads back with ``read_csv(path, time_column="time")``.
     """
     validate_dataset(ds, name="write_csv(ds)")
+    if not isinstance(delimiter, str):
+        raise TypeError(f"delimiter must be a str (e.g. ',' ';' or a tab); got "
+                        f"{type(delimiter).__name__}")
+    if not delimiter or len(delimiter) > 8 or any(c in _NOT_DELIMITER for c in delimiter):
+        raise ValueError(f"delimiter = {delimiter[:20]!r} is not admissible: 1 to 8 characters, "
+                         "none of them part of a number, a quote or a line break")
     names = list(ds.data_vars)
     head = ["time [s]"] + [f"{v} [{ds[v].attrs['units']}]" for v in names]
     cols = [ds["time"].values] + [ds[v].values.astype(np.float64) for v in names]

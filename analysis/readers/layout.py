@@ -31,7 +31,7 @@ import numpy as np
 import xarray as xr
 
 from analysis.cf import is_elapsed_seconds, time_attrs, toolkit_version
-from analysis.checks import require_positive
+from analysis.checks import require_instance, require_positive
 
 __all__ = [
     "CONVENTIONS",
@@ -217,6 +217,7 @@ def _clean_value(value: Any) -> Any:
 def clean_attrs(attrs: Mapping[str, Any]) -> dict[str, Any]:
     """Return attributes netCDF can store: bool -> int8, dict -> JSON, None dropped, datetimes ->
     ISO strings, other objects -> ``str``."""
+    require_instance(attrs, Mapping, "attrs")
     out = {}
     for k, v in attrs.items():
         cv = _clean_value(v)
@@ -359,6 +360,7 @@ def validate_dataset(ds: xr.Dataset, *, name: str = "dataset") -> xr.Dataset:
     ReaderError
         Naming the offending variable or attribute and what is admissible.
     """
+    require_instance(ds, xr.Dataset, name)
     from analysis.checks import sample_rate
 
     if "time" not in ds.coords:

@@ -13,7 +13,7 @@ import numpy as np
 import xarray as xr
 
 from analysis.cf import labels_from_cf
-from analysis.checks import require_finite_blocks
+from analysis.checks import require_finite_blocks, require_instance
 from analysis.readers.cdf3 import check_cdf3, is_cdf3
 from analysis.readers.integrity import format_bytes, reading, require_memory
 from analysis.readers.layout import ReaderError, clean_attrs, validate_dataset
@@ -141,6 +141,7 @@ def write_netcdf(ds: xr.Dataset, path: str | os.PathLike[str], *, compress: bool
     by :func:`read_netcdf` instead of being read as wrong numbers.
     Attributes are cleaned first (bool -> int8, dict -> JSON, None dropped).
     """
+    require_instance(ds, xr.Dataset, "ds")
     target = Path(path)
     out = ds.copy()
     out.attrs = clean_attrs(ds.attrs)

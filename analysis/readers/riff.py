@@ -27,6 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
+from analysis.checks import require_instance
 from analysis.readers.integrity import file_size, require_memory
 from analysis.readers.layout import ReaderError
 
@@ -266,6 +267,7 @@ def read_samples(path: str | os.PathLike[str], layout: WavLayout) -> np.ndarray:
         Not enough memory for the samples, or fewer bytes than the layout says (the file
         changed since).
     """
+    require_instance(layout, WavLayout, "layout")
     p = Path(path)
     n_values = layout.frames * layout.channels
     require_memory(

@@ -13,6 +13,8 @@ __all__ = ["table_lines"]
 
 def table_lines(text: str) -> Iterator[tuple[int, list[str]]]:
     """``(line number, fields)`` of every non-empty, non-comment line of ``text`` (from 1)."""
+    if not isinstance(text, str):
+        raise TypeError(f"text must be a str; got {type(text).__name__}")
     for lineno, raw in enumerate(text.splitlines(), start=1):
         line = raw.strip()
         if not line or line.startswith("#"):

@@ -26,6 +26,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from analysis.checks import (
+    require_instance,
+    require_positive,
+    require_real,
+    require_real_array,
+)
+
 __all__ = ["PrintPrecision", "grid_fits", "print_precision", "uniform_rate"]
 
 _TOKEN = re.compile(r"[+-]?(\d*)(?:\.(\d*))?(?:[eE][+-]?\d+)?")
@@ -124,6 +131,7 @@ def uniform_rate(
         the uniform grid by more than the print can explain (naming the sample index, the
         deviation and the allowed bound).
     """
+    require_instance(precision, PrintPrecision, "precision")
     t = np.asarray(time, dtype=np.float64)
     if t.size < 2:
         raise ValueError(f"{name}: needs at least two samples to define a sample rate")
@@ -185,6 +193,11 @@ def uniform_rate(
 
 def grid_fits(time: np.ndarray, rate: float, precision: PrintPrecision) -> bool:
     """Whether ``time`` is the grid ``time[0] + i / rate`` within the printed precision."""
-    t = np.asarray(time, dtype=np.float64)
+    t = require_real_array(time, "time", ndim=1, min_size=1, max_abs=1e300)
+    r = require_positive(require_real(rate, "rate"), "rate")
+    require_instance(precision, PrintPrecision, "precision")
+    if not t.size / r <= 1e300:
+        raise ValueError(f"rate = {rate!r} Hz is not admissible: the grid of {t.size} samples "
+                         "would span more than 1e300 s")
     bound = precision.bound(t)
     return not _misfit(t, float(t[0]), 1.0 / rate, bound + max(bound[0], bound[-1])).any()
