@@ -116,13 +116,15 @@ def check_output_folder(folder: str | os.PathLike, names: Iterable[str], *, over
 @contextlib.contextmanager
 def removed_if_left_empty(folder: str | os.PathLike) -> Iterator[Path]:
     """An output folder that the block creates is removed again if the block fails (an error
-    or an interrupt) before writing anything into it."""
+    or an interrupt) before writing any file into it: with the empty folders the block made
+    inside it (a diagnosis's ``candidates/runs``); a folder holding a file is kept."""
     d = Path(folder)
     existed = d.exists()
     try:
         yield d
     except BaseException:
-        if not existed:
-            with contextlib.suppress(OSError):
-                d.rmdir()  # only an empty folder
+        if not existed and d.is_dir() and not d.is_symlink():
+            for root, _, _ in os.walk(d, topdown=False):  # deepest first; rmdir: empty only
+                with contextlib.suppress(OSError):
+                    Path(root).rmdir()
         raise

@@ -86,6 +86,30 @@ def test_an_interrupted_or_failed_report_leaves_no_empty_folder(tmp_path, capsys
     assert "stand-in failure" in capsys.readouterr().err
 
 
+def test_a_failed_block_removes_the_empty_folders_it_made_and_keeps_files(tmp_path):
+    """A diagnosis that fails (a full disk, Ctrl-C) after making ``out/candidates/runs`` leaves
+    no folder behind; a folder holding a file stays, and so does one that existed before."""
+    from gearvib.outputs import removed_if_left_empty
+
+    out = tmp_path / "diag"
+    with pytest.raises(OSError), removed_if_left_empty(out):
+        (out / "candidates" / "runs").mkdir(parents=True)
+        raise OSError(28, "No space left on device")
+    assert not out.exists()
+    kept = tmp_path / "kept"
+    with pytest.raises(KeyboardInterrupt), removed_if_left_empty(kept):
+        (kept / "candidates" / "runs").mkdir(parents=True)
+        (kept / "candidates" / "sweep.nc").write_bytes(b"x")
+        raise KeyboardInterrupt
+    assert (kept / "candidates" / "sweep.nc").is_file() and not (kept / "candidates" / "runs"
+                                                                  ).exists()
+    before = tmp_path / "before"
+    before.mkdir()
+    with pytest.raises(ValueError), removed_if_left_empty(before):
+        raise ValueError("x")
+    assert before.is_dir()
+
+
 def test_stale_temp_files_are_named_and_removed_by_the_next_command(tmp_path, capsys):
     from gearvib import tempfiles
 
