@@ -245,11 +245,12 @@ def main() -> None:
                     "of main) timed side by side")
     ap.add_argument("--warm-caches", action="store_true", help="one untimed run per tree "
                     "first (numba caches)")
-    ap.add_argument("--quick", action="store_true", help="smoke run: 1 repeat, 1 faulty "
-                    "record, crack candidates only")
+    ap.add_argument("--quick", action="store_true", help="smoke run: the timed fresh and "
+                    "warm diagnosis once, crack candidates only, no accuracy records")
     args = ap.parse_args()
     if args.quick:
         args.repeat, args.faulty, args.healthy = 1, 1, 0
+        args.skip_accuracy = True  # the timed diagnoses run the whole pipeline already
     if not args.skip_timing:
         wall_time(args)
     if not args.skip_accuracy:
