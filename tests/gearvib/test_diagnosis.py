@@ -14,6 +14,7 @@ import sys
 import numpy as np
 import pytest
 
+from gearvib.cli import main
 from gearvib.diagnosis import Record, candidate_faults, diagnose
 from gearvib.diagnosis.candidates import planets_equivalent
 from gearvib.diagnosis.synthetic import record_from_run, synthetic_measurement
@@ -248,7 +249,7 @@ def _cli(*args, cwd, library=None):
                           text=True, cwd=cwd, timeout=600, env=env)
 
 
-def test_cli_json_report_and_output_rule(tmp_path, work):
+def test_cli_json_report_and_output_rule(tmp_path, work, capsys, monkeypatch):
     fault, _ = FAULTS["pin-planet3"]
     write_netcdf(_measure([fault], seed=14), tmp_path / "meas.nc")
     out = tmp_path / "out"
@@ -278,18 +279,26 @@ def test_cli_json_report_and_output_rule(tmp_path, work):
     got = {c["cause"] for c in json.loads(r.stdout)["causes"]}
     assert "pin_error" in got and got <= {"crack", "pin_error", "none", "local_tooth_fault"}
     assert sorted(p.name for p in work.rglob("*.npz")) == entries
-    # outputs exist: refused before any work, replaced with --overwrite
-    r = _cli("diagnose", "meas.nc", "--gearset", "paper-case1", "-o", "out", cwd=tmp_path)
-    assert r.returncode == 2 and "--overwrite" in r.stderr
-    # range-checked options, one-line errors
+    # the error cases run in this process (gearvib.cli.main, as the command does): outputs
+    # exist -> refused before any work; range-checked options; missing inputs; one line each
+    monkeypatch.chdir(tmp_path)
+
+    def refused(*args: str) -> str:
+        try:
+            code = main(["diagnose", *args])
+        except SystemExit as exc:  # argparse
+            code = exc.code
+        err = capsys.readouterr().err
+        assert code == 2 and "Traceback" not in err, err
+        return err
+
+    assert "--overwrite" in refused("meas.nc", "--gearset", "paper-case1", "-o", "out")
     for bad, key in ((["--threshold", "1.2"], "threshold"), (["--threshold", "nan"], "threshold"),
                      (["--revolutions", "2"], "revolutions"), (["--workers", "0"], "workers"),
                      (["--pulses-per-rev", "0"], "pulses-per-rev"),
                      (["--kinds", "crack,wear"], "kinds")):
-        r = _cli("diagnose", "meas.nc", "--gearset", "paper-case1", "-o", "o2", *bad,
-                 cwd=tmp_path)
-        assert r.returncode == 2 and key in r.stderr and "Traceback" not in r.stderr, r.stderr
-    r = _cli("diagnose", "missing.nc", "--gearset", "paper-case1", "-o", "o3", cwd=tmp_path)
-    assert r.returncode == 2 and "missing.nc" in r.stderr and not (tmp_path / "o3").exists()
-    r = _cli("diagnose", "meas.nc", "--gearset", "no-such-set", "-o", "o4", cwd=tmp_path)
-    assert r.returncode == 2 and "no-such-set" in r.stderr and not (tmp_path / "o4").exists()
+        assert key in refused("meas.nc", "--gearset", "paper-case1", "-o", "o2", *bad)
+    assert "missing.nc" in refused("missing.nc", "--gearset", "paper-case1", "-o", "o3")
+    assert not (tmp_path / "o3").exists()
+    assert "no-such-set" in refused("meas.nc", "--gearset", "no-such-set", "-o", "o4")
+    assert not (tmp_path / "o4").exists()
