@@ -19,13 +19,25 @@ false-alarm rate. ``--quick``: 4 records per group (a smoke run).
 from __future__ import annotations
 
 import argparse
+import importlib.util
 import time
+from pathlib import Path
 
 import numpy as np
 from scipy import stats
 
 from gearvib.diagnosis import Record, diagnose
 
+
+def _load(name: str, path: Path):
+    spec = importlib.util.spec_from_file_location(name, path)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+SIGNALS = _load("bearing_signals", Path(__file__).resolve().parents[1] / "tests" / "independent"
+                / "bearing_signals.py")
 FS = 12000.0
 RPM = 1797.0
 F_R = RPM / 60.0
@@ -34,19 +46,11 @@ ORDERS = {"BPFI": 5.4152, "BPFO": 3.5848, "BSF": 2.357, "FTF": 0.39828}
 
 def bursts(rate: float, seconds: float, rng: np.random.Generator, *, modulation: float,
            snr_db: float) -> np.ndarray:
-    """Resonance bursts at ``rate`` [Hz] in white noise (see the module docstring)."""
-    n = int(seconds * FS)
+    """Resonance bursts at ``rate`` [Hz] in white noise, the resonance drawn in 2-4 kHz
+    (``tests/independent/bearing_signals.py``)."""
     res = rng.uniform(2000.0, 4000.0)
-    x = np.zeros(n)
-    t_imp = np.cumsum(1.0 / rate * (1.0 + 0.01 * rng.standard_normal(int(seconds * rate + 10))))
-    t_imp = t_imp[t_imp < seconds - 0.01]
-    ring = np.arange(int(0.004 * FS)) / FS
-    burst = np.exp(-2.0 * np.pi * 0.05 * res * ring) * np.sin(2.0 * np.pi * res * ring)
-    for ti in t_imp:
-        k = round(ti * FS)
-        amp = 1.0 + 0.6 * np.cos(2.0 * np.pi * modulation * ti) if modulation else 1.0
-        x[k:k + burst.size] += amp * burst[:max(0, min(burst.size, n - k))]
-    return x / np.std(x) * 10 ** (snr_db / 20) + rng.standard_normal(n)
+    return SIGNALS.bearing_bursts(rate, seconds, rng, fs=FS, resonance_hz=res, snr_db=snr_db,
+                                  modulation_hz=modulation)
 
 
 def healthy(kind: int, rng: np.random.Generator) -> np.ndarray:

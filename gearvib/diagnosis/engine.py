@@ -231,6 +231,12 @@ class Record:
         return load_measurement(ds, channel=ch, speed="speed")
 
 
+def _first_bins(p: OrderProfile, n: int) -> OrderProfile:
+    """The profile's first ``n`` order bins (profiles of one diagnosis on a common band)."""
+    return OrderProfile(p.order[:n], p.amplitude[:n], p.units, p.revolutions, p.segments,
+                        p.speed_rpm, p.name)
+
+
 def order_reference(gs: Any, model: Any) -> str:
     """The shaft whose orders a diagnosis counts.
 
@@ -690,8 +696,7 @@ def diagnose(measured: Record, config: str, *, baseline: Record | None = None,
     order = meas.order[:n]
 
     def cut(p: OrderProfile) -> OrderProfile:
-        return OrderProfile(p.order[:n], p.amplitude[:n], p.units, p.revolutions, p.segments,
-                            p.speed_rpm, p.name)
+        return _first_bins(p, n)
 
     def prom(p: OrderProfile) -> np.ndarray:
         return prominence_db(cut(p))
@@ -859,8 +864,7 @@ def _diagnose_rig(measured: Record, cfg: dict, base: Path | None, *, config: str
     n = min(meas.order.size, base_prof.order.size)
 
     def cut(p: OrderProfile) -> OrderProfile:
-        return OrderProfile(p.order[:n], p.amplitude[:n], p.units, p.revolutions, p.segments,
-                            p.speed_rpm, p.name)
+        return _first_bins(p, n)
 
     meas, base_prof = cut(meas), cut(base_prof)
     d_meas = prominence_db(meas) - prominence_db(base_prof)

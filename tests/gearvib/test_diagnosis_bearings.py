@@ -24,6 +24,7 @@ from gearvib.diagnosis.bearings import (
     chance_score,
 )
 from gearvib.diagnosis.verdict import rank_causes
+from tests.independent.bearing_signals import bearing_bursts
 
 REPO = Path(__file__).resolve().parents[2]
 CWRU = Path("/work/shared/data/cwru")
@@ -39,22 +40,9 @@ BPFI, BPFO = 5.4152, 3.5848
 def _impulses(rate_hz: float, seconds: float, rng: np.random.Generator, *,
               modulation_hz: float = 0.0, resonance_hz: float = 2800.0,
               snr_db: float = -6.0) -> np.ndarray:
-    """Decaying resonance bursts at ``rate_hz`` (1 % jitter of the spacing: a bearing's
-    slip), amplitude modulated at ``modulation_hz``, in white noise (``snr_db``: rms of the
-    bursts over the noise's)."""
-    n = int(seconds * FS)
-    x = np.zeros(n)
-    gaps = 1.0 / rate_hz * (1.0 + 0.01 * rng.standard_normal(int(seconds * rate_hz + 10)))
-    t_imp = np.cumsum(gaps)
-    t_imp = t_imp[t_imp < seconds - 0.01]
-    ring = np.arange(int(0.004 * FS)) / FS
-    burst = np.exp(-2.0 * np.pi * 0.05 * resonance_hz * ring) * np.sin(
-        2.0 * np.pi * resonance_hz * ring)
-    for ti in t_imp:
-        k = round(ti * FS)
-        amp = 1.0 + 0.6 * np.cos(2.0 * np.pi * modulation_hz * ti) if modulation_hz else 1.0
-        x[k:k + burst.size] += amp * burst[:max(0, min(burst.size, n - k))]
-    return x / np.std(x) * 10 ** (snr_db / 20) + rng.standard_normal(n)
+    """Bursts at ``rate_hz`` through a 2.8 kHz resonance in noise (:func:`bearing_bursts`)."""
+    return bearing_bursts(rate_hz, seconds, rng, fs=FS, resonance_hz=resonance_hz,
+                          snr_db=snr_db, modulation_hz=modulation_hz)
 
 
 def _record(x: np.ndarray, rpm: float = RPM) -> Record:

@@ -23,6 +23,7 @@ from gearvib.fault_lines import (
 )
 from gearvib.report.measured_analysis import analyse_measurement
 from gearvib.report.measured_peaks import MAX_LABEL_CHANCE
+from tests.independent.bearing_signals import bearing_bursts
 
 REPO = Path(__file__).resolve().parents[2]
 CWRU = Path("/work/shared/data/cwru")
@@ -56,23 +57,9 @@ def _record(x: np.ndarray, rpm: float = RPM):
 def _impulses(rate_hz: float, seconds: float, rng: np.random.Generator, *,
               modulation_hz: float = 0.0, resonance_hz: float = 3000.0,
               snr_db: float = 0.0) -> np.ndarray:
-    """Impulses at ``rate_hz`` (1 % jitter of the spacing, as a bearing's slip), each a
-    decaying resonance, amplitude modulated at ``modulation_hz`` (the load zone of an inner
-    race turning with the shaft), in white noise at ``snr_db`` (signal rms / noise rms)."""
-    n = int(seconds * FS)
-    x = np.zeros(n)
-    t_imp = np.cumsum(1.0 / rate_hz * (1.0 + 0.01 * rng.standard_normal(int(seconds * rate_hz
-                                                                            + 10))))
-    t_imp = t_imp[t_imp < seconds - 0.01]
-    ring = np.arange(int(0.004 * FS)) / FS
-    pulse = np.exp(-2.0 * np.pi * 0.05 * resonance_hz * ring) * np.sin(
-        2.0 * np.pi * resonance_hz * ring)
-    for ti in t_imp:
-        k = round(ti * FS)
-        amp = 1.0 + 0.6 * np.cos(2.0 * np.pi * modulation_hz * ti) if modulation_hz else 1.0
-        x[k:k + pulse.size] += amp * pulse[:max(0, min(pulse.size, n - k))]
-    noise = rng.standard_normal(n)
-    return x / np.std(x) * 10 ** (snr_db / 20) + noise
+    """Bursts at ``rate_hz`` through a 3 kHz resonance in noise (:func:`bearing_bursts`)."""
+    return bearing_bursts(rate_hz, seconds, rng, fs=FS, resonance_hz=resonance_hz,
+                          snr_db=snr_db, modulation_hz=modulation_hz)
 
 
 def test_families_of_the_cwru_bearing_are_the_published_multiples(families):
