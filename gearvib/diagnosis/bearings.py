@@ -74,8 +74,8 @@ def chance_score(chance: float, threshold: float, max_chance: float = MAX_CHANCE
 
 
 def bearing_fault_lines(measurement: Measurement, description: Any, *,
-                        channel: str | None = None, reference: str | None = None
-                        ) -> FaultLines | None:
+                        channel: str | None = None, reference: str | None = None,
+                        model: Any = None) -> FaultLines | None:
     """The declared bearings' fault families checked in a measurement.
 
     Parameters
@@ -88,6 +88,8 @@ def bearing_fault_lines(measurement: Measurement, description: Any, *,
         Vibration channel (default the measurement's first).
     reference : str, optional
         Member or shaft whose speed the measurement gives (default the description's input).
+    model : AssembledModel, optional
+        The gear set's assembly if already at hand (assembled here otherwise).
 
     Returns
     -------
@@ -110,7 +112,7 @@ def bearing_fault_lines(measurement: Measurement, description: Any, *,
         from gearvib.assembly import assemble
         from gearvib.catalogue import gear_set_catalogue
 
-        model = assemble(description)
+        model = assemble(description) if model is None else model
         ref = reference or model.input_member
         ratios = dict(model.kinematic_ratios)
         if not ratios.get(ref):

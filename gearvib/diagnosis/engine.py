@@ -766,7 +766,8 @@ def diagnose(measured: Record, config: str, *, baseline: Record | None = None,
     fault_lines = None
     if kin.gs.rolling_bearings:  # the declared bearings, judged by their lines
         fault_lines = bearing_fault_lines(measured.to_measurement(), kin.gs,
-                                          channel=measured.channel, reference=member)
+                                          channel=measured.channel, reference=member,
+                                          model=kin.model)
         if fault_lines is not None:
             causes.extend(bearing_causes(fault_lines, float(threshold)))
     causes = rank_causes(causes, float(threshold), families=cause_fams, mismatch=mismatch,
