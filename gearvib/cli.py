@@ -935,8 +935,9 @@ def prepare_process(argv: Sequence[str]) -> None:
       directory holds a ``.numba_config.yaml``: numba imports it (0.015 s) only to read that
       file.
     * ``simulate``: :mod:`analysis.jit` (numba's cache folder, which :mod:`gearvib.kernels`
-      prepares) and :mod:`analysis.threads` (the one-thread BLAS limit of
-      :func:`gearvib.simulate.simulate`) are loaded without the package :mod:`analysis`,
+      prepares), :mod:`analysis.threads` (the one-thread BLAS limit of
+      :func:`gearvib.simulate.simulate`) and :mod:`analysis.netcdf_lock` (the lock of the
+      run's file) are loaded without the package :mod:`analysis`,
       whose import registers its xarray accessor and so imports xarray and pandas (0.4 s) in
       a command that writes its run with netCDF4 directly
       (:class:`gearvib.cfdata.PlainDataset`). Each module is the same file under its own
@@ -958,6 +959,7 @@ def prepare_process(argv: Sequence[str]) -> None:
         sys.modules.setdefault("yaml", None)  # type: ignore[arg-type]
     _load_without_package("analysis.jit")
     _load_without_package("analysis.threads")
+    _load_without_package("analysis.netcdf_lock")
 
 
 def _load_without_package(name: str) -> None:

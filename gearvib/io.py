@@ -141,7 +141,9 @@ def write_netcdf(ds: xr.Dataset | PlainDataset, path: str | os.PathLike) -> Path
     Notes
     -----
     Written through :func:`atomic_write` in a worker thread (``abandonable``): nothing
-    half-written is left on any error or interrupt, and an interrupt returns at once.
+    half-written is left on any error or interrupt, and an interrupt returns at once. The
+    write holds :data:`analysis.netcdf_lock.NETCDF_LOCK` (threads of one process
+    write one file at a time: the netCDF library is not thread-safe).
     """
     dest = Path(path)
     if isinstance(ds, PlainDataset):
@@ -154,8 +156,15 @@ def write_netcdf(ds: xr.Dataset | PlainDataset, path: str | os.PathLike) -> Path
     out.attrs = sanitize_attrs(ds.attrs)
     for name in out.variables:
         out[name].attrs = sanitize_attrs(out[name].attrs)
-    atomic_write(dest, lambda tmp: out.to_netcdf(tmp, engine="netcdf4", format="NETCDF4",
-                                                 encoding=_encoding(out)), abandonable=True)
+    encoding = _encoding(out)
+
+    def write(tmp: Path) -> None:
+        from analysis.netcdf_lock import NETCDF_LOCK
+
+        with NETCDF_LOCK:  # the netCDF library is not thread-safe
+            out.to_netcdf(tmp, engine="netcdf4", format="NETCDF4", encoding=encoding)
+
+    atomic_write(dest, write, abandonable=True)
     return dest
 
 
@@ -215,8 +224,10 @@ def _write_plain(content: tuple[dict[str, PlainVariable], dict, set[str]], tmp: 
     """Write the file content of :func:`_plain_file_content` with netCDF4: the calls, in their
     order and with their arguments, of xarray's netCDF4 backend (global attributes, dimensions
     in the order of first use, then each variable created, given its attributes and written)."""
+    from analysis.netcdf_lock import NETCDF_LOCK  # without xarray under `gearvib simulate`
+
     variables, global_attrs, coords = content
-    with netCDF4.Dataset(tmp, mode="w", clobber=True, diskless=False, persist=False,
+    with NETCDF_LOCK, netCDF4.Dataset(tmp, mode="w", clobber=True, diskless=False, persist=False,
                          format="NETCDF4") as nc:
         for key, value in global_attrs.items():
             arr = np.asarray(value)

@@ -23,6 +23,7 @@ from typing import TYPE_CHECKING, Any
 
 import netCDF4
 
+from analysis.netcdf_lock import NETCDF_LOCK
 from analysis.readers.integrity import require_memory
 
 if TYPE_CHECKING:
@@ -61,15 +62,17 @@ def open_image(path: str | os.PathLike[str], image: bytes | None = None
     Yields
     ------
     netCDF4.Dataset
-        Closed again on exit.
+        Closed again on exit. :data:`~analysis.netcdf_lock.NETCDF_LOCK` is held
+        meanwhile.
     """
     data = file_image(path) if image is None else image
-    nc = netCDF4.Dataset(str(path), mode="r", memory=data)
-    try:
-        yield nc
-    finally:
-        if nc.isopen():
-            nc.close()
+    with NETCDF_LOCK:  # the netCDF library is not thread-safe (analysis.netcdf_lock)
+        nc = netCDF4.Dataset(str(path), mode="r", memory=data)
+        try:
+            yield nc
+        finally:
+            if nc.isopen():
+                nc.close()
 
 
 def load_image(path: str | os.PathLike[str], image: bytes | None = None,

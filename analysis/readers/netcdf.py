@@ -14,6 +14,7 @@ import xarray as xr
 
 from analysis.cf import labels_from_cf
 from analysis.checks import require_finite_blocks, require_instance
+from analysis.netcdf_lock import NETCDF_LOCK
 from analysis.readers.cdf3 import check_cdf3, is_cdf3
 from analysis.readers.integrity import format_bytes, reading, require_memory
 from analysis.readers.layout import ReaderError, clean_attrs, validate_dataset
@@ -166,13 +167,19 @@ def write_netcdf(ds: xr.Dataset, path: str | os.PathLike[str], *, compress: bool
     tmp = folder / target.name
     try:
         os.close(os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666))
-        _abandonable(out.to_netcdf, tmp, engine="netcdf4", format="NETCDF4", encoding=encoding)
+        _abandonable(_locked_to_netcdf, out, tmp, encoding)
         os.replace(tmp, target)
     except BaseException:
         _remove_folder(folder)
         raise
     _remove_folder(folder)
     return target
+
+
+def _locked_to_netcdf(ds: xr.Dataset, path: Path, encoding: dict) -> None:
+    """``ds.to_netcdf`` under the process's netCDF lock (the library is not thread-safe)."""
+    with NETCDF_LOCK:
+        ds.to_netcdf(path, engine="netcdf4", format="NETCDF4", encoding=encoding)
 
 
 def _remove_folder(folder: Path, attempts: int = 100) -> None:

@@ -27,6 +27,7 @@ import os
 import re
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -37,6 +38,7 @@ from analysis.cf import cf_dataset
 from analysis.comparison import MeasuredSimulatedComparison, compare_measurements
 from analysis.identification import catalogue_lines, identify_peaks
 from analysis.measurement import Measurement, load_measurement
+from analysis.netcdf_lock import NETCDF_LOCK
 from gearvib.assembly import assemble
 from gearvib.catalogue import gear_set_catalogue
 from gearvib.config import GearSet, gearset_from_dict, load_gearset
@@ -112,6 +114,12 @@ def load_simulated(simulated: str | os.PathLike | xr.Dataset,
             key in m.signals.data_vars:
         m = load_measurement(simulated, forces=True, angle=key)
     return m
+
+
+def _locked_to_netcdf(ds: xr.Dataset, path: Path) -> None:
+    """``ds.to_netcdf`` under the process's netCDF lock (the library is not thread-safe)."""
+    with NETCDF_LOCK:
+        ds.to_netcdf(path, engine="netcdf4")
 
 
 def _family(name: str) -> str:
@@ -455,7 +463,7 @@ def build_comparison_report(comparison: SimulationComparison, out_dir: str | os.
     ds = comparison.to_dataset()
     out.mkdir(parents=True, exist_ok=True)
     html, pdf, nc = (out / f for f in COMPARISON_FILES)
-    atomic_write(nc, lambda tmp: ds.to_netcdf(tmp, engine="netcdf4"))
+    atomic_write(nc, partial(_locked_to_netcdf, ds))
     pages = atomic_write(pdf, lambda tmp: write_pdf(sections, tmp, title=title,
                                                subtitle=subtitle, images=images))
     atomic_write(html, lambda tmp: tmp.write_text(text, encoding="utf-8"))

@@ -194,7 +194,9 @@ def test_same_sweep_on_one_and_two_workers_and_dask(tmp_path):
     one = run_sweep(s, tmp_path / "one", workers=1, progress=False, report=False)
     two = run_sweep(s, tmp_path / "two", workers=2, progress=False, report=False)
     assert one.simulated == two.simulated == (0, 1, 2, 3)
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+    # worker threads: worker processes are test_sweep_dask.py's (a scheduler and two
+    # `dask worker` processes); their start costs ~10 s
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False,
                                   dashboard_address=None) as cluster, \
             distributed.Client(cluster) as client:
         dask = run_sweep(s, tmp_path / "dask", executor=client.get_executor(),
