@@ -49,6 +49,8 @@ PROFILES = ((1500.0, 1500.0), (1300.0, 1700.0), (1800.0, 1400.0), (1100.0, 1100.
 DURATION = 8.0
 QUICK_KINDS = ("crack",)
 """Candidate kinds of a ``--quick`` smoke run (a fifth of the simulations)."""
+QUICK_SECONDS = 3.0
+"""Length of the record of a ``--quick`` smoke run [s]."""
 
 
 def random_fault(rng: np.random.Generator) -> dict:
@@ -155,7 +157,9 @@ from gearvib.diagnosis import Record, diagnose
 t_import = time.perf_counter() - t0
 rec = Record.from_measurement(load_measurement(sys.argv[1]))
 workers = int(sys.argv[2])
-kinds = {"kinds": tuple(sys.argv[3].split(","))} if len(sys.argv) > 3 else {}
+kinds = {"kinds": tuple(sys.argv[3].split(","))} if len(sys.argv) > 3 and sys.argv[3] else {}
+if len(sys.argv) > 4:
+    kinds["revolutions"] = int(sys.argv[4])
 new_api = "library" in inspect.signature(diagnose).parameters
 out = {"import_s": t_import}
 with tempfile.TemporaryDirectory() as tmp:
@@ -175,12 +179,14 @@ print("RESULT " + json.dumps(out))
 """
 
 
-def _timed_run(tree: Path, record: Path, workers: int, kinds: tuple[str, ...] = ()) -> dict:
+def _timed_run(tree: Path, record: Path, workers: int, kinds: tuple[str, ...] = (),
+               revolutions: int | None = None) -> dict:
     """One fresh and one warm diagnosis of ``record`` with the code of ``tree`` (a new
     process: its imports, its numba cache, fresh candidates in a temporary folder)."""
     env = dict(os.environ, PYTHONPATH=str(tree))
+    extra = [",".join(kinds)] + ([str(revolutions)] if revolutions else [])
     r = subprocess.run([sys.executable, "-c", _TIMED, str(record), str(workers),
-                        *([",".join(kinds)] if kinds else [])],
+                        *(extra if kinds or revolutions else [])],
                        capture_output=True, text=True, env=env, check=False)
     lines = [x for x in r.stdout.splitlines() if x.startswith("RESULT ")]
     if r.returncode or not lines:
@@ -190,10 +196,12 @@ def _timed_run(tree: Path, record: Path, workers: int, kinds: tuple[str, ...] = 
 
 def wall_time(args: argparse.Namespace) -> None:
     """Fresh and warm diagnosis of a 10 s record, this tree against ``--baseline-tree``,
-    alternated ``--repeat`` times; medians, CPU seconds and the load."""
+    alternated ``--repeat`` times; medians, CPU seconds and the load (``--quick``: 3 s,
+    crack candidates, 8-revolution segments)."""
+    seconds = QUICK_SECONDS if args.quick else 10.0
     ds = synthetic_measurement("paper-case1", [{"kind": "crack", "member": "sun", "tooth": 3,
                                                 "severity": 0.4}],
-                               speed_rpm=(1500.0, 1500.0), duration=10.0, noise=0.02, seed=1)
+                               speed_rpm=(1500.0, 1500.0), duration=seconds, noise=0.02, seed=1)
     trees = {"this": REPO}
     if args.baseline_tree:
         trees = {"today": Path(args.baseline_tree).resolve(), **trees}
@@ -206,8 +214,8 @@ def wall_time(args: argparse.Namespace) -> None:
         for i in range(args.repeat):
             for name, tree in trees.items():
                 load = os.getloadavg()[0]
-                r = _timed_run(tree, record, args.workers,
-                               QUICK_KINDS if args.quick else ())
+                r = _timed_run(tree, record, args.workers, QUICK_KINDS if args.quick else (),
+                               8 if args.quick else None)
                 r["load"] = load
                 runs[name].append(r)
                 print(f"  {i + 1}/{args.repeat} {name:<5s} load {load:4.1f}: import "
@@ -215,7 +223,7 @@ def wall_time(args: argparse.Namespace) -> None:
                       f"(CPU {r['fresh_cpu_s']:5.1f} s), warm {r['warm_s']:5.2f} s "
                       f"(CPU {r['warm_cpu_s']:5.2f} s); top {r['fresh_causes'][0]}",
                       flush=True)
-    print(f"\none diagnosis of a 10 s measurement (1500 min-1, paper-case1, sun crack), "
+    print(f"\none diagnosis of a {seconds:.0f} s measurement (1500 min-1, paper-case1, sun crack), "
           f"{args.workers} workers, medians of {args.repeat}; load {os.getloadavg()}")
     med = {name: {k: float(np.median([r[k] for r in rs])) for k in
                   ("import_s", "fresh_s", "fresh_cpu_s", "warm_s", "warm_cpu_s", "load")}
@@ -245,7 +253,7 @@ def main() -> None:
                     "of main) timed side by side")
     ap.add_argument("--warm-caches", action="store_true", help="one untimed run per tree "
                     "first (numba caches)")
-    ap.add_argument("--quick", action="store_true", help="smoke run: the timed fresh and "
+    ap.add_argument("--quick", action="store_true", help="smoke run: a 3 s record, the timed fresh and "
                     "warm diagnosis once, crack candidates only, no accuracy records")
     args = ap.parse_args()
     if args.quick:

@@ -9,8 +9,8 @@ four-planet-21-31-83.toml``); a sun, planet and ring tooth fault and a sun eccen
 clear (SNR 15-20 dB) and weak (10-15 dB), and 3 healthy records per set; +-1 % speed, 10 s,
 20 kHz, the speed from the 60-pulse tacho. Each record is written as netCDF and read back
 through :func:`analysis.measurement.load_measurement`, as ``gearvib diagnose`` reads it.
-``--quick``: a smoke run (one independent record, crack candidates only, no gearvib-made
-record).
+``--quick``: a smoke run (3 s of one independent record, crack candidates only, 8-revolution
+segments, no gearvib-made record).
 
 Printed: *kind+member top-1* (the generator's tooth fault is a *local* tooth fault, so crack,
 pitting or broken tooth on the right member count; the eccentricity must be named
@@ -29,6 +29,7 @@ the path. ``--json F`` writes every record's ranked causes (to compare two versi
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import importlib.util
 import inspect
 import json
@@ -42,6 +43,8 @@ HERE = Path(__file__).resolve().parent
 LOCAL = ("crack", "pitting", "broken_tooth", "local_tooth_fault")
 QUICK_KINDS = ("crack",)
 """Candidate kinds of a ``--quick`` smoke run (a fifth of the simulations)."""
+QUICK_SECONDS = 3.0
+"""Length of the record of a ``--quick`` smoke run [s] (the benchmark's are 10 s)."""
 
 
 def _load(name: str, path: Path):
@@ -60,7 +63,7 @@ def _where(diagnose, folder: Path) -> dict:
 
 
 def _kinds(args: argparse.Namespace) -> dict:
-    return {"kinds": QUICK_KINDS} if args.quick else {}
+    return {"kinds": QUICK_KINDS, "revolutions": 8} if args.quick else {}
 
 
 def kind_class(cause: str) -> str:
@@ -100,11 +103,13 @@ def independent(args: argparse.Namespace, work: Path) -> list[dict]:
     ps = _load("planetary_signals", HERE.parent / "tests" / "independent" /
                "planetary_signals.py")
     specs = ps.benchmark_records(quick=args.quick)[:1 if args.quick else None]
+    if args.quick:  # a smoke run: 3 s of the record, 8-revolution segments
+        specs = [dataclasses.replace(s, duration=QUICK_SECONDS) for s in specs]
     rec_dir = Path(args.records) if args.records else work / "records"
     rec_dir.mkdir(parents=True, exist_ok=True)
     rows = []
     for spec in specs:
-        path = rec_dir / f"{spec.name}.nc"
+        path = rec_dir / f"{spec.name}{'_quick' if args.quick else ''}.nc"
         if not path.is_file():
             ps.write_record(spec, path)
         rec = Record.from_measurement(load_measurement(str(path)), name=spec.name)
