@@ -53,6 +53,7 @@ from analysis.resample import resample_to_angle
 
 __all__ = [
     "DEFAULT_THRESHOLD",
+    "SHAFT_HARMONICS",
     "Cause",
     "Diagnosis",
     "FamilyEvidence",
@@ -67,6 +68,7 @@ __all__ = [
     "order_profile",
     "prominence_db",
     "rising_peaks",
+    "shaft_line_mask",
     "sideband_ratios",
     "signature_score",
     "with_noise_floor",
@@ -290,12 +292,71 @@ def deadband_db(diff: np.ndarray, *, k: float = 3.0, minimum: float = 1.0) -> fl
     return max(minimum, k * 1.4826 * mad)
 
 
+SHAFT_HARMONICS = 2
+"""Harmonics of every turning shaft (1x, 2x) that :func:`shaft_line_mask` leaves out of the
+scores."""
+
+
+def shaft_line_mask(order: Any, shaft_orders: Any, *, harmonics: int = SHAFT_HARMONICS,
+                    width: float | None = None) -> np.ndarray:
+    """The order bins of the shaft rotation lines: ``h n`` for every shaft order ``n``,
+    ``h = 1 .. harmonics``, within ``±width``.
+
+    A line at once or twice a shaft's speed in the fixed frame is what unbalance,
+    misalignment or a bent shaft give on any machine: it is no evidence of a gear fault and
+    any simulated fault that disturbs the shaft raises it too. A gear's eccentricity or a pin
+    error shows as sidebands of the mesh harmonics at the rotation (the lines the fault
+    alone explains; Randall 1982, McFadden & Smith 1985), which stay in the score.
+
+    Parameters
+    ----------
+    order : array_like
+        Order bins (uniform, increasing).
+    shaft_orders : array_like
+        Speeds of the turning shafts in the fixed frame, in orders of the reference shaft
+        (absolute values are taken; zeros, a member at rest, are skipped).
+    harmonics : int
+        Harmonics of each shaft (>= 1).
+    width : float, optional
+        Half-width [orders]; default 2 bins (the main lobe of the Hann window of
+        :func:`order_profile`).
+
+    Returns
+    -------
+    numpy.ndarray of bool
+        True on the bins of a shaft line.
+
+    References
+    ----------
+    Randall, R. B. (1982). A new method of modeling gear faults. J. Mech. Design 104,
+    259-267. McFadden, P. D., Smith, J. D. (1985). An explanation for the asymmetry of the
+    modulation sidebands about the tooth meshing frequency in epicyclic gear vibration.
+    Proc. IMechE C 199, 65-70.
+    """
+    o = require_real_array(order, "order", ndim=1, min_size=0)
+    sh = np.abs(require_real_array(shaft_orders, "shaft_orders", min_size=0).ravel())
+    if isinstance(harmonics, bool) or not isinstance(harmonics, int | np.integer) \
+            or not 1 <= harmonics <= 100:
+        raise ValueError(f"harmonics = {harmonics!r} is not admissible (admissible: an integer "
+                         "1 .. 100)")
+    step = float(o[1] - o[0]) if o.size > 1 else 1.0
+    w = 2.0 * step if width is None else require_positive(require_real(width, "width"),
+                                                          "width")
+    lines = (np.arange(1, int(harmonics) + 1)[:, None] * sh[sh > 0][None, :]).ravel()
+    out = np.zeros(o.size, dtype=bool)
+    for c in lines:
+        out |= np.abs(o - c) <= w + 1e-9 * step
+    return out
+
+
 def signature_score(measured_diff: np.ndarray, signature: np.ndarray, *,
-                    deadband: float, signature_deadband: float = 3.0) -> float:
+                    deadband: float, signature_deadband: float = 3.0,
+                    exclude: Any = None) -> float:
     """Cosine similarity of the measured rises and a candidate's simulated rises, in [0, 1].
 
     Both are differences of prominence [dB] on the same order bins; only rises above the
-    deadbands count. 0 when either has no rise.
+    deadbands count. 0 when either has no rise. Bins where ``exclude`` (bool, one per bin;
+    e.g. :func:`shaft_line_mask`) is True are left out of both.
     """
     md = require_real_array(measured_diff, "measured_diff", ndim=1, min_size=0, finite=False)
     sg = require_real_array(signature, "signature", ndim=1, min_size=0, finite=False)
@@ -304,6 +365,13 @@ def signature_score(measured_diff: np.ndarray, signature: np.ndarray, *,
                          "must be on the same order axis")
     a = np.clip(md - require_real(deadband, "deadband"), 0.0, None)
     b = np.clip(sg - require_real(signature_deadband, "signature_deadband"), 0.0, None)
+    if exclude is not None:
+        ex = np.asarray(exclude)
+        if ex.dtype != bool or ex.shape != md.shape:
+            raise ValueError(f"exclude must be a bool array of one value per bin ({md.size}); "
+                             f"got dtype {ex.dtype}, shape {ex.shape}")
+        a = np.where(ex, 0.0, a)
+        b = np.where(ex, 0.0, b)
     # cosine similarity is scale-free: both scaled by a power of two (exact, so the same bits)
     # to keep the dot product and the norms finite for any finite input
     with np.errstate(under="ignore", invalid="ignore"):

@@ -42,6 +42,7 @@ from analysis.diagnosis import (
     order_profile,
     prominence_db,
     rising_peaks,
+    shaft_line_mask,
     sideband_ratios,
     signature_score,
     with_noise_floor,
@@ -716,7 +717,10 @@ def diagnose(measured: Record, config: str, *, baseline: Record | None = None,
     dead = deadband_db(d_meas)
     signatures = {c.label: envelope(ps) - p_h
                   for c, ps in zip(candidates, profiles[1:], strict=True)}
-    scores = {lab: signature_score(d_meas, sig, deadband=dead) for lab, sig in signatures.items()}
+    # the shafts' own lines (1x, 2x: unbalance, misalignment) are no evidence of a gear fault
+    shafts = shaft_line_mask(order, [v for k, v in ms.items() if k != "ground"])
+    scores = {lab: signature_score(d_meas, sig, deadband=dead, exclude=shafts)
+              for lab, sig in signatures.items()}
     fams = _family_table(lines, members, max_order)
     fam_ev = family_evidence(order, d_meas, dead, fams)
     fam_by = {f.family: f for f in fam_ev}

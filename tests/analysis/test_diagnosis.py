@@ -16,6 +16,7 @@ from analysis.diagnosis import (
     impulse_mismatch_db,
     order_profile,
     prominence_db,
+    shaft_line_mask,
     sideband_ratios,
     signature_score,
     with_noise_floor,
@@ -88,6 +89,48 @@ def test_signature_score_bounds_and_scaling():
     other = np.roll(sig, 7) + noise
     assert signature_score(other, sig, deadband=deadband_db(other)) < 0.2
     assert signature_score(np.zeros(10), np.ones(10), deadband=1.0) == 0.0
+
+
+def test_shaft_lines_alone_do_not_make_an_eccentricity():
+    """A healthy gearbox with strong 1x lines (unbalance of the sun, 4.95 carrier orders, and
+    of the carrier) against a simulated sun eccentricity that raises those lines and its mesh
+    sidebands ``m f_mesh +- f_rel``: counted, the shaft lines alone score it above the 0.4
+    threshold; left out (``shaft_line_mask``), they do not. A real eccentricity (the mesh
+    sidebands, with or without the 1x line) keeps its score."""
+    order = np.arange(0, 420, 1 / 16)
+    rng = np.random.default_rng(5)
+    mesh, f_rel, sun, carrier = 83.0, 83.0 / 21.0, 104.0 / 21.0, 1.0
+
+    def lines(at, db, base):
+        d = base.copy()
+        for o, v in at:
+            d[np.argmin(np.abs(order - o))] += v
+        return d
+
+    sidebands = [(m * mesh + k * f_rel, 12.0) for m in (1, 2, 3, 4) for k in (-1, 1)]
+    shaft = [(sun, 25.0), (carrier, 22.0)]
+    noise = rng.normal(0.0, 1.0, order.size)
+    healthy = lines(shaft, None, noise)
+    sig = lines(shaft + sidebands, None, np.zeros(order.size))
+    dead = deadband_db(healthy)
+    mask = shaft_line_mask(order, [sun, carrier, 0.0, -1.68])
+    # the mask: 1x and 2x of each turning shaft, +-2 bins; nothing else
+    want = np.zeros(order.size, bool)
+    for c in (sun, 2 * sun, carrier, 2 * carrier, 1.68, 3.36):
+        want |= np.abs(order - c) <= 2 / 16 + 1e-12
+    np.testing.assert_array_equal(mask, want)
+    assert not mask[np.argmin(np.abs(order - (mesh + f_rel)))]
+    assert mask[np.argmin(np.abs(order - 2 * sun))] and mask[np.argmin(np.abs(order - 3.36))]
+    assert signature_score(healthy, sig, deadband=dead) > 0.4  # the false alarm of before
+    assert signature_score(healthy, sig, deadband=dead, exclude=mask) < 0.1
+    faulty = lines(sidebands, None, healthy)
+    for meas in (faulty, lines(sidebands, None, noise)):
+        d = deadband_db(meas)
+        assert signature_score(meas, sig, deadband=d, exclude=mask) > 0.9
+    with pytest.raises(ValueError, match="exclude must be a bool array"):
+        signature_score(healthy, sig, deadband=dead, exclude=mask[1:])
+    with pytest.raises(ValueError, match="harmonics = 0 is not admissible"):
+        shaft_line_mask(order, [sun], harmonics=0)
 
 
 def test_family_evidence_chance_on_random_peaks():
