@@ -66,6 +66,7 @@ __all__ = [
     "near_modes",
     "order_locking",
     "order_profile",
+    "phasing_shifts",
     "prominence_db",
     "rising_peaks",
     "shaft_line_mask",
@@ -502,20 +503,89 @@ def rising_peaks(order: np.ndarray, diff: np.ndarray, deadband: float) -> np.nda
 
 
 def family_lines(fundamental: float, *, mesh_order: float, mesh_harmonics: int,
-                 harmonics: int, sidebands: int, max_order: float) -> np.ndarray:
-    """Lines of a fault family: harmonics ``k f`` and sidebands ``m f_mesh ± k f``.
+                 harmonics: int, sidebands: int, max_order: float,
+                 shifts: Sequence[Sequence[float]] | None = None) -> np.ndarray:
+    """Lines of a fault family: harmonics ``k f`` and sidebands ``m f_mesh ± k f (+ s)``.
 
     All in orders of the reference shaft, ``0 < order <= max_order``, unique (to 1e-9).
+    ``shifts[m - 1]``: the order shifts ``s`` of the sidebands of mesh harmonic ``m`` (the
+    planet phasing's, :func:`phasing_shifts`); default ``(0,)`` for every harmonic.
     """
     k = np.arange(1, harmonics + 1) * fundamental
     lines = [k]
     ks = np.arange(1, sidebands + 1) * fundamental
     for m in range(1, mesh_harmonics + 1):
         c = m * mesh_order
-        lines += [c - ks, c + ks]
+        for sh in (shifts[m - 1] if shifts is not None and m <= len(shifts) else (0.0,)):
+            lines += [c - ks + sh, c + ks + sh]
     o = np.concatenate(lines)
     o = o[(o > 0) & (o <= max_order)]
     return np.unique(np.round(o, 9))
+
+
+def phasing_shifts(z_gear: int, planet_angles_rad: Sequence[float], *, pass_order: float,
+                   mesh_harmonics: int) -> list[tuple[float, ...]]:
+    """Where the planet phasing puts the sidebands of a local fault on a central gear.
+
+    A tooth fault on a central gear (sun or ring) with ``N`` planets meets planet ``n`` at
+    the angle ``psi_n``: the fault's modulation of the mesh reaches a sensor on the housing,
+    as every planet-phased line does, at ``|m h + q Omega|`` with ``h`` the signed mesh rate
+    ``z_gear (n_gear - n_carrier)``, ``Omega = n_carrier - n_sensor`` and the circular index
+    ``q`` only where ``|sum_n exp(i (q - m z_gear) psi_n)| > 0``
+    (:func:`analysis.catalogue.phasing_factor`; McFadden & Smith 1985, Inalpolat &
+    Kahraman 2009). The fault's sidebands ``m f_mesh ± k N |n_gear - n_carrier|`` keep the
+    index of their mesh harmonic, so with equally spaced planets and ``m z_gear`` not a
+    multiple of ``N`` (sequential phasing) they are all cancelled and the fault's lines stand
+    ``q |Omega|`` away from them, with ``q = m z_gear mod N`` (the smallest ``|q|``; both
+    signs when two are equally small). In-phase sets (``m z_gear`` a multiple of ``N``)
+    and unequally spaced planets (every index passes) keep ``q = 0``.
+
+    Parameters
+    ----------
+    z_gear : int
+        Teeth of the central gear, signed as in the gear-set description (a ring negative).
+    planet_angles_rad : sequence of float
+        Angles of its planets on their carrier [rad].
+    pass_order : float
+        ``sign(h) Omega`` in orders of the reference shaft (0: a carrier at rest, no shift).
+    mesh_harmonics : int
+        Mesh harmonics ``m = 1 .. mesh_harmonics``.
+
+    Returns
+    -------
+    list of tuple of float
+        Per mesh harmonic the order shifts of its fault sidebands (``(0.0,)`` when they are
+        not cancelled), for :func:`family_lines`.
+
+    References
+    ----------
+    McFadden, P. D., Smith, J. D. (1985). Proc. IMechE C 199, 65-70. Inalpolat, M.,
+    Kahraman, A. (2009). J. Sound Vib. 323, 677-696.
+    """
+    from analysis.catalogue import phasing_factor
+
+    if isinstance(z_gear, bool) or not isinstance(z_gear, int | np.integer) or z_gear == 0:
+        raise ValueError(f"z_gear = {z_gear!r} is not admissible (a non-zero integer)")
+    psi = require_real_array(planet_angles_rad, "planet_angles_rad", ndim=1, min_size=1)
+    omega = require_real(pass_order, "pass_order")
+    if isinstance(mesh_harmonics, bool) or not isinstance(mesh_harmonics, int | np.integer) \
+            or not 1 <= mesh_harmonics <= 1000:
+        raise ValueError(f"mesh_harmonics = {mesh_harmonics!r} is not admissible (an integer "
+                         "1 .. 1000)")
+    n = psi.size
+    out = []
+    for m in range(1, int(mesh_harmonics) + 1):
+        if omega == 0.0 or phasing_factor(psi, -m * int(z_gear)) > 0.0:
+            out.append((0.0,))
+            continue
+        for r in range(1, n + 1):
+            qs = [q for q in (r, -r) if phasing_factor(psi, q - m * int(z_gear)) > 0.0]
+            if qs:
+                out.append(tuple(float(q * omega) for q in qs))
+                break
+        else:
+            out.append((0.0,))
+    return out
 
 
 @dataclass(frozen=True)
