@@ -334,19 +334,29 @@ def shaft_line_mask(order: Any, shaft_orders: Any, *, harmonics: int = SHAFT_HAR
     modulation sidebands about the tooth meshing frequency in epicyclic gear vibration.
     Proc. IMechE C 199, 65-70.
     """
-    o = require_real_array(order, "order", ndim=1, min_size=0)
-    sh = np.abs(require_real_array(shaft_orders, "shaft_orders", min_size=0).ravel())
+    o = require_real_array(order, "order", ndim=1, min_size=0, max_abs=1e12)
+    sh = np.abs(require_real_array(shaft_orders, "shaft_orders", min_size=0,
+                                   max_abs=1e12).ravel())
+    if sh.size > 10_000:
+        raise ValueError(f"shaft_orders has {sh.size} values; admissible: at most 10000 shafts")
     if isinstance(harmonics, bool) or not isinstance(harmonics, int | np.integer) \
             or not 1 <= harmonics <= 100:
         raise ValueError(f"harmonics = {harmonics!r} is not admissible (admissible: an integer "
                          "1 .. 100)")
     step = float(o[1] - o[0]) if o.size > 1 else 1.0
-    w = 2.0 * step if width is None else require_positive(require_real(width, "width"),
-                                                          "width")
+    w = 2.0 * abs(step) if width is None else require_positive(require_real(width, "width"),
+                                                               "width")
     lines = (np.arange(1, int(harmonics) + 1)[:, None] * sh[sh > 0][None, :]).ravel()
+    tol = w + 1e-9 * abs(step)
+    srt = np.argsort(o, kind="stable")
+    os_ = o[srt]
+    lo = np.searchsorted(os_, lines - tol, side="left")
+    hi = np.searchsorted(os_, lines + tol, side="right")
+    count = np.zeros(o.size + 1, dtype=np.int64)
+    np.add.at(count, lo, 1)
+    np.add.at(count, hi, -1)
     out = np.zeros(o.size, dtype=bool)
-    for c in lines:
-        out |= np.abs(o - c) <= w + 1e-9 * step
+    out[srt] = np.cumsum(count)[:-1] > 0
     return out
 
 
@@ -564,9 +574,14 @@ def phasing_shifts(z_gear: int, planet_angles_rad: Sequence[float], *, pass_orde
     """
     from analysis.catalogue import phasing_factor
 
-    if isinstance(z_gear, bool) or not isinstance(z_gear, int | np.integer) or z_gear == 0:
-        raise ValueError(f"z_gear = {z_gear!r} is not admissible (a non-zero integer)")
-    psi = require_real_array(planet_angles_rad, "planet_angles_rad", ndim=1, min_size=1)
+    if isinstance(z_gear, bool) or not isinstance(z_gear, int | np.integer) \
+            or not 0 < abs(int(z_gear)) <= 100_000:
+        raise ValueError(f"z_gear = {z_gear!r} is not admissible (a non-zero integer, |z| <= "
+                         "100000)")
+    psi = require_real_array(planet_angles_rad, "planet_angles_rad", ndim=1, min_size=1,
+                             max_abs=1e6)
+    if psi.size > 64:
+        raise ValueError(f"planet_angles_rad has {psi.size} angles; admissible: 1 .. 64 planets")
     omega = require_real(pass_order, "pass_order")
     if isinstance(mesh_harmonics, bool) or not isinstance(mesh_harmonics, int | np.integer) \
             or not 1 <= mesh_harmonics <= 1000:
