@@ -162,7 +162,6 @@ def test_the_phasing_moves_a_central_gear_faults_sidebands(gear):
             y += w * (1 + 0.5 * pulse(phi - p - 1.0, 1.6 * 2 * np.pi / zs)) * np.cos(
                 zs * (phi - p))
     amp = np.abs(np.fft.rfft(y)) / y.size
-    order = np.arange(amp.size) / revs
 
     def at(o):
         return amp[np.rint(np.asarray(o) * revs).astype(int)]
