@@ -53,6 +53,7 @@ from analysis.resample import resample_to_angle
 
 __all__ = [
     "DEFAULT_THRESHOLD",
+    "SHAFT_HARMONICS",
     "Cause",
     "Diagnosis",
     "FamilyEvidence",
@@ -65,8 +66,10 @@ __all__ = [
     "near_modes",
     "order_locking",
     "order_profile",
+    "phasing_shifts",
     "prominence_db",
     "rising_peaks",
+    "shaft_line_mask",
     "sideband_ratios",
     "signature_score",
     "with_noise_floor",
@@ -290,12 +293,81 @@ def deadband_db(diff: np.ndarray, *, k: float = 3.0, minimum: float = 1.0) -> fl
     return max(minimum, k * 1.4826 * mad)
 
 
+SHAFT_HARMONICS = 2
+"""Harmonics of every turning shaft (1x, 2x) that :func:`shaft_line_mask` leaves out of the
+scores."""
+
+
+def shaft_line_mask(order: Any, shaft_orders: Any, *, harmonics: int = SHAFT_HARMONICS,
+                    width: float | None = None) -> np.ndarray:
+    """The order bins of the shaft rotation lines: ``h n`` for every shaft order ``n``,
+    ``h = 1 .. harmonics``, within ``±width``.
+
+    A line at once or twice a shaft's speed in the fixed frame is what unbalance,
+    misalignment or a bent shaft give on any machine: it is no evidence of a gear fault and
+    any simulated fault that disturbs the shaft raises it too. A gear's eccentricity or a pin
+    error shows as sidebands of the mesh harmonics at the rotation (the lines the fault
+    alone explains; Randall 1982, McFadden & Smith 1985), which stay in the score.
+
+    Parameters
+    ----------
+    order : array_like
+        Order bins (uniform, increasing).
+    shaft_orders : array_like
+        Speeds of the turning shafts in the fixed frame, in orders of the reference shaft
+        (absolute values are taken; zeros, a member at rest, are skipped).
+    harmonics : int
+        Harmonics of each shaft (>= 1).
+    width : float, optional
+        Half-width [orders]; default 2 bins (the main lobe of the Hann window of
+        :func:`order_profile`).
+
+    Returns
+    -------
+    numpy.ndarray of bool
+        True on the bins of a shaft line.
+
+    References
+    ----------
+    Randall, R. B. (1982). A new method of modeling gear faults. J. Mech. Design 104,
+    259-267. McFadden, P. D., Smith, J. D. (1985). An explanation for the asymmetry of the
+    modulation sidebands about the tooth meshing frequency in epicyclic gear vibration.
+    Proc. IMechE C 199, 65-70.
+    """
+    o = require_real_array(order, "order", ndim=1, min_size=0, max_abs=1e12)
+    sh = np.abs(require_real_array(shaft_orders, "shaft_orders", min_size=0,
+                                   max_abs=1e12).ravel())
+    if sh.size > 10_000:
+        raise ValueError(f"shaft_orders has {sh.size} values; admissible: at most 10000 shafts")
+    if isinstance(harmonics, bool) or not isinstance(harmonics, int | np.integer) \
+            or not 1 <= harmonics <= 100:
+        raise ValueError(f"harmonics = {harmonics!r} is not admissible (admissible: an integer "
+                         "1 .. 100)")
+    step = float(o[1] - o[0]) if o.size > 1 else 1.0
+    w = 2.0 * abs(step) if width is None else require_positive(require_real(width, "width"),
+                                                               "width")
+    lines = (np.arange(1, int(harmonics) + 1)[:, None] * sh[sh > 0][None, :]).ravel()
+    tol = w + 1e-9 * abs(step)
+    srt = np.argsort(o, kind="stable")
+    os_ = o[srt]
+    lo = np.searchsorted(os_, lines - tol, side="left")
+    hi = np.searchsorted(os_, lines + tol, side="right")
+    count = np.zeros(o.size + 1, dtype=np.int64)
+    np.add.at(count, lo, 1)
+    np.add.at(count, hi, -1)
+    out = np.zeros(o.size, dtype=bool)
+    out[srt] = np.cumsum(count)[:-1] > 0
+    return out
+
+
 def signature_score(measured_diff: np.ndarray, signature: np.ndarray, *,
-                    deadband: float, signature_deadband: float = 3.0) -> float:
+                    deadband: float, signature_deadband: float = 3.0,
+                    exclude: Any = None) -> float:
     """Cosine similarity of the measured rises and a candidate's simulated rises, in [0, 1].
 
     Both are differences of prominence [dB] on the same order bins; only rises above the
-    deadbands count. 0 when either has no rise.
+    deadbands count. 0 when either has no rise. Bins where ``exclude`` (bool, one per bin;
+    e.g. :func:`shaft_line_mask`) is True are left out of both.
     """
     md = require_real_array(measured_diff, "measured_diff", ndim=1, min_size=0, finite=False)
     sg = require_real_array(signature, "signature", ndim=1, min_size=0, finite=False)
@@ -304,6 +376,13 @@ def signature_score(measured_diff: np.ndarray, signature: np.ndarray, *,
                          "must be on the same order axis")
     a = np.clip(md - require_real(deadband, "deadband"), 0.0, None)
     b = np.clip(sg - require_real(signature_deadband, "signature_deadband"), 0.0, None)
+    if exclude is not None:
+        ex = np.asarray(exclude)
+        if ex.dtype != bool or ex.shape != md.shape:
+            raise ValueError(f"exclude must be a bool array of one value per bin ({md.size}); "
+                             f"got dtype {ex.dtype}, shape {ex.shape}")
+        a = np.where(ex, 0.0, a)
+        b = np.where(ex, 0.0, b)
     # cosine similarity is scale-free: both scaled by a power of two (exact, so the same bits)
     # to keep the dot product and the norms finite for any finite input
     with np.errstate(under="ignore", invalid="ignore"):
@@ -434,20 +513,94 @@ def rising_peaks(order: np.ndarray, diff: np.ndarray, deadband: float) -> np.nda
 
 
 def family_lines(fundamental: float, *, mesh_order: float, mesh_harmonics: int,
-                 harmonics: int, sidebands: int, max_order: float) -> np.ndarray:
-    """Lines of a fault family: harmonics ``k f`` and sidebands ``m f_mesh ± k f``.
+                 harmonics: int, sidebands: int, max_order: float,
+                 shifts: Sequence[Sequence[float]] | None = None) -> np.ndarray:
+    """Lines of a fault family: harmonics ``k f`` and sidebands ``m f_mesh ± k f (+ s)``.
 
     All in orders of the reference shaft, ``0 < order <= max_order``, unique (to 1e-9).
+    ``shifts[m - 1]``: the order shifts ``s`` of the sidebands of mesh harmonic ``m`` (the
+    planet phasing's, :func:`phasing_shifts`); default ``(0,)`` for every harmonic.
     """
     k = np.arange(1, harmonics + 1) * fundamental
     lines = [k]
     ks = np.arange(1, sidebands + 1) * fundamental
     for m in range(1, mesh_harmonics + 1):
         c = m * mesh_order
-        lines += [c - ks, c + ks]
+        for sh in (shifts[m - 1] if shifts is not None and m <= len(shifts) else (0.0,)):
+            lines += [c - ks + sh, c + ks + sh]
     o = np.concatenate(lines)
     o = o[(o > 0) & (o <= max_order)]
     return np.unique(np.round(o, 9))
+
+
+def phasing_shifts(z_gear: int, planet_angles_rad: Sequence[float], *, pass_order: float,
+                   mesh_harmonics: int) -> list[tuple[float, ...]]:
+    """Where the planet phasing puts the sidebands of a local fault on a central gear.
+
+    A tooth fault on a central gear (sun or ring) with ``N`` planets meets planet ``n`` at
+    the angle ``psi_n``: the fault's modulation of the mesh reaches a sensor on the housing,
+    as every planet-phased line does, at ``|m h + q Omega|`` with ``h`` the signed mesh rate
+    ``z_gear (n_gear - n_carrier)``, ``Omega = n_carrier - n_sensor`` and the circular index
+    ``q`` only where ``|sum_n exp(i (q - m z_gear) psi_n)| > 0``
+    (:func:`analysis.catalogue.phasing_factor`; McFadden & Smith 1985, Inalpolat &
+    Kahraman 2009). The fault's sidebands ``m f_mesh ± k N |n_gear - n_carrier|`` keep the
+    index of their mesh harmonic, so with equally spaced planets and ``m z_gear`` not a
+    multiple of ``N`` (sequential phasing) they are all cancelled and the fault's lines stand
+    ``q |Omega|`` away from them, with ``q = m z_gear mod N`` (the smallest ``|q|``; both
+    signs when two are equally small). In-phase sets (``m z_gear`` a multiple of ``N``)
+    and unequally spaced planets (every index passes) keep ``q = 0``.
+
+    Parameters
+    ----------
+    z_gear : int
+        Teeth of the central gear, signed as in the gear-set description (a ring negative).
+    planet_angles_rad : sequence of float
+        Angles of its planets on their carrier [rad].
+    pass_order : float
+        ``sign(h) Omega`` in orders of the reference shaft (0: a carrier at rest, no shift).
+    mesh_harmonics : int
+        Mesh harmonics ``m = 1 .. mesh_harmonics``.
+
+    Returns
+    -------
+    list of tuple of float
+        Per mesh harmonic the order shifts of its fault sidebands (``(0.0,)`` when they are
+        not cancelled), for :func:`family_lines`.
+
+    References
+    ----------
+    McFadden, P. D., Smith, J. D. (1985). Proc. IMechE C 199, 65-70. Inalpolat, M.,
+    Kahraman, A. (2009). J. Sound Vib. 323, 677-696.
+    """
+    from analysis.catalogue import phasing_factor
+
+    if isinstance(z_gear, bool) or not isinstance(z_gear, int | np.integer) \
+            or not 0 < abs(int(z_gear)) <= 100_000:
+        raise ValueError(f"z_gear = {z_gear!r} is not admissible (a non-zero integer, |z| <= "
+                         "100000)")
+    psi = require_real_array(planet_angles_rad, "planet_angles_rad", ndim=1, min_size=1,
+                             max_abs=1e6)
+    if psi.size > 64:
+        raise ValueError(f"planet_angles_rad has {psi.size} angles; admissible: 1 .. 64 planets")
+    omega = require_real(pass_order, "pass_order")
+    if isinstance(mesh_harmonics, bool) or not isinstance(mesh_harmonics, int | np.integer) \
+            or not 1 <= mesh_harmonics <= 1000:
+        raise ValueError(f"mesh_harmonics = {mesh_harmonics!r} is not admissible (an integer "
+                         "1 .. 1000)")
+    n = psi.size
+    out = []
+    for m in range(1, int(mesh_harmonics) + 1):
+        if omega == 0.0 or phasing_factor(psi, -m * int(z_gear)) > 0.0:
+            out.append((0.0,))
+            continue
+        for r in range(1, n + 1):
+            qs = [q for q in (r, -r) if phasing_factor(psi, q - m * int(z_gear)) > 0.0]
+            if qs:
+                out.append(tuple(float(q * omega) for q in qs))
+                break
+        else:
+            out.append((0.0,))
+    return out
 
 
 @dataclass(frozen=True)

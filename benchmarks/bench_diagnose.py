@@ -1,6 +1,8 @@
 """Benchmark: accuracy, false alarms and wall time of ``gearvib diagnose`` (not a test).
 
-Run ``python3 benchmarks/bench_diagnose.py [--faulty 40] [--healthy 20] [--seed 0]``.
+Run ``python3 benchmarks/bench_diagnose.py [--faulty 40] [--healthy 20] [--seed 0]
+[--work DIR]`` (``--work``: keep the candidate libraries of the accuracy records there and
+reuse them in the next run of the same code).
 
 *Accuracy.* ``--faulty`` synthetic measurements of ``paper-case1`` with a random fault kind
 (crack, pitting, broken tooth, eccentricity, pin error, uniformly), member (sun, planet 1-3,
@@ -255,6 +257,8 @@ def main() -> None:
                     "first (numba caches)")
     ap.add_argument("--quick", action="store_true", help="smoke run: a 3 s record, the timed fresh and "
                     "warm diagnosis once, crack candidates only, no accuracy records")
+    ap.add_argument("--work", help="folder of the accuracy records' candidate libraries (one "
+                    "per speed profile; kept and reused; default temporary)")
     args = ap.parse_args()
     if args.quick:
         args.repeat, args.faulty, args.healthy = 1, 1, 0
@@ -263,7 +267,7 @@ def main() -> None:
         wall_time(args)
     if not args.skip_accuracy:
         with tempfile.TemporaryDirectory() as tmp:
-            accuracy(args, Path(tmp))
+            accuracy(args, Path(args.work) if args.work else Path(tmp))
 
 
 if __name__ == "__main__":

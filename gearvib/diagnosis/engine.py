@@ -40,8 +40,10 @@ from analysis.diagnosis import (
     near_modes,
     order_locking,
     order_profile,
+    phasing_shifts,
     prominence_db,
     rising_peaks,
+    shaft_line_mask,
     sideband_ratios,
     signature_score,
     with_noise_floor,
@@ -313,7 +315,9 @@ class _Lines:
     ``fault``: the fundamental of a local tooth fault (its catalogue family's first line),
     ``rotation``: its rotation relative to its carrier (eccentricity), ``carrier``: its
     carrier's rotation (pin errors), ``mesh``: the mesh frequency its faults modulate; the
-    ``*_family`` names key the family evidence.
+    ``*_family`` names key the family evidence; ``fault_shifts``: per mesh harmonic, where
+    the planet phasing moves the fault's sidebands (:func:`analysis.diagnosis.phasing_shifts`;
+    None: not moved).
     """
 
     fault: float | None
@@ -323,6 +327,7 @@ class _Lines:
     carrier: float
     carrier_family: str
     mesh: float
+    fault_shifts: tuple[tuple[float, ...], ...] | None = None
 
 
 def _member_lines(cat: Any, ms: dict[str, float], members: list[Any],
@@ -379,8 +384,31 @@ def _member_lines(cat: Any, ms: dict[str, float], members: list[Any],
         key = family if count.get(family, 0) == 1 else f"{family} {cat_name}"
         c_key = "carrier" if len(turning) <= 1 else f"carrier {m.carrier}"
         out[m.name] = _Lines(fault, key, abs(ms.get(m.target, 0.0) - ms.get(m.carrier, 0.0)),
-                             f"{cat_name}_rotation", abs(ms.get(m.carrier, 0.0)), c_key, mesh)
+                             f"{cat_name}_rotation", abs(ms.get(m.carrier, 0.0)), c_key, mesh,
+                             _fault_shifts(m.target, family, ms, model, planets))
     return out
+
+
+def _fault_shifts(gear: str, family: str, ms: dict[str, float], model: Any,
+                  planets: dict[str, str]) -> tuple[tuple[float, ...], ...] | None:
+    """Per mesh harmonic, where the planet phasing puts the sidebands of a local fault on the
+    central gear ``gear`` (:func:`analysis.diagnosis.phasing_shifts`, the sensor on the
+    housing); None for another family or a gear without planet meshes."""
+    if family not in ("sun_fault", "ring_fault"):
+        return None
+    meshes = [d for d in model.meta.get("meshes", []) if str(d["gear1"]) == gear
+              and d.get("z1") is not None and d["gear2"] in planets]
+    if not meshes:
+        return None
+    carrier = planets[meshes[0]["gear2"]]
+    mates = {d["gear2"] for d in meshes if planets[d["gear2"]] == carrier}
+    psi = [math.radians(float(p["angle_deg"])) for p in model.meta.get("planets", [])
+           if p["name"] in mates]
+    z = int(meshes[0]["z1"])
+    rel = ms[gear] - ms[carrier]
+    pass_order = math.copysign(1.0, z * rel) * ms[carrier] if rel else 0.0
+    return tuple(phasing_shifts(z, psi, pass_order=pass_order,
+                                mesh_harmonics=FAMILY_MESH_HARMONICS))
 
 
 def _library(library: str | os.PathLike | bool | None,
@@ -482,26 +510,32 @@ def _fit_ramp(t: np.ndarray, rpm: np.ndarray) -> tuple[float, float]:
     return float(b), float(b + a * t[-1])
 
 
+FAMILY_MESH_HARMONICS = 6
+"""Mesh harmonics whose sidebands a family's lines include (the family evidence)."""
+
+
 def _family_table(lines: dict[str, _Lines], members: list[Any], max_order: float
                   ) -> dict[str, tuple[float, np.ndarray]]:
     """Catalogue families of the candidate members: their fault lines, rotations (turning
     members) and carriers, each with harmonics and sidebands of the member's mesh."""
-    base: dict[str, tuple[float, float]] = {}
+    base: dict[str, tuple[float, float, Any]] = {}
     for m in members:
         ln = lines[m.name]
         if ln.fault is not None:
-            base.setdefault(ln.fault_family, (ln.fault, ln.mesh))
+            base.setdefault(ln.fault_family, (ln.fault, ln.mesh, ln.fault_shifts))
     for m in members:
         ln = lines[m.name]
         if m.turns:
-            base.setdefault(ln.rotation_family, (ln.rotation, ln.mesh))
+            base.setdefault(ln.rotation_family, (ln.rotation, ln.mesh, None))
     for m in members:
         ln = lines[m.name]
-        base.setdefault(ln.carrier_family, (ln.carrier, ln.mesh))
+        base.setdefault(ln.carrier_family, (ln.carrier, ln.mesh, None))
     out = {}
-    for name, (f, mesh) in base.items():
+    for name, (f, mesh, shifts) in base.items():
         if f > 0:
-            out[name] = (f, family_lines(f, mesh_order=mesh, mesh_harmonics=6, harmonics=10,
+            out[name] = (f, family_lines(f, mesh_order=mesh,
+                                         mesh_harmonics=FAMILY_MESH_HARMONICS, harmonics=10,
+                                         shifts=shifts,
                                          sidebands=10, max_order=max_order))
     return out
 
@@ -716,7 +750,10 @@ def diagnose(measured: Record, config: str, *, baseline: Record | None = None,
     dead = deadband_db(d_meas)
     signatures = {c.label: envelope(ps) - p_h
                   for c, ps in zip(candidates, profiles[1:], strict=True)}
-    scores = {lab: signature_score(d_meas, sig, deadband=dead) for lab, sig in signatures.items()}
+    # the shafts' own lines (1x, 2x: unbalance, misalignment) are no evidence of a gear fault
+    shafts = shaft_line_mask(order, [v for k, v in ms.items() if k != "ground"])
+    scores = {lab: signature_score(d_meas, sig, deadband=dead, exclude=shafts)
+              for lab, sig in signatures.items()}
     fams = _family_table(lines, members, max_order)
     fam_ev = family_evidence(order, d_meas, dead, fams)
     fam_by = {f.family: f for f in fam_ev}

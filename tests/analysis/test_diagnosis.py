@@ -15,7 +15,9 @@ from analysis.diagnosis import (
     family_lines,
     impulse_mismatch_db,
     order_profile,
+    phasing_shifts,
     prominence_db,
+    shaft_line_mask,
     sideband_ratios,
     signature_score,
     with_noise_floor,
@@ -88,6 +90,101 @@ def test_signature_score_bounds_and_scaling():
     other = np.roll(sig, 7) + noise
     assert signature_score(other, sig, deadband=deadband_db(other)) < 0.2
     assert signature_score(np.zeros(10), np.ones(10), deadband=1.0) == 0.0
+
+
+def test_shaft_lines_alone_do_not_make_an_eccentricity():
+    """A healthy gearbox with strong 1x lines (unbalance of the sun, 4.95 carrier orders, and
+    of the carrier) against a simulated sun eccentricity that raises those lines and its mesh
+    sidebands ``m f_mesh +- f_rel``: counted, the shaft lines alone score it above the 0.4
+    threshold; left out (``shaft_line_mask``), they do not. A real eccentricity (the mesh
+    sidebands, with or without the 1x line) keeps its score."""
+    order = np.arange(0, 420, 1 / 16)
+    rng = np.random.default_rng(5)
+    mesh, f_rel, sun, carrier = 83.0, 83.0 / 21.0, 104.0 / 21.0, 1.0
+
+    def lines(at, db, base):
+        d = base.copy()
+        for o, v in at:
+            d[np.argmin(np.abs(order - o))] += v
+        return d
+
+    sidebands = [(m * mesh + k * f_rel, 12.0) for m in (1, 2, 3, 4) for k in (-1, 1)]
+    shaft = [(sun, 25.0), (carrier, 22.0)]
+    noise = rng.normal(0.0, 1.0, order.size)
+    healthy = lines(shaft, None, noise)
+    sig = lines(shaft + sidebands, None, np.zeros(order.size))
+    dead = deadband_db(healthy)
+    mask = shaft_line_mask(order, [sun, carrier, 0.0, -1.68])
+    # the mask: 1x and 2x of each turning shaft, +-2 bins; nothing else
+    want = np.zeros(order.size, bool)
+    for c in (sun, 2 * sun, carrier, 2 * carrier, 1.68, 3.36):
+        want |= np.abs(order - c) <= 2 / 16 + 1e-12
+    np.testing.assert_array_equal(mask, want)
+    assert not mask[np.argmin(np.abs(order - (mesh + f_rel)))]
+    assert mask[np.argmin(np.abs(order - 2 * sun))] and mask[np.argmin(np.abs(order - 3.36))]
+    assert signature_score(healthy, sig, deadband=dead) > 0.4  # the false alarm of before
+    assert signature_score(healthy, sig, deadband=dead, exclude=mask) < 0.1
+    faulty = lines(sidebands, None, healthy)
+    for meas in (faulty, lines(sidebands, None, noise)):
+        d = deadband_db(meas)
+        assert signature_score(meas, sig, deadband=d, exclude=mask) > 0.9
+    with pytest.raises(ValueError, match="exclude must be a bool array"):
+        signature_score(healthy, sig, deadband=dead, exclude=mask[1:])
+    with pytest.raises(ValueError, match="harmonics = 0 is not admissible"):
+        shaft_line_mask(order, [sun], harmonics=0)
+
+
+@pytest.mark.parametrize("gear", ["ring", "sun"])
+def test_the_phasing_moves_a_central_gear_faults_sidebands(gear):
+    """Four planets at 90 deg, z_s = 21, z_r = 83 (sequential phasing), ring fixed, a sensor
+    on the housing with a Hann window over the planets' angle: the spectrum (21 carrier
+    revolutions, exact bins) of a tooth fault on the ring or the sun, written here from the
+    mesh phases (each planet's mesh modulated by a pulse when it meets the damaged tooth). The
+    catalogue's sidebands ``m f_mesh +- k f`` are cancelled (nothing there), the lines stand
+    at the positions ``phasing_shifts`` moves them to; for 3 in-phase planets nothing moves."""
+    revs, spr = 21, 2048
+    th = 2 * np.pi * np.arange(revs * spr) / spr  # carrier angle
+    psi = np.radians([0.0, 90.0, 180.0, 270.0])
+    zs, zr = 21, 83
+
+    def pulse(x, width):
+        x = np.angle(np.exp(1j * x))
+        return np.where(np.abs(x) < width / 2, np.cos(np.pi * x / width) ** 2, 0.0)
+
+    y = np.zeros(th.size)
+    for p in psi:
+        d = np.angle(np.exp(1j * (th + p)))  # the planet's angle from the sensor
+        w = 0.05 + 0.95 * pulse(d, np.radians(120.0))  # Hann window, 120 deg
+        if gear == "ring":  # the planet passes the damaged ring tooth at carrier angle 1.0
+            y += w * (1 + 0.5 * pulse(th + p - 1.0, 1.6 * 2 * np.pi / zr)) * np.cos(zr * (th + p))
+        else:  # the sun turns at 83/21 relative to the carrier
+            phi = th * zr / zs
+            y += w * (1 + 0.5 * pulse(phi - p - 1.0, 1.6 * 2 * np.pi / zs)) * np.cos(
+                zs * (phi - p))
+    amp = np.abs(np.fft.rfft(y)) / y.size
+
+    def at(o):
+        return amp[np.rint(np.asarray(o) * revs).astype(int)]
+
+    f = 4.0 if gear == "ring" else 4 * zr / zs  # N |n_gear - n_carrier|
+    z = -zr if gear == "ring" else zs
+    shifts = phasing_shifts(z, psi, pass_order=1.0, mesh_harmonics=2)
+    assert shifts == [(1.0,), (2.0, -2.0)]
+    nominal = family_lines(f, mesh_order=83.0, mesh_harmonics=2, harmonics=0, sidebands=4,
+                           max_order=200.0)
+    moved = family_lines(f, mesh_order=83.0, mesh_harmonics=2, harmonics=0, sidebands=4,
+                         max_order=200.0, shifts=shifts)
+    big = amp.max()
+    assert np.all(at(nominal) < 1e-9 * big)  # cancelled by the phasing
+    assert np.all(at(moved) > 1e-6 * big)  # the fault's lines, all of them
+    if gear == "ring":  # the whole record repeats every quarter revolution
+        assert np.all(np.abs(moved / 4 - np.rint(moved / 4)) < 1e-9)
+    in_phase = phasing_shifts(-114, np.radians([0.0, 120.0, 240.0]), pass_order=1.0,
+                              mesh_harmonics=3)
+    assert in_phase == [(0.0,)] * 3
+    assert phasing_shifts(z, psi, pass_order=0.0, mesh_harmonics=1) == [(0.0,)]
+    with pytest.raises(ValueError, match="z_gear = 0 is not admissible"):
+        phasing_shifts(0, psi, pass_order=1.0, mesh_harmonics=1)
 
 
 def test_family_evidence_chance_on_random_peaks():

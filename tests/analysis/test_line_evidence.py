@@ -64,6 +64,27 @@ def test_a_family_in_noise_is_detected_with_a_small_chance():
     assert "BPFX: detected (3/3" in fig.axes[0].get_legend().get_texts()[0].get_text()
 
 
+def test_a_family_alone_in_its_spectrum_has_a_small_but_not_zero_chance():
+    """Noise and only the family's own lines: no background line as strong as the family, so
+    the chance rests on the floor of half a line over the spectrum (``half / span`` per
+    window), computed here from the check's own windows: small, but never exactly 0."""
+    rng = np.random.default_rng(3)
+    pw = noise(rng)
+    for h in (1, 2, 3):
+        add_line(pw, h * 87.25, 25.0)
+    c = check_lines(AXIS, pw, LineFamily("BPFX", 87.0, 3))
+    pos, prom = prominent_lines(AXIS, pw, threshold_db=c.threshold_db)
+    assert c.detected and set(np.round(pos[prom >= strength(c)], 2)) <= {87.25, 174.5, 261.75}
+    chance = family_chance(AXIS, c, pos, prom)
+    span = AXIS[-1] - AXIS[1]
+    q1 = (c.tolerance * 87.0 + SPACING) / span
+    q2, q3 = ((0.5 * h + 1.0) * SPACING / span for h in (2, 3))
+    assert chance == pytest.approx(q1 * (1.0 - (1.0 - q2) * (1.0 - q3)), rel=1e-9)
+    assert 0.0 < chance < 1e-4
+    ev = line_evidence(AXIS, pw, LineFamily("BPFX", 87.0, 3))
+    assert ev.status[0] == "detected" and ev.chance[0] == pytest.approx(chance)
+
+
 def test_the_chance_is_the_detection_rate_of_families_placed_at_random():
     """Spectra with about one random line per 5 Hz (10 to 30 dB): the mean stated chance of
     families at random positions equals the rate at which they are detected."""
