@@ -580,13 +580,13 @@ def near_modes(orders: Sequence[float], reference_hz: float, natural_hz: Mapping
                *, rtol: float = 0.05) -> list[str]:
     """Lines (orders at the reference frequency) within ``rtol`` of a natural frequency."""
     require_instance(natural_hz, Mapping, "natural_hz")
-    orders = require_real_array(orders, "orders", min_size=0).ravel()
+    order_values = require_real_array(orders, "orders", min_size=0).ravel()
     reference_hz = require_real(reference_hz, "reference_hz")
     require_real(rtol, "rtol")
     for name, fn in natural_hz.items():
         require_real(fn, f"natural_hz[{name!r}]")
     out = []
-    for o in orders:
+    for o in order_values:
         f = float(o) * reference_hz
         for name, fn in natural_hz.items():
             if fn > 0 and abs(f - fn) <= rtol * fn:
@@ -761,8 +761,12 @@ class Diagnosis:
 
         fig = Figure(figsize=figsize, layout="constrained")
         seen: set[str] = set()
-        shown = [c for c in self.causes if c.cause != "none"
-                 and not (c.variant in seen or seen.add(c.variant))][:top]
+        shown = []  # the first cause of each variant
+        for c in self.causes:
+            if c.cause != "none" and c.variant not in seen:
+                seen.add(c.variant)
+                shown.append(c)
+        shown = shown[:top]
         axes = fig.subplots(1 + len(shown), 1, sharex=True, squeeze=False)[:, 0]
         ax = axes[0]
         ax.plot(self.order, self.measured_diff, lw=0.7, color="k")

@@ -677,6 +677,7 @@ def tracking(
     else:
         track = Track(b - a, interval, t0=t0, fs=fs, angle=values)
         rpm_max = track.step_max * fs * 60.0 / (2.0 * np.pi)
+    mo: float | None
     if samples_per_rev is None:
         spr, mo_default = default_samples_per_rev(fs, rpm_max)
         if max_order is None and max_order_wanted is not None:

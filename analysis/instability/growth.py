@@ -14,6 +14,7 @@ run-up or a stepped-speed run that dwells inside the band.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -260,7 +261,7 @@ def runup_growth(bands: Any, time: Any, rpm: Any, *, threshold_db: float = 6.0,
                       f"{0.5 * (b.lower_rpm + b.upper_rpm):.0f} min-1")
         rows.append((b.label, b.lower_rpm, b.upper_rpm, tau, b.peak_growth_rate, expo, gdb,
                      gdb >= thr, need, advice))
-    cols = list(zip(*rows, strict=True)) if rows else [[]] * 10
+    cols: list[Sequence[Any]] = list(zip(*rows, strict=True)) if rows else [[]] * 10
     return GrowthTable(
         label=np.asarray(cols[0], dtype=object), lower_rpm=np.asarray(cols[1], float),
         upper_rpm=np.asarray(cols[2], float), time_in_band=np.asarray(cols[3], float),

@@ -146,7 +146,7 @@ class MeshPhasingRule:
         k = self.index(harmonic)
         return tuple(sorted({min(k, self.n_planets - k)}))
 
-    def check_family(self, family: tuple[str, int], name: str = "mode_families") -> int:
+    def check_family(self, family: Any, name: str = "mode_families") -> int:
         """Validate a ``(kind, p)`` family and return ``p``."""
         try:
             kind, p = family
@@ -427,7 +427,7 @@ def instability_candidates(
                              f"natural_frequencies_hz has {f.size}")
         fams = [tuple(fm) for fm in mode_families]
         for fm in fams:
-            mesh_harmonic_rule.check_family(fm)  # type: ignore[arg-type]
+            mesh_harmonic_rule.check_family(fm)
 
     notes: list[str] = []
     want_diff = "difference" in kinds and gyroscopic
@@ -462,7 +462,7 @@ def instability_candidates(
     if speed_range is not None:
         rows = [r for r in rows if lo <= r[5] <= hi]
     rows.sort(key=lambda r: (r[4], r[3]))
-    cols = list(zip(*rows, strict=True)) if rows else [[]] * 9
+    cols: list[Sequence[Any]] = list(zip(*rows, strict=True)) if rows else [[]] * 9
 
     def arr(i, dtype):
         return np.asarray(cols[i], dtype=dtype)
