@@ -542,7 +542,7 @@ def family_evidence(order: np.ndarray, diff: np.ndarray, deadband: float,
 
 
 def order_locking(profile_orders: OrderProfile, x: Any, fs: float, rpm: Any,
-                  peak_orders: Sequence[float]) -> str:
+                  peak_orders: Sequence[float] | np.ndarray) -> str:
     """Whether the strongest measured rises are order-locked or frequency-locked.
 
     Compares the prominence of the rising lines in the order spectrum with their prominence
@@ -576,8 +576,8 @@ def order_locking(profile_orders: OrderProfile, x: Any, fs: float, rpm: Any,
             f"{lo:.0f}-{hi:.0f} min-1)")
 
 
-def near_modes(orders: Sequence[float], reference_hz: float, natural_hz: Mapping[str, float],
-               *, rtol: float = 0.05) -> list[str]:
+def near_modes(orders: Sequence[float] | np.ndarray, reference_hz: float,
+               natural_hz: Mapping[str, float], *, rtol: float = 0.05) -> list[str]:
     """Lines (orders at the reference frequency) within ``rtol`` of a natural frequency."""
     require_instance(natural_hz, Mapping, "natural_hz")
     order_values = require_real_array(orders, "orders", min_size=0).ravel()

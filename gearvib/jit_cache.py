@@ -43,9 +43,10 @@ def kernels_cached() -> bool | None:
         dispatcher = kernels.integrate_chunk
         if dispatcher.signatures:  # compiled (or loaded) in this process already
             return True
-        cache = dispatcher._cache
+        # numba's private cache objects, not in its type stubs
+        cache = dispatcher._cache  # type: ignore[attr-defined]
         index = cache._cache_file._load_index()  # {} when missing or stale
-        magic = dispatcher.targetctx.codegen().magic_tuple()
+        magic = dispatcher.targetctx.codegen().magic_tuple()  # type: ignore[attr-defined]
         return any(isinstance(key, tuple) and len(key) > 1 and key[1] == magic
                    for key in index)
     except Exception:  # numba internals: anything means "unknown"

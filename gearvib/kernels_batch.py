@@ -717,7 +717,8 @@ def integrate_lanes(
     k4 = stages[3]
     tmp = stages[4]
     cap = splits.shape[0]
-    zero = lanes_splat(0.0)
+    # numba passes an @intrinsic's typing context itself (its stub wants it as an argument)
+    zero = lanes_splat(0.0)  # type: ignore[call-arg, var-annotated]
     dtv = lanes_splat(dt)
     n_live = 0
     for b in range(WIDTH):
@@ -1223,6 +1224,8 @@ def _load_specialised(batch: tuple) -> KernelSet:
         write_once(path, text)
         name = f"gearvib_batch_{digest}"
         spec = importlib.util.spec_from_file_location(name, path)
+        if spec is None or spec.loader is None:
+            raise ImportError(f"no module spec for {path}")
         module = importlib.util.module_from_spec(spec)
         spec.loader.exec_module(module)
     except (OSError, ImportError, AttributeError) as exc:  # unwritable, no sources: generic

@@ -35,7 +35,7 @@ import math
 import time as _time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any, TypeVar
+from typing import Any, TypeVar, cast
 
 import numpy as np
 
@@ -185,7 +185,7 @@ def simulate(
     gyroscopic: bool = False,
     progress: bool | None = None,
     config: Mapping | str | None = None,
-    natural_frequencies: Sequence[float] | None = None,
+    natural_frequencies: Sequence[float] | np.ndarray | None = None,
     max_steps: int = DEFAULT_MAX_STEPS,
 ) -> RunUpResult:
     """Simulate a run-up (or run-down, or torque-driven run) of an assembled gear set.
@@ -514,7 +514,10 @@ def simulate_batch(
                          "'return')")
     nv = len(models)
     conds = list(conditions) if isinstance(conditions, list | tuple) else [conditions] * nv
-    configs = list(config) if isinstance(config, list | tuple) else [config] * nv
+    # a list or tuple holds one configuration per model; anything else is one for all
+    configs: list[Mapping | str | None] = (
+        list(config) if isinstance(config, list | tuple)
+        else [cast(Mapping | str | None, config)] * nv)
     for name, seq in (("conditions", conds), ("config", configs)):
         if len(seq) != nv:
             raise ValueError(f"{name} must be one value or one per model ({nv}), got {len(seq)}")

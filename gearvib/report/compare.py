@@ -325,6 +325,7 @@ def compare_cases(reference: CaseAnalysis, other: CaseAnalysis, *, rpm_tol: floa
     better = [c for c in changes if c.status in ("weaker", "vanished")]
     phasing = (kind == "phasing" and p2p[0] is not None and p2p[1] is not None)
     if phasing:
+        assert p2p[0] is not None and p2p[1] is not None  # (phasing)
         stiff_text = (f"summed {gear}-mesh stiffness fluctuation {p2p[1] / 1e8:.3f}e8 N/m "
                       f"peak-to-peak in {b} against {p2p[0] / 1e8:.3f}e8 N/m in {a}")
         claims.append((f"the summed {gear}-mesh stiffness oscillates less", p2p[1] < p2p[0],

@@ -344,7 +344,7 @@ def _build(runs: list[tuple[str, xr.Dataset]], folder: _OutputFolder, *, title: 
                                                     subtitle=subtitle, images=images))
     atomic_write(html_path, lambda tmp: tmp.write_text(text, encoding="utf-8"))
     log.info("report written: %s, %s (%d pages)", html_path, pdf_path, pages)
-    return ReportPaths(html=html_path, pdf=pdf_path, pdf_pages=int(pages),  # type: ignore[arg-type]
+    return ReportPaths(html=html_path, pdf=pdf_path, pdf_pages=int(pages),
                        sections=tuple(s.id for s in sections), cases=tuple(names),
                        comparisons=comparisons)
 
