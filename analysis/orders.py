@@ -544,7 +544,8 @@ def _cut_setup(
     elif bandwidth is not None:
         kind, bw = "order", bandwidth
     else:
-        kind, bw = "Hz", float(bandwidth_hz)  # type: ignore[arg-type]
+        assert bandwidth_hz is not None  # one of the two is given here
+        kind, bw = "Hz", float(bandwidth_hz)
     return ords, kind, bw, spacing
 
 

@@ -960,6 +960,7 @@ def prepare_process(argv: Sequence[str]) -> None:
         for name in SINGLE_THREAD_VARIABLES:
             os.environ.setdefault(name, "1")
     if not os.path.exists(".numba_config.yaml"):  # numba's config file, read from the cwd
+        # None in sys.modules blocks the import (importlib's documented rule; not in the stub)
         sys.modules.setdefault("yaml", None)  # type: ignore[arg-type]
     _load_without_package("analysis.jit")
     _load_without_package("analysis.threads")
@@ -1007,6 +1008,7 @@ def hide_unused_modules(argv: Sequence[str]) -> None:
     """
     hidden = ["cffi"] if "sweep" in argv else ["cffi", "dask", "distributed"]
     for name in hidden:
+        # None in sys.modules blocks the import (importlib's documented rule; not in the stub)
         sys.modules.setdefault(name, None)  # type: ignore[arg-type]
 
 

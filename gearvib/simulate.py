@@ -33,9 +33,9 @@ from __future__ import annotations
 import functools
 import math
 import time as _time
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any, TypeVar, cast
+from typing import ParamSpec, TypeVar, cast
 
 import numpy as np
 
@@ -160,18 +160,19 @@ def _blow_up_message(t: float, code: int, setup: RunSetup, step: StepChoice, gyr
     )
 
 
-_F = TypeVar("_F", bound=Any)
+_P = ParamSpec("_P")
+_R = TypeVar("_R")
 
 
-def _one_blas_thread(func: _F) -> _F:
+def _one_blas_thread(func: Callable[_P, _R]) -> Callable[_P, _R]:
     """Run ``func`` with one BLAS/OpenMP thread (module docstring, "Threads")."""
 
     @functools.wraps(func)
-    def wrapper(*args: Any, **kwargs: Any) -> Any:
+    def wrapper(*args: _P.args, **kwargs: _P.kwargs) -> _R:
         with one_blas_thread():
             return func(*args, **kwargs)
 
-    return wrapper  # type: ignore[return-value]
+    return wrapper
 
 
 @_one_blas_thread

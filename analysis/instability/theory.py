@@ -173,8 +173,8 @@ class MeshPhasingRule:
         return any((s1 * p + s2 * p2 - k) % n == 0 for s1 in (1, -1) for s2 in (1, -1))
 
 
-def _family_reason(rule: MeshPhasingRule, n: int, fams_i: list[tuple[str, int]],
-                   fams_j: list[tuple[str, int]]) -> tuple[bool, str]:
+def _family_reason(rule: MeshPhasingRule, n: int, fams_i: Sequence[tuple[Any, ...]],
+                   fams_j: Sequence[tuple[Any, ...]]) -> tuple[bool, str]:
     k = rule.index(n)
     for fi in fams_i:
         for fj in fams_j:
@@ -418,7 +418,7 @@ def instability_candidates(
     if len(labels) != f.size:
         raise ValueError(f"mode_labels has {len(labels)} entries; natural_frequencies_hz has "
                          f"{f.size}")
-    fams = None
+    fams: list[tuple[Any, ...]] | None = None  # (kind, p) per mode, checked below
     if mesh_harmonic_rule is not None:
         if mode_families is None:
             raise ValueError("mesh_harmonic_rule needs mode_families ((kind, p) per mode)")
@@ -455,8 +455,8 @@ def instability_candidates(
                     ok, why = True, ""
                     if fams is not None and mesh_harmonic_rule is not None:
                         ok, why = _family_reason(mesh_harmonic_rule, n,
-                                                 [fams[i] for i in ca],  # type: ignore[misc]
-                                                 [fams[i] for i in cb])  # type: ignore[misc]
+                                                 [fams[i] for i in ca],
+                                                 [fams[i] for i in cb])
                     rpm = fm / factor if factor is not None else np.nan
                     rows.append((kind, ca[0], cb[0], n, fm, rpm, ok, why, lab))
     if speed_range is not None:

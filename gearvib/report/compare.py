@@ -232,6 +232,7 @@ def _match_floquet(ref: list[tuple[float, float, str]], oth: list[tuple[float, f
         out.append(FloquetChange(status, (a[0], a[1]), (b[0], b[1]), b[2] or a[2], a[2], b[2]))
     out += [FloquetChange("appeared", None, (b[0], b[1]), b[2], "", b[2])
             for j, b in enumerate(oth) if j not in used]
+    # every change has a reference region, an other region or both
     out.sort(key=lambda c: (c.reference or c.other)[0])  # type: ignore[index]
     return out
 
@@ -367,6 +368,8 @@ def compare_cases(reference: CaseAnalysis, other: CaseAnalysis, *, rpm_tol: floa
             verdict = (f"This run does not reproduce the paper's finding of fewer and weaker "
                        f"resonance regions{partly}: {region_text}, although the "
                        f"{claims[0][2]}.")
+            # stronger or appeared changes have an other region, weaker or vanished ones a
+            # reference region
             if worse:
                 explanation.append(
                     "Regions that got stronger or appeared in " + b + ": "

@@ -198,7 +198,7 @@ def _gearset(ds: xr.Dataset) -> dict:
     return gs if isinstance(gs, dict) else {}
 
 
-def _load_inputs(inputs: Sequence[RunInput]) -> list[tuple[str, xr.Dataset]]:
+def _load_inputs(inputs: Sequence[RunInput] | RunInput) -> list[tuple[str, xr.Dataset]]:
     if isinstance(inputs, str | os.PathLike | xr.Dataset):
         inputs = [inputs]
     if not inputs:
@@ -293,7 +293,7 @@ def build_report(paths_or_datasets: Sequence[RunInput] | RunInput, out_dir: str 
         The output folder is not usable (before any computation).
     """
     AnalysisSettings().with_cuts(cut_orders, order_resolution)  # checked before any file
-    runs = _load_inputs(paths_or_datasets)  # type: ignore[arg-type]
+    runs = _load_inputs(paths_or_datasets)
     settings_of: dict[str, AnalysisSettings | None] = {}
     for name, ds in runs:  # before any analysis: the maps must fit into memory
         t = ds["time"].values

@@ -448,7 +448,8 @@ class Sweep:
         if self.mode == "zip":
             return list(zip(*(p.listed for p in ps), strict=True))
         rng = np.random.default_rng(self.seed)
-        cols = [p.sample(rng, int(self.samples)) for p in ps]  # type: ignore[arg-type]
+        assert self.samples is not None  # __post_init__: random mode needs samples
+        cols = [p.sample(rng, int(self.samples)) for p in ps]
         return list(zip(*cols, strict=True))
 
     def _label(self, p: Parameter, v: Any) -> str:
