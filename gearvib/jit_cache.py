@@ -43,10 +43,9 @@ def kernels_cached() -> bool | None:
         dispatcher = kernels.integrate_chunk
         if dispatcher.signatures:  # compiled (or loaded) in this process already
             return True
-        # numba's private cache objects, not in its type stubs
-        cache = dispatcher._cache  # type: ignore[attr-defined]
+        cache = dispatcher._cache  # numba's private cache objects
         index = cache._cache_file._load_index()  # {} when missing or stale
-        magic = dispatcher.targetctx.codegen().magic_tuple()  # type: ignore[attr-defined]
+        magic = dispatcher.targetctx.codegen().magic_tuple()
         return any(isinstance(key, tuple) and len(key) > 1 and key[1] == magic
                    for key in index)
     except Exception:  # numba internals: anything means "unknown"

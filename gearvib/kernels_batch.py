@@ -717,8 +717,7 @@ def integrate_lanes(
     k4 = stages[3]
     tmp = stages[4]
     cap = splits.shape[0]
-    # numba passes an @intrinsic's typing context itself (its stub wants it as an argument)
-    zero = lanes_splat(0.0)  # type: ignore[call-arg, var-annotated]
+    zero = lanes_splat(0.0)
     dtv = lanes_splat(dt)
     n_live = 0
     for b in range(WIDTH):

@@ -14,6 +14,7 @@ run-up or a stepped-speed run that dwells inside the band.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -245,9 +246,9 @@ def runup_growth(bands: Any, time: Any, rpm: Any, *, threshold_db: float = 6.0,
         dt = np.gradient(tt)
         tau = float(dt[inside].sum())
         expo = float((b.rate_at(rr) * dt).sum())
-        gdb = 20.0 * np.log10(np.e) * expo
+        gdb = 20.0 * np.log10(math.e) * expo
         mean_rate = expo / tau if tau > 0 else (2.0 / 3.0) * b.peak_growth_rate
-        need = thr / (20.0 * np.log10(np.e) * mean_rate) if mean_rate > 0 else np.inf
+        need = thr / (20.0 * np.log10(math.e) * mean_rate) if mean_rate > 0 else np.inf
         if gdb >= thr:
             advice = "grows in this run"
         elif not np.isfinite(need):
