@@ -839,7 +839,7 @@ def kinematic_catalogue(
         for fam, (rate, formula) in base.items():
             for h in range(1, harmonics + 1):
                 out.add(fam, h, 0, b.name, (f"{h}·" if h > 1 else "") + formula
-                        + f" (γ = {g:.4f})", h * rate)
+                        + f" (γ = {gamma:.4f})", h * rate)
 
     rows = sorted(out.rows, key=lambda r: (r[5], list(FAMILIES).index(r[0]), r[1], r[2]))
 

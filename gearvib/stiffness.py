@@ -465,9 +465,8 @@ class PairSuperposition(MeshStiffness):
 
     def _eval(self, u: np.ndarray) -> np.ndarray:
         n = math.ceil(self.contact_ratio)
-        total = sum(self.pair(u + j) for j in range(n + 1))
-        assert isinstance(total, np.ndarray)  # n + 1 >= 1 terms
-        return total
+        # n + 1 >= 1 terms (never the start 0); a numpy scalar for a 0-d u (__call__ converts)
+        return sum(self.pair(u + j) for j in range(n + 1))  # type: ignore[return-value]
 
     def _breakpoints(self) -> np.ndarray:
         return np.mod(self._bp_u, 1.0)

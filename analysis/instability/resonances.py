@@ -782,7 +782,7 @@ def detect_resonances(
                         f"{row['r_lo']:.0f}–{row['r_hi']:.0f})")
             bi, _ = developing_band(r0)
             band_txt = "" if bi is None or growth is None else (
-                f"; also inside the unstable bi {growth.lower_rpm[bi]:.0f}–"
+                f"; also inside the unstable band {growth.lower_rpm[bi]:.0f}–"
                 f"{growth.upper_rpm[bi]:.0f} min-1 ({growth.label[bi]}), which grows "
                 f"{growth.growth_db[bi]:.0f} dB in this run")
             if excited(k, c):
@@ -791,7 +791,7 @@ def detect_resonances(
                 direct_hits[(k, c)] = max(direct_hits.get((k, c), 0.0), row["strength"])
             elif bi is not None and growth is not None:
                 row.update(mechanism=PARAMETRIC, mode=fnames[c],
-                           cause=str(growth.label[bi]) or "Floquet bi", pred=rc,
+                           cause=str(growth.label[bi]) or "Floquet band", pred=rc,
                            note=(evidence + f"; harmonic {k} does not force {fnames[c]} (mesh "
                                  "phasing)" + band_txt))
                 row["parametric_band"] = bi
@@ -862,11 +862,11 @@ def detect_resonances(
             row["chance"] = covered_fraction(np.asarray(mid), np.asarray(hws) * 2, r_min, r_max)
         if bi is not None and growth is not None and targets:
             _, c, j = min(targets)
-            lab_b = str(growth.label[bi]) or "Floquet bi"
+            lab_b = str(growth.label[bi]) or "Floquet band"
             row.update(mechanism=PARAMETRIC, mode=fnames[c], cause=lab_b,
                        pred=0.5 * (growth.lower_rpm[bi] + growth.upper_rpm[bi]),
                        note=(f"response at {fnames[c]}" + (f" {j:+d} f_mesh" if j else "")
-                             + f" inside the unstable bi {growth.lower_rpm[bi]:.0f}–"
+                             + f" inside the unstable band {growth.lower_rpm[bi]:.0f}–"
                                f"{growth.upper_rpm[bi]:.0f} min-1, which grows by "
                                f"{growth.growth_db[bi]:.0f} dB in this run"))
         elif growth is None and candidates is not None and targets:
