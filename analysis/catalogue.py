@@ -390,7 +390,8 @@ class KinematicCatalogue:
             ph = "" if np.isnan(cat.phasing[i]) else f"{cat.phasing[i]:.3f}"
             rows.append(f"{cat.family[i]:14} {cat.harmonic[i]:2d} {cat.sideband[i]:3d} "
                         f"{str(cat.member[i])[:28]:28} {cat.order[i]:10.4f} "
-                        + (f"{f[i]:10.2f} " if has_f else "") + f"{ph:>7}  {cat.formula[i]}")
+                        + (f"{f[i]:10.2f} " if f is not None else "")
+                        + f"{ph:>7}  {cat.formula[i]}")
         rows += [f"note: {n}" for n in self.notes]
         return "\n".join(rows)
 
@@ -576,12 +577,12 @@ def kinematic_catalogue(
                             f"{type(items).__name__}")
         for k, item in enumerate(items):
             require_instance(item, cls, f"{name}[{k}]")
-    for k, v in speeds.items():
-        require_real(v, f"speeds[{k!r}]")
+    for sk, v in speeds.items():
+        require_real(v, f"speeds[{sk!r}]")
     sp = {str(k): float(v) for k, v in dict(speeds).items()}
-    for k, v in sp.items():
+    for sk, v in sp.items():
         if not math.isfinite(v):
-            raise ValueError(f"speeds[{k!r}] = {v!r} is not admissible: finite")
+            raise ValueError(f"speeds[{sk!r}] = {v!r} is not admissible: finite")
     if GROUND in sp and sp[GROUND] != 0.0:
         raise ValueError(f"speeds[{GROUND!r}] must be 0 (the housing is at rest)")
     sp[GROUND] = 0.0
@@ -610,9 +611,9 @@ def kinematic_catalogue(
             if member not in sp:
                 raise ValueError(f"mesh {m.name!r}: member {member!r} has no speed in speeds")
     angles = {str(k): math.radians(float(v)) for k, v in dict(planet_angles_deg or {}).items()}
-    for k, a in angles.items():
+    for ak, a in angles.items():
         if not math.isfinite(a):
-            raise ValueError(f"planet_angles_deg[{k!r}] is not finite")
+            raise ValueError(f"planet_angles_deg[{ak!r}] is not finite")
     sref = require_positive(speed_rpm, "speed_rpm", allow_zero=True) if speed_rpm is not None \
         else None
     run = None
@@ -648,12 +649,12 @@ def kinematic_catalogue(
     planet_set = set(planets)
     shafts = [k for k in sp if k != GROUND and k not in planet_set]
     shafts += list(members_of_group)
-    for s in shafts:
-        n = sp[members_of_group[s][0]] if s in members_of_group else sp[s]
+    for shaft in shafts:
+        n = sp[members_of_group[shaft][0]] if shaft in members_of_group else sp[shaft]
         if abs(n) <= tiny:
             continue
         for h in range(1, harmonics + 1):
-            out.add("shaft", h, 0, s, f"{h} f_{s}" if h > 1 else f"f_{s}", h * n)
+            out.add("shaft", h, 0, shaft, f"{h} f_{shaft}" if h > 1 else f"f_{shaft}", h * n)
 
     # ---- meshes grouped by carrier and frequency ---------------------------------------------
     mgroups: dict[tuple, list[ToothMesh]] = {}
@@ -708,10 +709,10 @@ def kinematic_catalogue(
                         continue
                     ph = phasing_factor(psi, q - mh * m0.z_gear) if have_phase \
                         else float("nan")
-                    k, r = divmod(abs(s), n_pl)
+                    whole, rest = divmod(abs(s), n_pl)
                     sign = "+" if s > 0 else "−"
-                    term = (f"{k if k > 1 else ''}{' ' if k > 1 else ''}f_pp" if r == 0
-                            else f"{abs(s)} f_c")
+                    term = (f"{whole if whole > 1 else ''}{' ' if whole > 1 else ''}f_pp"
+                            if rest == 0 else f"{abs(s)} f_c")
                     head = "f_mesh" if mh == 1 else f"{mh} f_mesh"
                     out.add("sideband", mh, s, label, f"{head} {sign} {term}", rate, ph)
         # eccentricity (runout) of a gear of the mesh: its rotation relative to the carrier
@@ -719,8 +720,8 @@ def kinematic_catalogue(
         # the carrier speed, which gives its rotation relative to the sensor too
         ecc_members: dict[str, float] = {}
         for m in ms:
-            for g in (m.gear, m.planet):
-                ecc_members.setdefault(group_of.get(g, g), sp[g])
+            for gm in (m.gear, m.planet):
+                ecc_members.setdefault(group_of.get(gm, gm), sp[gm])
         for gname, n_g in ecc_members.items():
             rates: list[tuple[float, str]] = []
             rel_txt = f"f_{gname}" if carrier in at_rest else f"|f_{gname} − f_{carrier}|"
@@ -825,20 +826,20 @@ def kinematic_catalogue(
             notes.append(f"bearing {b.name}: inner and outer ring turn together (no defect "
                          "frequencies)")
             continue
-        g = b.ratio
+        gamma = b.ratio
         z = int(b.n_rolling)
         base = {
-            "bearing_ftf": (fr * (1 - g) / 2, "f_r (1 − γ)/2") if b.stationary == "outer"
-            else (fr * (1 + g) / 2, "f_r (1 + γ)/2"),
-            "bearing_bpfo": (z * fr * (1 - g) / 2, f"{z} f_r (1 − γ)/2"),
-            "bearing_bpfi": (z * fr * (1 + g) / 2, f"{z} f_r (1 + γ)/2"),
-            "bearing_bsf": (b.pitch_diameter * fr * (1 - g * g) / (2 * b.rolling_diameter),
-                            "D f_r (1 − γ²)/(2 d)"),
+            "bearing_ftf": (fr * (1 - gamma) / 2, "f_r (1 − γ)/2") if b.stationary == "outer"
+            else (fr * (1 + gamma) / 2, "f_r (1 + γ)/2"),
+            "bearing_bpfo": (z * fr * (1 - gamma) / 2, f"{z} f_r (1 − γ)/2"),
+            "bearing_bpfi": (z * fr * (1 + gamma) / 2, f"{z} f_r (1 + γ)/2"),
+            "bearing_bsf": (b.pitch_diameter * fr * (1 - gamma * gamma)
+                            / (2 * b.rolling_diameter), "D f_r (1 − γ²)/(2 d)"),
         }
         for fam, (rate, formula) in base.items():
             for h in range(1, harmonics + 1):
                 out.add(fam, h, 0, b.name, (f"{h}·" if h > 1 else "") + formula
-                        + f" (γ = {g:.4f})", h * rate)
+                        + f" (γ = {gamma:.4f})", h * rate)
 
     rows = sorted(out.rows, key=lambda r: (r[5], list(FAMILIES).index(r[0]), r[1], r[2]))
 

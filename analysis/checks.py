@@ -8,9 +8,10 @@ from __future__ import annotations
 
 import warnings
 from collections.abc import Sequence
-from typing import Any
+from typing import Any, TypeVar
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 __all__ = [
     "renamed",
@@ -39,7 +40,7 @@ BLOCK_SAMPLES = 1 << 15
 _SMALL_BYTES = 1 << 20
 
 
-def require_finite(values: np.ndarray, name: str) -> np.ndarray:
+def require_finite(values: ArrayLike, name: str) -> np.ndarray:
     """Return ``values`` as a float array; raise if it is empty or holds NaN/inf.
 
     Parameters
@@ -184,7 +185,7 @@ def require_size(nbytes: float, what: str, parameters: str) -> None:
         )
 
 
-def require_monotonic(values: np.ndarray, name: str, *, strict: bool = True) -> np.ndarray:
+def require_monotonic(values: ArrayLike, name: str, *, strict: bool = True) -> np.ndarray:
     """Raise unless ``values`` increase (strictly by default) along the last axis."""
     arr = require_finite(values, name)
     d = np.diff(arr, axis=-1)
@@ -231,7 +232,10 @@ def sample_rate(time: np.ndarray, *, name: str = "time", rtol: float = 1e-6) -> 
     return 1.0 / dt
 
 
-def require_choice(value: Any, allowed: tuple[str, ...], name: str) -> str:
+_Choice = TypeVar("_Choice", bound=str)
+
+
+def require_choice(value: Any, allowed: tuple[_Choice, ...], name: str) -> _Choice:
     """Return ``value``; raise unless it is one of ``allowed``."""
     if value not in allowed:
         raise ValueError(f"{name} = {value!r} is not admissible: must be one of {allowed}")
@@ -353,7 +357,8 @@ def uniform_rate(time: Any, name: str = "time", rtol: float = 1e-6) -> float:
     n = t.size
     if decoded:
         unit, count = np.datetime_data(t.dtype)
-        quantum = float(np.timedelta64(count, unit) / np.timedelta64(1, "s"))
+        # the stubs want a literal unit; datetime_data gives it as a str
+        quantum = float(np.timedelta64(count, unit) / np.timedelta64(1, "s"))  # type: ignore[call-overload]
         origin = t[0]
 
         def seconds(seg: np.ndarray) -> np.ndarray:
@@ -419,16 +424,16 @@ def require_finite_blocks(x: np.ndarray, name: str, bound: float | None = None) 
             bad = np.abs(blk) > bound
             if not bad.any():
                 continue
-            kind, hint = f"a magnitude above {bound:g}", "check its units and scaling"
+            what, hint = f"a magnitude above {bound:g}", "check its units and scaling"
         elif bad.any():
-            kind, hint = "non-finite value (NaN or inf)", "gap-fill or trim the channel first"
+            what, hint = "non-finite value (NaN or inf)", "gap-fill or trim the channel first"
         else:
             continue
         where = np.argwhere(bad)[0]
         idx = start + int(where[-1])
         channel = f" of channel {tuple(int(i) for i in where[:-1])}" if x.ndim > 1 else ""
         raise ValueError(
-            f"{name}: {kind} at time sample {idx}{channel}; only finite values"
+            f"{name}: {what} at time sample {idx}{channel}; only finite values"
             f"{'' if bound is None else f' up to {bound:g}'} are admissible ({hint})"
         )
 

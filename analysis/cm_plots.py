@@ -200,7 +200,7 @@ def gear_signals_figure(
     axes = fig.subplots(4, 1)
     u = signals.units
     tsa_row = pick(signals.tsa)
-    series = [
+    series: list[tuple[str, list[tuple[np.ndarray, str | None, str]]]] = [
         ("TSA and regular meshing components", [(tsa_row, "TSA", "C0"),
                                                 (pick(signals.regular) + tsa_row.mean(),
                                                  "regular (+ mean)", "C1")]),
@@ -324,7 +324,7 @@ def trend_figure(
             if x == "record" and h <= xs.size:
                 ax.axvspan(xs[0] - 0.5, xs[min(h, xs.size) - 1] + 0.5, color="C2", alpha=0.08)
         units = ds[name].attrs.get("units", "1")
-        ax.set_title(name + ("" if units == "1" else f" [{units}]"), fontsize=8, loc="left")
+        ax.set_title(str(name) + ("" if units == "1" else f" [{units}]"), fontsize=8, loc="left")
         ax.tick_params(labelsize=7)
         ax.grid(True, lw=0.3, alpha=0.5)
     for ax in axes[len(names):]:

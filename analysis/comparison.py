@@ -604,9 +604,9 @@ def compare_measurements(
     spr = 2 * math.ceil(1.28 * mo)
     maps = []
     for m, x, what in ((measured, xm, "measured"), (simulated, xs, "simulated")):
-        v = np.asarray(x.values, dtype=float)
+        vals = np.asarray(x.values, dtype=float)
         try:
-            om = rpm_order_map(v - v.mean(), m.fs, **_reference_kw(m), window="hann",
+            om = rpm_order_map(vals - vals.mean(), m.fs, **_reference_kw(m), window="hann",
                                overlap=0.75,
                                amplitude="power", resolution=order_resolution, max_order=mo,
                                samples_per_rev=spr)
@@ -619,12 +619,12 @@ def compare_measurements(
     powers = []
     frames = []
     for om in maps:
-        v = np.asarray(om.values, dtype=float)
-        if not np.array_equal(om.order[: v.shape[-1]], maps[0].order[: v.shape[-1]]):
-            v = np.stack([np.interp(order, om.order, row) for row in v])
+        vals = np.asarray(om.values, dtype=float)
+        if not np.array_equal(om.order[: vals.shape[-1]], maps[0].order[: vals.shape[-1]]):
+            vals = np.stack([np.interp(order, om.order, row) for row in vals])
         else:
-            v = v[:, keep]
-        powers.append(v)
+            vals = vals[:, keep]
+        powers.append(vals)
         frames.append(np.asarray(om.rpm, dtype=float))
     # the common range of the frames (a frame's speed is its mean over several revolutions)
     f_lo = max(lo, *(float(f.min()) for f in frames))
@@ -643,10 +643,10 @@ def compare_measurements(
     nb = int(max(1, min(rpm_bins, n_common // 2))) if varying else 1
     edges = np.linspace(lo, hi, nb + 1)
     if nb == 1:
-        binned = [p[x].mean(axis=0)[None, :] for p, x in zip(powers, inside, strict=True)]
+        binned = [pw[x].mean(axis=0)[None, :] for pw, x in zip(powers, inside, strict=True)]
     else:
-        binned = [_binned(p, f, edges) for p, f in zip(powers, frames, strict=True)]
-    spectra = [p[x].mean(axis=0) for p, x in zip(powers, inside, strict=True)]
+        binned = [_binned(pw, f, edges) for pw, f in zip(powers, frames, strict=True)]
+    spectra = [pw[x].mean(axis=0) for pw, x in zip(powers, inside, strict=True)]
     enbw = float(maps[0].enbw_orders)
     lines_from = order >= 2 * enbw  # the near-DC bins hold no order line
     if not lines_from.any():

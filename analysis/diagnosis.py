@@ -695,7 +695,7 @@ def family_evidence(order: np.ndarray, diff: np.ndarray, deadband: float,
 
 
 def order_locking(profile_orders: OrderProfile, x: Any, fs: float, rpm: Any,
-                  peak_orders: Sequence[float]) -> str:
+                  peak_orders: Sequence[float] | np.ndarray) -> str:
     """Whether the strongest measured rises are order-locked or frequency-locked.
 
     Compares the prominence of the rising lines in the order spectrum with their prominence
@@ -729,17 +729,17 @@ def order_locking(profile_orders: OrderProfile, x: Any, fs: float, rpm: Any,
             f"{lo:.0f}-{hi:.0f} min-1)")
 
 
-def near_modes(orders: Sequence[float], reference_hz: float, natural_hz: Mapping[str, float],
-               *, rtol: float = 0.05) -> list[str]:
+def near_modes(orders: Sequence[float] | np.ndarray, reference_hz: float,
+               natural_hz: Mapping[str, float], *, rtol: float = 0.05) -> list[str]:
     """Lines (orders at the reference frequency) within ``rtol`` of a natural frequency."""
     require_instance(natural_hz, Mapping, "natural_hz")
-    orders = require_real_array(orders, "orders", min_size=0).ravel()
+    order_values = require_real_array(orders, "orders", min_size=0).ravel()
     reference_hz = require_real(reference_hz, "reference_hz")
     require_real(rtol, "rtol")
     for name, fn in natural_hz.items():
         require_real(fn, f"natural_hz[{name!r}]")
     out = []
-    for o in orders:
+    for o in order_values:
         f = float(o) * reference_hz
         for name, fn in natural_hz.items():
             if fn > 0 and abs(f - fn) <= rtol * fn:
@@ -914,8 +914,12 @@ class Diagnosis:
 
         fig = Figure(figsize=figsize, layout="constrained")
         seen: set[str] = set()
-        shown = [c for c in self.causes if c.cause != "none"
-                 and not (c.variant in seen or seen.add(c.variant))][:top]
+        shown = []  # the first cause of each variant
+        for c in self.causes:
+            if c.cause != "none" and c.variant not in seen:
+                seen.add(c.variant)
+                shown.append(c)
+        shown = shown[:top]
         axes = fig.subplots(1 + len(shown), 1, sharex=True, squeeze=False)[:, 0]
         ax = axes[0]
         ax.plot(self.order, self.measured_diff, lw=0.7, color="k")

@@ -118,7 +118,7 @@ def choose_band(band: BandSpec, fs: float, x: np.ndarray, *, max_level: int | No
                 f"band = {band!r} is not admissible: (low, high) in Hz, a Band, a Kurtogram "
                 "or None (chosen by the fast kurtogram)"
             )
-        lo, hi = band  # type: ignore[misc]
+        lo, hi = band
         b = Band(lo, hi)
     if b.high > 0.5 * fs * (1.0 + 1e-12):
         raise ValueError(
@@ -436,8 +436,8 @@ def envelope_spectrum(
     e = env.values
     e -= np.mean(e)
     n = e.size
-    common = {"window": window, "amplitude": amp, "overlap": overlap, "units": env.units,
-              "name": env.name, "workers": workers}  # fmt: skip
+    common: dict[str, Any] = {"window": window, "amplitude": amp, "overlap": overlap,
+                              "units": env.units, "name": env.name, "workers": workers}
     if resolution is None:
         spec = spectrum(e, env.fs, segment_length=max(2, n // SEGMENTS), **common)
     else:

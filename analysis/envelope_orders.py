@@ -231,7 +231,7 @@ def envelope_order_spectrum(
         top_hz = float(part.max()) / 60.0
     else:
         top_hz = float(np.diff(part).max()) * fs_env / (2.0 * np.pi) if part.size > 1 else 0.0
-    kwargs = {sub.kind: sub.values}
+    kwargs: dict[str, Any] = {sub.kind: sub.values}  # rpm= or angle=
     os_ = order_spectrum(
         e, fs_env, resolution=resolution, window=window, amplitude=amp, overlap=overlap,
         samples_per_rev=samples_per_rev, max_order=max_order, min_rpm=min_rpm,

@@ -97,8 +97,17 @@ def envelope_spectrum_figure(
                               "analysis.envelope_orders.EnvelopeOrderSpectrum"), "result")
     fams = _families(families)
     fig, ax = _axes(ax, figsize)
-    is_order = hasattr(result, "order")
-    axis = result.order if is_order else result.frequency
+    # imported here: analysis.envelope_orders imports this module
+    from analysis.envelope_orders import EnvelopeOrderSpectrum
+
+    if isinstance(result, EnvelopeOrderSpectrum):
+        is_order, axis = True, result.order
+        res = f"RBW {result.resolution_orders:.3g} orders"
+        what = "squared envelope order spectrum"
+    else:
+        is_order, axis = False, result.frequency
+        res = f"RBW {result.resolution_hz:.3g} Hz, {result.n_averages} avg."
+        what = "squared envelope spectrum"
     top_line = max((float(f.lines()[2].max()) for f in fams), default=0.0)
     if axis_max is None:
         if top_line > 0:
@@ -134,12 +143,6 @@ def envelope_spectrum_figure(
     ax.set_ylabel(_value_label(result.amplitude, result.units, db))
     b = result.band
     src = "kurtogram" if result.kurtogram is not None else "given"
-    if is_order:
-        res = f"RBW {result.resolution_orders:.3g} orders"
-        what = "squared envelope order spectrum"
-    else:
-        res = f"RBW {result.resolution_hz:.3g} Hz, {result.n_averages} avg."
-        what = "squared envelope spectrum"
     ax.set_title(f"{result.name}: {what}, band {b.low:.5g}-{b.high:.5g} Hz ({src}), {res}",
                  fontsize=10)  # fmt: skip
     ax.grid(True, alpha=0.3)

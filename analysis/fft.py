@@ -271,9 +271,10 @@ def empty_aligned(shape: int | tuple[int, ...], dtype: Any = np.float64) -> np.n
 
 def _empty_aligned(shape: int | tuple[int, ...], dtype: Any) -> np.ndarray:
     """:func:`empty_aligned` without the checks (internal buffers of checked sizes)."""
-    if _fftw() is None:
+    fftw = _fftw()
+    if fftw is None:
         return np.empty(shape, dtype)
-    return _fftw().empty_aligned(shape, dtype)
+    return fftw.empty_aligned(shape, dtype)
 
 
 def _cached(key: tuple[Any, ...], size: int, make: Any) -> Any:
@@ -410,9 +411,10 @@ class RfftPlan:
         self.input = _empty_aligned((rows, n), np.float64)
         self._output: np.ndarray | None = None
         self._fftw: Any = None
-        if _fftw() is not None:
+        fftw = _fftw()
+        if fftw is not None:
             self._output = _empty_aligned((rows, n // 2 + 1), np.complex128)
-            self._fftw = _fftw().FFTW(
+            self._fftw = fftw.FFTW(
                 self.input,
                 self._output,
                 axes=(-1,),

@@ -217,6 +217,7 @@ def gear_signals(
         Naming the parameter: non-integer or too high mesh orders, negative counts, a TSA
         with unobserved angles (NaN) or non-finite values.
     """
+    meta: dict[str, Any]  # the TSA's description, passed on to GearSignals
     if isinstance(tsa, TSA):
         values = np.asarray(tsa.values, dtype=float)
         top = float(tsa.max_order)

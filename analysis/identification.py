@@ -86,9 +86,12 @@ class CandidateLines:
         if other.axis != self.axis:
             raise ValueError(f"cannot combine candidate lines on axis {self.axis!r} and "
                              f"{other.axis!r}")
-        return CandidateLines(*(np.concatenate([getattr(self, k), getattr(other, k)])
-                                for k in ("value", "family", "expression", "uncertainty",
-                                          "locked")), axis=self.axis)
+
+        def joined(field: str) -> np.ndarray:
+            return np.concatenate([getattr(self, field), getattr(other, field)])
+
+        return CandidateLines(joined("value"), joined("family"), joined("expression"),
+                              joined("uncertainty"), joined("locked"), axis=self.axis)
 
     @classmethod
     def empty(cls, axis: str = "frequency") -> CandidateLines:
@@ -341,7 +344,8 @@ class _Union:
         w = np.broadcast_to(np.asarray(half_widths, dtype=float), c.shape)
         order = np.argsort(c - w)
         lo, hi = (c - w)[order], (c + w)[order]
-        starts, ends = [], []
+        starts: list[float] = []
+        ends: list[float] = []
         for x, y in zip(lo, hi, strict=True):
             if starts and x <= ends[-1]:
                 ends[-1] = max(ends[-1], y)

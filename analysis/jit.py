@@ -156,5 +156,5 @@ def _use(folder: Path) -> str:
     os.environ["NUMBA_CACHE_DIR"] = str(folder)
     config = sys.modules.get("numba.core.config")
     if config is not None:  # numba already imported: its config was read then
-        config.CACHE_DIR = str(folder)
+        config.CACHE_DIR = str(folder)  # type: ignore[attr-defined]  # set by numba at run time
     return str(folder)

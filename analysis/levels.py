@@ -10,7 +10,7 @@ that; :func:`power_of` converts any of them, linear or dB, back to power.
 from __future__ import annotations
 
 import warnings
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 
@@ -32,8 +32,10 @@ __all__ = [
     "units_of",
 ]
 
+#: An amplitude convention of a spectrum.
+Amplitude = Literal["peak", "rms", "power", "density"]
 #: Amplitude conventions of spectra (``"density"`` is the PSD, scipy's word).
-AMPLITUDES = ("peak", "rms", "power", "density")
+AMPLITUDES: tuple[Amplitude, ...] = ("peak", "rms", "power", "density")
 #: Deprecated: the conventions with the old name ``"psd"`` for ``"density"``.
 SCALINGS = ("peak", "rms", "power", "psd")
 #: Highest level [dB] :func:`power_of` converts (1e300 as a power).
@@ -43,8 +45,12 @@ MAX_POWER = 1e300
 
 
 def amplitude_choice(
-    amplitude: Any, scaling: Any, function: str, allowed: tuple[str, ...], default: str = "rms"
-) -> str:
+    amplitude: Any,
+    scaling: Any,
+    function: str,
+    allowed: tuple[Amplitude, ...],
+    default: Amplitude = "rms",
+) -> Amplitude:
     """Checked amplitude convention from ``amplitude=`` or the deprecated ``scaling=``.
 
     The old value ``"psd"`` is accepted for ``"density"`` with a :class:`FutureWarning`.

@@ -418,7 +418,7 @@ class LineEvidence:
     def rows(self) -> list[tuple[str, ...]]:
         """One row per family: name, expected fundamental, status, harmonics found,
         prominences of the harmonics [dB], sidebands found, chance."""
-        out = []
+        out: list[tuple[str, ...]] = []
         unit = "" if self.axis_units == "1" else " Hz"
         by = self.explained_by or ("",) * len(self.checks)
         for c, ch, st, b in zip(self.checks, self.chance, self.status, by, strict=True):

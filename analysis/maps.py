@@ -191,6 +191,7 @@ class RpmFrequencyMap(_MapBase):
         What was done beyond the request.
     """
 
+    # always given: the default only follows the defaults of the base class's fields
     frequency: np.ndarray = None  # type: ignore[assignment]
     resolution_hz: float = 0.0
     bin_spacing_hz: float = 0.0
@@ -235,6 +236,7 @@ class RpmOrderMap(_MapBase):
         Highest alias-free order.
     """
 
+    # always given: the default only follows the defaults of the base class's fields
     order: np.ndarray = None  # type: ignore[assignment]
     resolution_orders: float = 0.0
     bin_spacing_orders: float = 0.0

@@ -243,7 +243,7 @@ def _read_file(path: Path, options: dict | None, fs: float | None = None,
                              "fs= (--fs HZ) or time_column= (--time-column NAME))") from None
     else:
         ds = read(path, **opts)
-    if compare_rate:
+    if compare_rate and fs is not None:  # compare_rate is only True for a given fs
         check_rate(ds, fs, str(path))
     fmt = str(ds.attrs.get("source_format", ext.lstrip(".")))
     reader = next((f"analysis.readers.{fn.__name__}" for name, (fn, exts) in FORMATS.items()
@@ -302,10 +302,10 @@ def _channels_of_run(ds: xr.Dataset, t: np.ndarray, forces: bool = False
                  else [f"sensor{i}" for i in range(acc.sizes["sensor"])])
         for i, n in enumerate(names):
             key = n if n not in _REFERENCE_NAMES and n not in variables else f"sensor_{n}"
-            attrs = {"units": str(acc.attrs.get("units", "m s-2")),
-                     "long_name": f"virtual accelerometer {n!r} (simulated housing "
-                                  "acceleration)",
-                     "source_channel": f"{_RUN_MARKER}[sensor={n}]"}
+            attrs: dict[str, Any] = {
+                "units": str(acc.attrs.get("units", "m s-2")),
+                "long_name": f"virtual accelerometer {n!r} (simulated housing acceleration)",
+                "source_channel": f"{_RUN_MARKER}[sensor={n}]"}
             if "sensor_angle" in ds.variables:
                 attrs["sensor_angle_deg"] = float(np.asarray(ds["sensor_angle"].values)[i])
             variables[key] = ("time", np.asarray(acc.isel(sensor=i).values, dtype=float),
@@ -652,6 +652,7 @@ def load_measurement(
         raise ValueError("pulses_per_rev applies to a tacho channel, not to "
                          "speed/angle/rpm/rpm_from")
     fs = check_fs(fs)
+    prov: dict[str, Any]
     if isinstance(source, xr.Dataset):
         if time_column is not None:
             raise ValueError("time_column applies to a CSV or MAT file, not to a Dataset")

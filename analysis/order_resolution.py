@@ -42,7 +42,7 @@ from __future__ import annotations
 
 import warnings
 from collections.abc import Iterable, Mapping
-from typing import Any
+from typing import Any, overload
 
 import numpy as np
 
@@ -80,6 +80,18 @@ MIN_FRAMES = 16
 
 class OrderBandWarning(UserWarning):
     """An order band holds the main lobe of another requested order or catalogue line."""
+
+
+@overload
+def optional_positive(value: None, name: str, unit: str) -> None: ...
+
+
+@overload
+def optional_positive(value: float, name: str, unit: str) -> float: ...
+
+
+@overload
+def optional_positive(value: Any, name: str, unit: str) -> float | None: ...
 
 
 def optional_positive(value: Any, name: str, unit: str) -> float | None:

@@ -32,7 +32,15 @@ from analysis.frames import (
     stft_into,
 )
 from analysis.inputs import channel_coords, reference_input, select_channel, signal_input
-from analysis.levels import AMPLITUDES, amplitude_choice, line_factors, power_of, to_db, units_of
+from analysis.levels import (
+    AMPLITUDES,
+    Amplitude,
+    amplitude_choice,
+    line_factors,
+    power_of,
+    to_db,
+    units_of,
+)
 from analysis.maps import RpmFrequencyMap, RpmOrderMap
 from analysis.order_resolution import (
     OrderBandWarning,
@@ -326,7 +334,7 @@ def order_spectrum(
         raise ValueError(f"{what} is too coarse: segments of {seg} < 4 samples")
     step = max(1, round(seg * (1.0 - float(overlap))))
     n_seg = (m - seg) // step + 1
-    kind = "density" if amp == "density" else "power"
+    kind: Amplitude = "density" if amp == "density" else "power"
     total = np.zeros((*sig.lead, seg // 2 + 1))
     values = np.empty(0)
     for k0, k1 in frame_ranges(n_seg, seg, step, block):
@@ -536,7 +544,8 @@ def _cut_setup(
     elif bandwidth is not None:
         kind, bw = "order", bandwidth
     else:
-        kind, bw = "Hz", float(bandwidth_hz)  # type: ignore[arg-type]
+        assert bandwidth_hz is not None  # one of the two is given here
+        kind, bw = "Hz", float(bandwidth_hz)
     return ords, kind, bw, spacing
 
 
@@ -697,7 +706,7 @@ def order_cuts_from_map(
     if not isinstance(m, RpmFrequencyMap | RpmOrderMap):
         raise ValueError("m must be an RpmFrequencyMap or RpmOrderMap")
     is_freq = isinstance(m, RpmFrequencyMap)
-    axis = m.frequency if is_freq else m.order
+    axis = m.frequency if isinstance(m, RpmFrequencyMap) else m.order
     ords, kind, bw, spacing = _cut_setup(
         m.window_spec, axis, is_freq, orders, bandwidth, bandwidth_hz, amplitude, scale
     )
@@ -713,7 +722,7 @@ def order_cuts_from_map(
             band[ch][:, sl] = _band_power(
                 power, m.rpm[sl], axis, ords, kind, bw, is_freq, m.enbw_bins
             )
-    resolution = m.resolution_hz if is_freq else m.resolution_orders  # type: ignore[union-attr]
+    resolution = m.resolution_hz if isinstance(m, RpmFrequencyMap) else m.resolution_orders
     _warn_overlaps(ords, kind, bw, is_freq, spacing, m.window_spec, m.rpm, named, resolution)
     vals, units, ref = _levels(band, amplitude, scale, m.signal_units)
     return OrderCut(
@@ -733,7 +742,7 @@ def order_cuts_from_map(
         resolution=resolution,
         resolution_units="Hz" if is_freq else "1",
         segment_length=m.segment_length,
-        samples_per_rev=0 if is_freq else m.samples_per_rev,  # type: ignore[union-attr]
+        samples_per_rev=m.samples_per_rev if isinstance(m, RpmOrderMap) else 0,
         overlap=m.overlap,
         dims=m.dims,
         coords=m.coords,

@@ -275,6 +275,7 @@ def _average(
     w = sum(p[2] for p in parts)
     ww = sum(p[3] for p in parts)
     assert isinstance(w, np.ndarray) and isinstance(ww, np.ndarray)
+    assert isinstance(wx, np.ndarray) and isinstance(wxx, np.ndarray)
     top = float(np.max(w)) if w.size else 0.0
     seen = w >= _OBSERVED * top if top > 0 else np.zeros(w.shape, dtype=bool)
     mean = np.full(np.shape(wx), np.nan)
@@ -472,7 +473,7 @@ def _separate(
     sig = syn.signal
     mo = float(res.max_order)
     notes = list(syn.shaft.notes)
-    common = dict(
+    common: dict[str, Any] = dict(  # the fields every TSA of the separation shares
         samples_per_rev=0, max_order=0.0, start_time=float(res.block(j_start, j_start + 1)[1][0]),
         stop_time=float(res.block(j_stop - 1, j_stop)[1][0]), units=sig.units, name=sig.name,
         dims=sig.dims, coords=sig.coords, reference=syn.shaft.label,

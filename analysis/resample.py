@@ -41,7 +41,7 @@ beyond their output they need a few MB whatever the record's length.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 import scipy.integrate
@@ -205,6 +205,15 @@ class AngleSignal:
         )
 
 
+class Samples(Protocol):
+    """Values per sample read in slices: an array, or a lazy sequence that computes the
+    slices it is asked for (see :mod:`analysis.sync_reference`)."""
+
+    def __len__(self) -> int: ...
+
+    def __getitem__(self, key: slice, /) -> np.ndarray: ...
+
+
 class Track:
     """Time axis and shaft angle of a record, read block-wise.
 
@@ -238,8 +247,8 @@ class Track:
         time: np.ndarray | None = None,
         t0: float = 0.0,
         fs: float = 1.0,
-        angle: np.ndarray | None = None,
-        rpm: np.ndarray | None = None,
+        angle: Samples | None = None,
+        rpm: Samples | None = None,
     ) -> None:
         self.n = n
         self.interval = interval
@@ -677,6 +686,7 @@ def tracking(
     else:
         track = Track(b - a, interval, t0=t0, fs=fs, angle=values)
         rpm_max = track.step_max * fs * 60.0 / (2.0 * np.pi)
+    mo: float | None
     if samples_per_rev is None:
         spr, mo_default = default_samples_per_rev(fs, rpm_max)
         if max_order is None and max_order_wanted is not None:

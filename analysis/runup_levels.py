@@ -46,7 +46,7 @@ from __future__ import annotations
 
 import dataclasses
 import warnings
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -329,8 +329,9 @@ class RunupLevels:
     def plot(self, kind: str = "cuts", **kwargs: Any) -> Figure:
         """Figure of ``kind`` ``"cuts"`` (order cuts and overall level), ``"waterfall"`` or
         ``"campbell"`` (see :mod:`analysis.runup_level_plots`)."""
-        builders = {"cuts": rp.order_cuts_levels_figure, "waterfall": rp.waterfall_figure,
-                    "campbell": rp.campbell_levels_figure}
+        builders: dict[str, Callable[..., Figure]] = {
+            "cuts": rp.order_cuts_levels_figure, "waterfall": rp.waterfall_figure,
+            "campbell": rp.campbell_levels_figure}
         if kind not in builders:
             raise ValueError(f"kind = {kind!r}; admissible: {', '.join(builders)}")
         return builders[kind](self, **kwargs)
@@ -472,7 +473,7 @@ def runup_levels(
         if time is None:
             raise ValueError("give the sample rate fs or the time axis time")
         fs = uniform_rate(time)
-    fs = float(optional_positive(fs, "fs", "Hz"))  # type: ignore[arg-type]
+    fs = float(optional_positive(fs, "fs", "Hz"))
     units = units or "1"
     name = name or "x"
     for value, what in ((natural_tolerance, "natural_tolerance"), (min_rise_db, "min_rise_db"),

@@ -355,10 +355,10 @@ def _remove_extra(tp: np.ndarray) -> tuple[np.ndarray, int]:
             break
         keep = np.ones(tp.size, dtype=bool)
         last = -3
-        for i in short:
+        for i in short.tolist():
             if i <= last + 2:  # neighbours changed in this pass; decide in the next one
                 continue
-            scores = []
+            scores: list[float] = []
             for j in (i, i + 1):
                 if j == 0 or j == tp.size - 1:
                     scores.append(0.25)

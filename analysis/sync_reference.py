@@ -163,7 +163,7 @@ def _pulse_reference(
             "were left out (no angle reference there)"
         )
     lazy = _PulseAngle(pchip, start, stop - start, fs)
-    track = Track(stop - start, interval, t0=t0 + start / fs, fs=fs, angle=lazy)  # type: ignore[arg-type]
+    track = Track(stop - start, interval, t0=t0 + start / fs, fs=fs, angle=lazy)
     label = f"{what} ({ppr} pulses/rev)" + (f", ratio {ratio:.10g}" if ratio != 1.0 else "")
     return ShaftAngle(track, start, stop, ratio, label, tuple(notes), fs)
 
@@ -272,9 +272,9 @@ def shaft_angle(
             "= {value}",
             offset=a,
         )  # fmt: skip
-        track = Track(b - a, interval, t0=t0, fs=fs, rpm=_Scaled(values, r))  # type: ignore[arg-type]
+        track = Track(b - a, interval, t0=t0, fs=fs, rpm=_Scaled(values, r))
     else:
-        track = Track(b - a, interval, t0=t0, fs=fs, angle=_Scaled(values, r))  # type: ignore[arg-type]
+        track = Track(b - a, interval, t0=t0, fs=fs, angle=_Scaled(values, r))
     label = _label(ref, r)
     return ShaftAngle(track, a, b, r, label, (note,) if note else (), fs)
 

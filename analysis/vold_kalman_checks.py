@@ -169,16 +169,17 @@ def speed_references(
     kind = "rpm" if rpm is not None else ("angle" if angle is not None else None)
     items = shaft_list(rpm if rpm is not None else angle, n) if kind else [None]
     for i, item in enumerate(items):
-        ref = reference_input(
+        given_ref = reference_input(
             item if kind == "rpm" else None,
             item if kind == "angle" else None,
             n,
             required=True,
             signal=sig if kind is None else None,
         )
-        values = np.asarray(ref.values, dtype=float)
-        label = ref.label if len(items) == 1 else f"{ref.label} (shaft {i})"
-        if ref.kind == "rpm":
+        assert given_ref is not None  # required=True raises instead of returning None
+        values = np.asarray(given_ref.values, dtype=float)
+        label = given_ref.label if len(items) == 1 else f"{given_ref.label} (shaft {i})"
+        if given_ref.kind == "rpm":
             if float(values.min()) < 0.0:
                 j = int(np.argmin(values))
                 raise ValueError(

@@ -105,9 +105,15 @@ class ResolvedMesh:
 def resolve_mesh(mesh: Mesh) -> ResolvedMesh:
     """Merge a mesh's tooth geometry with its lumped overrides."""
     g = mesh.geometry
-    rb1 = mesh.base_radius1 if mesh.base_radius1 is not None else g.gear1.base_radius
-    rb2 = mesh.base_radius2 if mesh.base_radius2 is not None else g.gear2.base_radius
-    alpha = mesh.pressure_angle if mesh.pressure_angle is not None else g.working_pressure_angle
+    if g is None:  # lumped: Mesh requires both base radii and the pressure angle then
+        assert mesh.base_radius1 is not None and mesh.base_radius2 is not None
+        assert mesh.pressure_angle is not None
+        rb1, rb2, alpha = mesh.base_radius1, mesh.base_radius2, mesh.pressure_angle
+    else:
+        rb1 = mesh.base_radius1 if mesh.base_radius1 is not None else g.gear1.base_radius
+        rb2 = mesh.base_radius2 if mesh.base_radius2 is not None else g.gear2.base_radius
+        alpha = (mesh.pressure_angle if mesh.pressure_angle is not None
+                 else g.working_pressure_angle)
     if g is not None and mesh.helix_angle == 0.0:
         beta_b = g.base_helix_angle
         hand = math.copysign(1.0, g.gear1.helix_angle) if g.gear1.helix_angle else 0.0
@@ -145,8 +151,8 @@ class _Coordinates:
         self.index: dict[tuple[str, str], int] = {}
         self.body_of: list[Body] = []
         for b in bodies:
-            comps = ("zeta", "eta") if b.role == "planet" else ("x", "y")
-            comps = (*comps, "z", "theta") if axial else (*comps, "theta")
+            plane = ("zeta", "eta") if b.role == "planet" else ("x", "y")
+            comps = (*plane, "z", "theta") if axial else (*plane, "theta")
             for c in comps:
                 self.index[(b.name, c)] = len(self.names)
                 self.names.append(f"{b.name}.{c}")
@@ -302,6 +308,7 @@ def assemble(gs: GearSet, *, n_table: int = N_TABLE) -> AssembledModel:
         r = resolved[m.name]
         b1, b2 = bodies[m.gear1], bodies[m.gear2]
         carrier = b2.carrier
+        assert carrier is not None  # gear2 is a planet, which has its carrier (GearSet checks)
         if b1.role == "planet" and b1.carrier != carrier:
             raise ValueError(f"mesh {m.name!r}: planets on different carriers cannot mesh")
         diff = centre[b2.name] - centre[b1.name]
@@ -396,6 +403,7 @@ def assemble(gs: GearSet, *, n_table: int = N_TABLE) -> AssembledModel:
         s = b.support
         if b.role == "planet":
             car = b.carrier
+            assert car is not None  # a planet has its carrier (Body checks)
             e_r, e_t = _planet_frame(b.angle)
             a = radius[b.name]
             u_r = coords.unit(b.name, "zeta")
@@ -530,8 +538,8 @@ def assemble(gs: GearSet, *, n_table: int = N_TABLE) -> AssembledModel:
     full_mode = tmat @ mode
     for b in gs.bodies:
         ratios[b.name] = float(full_mode[coords.get(b.name, "theta")])
-    for b in (*gs.fixed, *held):
-        ratios[b] = 0.0  # exactly at rest (the null space gives it to rounding)
+    for name in (*gs.fixed, *held):
+        ratios[name] = 0.0  # exactly at rest (the null space gives it to rounding)
 
     # mesh frequency of every mesh per input speed, |z1 (n1 - n_c)| / 60 (paper eq. 5); NaN
     # without tooth numbers. Stages and planet toothings may differ (two-stage, Wolfrom).
@@ -540,6 +548,7 @@ def assemble(gs: GearSet, *, n_table: int = N_TABLE) -> AssembledModel:
         z1 = resolved[m.name].z1
         if z1 is not None:
             car = bodies[m.gear2].carrier
+            assert car is not None  # gear2 is a planet
             f_per_rpm[k] = abs(z1 * (ratios[m.gear1] - ratios[car])) / 60.0
 
     bearing_vectors = (np.array([u for _, u, _, _ in bearings]) @ tmat if bearings
@@ -760,8 +769,8 @@ def _mesh_positions(gs: GearSet, resolved: dict[str, ResolvedMesh], bodies: dict
 
     while not done.all():
         progress = False
-        for k in np.flatnonzero(~done):
-            if assign(int(k)):
+        for k in np.flatnonzero(~done).tolist():
+            if assign(k):
                 done[k] = progress = True
         if progress:
             continue

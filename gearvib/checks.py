@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, SupportsFloat, cast
 
 __all__ = [
     "ITEM",
@@ -130,7 +130,7 @@ def check_number(value: Any, name: str, *, low: float | None = None,
     if isinstance(value, bool) or not isinstance(value, types):
         raise error(f"{name} must be a number, got {wording.shown(value)}")
     try:
-        v = float(value)
+        v = float(cast(SupportsFloat, value))  # one of the number types
     except OverflowError:  # an integer of hundreds of digits
         text = str(value)
         shown = f"{text[:20]}... ({len(text)} digits)" if wording.full else short(value)

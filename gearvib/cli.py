@@ -365,7 +365,7 @@ def _per_channel(pairs: Sequence[tuple[str | None, object]], option: str) -> obj
             raise CliError(f"{option}: give either one VALUE (every channel) or CH=VALUE per "
                            "channel, not both or twice")
         return pairs[0][1]
-    names = [ch for ch, _ in pairs]
+    names = [ch for ch, _ in pairs if ch is not None]  # (none is None here)
     twice = sorted({n for n in names if names.count(n) > 1})
     if twice:
         raise CliError(f"{option}: channel {twice[0]!r} is given twice")
@@ -521,6 +521,9 @@ def _cmd_diagnose(args: argparse.Namespace) -> int:
     print(f"report: {paths.html}")
     print(f"        {paths.pdf}")
     print(f"        {paths.dataset}")
+    return 0
+
+
 def _cmd_compare(args: argparse.Namespace) -> int:
     from pathlib import Path
 
@@ -541,7 +544,9 @@ def _cmd_compare(args: argparse.Namespace) -> int:
         gearset = load_gearset(args.gearset)
     measured = load_measurement(args.measured, channel=args.channel, **_speed_options(args))
     simulated = load_simulated(args.simulated, reference=args.reference)
-    simulated_channel_name(simulated, args.simulated_channel, measured.channel().name)
+    channel_name = measured.channel().name
+    simulated_channel_name(simulated, args.simulated_channel,
+                           None if channel_name is None else str(channel_name))
     out = Path(args.output)
     _report_removed(check_output_folder(out, COMPARISON_FILES, overwrite=args.overwrite)[1])
     with removed_if_left_empty(out):
@@ -956,6 +961,7 @@ def prepare_process(argv: Sequence[str]) -> None:
         for name in SINGLE_THREAD_VARIABLES:
             os.environ.setdefault(name, "1")
     if not os.path.exists(".numba_config.yaml"):  # numba's config file, read from the cwd
+        # None in sys.modules blocks the import (importlib's documented rule; not in the stub)
         sys.modules.setdefault("yaml", None)  # type: ignore[arg-type]
     _load_without_package("analysis.jit")
     _load_without_package("analysis.threads")
@@ -1004,6 +1010,7 @@ def hide_unused_modules(argv: Sequence[str]) -> None:
     """
     hidden = ["cffi"] if "sweep" in argv else ["cffi", "dask", "distributed"]
     for name in hidden:
+        # None in sys.modules blocks the import (importlib's documented rule; not in the stub)
         sys.modules.setdefault(name, None)  # type: ignore[arg-type]
 
 

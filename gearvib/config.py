@@ -27,7 +27,7 @@ import tomllib
 from dataclasses import replace
 from importlib import resources
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 from gearvib.checks import TABLE, check_integer, check_number
 from gearvib.checks import short as _short
@@ -43,6 +43,7 @@ from gearvib.structure import (
     Coupling,
     GearSet,
     Mesh,
+    Role,
     Support,
     check_damping_law,
     ravigneaux,
@@ -278,7 +279,7 @@ def _support(table: dict | None, where: str) -> Support:
         raise ConfigError(f"{where}: {exc}") from None
 
 
-def _body(name: str, table: dict, role: str, where: str) -> Body:
+def _body(name: str, table: dict, role: Role, where: str) -> Body:
     check_keys(table, _BODY, where)
     try:
         # planet templates get their carrier and angle from the builder
@@ -443,10 +444,10 @@ def _builder_set(kind: str, cfg: dict, base: Path | None) -> GearSet:
                            "[bodies]")
     meshes_t = check_keys(_require(cfg, "meshes", "the description"), set(_MESHES[kind]),
                            "[meshes]")
-    roles = {"carrier": "carrier"}
+    roles: dict[str, Role] = {"carrier": "carrier"}
     bodies = {}
     for bname in _BODIES[kind]:
-        role = "planet" if bname.startswith("planet") else roles.get(bname, "central")
+        role: Role = "planet" if bname.startswith("planet") else roles.get(bname, "central")
         t = _require(bodies_t, bname, "[bodies]")
         body = _body(bname, t, role, f"[bodies.{bname}]")
         bodies[bname] = body
@@ -492,7 +493,7 @@ def _builder_set(kind: str, cfg: dict, base: Path | None) -> GearSet:
                               f"{ring} = {z(ring)} (admissible: fewer teeth than the ring, "
                               f"{planet} < {abs(z(ring))})")
 
-    def shifts(keys: tuple[str, ...]) -> dict[str, float | None]:
+    def shifts(keys: tuple[str, ...]) -> dict[str, Any]:
         """Profile shifts (finite numbers; a solved planet shift defaults to None)."""
         return {k: _finite(g[k], f"[geometry].{k}") if k in g else
                 (None if k in _SOLVED_SHIFTS else 0.0) for k in keys}
@@ -604,15 +605,15 @@ def _parallel_set(cfg: dict, base: Path | None) -> GearSet:
     bodies = {}
     for bname in _PARALLEL_BODIES:
         if bname in bodies_t or bname in ("pinion", "wheel"):
-            role = "carrier" if bname == HOUSING else "central"
-            bodies[bname] = _body(bname, _require(bodies_t, bname, "[bodies]"), role,
+            part: Role = "carrier" if bname == HOUSING else "central"
+            bodies[bname] = _body(bname, _require(bodies_t, bname, "[bodies]"), part,
                                   f"[bodies.{bname}]")
     spec = _mesh_spec(_require(meshes_t, "pinion", "[meshes]"), "[meshes.pinion]", base,
                       deferred=True)
     spec_w = _mesh_spec(meshes_t["wheel"], "[meshes.wheel]", base, deferred=True) \
         if "wheel" in meshes_t else None
     own = set(bodies) | {HOUSING}
-    op = {"fixed": [HOUSING], "input": "pinion", "output": "wheel"}
+    op: dict[str, Any] = {"fixed": [HOUSING], "input": "pinion", "output": "wheel"}
     if "operation" in cfg:
         given = _operation(cfg)
         for key in ("input", "output"):  # a role naming an added [[body]] is set afterwards
@@ -747,7 +748,7 @@ def _extra_bodies(cfg: dict, required: bool) -> list[Body]:
             raise ConfigError(f"{where}.carrier must be the name of a carrier body")
         try:
             bodies.append(Body(
-                name=name, role=role,
+                name=name, role=cast(Role, role),  # Body refuses any other role
                 mass=_positive_in(_require(t, "mass", where), f"{where}.mass", MASS_RANGE),
                 inertia=_positive_in(_require(t, "inertia", where), f"{where}.inertia",
                                      INERTIA_RANGE),
@@ -847,9 +848,10 @@ def _general_set(cfg: dict, base: Path | None) -> GearSet:
         names = {k: _string(_require(t, k, where), f"{where}.{k}")
                  for k in ("name", "gear1", "gear2")}
         try:
+            stiffness, back_stiffness = spec.models()  # built: not deferred
             meshes.append(Mesh(
-                **names, stiffness=spec.stiffness,
-                back_stiffness=spec.back_stiffness, backlash=spec.backlash,
+                name=names["name"], gear1=names["gear1"], gear2=names["gear2"],
+                stiffness=stiffness, back_stiffness=back_stiffness, backlash=spec.backlash,
                 damping=spec.damping, damping_ratio=spec.damping_ratio,
                 damping_law=spec.damping_law, **kw))
         except (ValueError, OverflowError, ZeroDivisionError) as exc:

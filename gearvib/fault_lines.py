@@ -467,8 +467,9 @@ def check_fault_lines(measurement: Measurement, families: Sequence[FaultFamily],
         min_bandwidth = min(MIN_BANDWIDTH_FACTOR * highest * top_hz, 0.5 * fs)
     band = _band_of(band)
     stated = measurement.source.get("reference_channel") is None
-    common = {"band": band, "min_bandwidth": None if band is not None else min_bandwidth,
-              "name": str(x.name)}
+    common: dict[str, Any] = {
+        "band": band, "min_bandwidth": None if band is not None else min_bandwidth,
+        "name": str(x.name)}
     if stated:  # a stated constant speed: the envelope spectrum in Hz
         env: Any = envelope_spectrum(x, **common)
         keep = env.frequency <= env.band.width
@@ -476,8 +477,8 @@ def check_fault_lines(measurement: Measurement, families: Sequence[FaultFamily],
         power = env.power()[keep]
         what = "squared envelope spectrum"
     else:
-        ref = ({"angle": measurement.angle.values} if measurement.angle is not None
-               else {"rpm": rpm})
+        ref: dict[str, Any] = ({"angle": measurement.angle.values}
+                               if measurement.angle is not None else {"rpm": rpm})
         env = envelope_order_spectrum(np.asarray(x.values, dtype=float), fs, **ref,
                                       units=str(x.attrs.get("units", "1")), **common)
         keep = env.order <= env.order_limit
@@ -505,6 +506,8 @@ def check_fault_lines(measurement: Measurement, families: Sequence[FaultFamily],
         notes.append(f"above the demodulated band's width ({b.width:.4g} Hz) or the spectrum: "
                      + ", ".join(outside))
     order_ev = None
+    computed: OrderSpectrum | None = (None if isinstance(order_spectrum, bool)
+                                      else order_spectrum)
     if order_spectrum is True:
         from analysis.orders import order_spectrum as compute
 
@@ -513,20 +516,17 @@ def check_fault_lines(measurement: Measurement, families: Sequence[FaultFamily],
         ref = ({"angle": measurement.angle.values} if measurement.angle is not None
                else {"rpm": rpm})
         try:
-            order_spectrum = compute(np.asarray(x.values, dtype=float), fs, **ref,
+            computed = compute(np.asarray(x.values, dtype=float), fs, **ref,
                                      window="hann", amplitude="peak", resolution=res,
                                      max_order=min(nyq, 1.3 * highest + 2.0),
                                      units=str(x.attrs.get("units", "1")), name=str(x.name))
         except ValueError as exc:
             notes.append(f"order spectrum not checked: {exc}")
-            order_spectrum = False
-    if isinstance(order_spectrum, bool):
-        order_spectrum = None
-    if order_spectrum is not None:
-        o_axis = np.asarray(order_spectrum.order, dtype=float)
-        o_pow = np.square(np.asarray(order_spectrum.values, dtype=float)) \
-            if order_spectrum.amplitude in ("peak", "rms") else \
-            np.asarray(order_spectrum.values, dtype=float)
+    if computed is not None:
+        o_axis = np.asarray(computed.order, dtype=float)
+        o_pow = np.square(np.asarray(computed.values, dtype=float)) \
+            if computed.amplitude in ("peak", "rms") else \
+            np.asarray(computed.values, dtype=float)
         kept, _ = _explaining(known, 1.0, o_axis, o_pow, h_top)
         kn_o: list[Any] = list(kept)
         # the families the envelope detected explain their lattice here too (an inner-race
@@ -540,8 +540,9 @@ def check_fault_lines(measurement: Measurement, families: Sequence[FaultFamily],
                                  min_harmonics=min_harmonics,
                                  name=f"{x.name}: order spectrum")
     return FaultLines(families=fams, envelope=env, envelope_evidence=env_ev,
-                      order_evidence=order_ev, order_spectrum=order_spectrum,
+                      order_evidence=order_ev, order_spectrum=computed,
                       domain="frequency" if stated else "order",
                       speed_rpm=mean_rpm,
-                      min_bandwidth=None if band is not None else float(min_bandwidth),
+                      min_bandwidth=(None if band is not None or min_bandwidth is None
+                                     else float(min_bandwidth)),
                       notes=tuple(notes))

@@ -39,6 +39,7 @@ import os
 import sys
 import warnings
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from numba.core.errors import NumbaError
@@ -64,7 +65,7 @@ DEPENDENCIES = ("kernels.py", "fault_pass.py", "faults/law.py")
 
 # compiled passes of this process, by source digest (the functions stay referenced: their
 # addresses are valid for the life of the process)
-_PASSES: dict[str, object] = {}
+_PASSES: dict[str, Any] = {}
 
 
 def specialised_folder() -> Path:
@@ -273,6 +274,8 @@ def pass_address(ints: np.ndarray, tables: np.ndarray) -> int:
             write_once(path, text)
             name = f"gearvib_fault_pass_{digest}"
             spec = importlib.util.spec_from_file_location(name, path)
+            if spec is None or spec.loader is None:
+                raise ImportError(f"no module spec for {path}")
             module = importlib.util.module_from_spec(spec)
             sys.modules[name] = module  # before: the cfunc compiles (or loads) on import
             try:

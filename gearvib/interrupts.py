@@ -43,7 +43,7 @@ import sys
 import threading
 import time
 from collections.abc import Callable, Iterator
-from typing import TypeVar
+from typing import TypeVar, cast
 
 from gearvib import tempfiles
 
@@ -135,7 +135,7 @@ def run_abandonable(fn: Callable[..., T], *args, **kwargs) -> T:
     if job.error is not None:
         err, job.error = job.error, None
         raise err
-    return job.result  # type: ignore[return-value]
+    return cast(T, job.result)  # fn's result: work() finished without an error
 
 
 class _Job:
@@ -238,13 +238,13 @@ def signals_as_exceptions(grace: float = GRACE_SECONDS) -> Iterator[None]:
 
     previous_hook = sys.unraisablehook
 
-    def quiet_interrupts(unraisable: object) -> None:
+    def quiet_interrupts(unraisable: sys.UnraisableHookArgs) -> None:
         # the signal's exception raised inside a finalizer or a weakref callback cannot
         # propagate; Python would print it with a traceback ("Exception ignored in ...")
         # before the command's one line. The signal is pending: the command ends anyway.
         if isinstance(getattr(unraisable, "exc_value", None), Interrupted) and _PENDING:
             return
-        previous_hook(unraisable)  # type: ignore[arg-type]
+        previous_hook(unraisable)
 
     sys.unraisablehook = quiet_interrupts
     previous = {}

@@ -22,12 +22,13 @@ same file, byte for byte, without importing xarray and pandas (``gearvib simulat
 from __future__ import annotations
 
 import contextlib
+import functools
 import json
 import math
 import os
 from collections.abc import Callable, Mapping
 from pathlib import Path
-from typing import TYPE_CHECKING, TypeVar
+from typing import TYPE_CHECKING, Any, TypeVar
 
 import netCDF4
 import numpy as np
@@ -105,6 +106,15 @@ def _variable_encoding(dims: tuple, shape: tuple, kind: str, has_nan: Callable[[
     return e
 
 
+def _has_nan(data: np.ndarray) -> bool:
+    return bool(np.isnan(data).any())
+
+
+def _values_have_nan(var: xr.Variable) -> bool:
+    """NaN in ``var``'s values (read only when asked: the values may be lazy)."""
+    return _has_nan(var.values)
+
+
 def _encoding(ds: xr.Dataset) -> dict:
     out = {}
     for name, var in ds.variables.items():
@@ -113,7 +123,7 @@ def _encoding(ds: xr.Dataset) -> dict:
             continue
         out[str(name)] = _variable_encoding(
             var.dims, var.shape, var.dtype.kind,
-            lambda var=var: bool(np.isnan(var.values).any()), name in ds.coords)
+            functools.partial(_values_have_nan, var), name in ds.coords)
     return out
 
 
@@ -245,15 +255,18 @@ def _write_plain(content: tuple[dict[str, PlainVariable], dict, set[str]], tmp: 
             data = var.data
             kind = data.dtype.kind
             enc = _variable_encoding(var.dims, data.shape, kind,
-                                     lambda data=data: bool(np.isnan(data).any()),
+                                     functools.partial(_has_nan, data),
                                      name in coords)
             fill = enc.get("_FillValue", np.nan if kind == "f" else None)
+            # the stub's overloads take one datatype kind each, and a literal compression
+            datatype: Any = str if kind == "U" else data.dtype
+            compression: dict[str, Any] = {"compression": "zlib"} if enc.get("zlib") else {}
             nc_var = nc.createVariable(
-                varname=name, datatype=str if kind == "U" else data.dtype, dimensions=var.dims,
+                varname=name, datatype=datatype, dimensions=var.dims,
                 zlib=False, complevel=enc.get("complevel", 4), shuffle=enc.get("shuffle", True),
                 fletcher32=False, contiguous=False, chunksizes=enc.get("chunksizes"),
                 endian="native", least_significant_digit=None, fill_value=fill,
-                **({"compression": "zlib"} if enc.get("zlib") else {}))
+                **compression)
             nc_var.setncatts(var.attrs)
             nc_var.set_auto_maskandscale(False)
             nc_var.set_auto_chartostring(False)

@@ -43,7 +43,7 @@ def kernels_cached() -> bool | None:
         dispatcher = kernels.integrate_chunk
         if dispatcher.signatures:  # compiled (or loaded) in this process already
             return True
-        cache = dispatcher._cache
+        cache = dispatcher._cache  # numba's private cache objects
         index = cache._cache_file._load_index()  # {} when missing or stale
         magic = dispatcher.targetctx.codegen().magic_tuple()
         return any(isinstance(key, tuple) and len(key) > 1 and key[1] == magic

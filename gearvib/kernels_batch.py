@@ -1223,6 +1223,8 @@ def _load_specialised(batch: tuple) -> KernelSet:
         write_once(path, text)
         name = f"gearvib_batch_{digest}"
         spec = importlib.util.spec_from_file_location(name, path)
+        if spec is None or spec.loader is None:
+            raise ImportError(f"no module spec for {path}")
         module = importlib.util.module_from_spec(spec)
         spec.loader.exec_module(module)
     except (OSError, ImportError, AttributeError) as exc:  # unwritable, no sources: generic

@@ -33,9 +33,9 @@ from __future__ import annotations
 import functools
 import math
 import time as _time
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any, TypeVar
+from typing import ParamSpec, TypeVar, cast
 
 import numpy as np
 
@@ -160,18 +160,19 @@ def _blow_up_message(t: float, code: int, setup: RunSetup, step: StepChoice, gyr
     )
 
 
-_F = TypeVar("_F", bound=Any)
+_P = ParamSpec("_P")
+_R = TypeVar("_R")
 
 
-def _one_blas_thread(func: _F) -> _F:
+def _one_blas_thread(func: Callable[_P, _R]) -> Callable[_P, _R]:
     """Run ``func`` with one BLAS/OpenMP thread (module docstring, "Threads")."""
 
     @functools.wraps(func)
-    def wrapper(*args: Any, **kwargs: Any) -> Any:
+    def wrapper(*args: _P.args, **kwargs: _P.kwargs) -> _R:
         with one_blas_thread():
             return func(*args, **kwargs)
 
-    return wrapper  # type: ignore[return-value]
+    return wrapper
 
 
 @_one_blas_thread
@@ -185,7 +186,7 @@ def simulate(
     gyroscopic: bool = False,
     progress: bool | None = None,
     config: Mapping | str | None = None,
-    natural_frequencies: Sequence[float] | None = None,
+    natural_frequencies: Sequence[float] | np.ndarray | None = None,
     max_steps: int = DEFAULT_MAX_STEPS,
 ) -> RunUpResult:
     """Simulate a run-up (or run-down, or torque-driven run) of an assembled gear set.
@@ -514,7 +515,10 @@ def simulate_batch(
                          "'return')")
     nv = len(models)
     conds = list(conditions) if isinstance(conditions, list | tuple) else [conditions] * nv
-    configs = list(config) if isinstance(config, list | tuple) else [config] * nv
+    # a list or tuple holds one configuration per model; anything else is one for all
+    configs: list[Mapping | str | None] = (
+        list(config) if isinstance(config, list | tuple)
+        else [cast(Mapping | str | None, config)] * nv)
     for name, seq in (("conditions", conds), ("config", configs)):
         if len(seq) != nv:
             raise ValueError(f"{name} must be one value or one per model ({nv}), got {len(seq)}")

@@ -47,6 +47,7 @@ from collections.abc import Callable, Sequence
 from concurrent.futures import Executor
 from dataclasses import dataclass
 from functools import cached_property
+from typing import Any
 
 import numpy as np
 
@@ -586,7 +587,7 @@ def _concatenate(tables: Sequence, order_by: str):
     first = tables[0]
     if len(tables) == 1:
         return first
-    kw = {}
+    kw: dict[str, Any] = {}
     for f in dataclasses.fields(first):
         values = [getattr(t, f.name) for t in tables]
         if f.name in ("notes",):
@@ -780,9 +781,10 @@ def stability_over_speed(model: AssembledModel, speeds_rpm: np.ndarray, *,
                                                       1.03 * float(speeds[-1])),
                                          torque_sign=torque_sign)
     keep = np.array([k != "rigid-body" for k in modal.kinds], dtype=bool)
-    shapes = np.real(modal.shapes[:, keep])
-    names = [f"f{i + 1}" for i in np.flatnonzero(keep)]
-    if shapes.shape[1] != candidates.natural_frequencies_hz.size:
+    real_shapes = np.real(modal.shapes[:, keep])
+    shapes: np.ndarray | None = real_shapes
+    names: list[str] | None = [f"f{i + 1}" for i in np.flatnonzero(keep)]
+    if real_shapes.shape[1] != candidates.natural_frequencies_hz.size:
         shapes, names = None, None  # candidates of other modes: frequency relation only
     opts = dict(CHART_ACCURACY if floquet_options is None else floquet_options)
     with _chart_executor(workers, scheduler, executor) as (pool, n):

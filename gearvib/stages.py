@@ -54,8 +54,9 @@ def stage_prefix(index: int) -> str:
 def _mesh(name: str, g1: str, g2: str, t1: Toothing, t2: Toothing, spec: MeshSpec,
           centre_distance: float) -> Mesh:
     spec = spec.resolve(mesh_geometry(t1, t2, centre_distance))
-    return Mesh(name=name, gear1=g1, gear2=g2, stiffness=spec.stiffness, toothing1=t1,
-                toothing2=t2, back_stiffness=spec.back_stiffness, backlash=spec.backlash,
+    stiffness, back_stiffness = spec.models()
+    return Mesh(name=name, gear1=g1, gear2=g2, stiffness=stiffness, toothing1=t1,
+                toothing2=t2, back_stiffness=back_stiffness, backlash=spec.backlash,
                 damping=spec.damping, damping_ratio=spec.damping_ratio,
                 centre_distance=centre_distance)
 

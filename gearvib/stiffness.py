@@ -25,6 +25,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from gearvib.geometry import MeshGeometry
 from gearvib.paths import is_file
@@ -328,7 +329,7 @@ class FourierStiffness(MeshStiffness):
     a bounded scalar minimisation.
     """
 
-    def __init__(self, mean: float, cos: Sequence[float] = (), sin: Sequence[float] = ()) -> None:
+    def __init__(self, mean: float, cos: ArrayLike = (), sin: ArrayLike = ()) -> None:
         self._mean = _stiff("mean", mean)
         a = self._coeffs("cos", cos)
         b = self._coeffs("sin", sin)
@@ -343,7 +344,7 @@ class FourierStiffness(MeshStiffness):
             )
 
     @staticmethod
-    def _coeffs(name: str, values: Sequence[float]) -> np.ndarray:
+    def _coeffs(name: str, values: ArrayLike) -> np.ndarray:
         try:
             arr = np.asarray(values, dtype=float).ravel()
         except (TypeError, ValueError) as exc:
@@ -435,7 +436,7 @@ class PairSuperposition(MeshStiffness):
         self,
         single_pair: Callable[[np.ndarray], np.ndarray],
         contact_ratio: float,
-        breakpoints: Sequence[float] | None = None,
+        breakpoints: Sequence[float] | np.ndarray | None = None,
     ) -> None:
         if not callable(single_pair):
             raise ValueError(f"single_pair = {single_pair!r} must be callable")
@@ -464,7 +465,8 @@ class PairSuperposition(MeshStiffness):
 
     def _eval(self, u: np.ndarray) -> np.ndarray:
         n = math.ceil(self.contact_ratio)
-        return sum(self.pair(u + j) for j in range(n + 1))
+        # n + 1 >= 1 terms (never the start 0); a numpy scalar for a 0-d u (__call__ converts)
+        return sum(self.pair(u + j) for j in range(n + 1))  # type: ignore[return-value]
 
     def _breakpoints(self) -> np.ndarray:
         return np.mod(self._bp_u, 1.0)
@@ -552,8 +554,8 @@ class TabulatedPair(PairSuperposition):
 
     def __init__(
         self,
-        position: Sequence[float],
-        stiffness: Sequence[float],
+        position: ArrayLike,
+        stiffness: ArrayLike,
         contact_ratio: float,
         source: str | None = None,
     ) -> None:
@@ -616,8 +618,10 @@ class TabulatedPair(PairSuperposition):
             out[i] = np.sum(np.exp(-1j * w * u0) * (k0 * i0 + (k1 - k0) / h * i1))
         return out
 
-    def to_dict(self) -> dict:
-        d = {
+    def to_dict(self, n: int = 257) -> dict:
+        """The table as it is (``n``, the sampling of :meth:`PairSuperposition.to_dict`, does
+        not apply)."""
+        d: dict[str, Any] = {
             "model": "pairs",
             "contact_ratio": self.contact_ratio,
             "position": [float(v) for v in self.position],
@@ -636,8 +640,8 @@ class TabulatedPair(PairSuperposition):
     @classmethod
     def from_arrays(
         cls,
-        position: Sequence[float],
-        stiffness: Sequence[float],
+        position: ArrayLike,
+        stiffness: ArrayLike,
         contact_ratio: float,
         *,
         position_unit: str = "path_fraction",

@@ -478,6 +478,7 @@ class GearSet:
             if c.role != "central":
                 continue
             p = self.body(m.gear2)
+            assert p.carrier is not None  # gear2 is a planet, which has its carrier
             out.append(BaseStructure(c, p, self.body(p.carrier), m))
         return tuple(out)
 
@@ -550,12 +551,20 @@ class MeshSpec:
         return replace(self, stiffness=build(self.stiffness),
                        back_stiffness=build(self.back_stiffness))
 
+    def models(self) -> tuple[MeshStiffness, MeshStiffness | None]:
+        """The stiffness and back-flank stiffness models of a spec whose tables are built
+        (:meth:`resolve`)."""
+        if isinstance(self.stiffness, dict) or isinstance(self.back_stiffness, dict):
+            raise ValueError("a stiffness table needs the mesh geometry: resolve() the spec")
+        return self.stiffness, self.back_stiffness
+
 
 def _mesh(name: str, g1: str, g2: str, t1: Toothing, t2: Toothing, spec: MeshSpec,
           centre_distance: float | None = None) -> Mesh:
     spec = spec.resolve(mesh_geometry(t1, t2, centre_distance))
-    return Mesh(name=name, gear1=g1, gear2=g2, stiffness=spec.stiffness, toothing1=t1,
-                toothing2=t2, back_stiffness=spec.back_stiffness, backlash=spec.backlash,
+    stiffness, back_stiffness = spec.models()
+    return Mesh(name=name, gear1=g1, gear2=g2, stiffness=stiffness, toothing1=t1,
+                toothing2=t2, back_stiffness=back_stiffness, backlash=spec.backlash,
                 damping=spec.damping, damping_ratio=spec.damping_ratio,
                 damping_law=spec.damping_law, centre_distance=centre_distance)
 

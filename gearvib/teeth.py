@@ -107,7 +107,7 @@ def _planet_tooth(m, k: int, planet: str, is_gear1: bool, z: int, g: MeshGeometr
     toothing = None
     if g is not None:
         toothing = g.gear1 if is_gear1 else g.gear2
-    if toothing is not None and not toothing.internal:
+    if g is not None and toothing is not None and not toothing.internal:
         beta = planet_tooth_angle(g, planet_is_gear1=is_gear1, mate_direction=mate_dir,
                                   position=float(s0[k]))
         beta -= m.tooth_offset1 if is_gear1 else m.tooth_offset2

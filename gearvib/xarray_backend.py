@@ -89,7 +89,7 @@ class GearvibBackendEntrypoint(BackendEntrypoint):
                    "time in float seconds, string labels as indexes")
     open_dataset_parameters = ("filename_or_obj", "drop_variables")
 
-    def open_dataset(  # type: ignore[override]
+    def open_dataset(
         self,
         filename_or_obj: Any,
         *,

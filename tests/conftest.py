@@ -20,6 +20,7 @@ LONGEST_FIRST = (
     "tests/gearvib/test_diagnosis.py",
     "tests/packaging/test_wheel.py",
     "tests/gearvib/test_report_content.py",
+    "tests/test_typing.py",
     "tests/gearvib/test_fault_pass.py",
     "tests/cli/test_interrupts.py",
     "tests/gearvib/test_measured_report.py",

@@ -520,10 +520,10 @@ def attribute_region(lower_hz: float, upper_hz: float, candidates: Candidates, *
     for i in np.flatnonzero(holds):
         share = 1.0
         if shares is not None and shares.size:
-            parts = [float(shares[cluster(int(j))].sum())
-                     for j in {int(candidates.mode_i[i]), int(candidates.mode_j[i])}]
-            share = float(sum(parts))
-            if share < min_share or min(parts) < CLUSTER_SHARE_MIN:
+            mode_parts = [float(shares[cluster(int(j))].sum())
+                          for j in {int(candidates.mode_i[i]), int(candidates.mode_j[i])}]
+            share = float(sum(mode_parts))
+            if share < min_share or min(mode_parts) < CLUSTER_SHARE_MIN:
                 continue
         scored.append((share, int(i)))
     best: tuple[tuple, int] | None = None
@@ -788,7 +788,8 @@ def stability_chart(
             if hit is not None:
                 idx = hit
                 lab = candidates.full_label(hit)
-                cf = (float(candidates.rpm[hit]) * factor if _by_speed(candidates, factor)
+                cf = (float(candidates.rpm[hit]) * factor
+                      if _by_speed(candidates, factor) and factor is not None
                       else float(candidates.f_mesh_hz[hit]))
         table.append({
             "lower": float(lower), "upper": float(upper), "lower_open": lower_open,

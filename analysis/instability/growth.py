@@ -14,6 +14,8 @@ run-up or a stepped-speed run that dwells inside the band.
 
 from __future__ import annotations
 
+import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -244,9 +246,9 @@ def runup_growth(bands: Any, time: Any, rpm: Any, *, threshold_db: float = 6.0,
         dt = np.gradient(tt)
         tau = float(dt[inside].sum())
         expo = float((b.rate_at(rr) * dt).sum())
-        gdb = 20.0 * np.log10(np.e) * expo
+        gdb = 20.0 * np.log10(math.e) * expo
         mean_rate = expo / tau if tau > 0 else (2.0 / 3.0) * b.peak_growth_rate
-        need = thr / (20.0 * np.log10(np.e) * mean_rate) if mean_rate > 0 else np.inf
+        need = thr / (20.0 * np.log10(math.e) * mean_rate) if mean_rate > 0 else np.inf
         if gdb >= thr:
             advice = "grows in this run"
         elif not np.isfinite(need):
@@ -260,7 +262,7 @@ def runup_growth(bands: Any, time: Any, rpm: Any, *, threshold_db: float = 6.0,
                       f"{0.5 * (b.lower_rpm + b.upper_rpm):.0f} min-1")
         rows.append((b.label, b.lower_rpm, b.upper_rpm, tau, b.peak_growth_rate, expo, gdb,
                      gdb >= thr, need, advice))
-    cols = list(zip(*rows, strict=True)) if rows else [[]] * 10
+    cols: list[Sequence[Any]] = list(zip(*rows, strict=True)) if rows else [[]] * 10
     return GrowthTable(
         label=np.asarray(cols[0], dtype=object), lower_rpm=np.asarray(cols[1], float),
         upper_rpm=np.asarray(cols[2], float), time_in_band=np.asarray(cols[3], float),

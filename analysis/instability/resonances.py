@@ -780,21 +780,21 @@ def detect_resonances(
             evidence = (f"ray k={k} crosses {fnames[c]} = {fn[c]:.0f} Hz at {rc:.0f} min-1; "
                         f"rise {row['strength']:.1f} dB at {r0:.0f} min-1 (-3 dB range "
                         f"{row['r_lo']:.0f}–{row['r_hi']:.0f})")
-            b, _ = developing_band(r0)
-            band_txt = "" if b is None else (
-                f"; also inside the unstable band {growth.lower_rpm[b]:.0f}–"
-                f"{growth.upper_rpm[b]:.0f} min-1 ({growth.label[b]}), which grows "
-                f"{growth.growth_db[b]:.0f} dB in this run")
+            bi, _ = developing_band(r0)
+            band_txt = "" if bi is None or growth is None else (
+                f"; also inside the unstable band {growth.lower_rpm[bi]:.0f}–"
+                f"{growth.upper_rpm[bi]:.0f} min-1 ({growth.label[bi]}), which grows "
+                f"{growth.growth_db[bi]:.0f} dB in this run")
             if excited(k, c):
                 row.update(mechanism=FORCED, mode=fnames[c], cause=f"{k} f_mesh = {fnames[c]}",
                            pred=rc, note=evidence + band_txt)
                 direct_hits[(k, c)] = max(direct_hits.get((k, c), 0.0), row["strength"])
-            elif b is not None:
+            elif bi is not None and growth is not None:
                 row.update(mechanism=PARAMETRIC, mode=fnames[c],
-                           cause=str(growth.label[b]) or "Floquet band", pred=rc,
+                           cause=str(growth.label[bi]) or "Floquet band", pred=rc,
                            note=(evidence + f"; harmonic {k} does not force {fnames[c]} (mesh "
                                  "phasing)" + band_txt))
-                row["parametric_band"] = b
+                row["parametric_band"] = bi
             else:
                 row.update(mode=fnames[c], pred=rc,
                            note=(evidence + f"; but harmonic {k} does not force {fnames[c]} "
@@ -853,34 +853,34 @@ def detect_resonances(
                     targets.append((abs(j), c, j))
         if row["feature"] == "natural frequency":
             targets = [(0, row["cluster"], 0)]
-        b, why = developing_band(r0)
+        bi, why = developing_band(r0)
         if growth is not None:
-            cen = [0.5 * (growth.lower_rpm[q] + growth.upper_rpm[q]) for q in range(len(growth))
+            mid = [0.5 * (growth.lower_rpm[q] + growth.upper_rpm[q]) for q in range(len(growth))
                    if growth.can_grow[q]]
             hws = [0.5 * (growth.upper_rpm[q] - growth.lower_rpm[q]) for q in range(len(growth))
                    if growth.can_grow[q]]
-            row["chance"] = covered_fraction(np.asarray(cen), np.asarray(hws) * 2, r_min, r_max)
-        if b is not None and targets:
+            row["chance"] = covered_fraction(np.asarray(mid), np.asarray(hws) * 2, r_min, r_max)
+        if bi is not None and growth is not None and targets:
             _, c, j = min(targets)
-            lab_b = str(growth.label[b]) or "Floquet band"
+            lab_b = str(growth.label[bi]) or "Floquet band"
             row.update(mechanism=PARAMETRIC, mode=fnames[c], cause=lab_b,
-                       pred=0.5 * (growth.lower_rpm[b] + growth.upper_rpm[b]),
+                       pred=0.5 * (growth.lower_rpm[bi] + growth.upper_rpm[bi]),
                        note=(f"response at {fnames[c]}" + (f" {j:+d} f_mesh" if j else "")
-                             + f" inside the unstable band {growth.lower_rpm[b]:.0f}–"
-                               f"{growth.upper_rpm[b]:.0f} min-1, which grows by "
-                               f"{growth.growth_db[b]:.0f} dB in this run"))
+                             + f" inside the unstable band {growth.lower_rpm[bi]:.0f}–"
+                               f"{growth.upper_rpm[bi]:.0f} min-1, which grows by "
+                               f"{growth.growth_db[bi]:.0f} dB in this run"))
         elif growth is None and candidates is not None and targets:
-            best = None
+            hit = None
             for q in range(len(candidates)):
                 if not candidates.allowed[q] or candidates.kind[q] not in ("principal", "sum"):
                     continue
                 rc = float(candidates.f_mesh_hz[q]) / factor
                 dl = u_fn * rc + float(np.interp(rc, rpm, u_rate))
                 err = abs(rc - r0)
-                if row["r_lo"] - dl <= rc <= row["r_hi"] + dl and (best is None or err < best[0]):
-                    best = (err, q)
-            if best is not None:
-                q = best[1]
+                if row["r_lo"] - dl <= rc <= row["r_hi"] + dl and (hit is None or err < hit[0]):
+                    hit = (err, q)
+            if hit is not None:
+                q = hit[1]
                 _, c, j = min(targets)
                 row.update(mechanism=PARAMETRIC, mode=fnames[c], cause=str(candidates.label[q]),
                            pred=float(candidates.f_mesh_hz[q]) / factor,

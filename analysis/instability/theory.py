@@ -146,7 +146,7 @@ class MeshPhasingRule:
         k = self.index(harmonic)
         return tuple(sorted({min(k, self.n_planets - k)}))
 
-    def check_family(self, family: tuple[str, int], name: str = "mode_families") -> int:
+    def check_family(self, family: Any, name: str = "mode_families") -> int:
         """Validate a ``(kind, p)`` family and return ``p``."""
         try:
             kind, p = family
@@ -173,8 +173,8 @@ class MeshPhasingRule:
         return any((s1 * p + s2 * p2 - k) % n == 0 for s1 in (1, -1) for s2 in (1, -1))
 
 
-def _family_reason(rule: MeshPhasingRule, n: int, fams_i: list[tuple[str, int]],
-                   fams_j: list[tuple[str, int]]) -> tuple[bool, str]:
+def _family_reason(rule: MeshPhasingRule, n: int, fams_i: Sequence[tuple[Any, ...]],
+                   fams_j: Sequence[tuple[Any, ...]]) -> tuple[bool, str]:
     k = rule.index(n)
     for fi in fams_i:
         for fj in fams_j:
@@ -418,7 +418,7 @@ def instability_candidates(
     if len(labels) != f.size:
         raise ValueError(f"mode_labels has {len(labels)} entries; natural_frequencies_hz has "
                          f"{f.size}")
-    fams = None
+    fams: list[tuple[Any, ...]] | None = None  # (kind, p) per mode, checked below
     if mesh_harmonic_rule is not None:
         if mode_families is None:
             raise ValueError("mesh_harmonic_rule needs mode_families ((kind, p) per mode)")
@@ -427,7 +427,7 @@ def instability_candidates(
                              f"natural_frequencies_hz has {f.size}")
         fams = [tuple(fm) for fm in mode_families]
         for fm in fams:
-            mesh_harmonic_rule.check_family(fm)  # type: ignore[arg-type]
+            mesh_harmonic_rule.check_family(fm)
 
     notes: list[str] = []
     want_diff = "difference" in kinds and gyroscopic
@@ -455,14 +455,14 @@ def instability_candidates(
                     ok, why = True, ""
                     if fams is not None and mesh_harmonic_rule is not None:
                         ok, why = _family_reason(mesh_harmonic_rule, n,
-                                                 [fams[i] for i in ca],  # type: ignore[misc]
-                                                 [fams[i] for i in cb])  # type: ignore[misc]
+                                                 [fams[i] for i in ca],
+                                                 [fams[i] for i in cb])
                     rpm = fm / factor if factor is not None else np.nan
                     rows.append((kind, ca[0], cb[0], n, fm, rpm, ok, why, lab))
     if speed_range is not None:
         rows = [r for r in rows if lo <= r[5] <= hi]
     rows.sort(key=lambda r: (r[4], r[3]))
-    cols = list(zip(*rows, strict=True)) if rows else [[]] * 9
+    cols: list[Sequence[Any]] = list(zip(*rows, strict=True)) if rows else [[]] * 9
 
     def arr(i, dtype):
         return np.asarray(cols[i], dtype=dtype)

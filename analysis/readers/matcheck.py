@@ -39,6 +39,7 @@ import struct
 import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Literal
 
 import numpy as np
 
@@ -117,7 +118,9 @@ def _mi_name(code: int) -> str:
 class _V5Walker:
     """Walks MAT v5 matrix elements inside one buffer the way scipy's VarReader5 reads them."""
 
-    def __init__(self, buf: bytes | mmap.mmap | memoryview, endian: str, base: int) -> None:
+    def __init__(
+        self, buf: bytes | mmap.mmap | memoryview, endian: Literal["<", ">"], base: int
+    ) -> None:
         self.buf = buf
         self.e = endian
         self.base = base  # offset of buf in the file (0 inside decompressed data)
@@ -243,11 +246,11 @@ class _V5Walker:
         mclass, is_complex, is_logical = flags & 0xFF, flags >> 11 & 1, flags >> 9 & 1
         p = start + 16
         if mclass == _MX_OPAQUE:  # name, type system, class name, then a matrix
-            name, p = self.int8_string(p, mend, f"{what} name")
+            opaque_name, p = self.int8_string(p, mend, f"{what} name")
             for part in ("type system", "class name"):
                 _, p = self.int8_string(p, mend, f"{what} {part}")
             p, size, _ = self.matrix(p, mend, depth + 1, f"{what} (opaque content)")
-            return p, size, name.decode("latin-1")
+            return p, size, opaque_name.decode("latin-1")
         if not 1 <= mclass <= _MX_FUNCTION:
             raise self.fail(start, f"{what}: unknown array class {mclass} (admissible 1..17)")
         dims, p = self.int32s(p, mend, 4 * _MAX_DIMS, f"{what} dimensions")
@@ -389,7 +392,7 @@ def _check_v5(path: Path, buf, size: int, info: MatInfo) -> None:
     marker = bytes(buf[126:128])
     if marker not in (b"IM", b"MI"):
         raise _Damage(126, f"endian indicator {marker!r} is neither 'IM' nor 'MI'")
-    endian = "<" if marker == b"IM" else ">"
+    endian: Literal["<", ">"] = "<" if marker == b"IM" else ">"
     walker = _V5Walker(buf, endian, 0)
     budget = memory_budget()
     seen: set[str] = set()

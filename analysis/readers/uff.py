@@ -197,7 +197,8 @@ def read_uff(path: str | os.PathLike[str], sets: Sequence[int] | None = None) ->
         chosen = [int(s) for s in sets]
     else:
         chosen = list(range(len(records)))
-    channels, rates = [], {}
+    channels: list[ChannelData] = []
+    rates: dict[int, tuple[float, int, str]] = {}
     with reading(p, "UFF"):  # fields of a damaged set may not convert
         for k in chosen:
             channels.append(_channel(p, k, records[k], rates))

@@ -24,7 +24,7 @@ __all__ = ["read_wav", "write_wav"]
 def _per_channel(value: float | str | Sequence, n: int, name: str) -> list:
     if isinstance(value, str) or np.ndim(value) == 0:
         return [value] * n
-    vals = list(value)  # type: ignore[arg-type]
+    vals = list(value)  # type: ignore[arg-type]  # a sequence: scalars returned above
     if len(vals) != n:
         raise ValueError(f"{name}: {len(vals)} values given for {n} channel(s); give 1 or {n}")
     return vals

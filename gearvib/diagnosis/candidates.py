@@ -285,7 +285,9 @@ def candidate_faults(cfg: dict, kinds: Sequence[str] = KINDS, *,
     for kind in LOCAL_KINDS:
         if kind in kinds:
             for m in members:
-                for toothing in _toothings(gs, m.target) or [None]:
+                toothings: list[tuple[int, tuple[str, ...]] | None] = [
+                    *_toothings(gs, m.target)] or [None]
+                for toothing in toothings:
                     out += _local(kind, m.name, m.target, toothing)
     if "eccentricity" in kinds:
         for m in members:

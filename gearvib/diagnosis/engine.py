@@ -457,11 +457,11 @@ def _candidate_profiles(config: str, cfg: dict, base: Path | None,
     """
     from gearvib.sweep import Parameter, Sweep, run_sweep
 
-    faults = [[]] + [[c.fault] for c in candidates]
+    faults: list[list[Any]] = [[]] + [[c.fault] for c in candidates]
     labels = ["healthy"] + [c.label for c in candidates]
     entries = [entry_key(entry_description(cfg, base, f, sensors, run, settings))
                for f in faults]
-    data = [load_entry(folder, k, t) for k, t in entries]
+    data: list[Any] = [load_entry(folder, k, t) for k, t in entries]  # None: loaded below
     missing = [i for i, d in enumerate(data) if d is None]
     counts = {"simulated": 0, "reused": len(faults) - len(missing)}
     if missing:
@@ -580,7 +580,7 @@ def _local_kind_scores(best: dict[tuple[str, str], tuple[float, Candidate]],
             continue
         ln = lines.get(c.member)
         f = ln.fault if ln is not None else None
-        if f is None or not ln.mesh > 0:
+        if ln is None or f is None or not ln.mesh > 0:
             continue
         mesh = ln.mesh
         if c.member not in meas_cache:
@@ -612,7 +612,7 @@ def diagnose(measured: Record, config: str, *, baseline: Record | None = None,
              library: str | os.PathLike | bool | None = None,
              work_dir: str | os.PathLike | None = None, keep_runs: bool = False,
              workers: int | None = None,
-             kinds: tuple[str, ...] = KINDS, sensors: tuple[dict, ...] | None = None,
+             kinds: tuple[str, ...] = KINDS, sensors: tuple[dict, ...] | list[dict] | None = None,
              revolutions: int = DEFAULT_REVOLUTIONS, threshold: float = DEFAULT_THRESHOLD,
              max_duration: float = 30.0, progress: bool = False) -> Diagnosis:
     """Rank the candidate causes of what a measurement shows beyond a healthy baseline.
@@ -833,11 +833,11 @@ def diagnose(measured: Record, config: str, *, baseline: Record | None = None,
                        "the ring gear, more averaging or a higher load")
         if lead.cause != "none" and any(c.member in groups for c in causes[:2]):
             nxt.append("a once-per-revolution carrier tacho to tell which planet")
-    kinds = [c for c in causes if c.member == lead.member and c.cause in LOCAL_KINDS]
-    if ((lead.cause in LOCAL_KINDS or lead.cause == LOCAL_FAULT) and len(kinds) > 1
-            and (lead.cause == LOCAL_FAULT or kinds[0].score - kinds[1].score < 0.1)):
+    local = [c for c in causes if c.member == lead.member and c.cause in LOCAL_KINDS]
+    if ((lead.cause in LOCAL_KINDS or lead.cause == LOCAL_FAULT) and len(local) > 1
+            and (lead.cause == LOCAL_FAULT or local[0].score - local[1].score < 0.1)):
         nxt.append(f"an inspection of {lead.member} (borescope, oil debris): the kind of "
-                   f"local tooth fault ({kinds[0].cause} or {kinds[1].cause}) differs in "
+                   f"local tooth fault ({local[0].cause} or {local[1].cause}) differs in "
                    "the spectrum mainly by its size and impulse shape, which an unknown "
                    "transfer path hides")
     if close and not nxt:

@@ -90,7 +90,10 @@ def code_digest() -> str:
     h = hashlib.sha256()
     h.update(json.dumps([gearvib.__version__, np.__version__, scipy.__version__,
                          numba.__version__, xarray.__version__]).encode())
-    roots = [Path(pkg.__file__).resolve().parent for pkg in (gearvib, analysis)]
+    roots = []
+    for pkg in (gearvib, analysis):
+        assert pkg.__file__ is not None  # regular packages, not namespace ones
+        roots.append(Path(pkg.__file__).resolve().parent)
     return source_digest(roots, h).hexdigest()[:20]
 
 
@@ -155,7 +158,9 @@ def save_entry(folder: Path, key: str, text: str, arrays: dict[str, np.ndarray])
     tempfiles.register(tmp)
     try:
         with os.fdopen(fd, "wb") as fh:
-            np.savez(fh, key=np.array(text), **{k: np.asarray(arrays[k]) for k in _FIELDS})
+            payload: dict[str, Any] = {"key": np.array(text),
+                                       **{k: np.asarray(arrays[k]) for k in _FIELDS}}
+            np.savez(fh, **payload)
         os.replace(tmp, path)
     except BaseException:
         tempfiles.remove_temporary(tmp)

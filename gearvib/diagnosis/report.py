@@ -107,6 +107,7 @@ def _sections(d: Diagnosis, title_name: str) -> list[Section]:
     likely = d.likely
     lead = d.causes[0] if d.causes else None
     if likely:
+        assert lead is not None  # the likely causes are among the causes
         verdict = (f"{len(likely)} cause(s) above the threshold {d.threshold:.2f}; the most "
                    f"likely is {_what(lead)} (score {lead.score:.2f}).")
         members = {c.member for c in likely}

@@ -19,6 +19,7 @@ from gearvib.faults.description import (
     Fault,
     FaultError,
     PinError,
+    PitchError,
     PlanetBacklash,
     faults_from_list,
 )
@@ -176,7 +177,7 @@ def fault_targets(model: AssembledModel, fault: Fault) -> list[Target]:
     if tooth is not None and sizes and not 0 <= tooth < sizes[0]:
         raise FaultError(f"{label}: tooth = {tooth} is not admissible (admissible: 0 .. "
                          f"{sizes[0] - 1}; {fault.member!r} has {sizes[0]} teeth)")
-    if fault.kind == "pitch_error" and sizes:
+    if isinstance(fault, PitchError) and sizes:
         fault.cumulative_deviations(sizes[0])  # checks the list length
     if model.mesh_teeth is None and needs_teeth:
         raise FaultError(f"{label}: the model has no tooth map (build it with "

@@ -210,7 +210,7 @@ def _curve(table: Any, where: str, base: Path | None) -> PairCurve:
             eps = 1.0 if unit == "path_fraction" else 100.0
             pair = TabulatedPair.from_csv(path, eps, position_unit=unit,
                                           stiffness_unit=s_unit, face_width=face, **cols)
-            src = str(path)
+            src: str | None = str(path)
         else:
             for k in ("position_column", "stiffness_column"):
                 if k in table:
@@ -539,6 +539,7 @@ class PitchError(Fault):
             out[self.tooth] = self.deviation
             return out
         values = self.single if self.single is not None else self.cumulative
+        assert values is not None  # __post_init__: exactly one form is given
         if len(values) != z:
             raise FaultError(f"{w}: {len(values)} deviations given, {self.member!r} has {z} "
                              "teeth (one per tooth, tooth 0 first)")

@@ -704,6 +704,7 @@ def build_fault_law(model: AssembledModel) -> FaultLaw:
                 if f.severity is not None:
                     prof[:2] *= 1.0 - f.severity
                 else:
+                    assert f.curve is not None  # Crack: a severity or a curve
                     pos = np.asarray(f.curve.position)
                     if f.curve.position_unit == "path_fraction":
                         pos = pos * fm.eps

@@ -23,6 +23,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from analysis.envelope import EnvelopeSpectrum
 from gearvib.fault_lines import (
     MIN_BANDWIDTH_FACTOR,
     FaultLines,
@@ -194,7 +195,7 @@ def _band_text(fl: FaultLines, name: str) -> str:
                f"K = {kg.kurtosis_max:.3g}) among the bands at least "
                f"{fl.min_bandwidth:.4g} Hz wide ({MIN_BANDWIDTH_FACTOR:g} x the highest line "
                "checked at the top speed, unless given)")
-    if fl.domain == "frequency":
+    if isinstance(fl.envelope, EnvelopeSpectrum):  # fl.domain == "frequency"
         res = f"resolution {fl.envelope.resolution_hz:.3g} Hz"
         dom = ("in Hz, the families placed at the stated constant speed "
                f"{fl.speed_rpm:.6g} min⁻¹")
@@ -225,7 +226,7 @@ def _needed(fl: FaultLines) -> str:
 def envelope_rows(fl: FaultLines) -> list[tuple[str, ...]]:
     """Rows of the envelope table (:data:`ENVELOPE_HEADER`)."""
     f_ref = fl.speed_rpm / 60.0
-    out = []
+    out: list[tuple[str, ...]] = []
     for fam, r in zip(fl.families, fl.envelope_evidence.rows(), strict=True):
         _, _, st, found, prom, sbs, chance = r
         chance = _shown_chance(st, chance)
@@ -238,7 +239,7 @@ def order_rows(fl: FaultLines) -> list[tuple[str, ...]]:
     """Rows of the order-spectrum table (:data:`ORDER_HEADER`)."""
     if fl.order_evidence is None:
         return []
-    out = []
+    out: list[tuple[str, ...]] = []
     for fam, r in zip(fl.families, fl.order_evidence.rows(), strict=True):
         _, _, st, found, prom, _, chance = r
         chance = _shown_chance(st, chance)

@@ -180,7 +180,7 @@ def analyse_case(ds: xr.Dataset, *, name: str | None = None,
     if why:
         notes.append(why)
     modal = modal_analysis(model) if model is not None else None
-    if modal is not None:
+    if model is not None and modal is not None:
         keep = np.array([k != "rigid-body" for k in modal.kinds], dtype=bool)
         fn = modal.frequencies_hz[keep]
         names = [f"f{i + 1}" for i in np.flatnonzero(keep)]

@@ -218,7 +218,7 @@ class CaseAnalysis:
 
     def peak_rows(self) -> list[tuple[str, ...]]:
         """Rows of the identified-peak table (at most two expressions per peak)."""
-        rows = []
+        rows: list[tuple[str, ...]] = []
         for fsp in self.spectra:
             lab = fsp.labels
             for i in range(len(fsp.peaks)):
@@ -276,7 +276,7 @@ class CaseAnalysis:
 
     def region_rows(self) -> list[tuple[str, ...]]:
         """Rows of the Floquet region table (formatted strings)."""
-        rows = []
+        rows: list[tuple[str, ...]] = []
         for r in self.floquet_regions():
             lo_s, hi_s = r["lower_rpm"], r["upper_rpm"]
             rows.append((f"{'≤ ' if r['lower_open'] else ''}{lo_s:.0f}",

@@ -7,6 +7,7 @@ sensors of a run (at most :data:`MAX_SENSORS`, the first one primary) and for a 
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 import xarray as xr
@@ -79,11 +80,11 @@ def case_levels(ds: xr.Dataset, case: str, groups: Sequence[MeshGroup],
     mesh_orders = [(g.name, g.order) for g in groups]
     f_modes, n_modes = merged_modes(fn, names)
     band = (2.0 * float(fmap.resolution_hz), fmax)
-    common = {"fs": fs, "case": case, "mesh_orders": mesh_orders, "settings": settings,
-              "catalogue": cat, "reference_member": member, "angle": angle,
-              "natural_frequencies_hz": f_modes, "natural_names": n_modes,
-              "frequency_range": band,
-              "reference": f"input shaft{f' ({member})' if member else ''}"}
+    common: dict[str, Any] = {
+        "fs": fs, "case": case, "mesh_orders": mesh_orders, "settings": settings,
+        "catalogue": cat, "reference_member": member, "angle": angle,
+        "natural_frequencies_hz": f_modes, "natural_names": n_modes, "frequency_range": band,
+        "reference": f"input shaft{f' ({member})' if member else ''}"}
     out = []
     sensors = ([str(s) for s in ds["sensor"].values][:MAX_SENSORS]
                if "sensor_acceleration" in ds.variables else [])

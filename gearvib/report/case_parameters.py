@@ -68,10 +68,10 @@ def _geometry_rows(gs: dict, model: AssembledModel | None) -> list[tuple[str, st
     for m in model.meta.get("meshes", []):
         if not isinstance(m, dict):
             continue
-        key = (str(m.get("gear1", "")), m.get("z1"), m.get("z2"),
-               round(float(m.get("centre_distance") or 0.0), 9),
-               round(float(m.get("contact_ratio") or 0.0), 6))
-        kinds.setdefault(key, []).append(m)
+        kind = (str(m.get("gear1", "")), m.get("z1"), m.get("z2"),
+                round(float(m.get("centre_distance") or 0.0), 9),
+                round(float(m.get("contact_ratio") or 0.0), 6))
+        kinds.setdefault(kind, []).append(m)
     for (_gear1, z1, z2, a, eps), ms in kinds.items():
         names = [str(m["name"]) for m in ms]
         label = names[0] if len(names) == 1 else f"{names[0]} … {names[-1]}"

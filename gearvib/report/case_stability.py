@@ -34,7 +34,7 @@ __all__ = ["STABILITY_MODES", "candidate_mechanism", "first_order_rows",
            "shown_candidates", "stability_chart", "stored_candidates"]
 
 
-STABILITY_MODES = {
+STABILITY_MODES: dict[str, dict[str, Any]] = {
     "full": {"points": None, "floquet": CHART_ACCURACY, "xtol_rel": 1e-8},
     "coarse": {"points": 80, "floquet": {"multiplier_atol": 1e-6, "unity_margin": 0.03},
                "xtol_rel": 1e-6},
@@ -144,7 +144,7 @@ def first_order_rows(model: AssembledModel, span: tuple[float, float],
         return []
     lo_r, hi_r = span
     factor = {g.name: g.frequency_per_rpm for g in model.mesh_frequency_groups()}
-    rows = []
+    rows: list[tuple[str, ...]] = []
     for i in np.argsort(widths.lower_rpm):
         lo, hi = float(widths.lower_rpm[i]), float(widths.upper_rpm[i])
         w = float(widths.width_hz[i])

@@ -232,6 +232,7 @@ def _match_floquet(ref: list[tuple[float, float, str]], oth: list[tuple[float, f
         out.append(FloquetChange(status, (a[0], a[1]), (b[0], b[1]), b[2] or a[2], a[2], b[2]))
     out += [FloquetChange("appeared", None, (b[0], b[1]), b[2], "", b[2])
             for j, b in enumerate(oth) if j not in used]
+    # every change has a reference region, an other region or both
     out.sort(key=lambda c: (c.reference or c.other)[0])  # type: ignore[index]
     return out
 
@@ -325,6 +326,7 @@ def compare_cases(reference: CaseAnalysis, other: CaseAnalysis, *, rpm_tol: floa
     better = [c for c in changes if c.status in ("weaker", "vanished")]
     phasing = (kind == "phasing" and p2p[0] is not None and p2p[1] is not None)
     if phasing:
+        assert p2p[0] is not None and p2p[1] is not None  # (phasing)
         stiff_text = (f"summed {gear}-mesh stiffness fluctuation {p2p[1] / 1e8:.3f}e8 N/m "
                       f"peak-to-peak in {b} against {p2p[0] / 1e8:.3f}e8 N/m in {a}")
         claims.append((f"the summed {gear}-mesh stiffness oscillates less", p2p[1] < p2p[0],
@@ -366,6 +368,8 @@ def compare_cases(reference: CaseAnalysis, other: CaseAnalysis, *, rpm_tol: floa
             verdict = (f"This run does not reproduce the paper's finding of fewer and weaker "
                        f"resonance regions{partly}: {region_text}, although the "
                        f"{claims[0][2]}.")
+            # stronger or appeared changes have an other region, weaker or vanished ones a
+            # reference region
             if worse:
                 explanation.append(
                     "Regions that got stronger or appeared in " + b + ": "

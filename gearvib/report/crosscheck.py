@@ -293,10 +293,10 @@ def _check_chance(tables: list[ReportTable], paragraphs: list[tuple[str, str]]) 
         rises = _find(tables, f"Rises of {case}")
         if rises is None or "chance" not in rises.header:
             continue
-        mech = rises.column("mechanism: cause")
-        values = [_percent(c) for c, x in zip(rises.column("chance"), mech, strict=True)
-                  if not x.startswith("unexplained")]
-        values = [v for v in values if v is not None]
+        mechanisms = rises.column("mechanism: cause")
+        percents = [_percent(c) for c, x in zip(rises.column("chance"), mechanisms, strict=True)
+                    if not x.startswith("unexplained")]
+        values = [v for v in percents if v is not None]
         stated = float(m.group("pct"))
         if not values:
             out.append(f"{case}: the text states a chance of {stated:.0f} % although the rise "
@@ -331,8 +331,8 @@ def _check_ranges(tables: list[ReportTable], paragraphs: list[tuple[str, str]]) 
     for t in tables:
         for r in t.rows:
             for c in r:
-                m = _RANGE_CELL.fullmatch(c.strip())
-                if m and float(m.group(1)) == float(m.group(2)):
+                cell = _RANGE_CELL.fullmatch(c.strip())
+                if cell and float(cell.group(1)) == float(cell.group(2)):
                     out.append(f"{t.caption}: a range with equal ends: {c!r}")
     return sorted(set(out), key=out.index)
 

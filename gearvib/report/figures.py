@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from analysis.instability import FORCED, PARAMETRIC, UNEXPLAINED
+from analysis.maps import RpmFrequencyMap
 from analysis.plots import rpm_frequency_map_figure, rpm_order_map_figure
 from analysis.spectrum import to_db
 from gearvib.report.case_analysis import MARKER_BUDGET, CaseAnalysis
@@ -107,7 +108,8 @@ def place_labels(fig: Figure, ax: Any, labels: Sequence[Any], *, pad: float = 1.
 
         FigureCanvasAgg(fig)
     fig.canvas.draw()  # the one layout and draw: the text extents below need no other
-    renderer = fig.canvas.get_renderer()
+    # an Agg canvas (made above if needed); FigureCanvasBase does not declare the method
+    renderer = fig.canvas.get_renderer()  # type: ignore[attr-defined]
     fig.set_layout_engine("none")
     placed: list[Any] = [a.get_window_extent(renderer) for a in avoid
                          if a is not None and a.get_visible()]
@@ -279,9 +281,9 @@ def mesh_stiffness_figure(cases: Sequence[CaseAnalysis], *,
     """
     keys: list[tuple[str, str]] = []
     for ca in cases:
-        for st in ca.stiffness:
-            if (st.group, st.central) not in keys:
-                keys.append((st.group, st.central))
+        for sk in ca.stiffness:
+            if (sk.group, sk.central) not in keys:
+                keys.append((sk.group, sk.central))
     n = max(1, len(keys))
     fig = _figure((figsize[0], figsize[1] if n == 1 else 2.5 * n + 0.6))
     axes = fig.subplots(n, 1, squeeze=False)[:, 0]
@@ -319,7 +321,7 @@ def map_level_max(ca: CaseAnalysis, order: bool = False) -> float:
     if m is None:
         return -np.inf
     values = np.asarray(m.values, dtype=float)
-    if not order:
+    if isinstance(m, RpmFrequencyMap):  # not order
         keep = m.frequency <= ca.frequency_max_hz
         values = values[..., keep]
     lv = values if m.scale == "dB" else to_db(values, "power" if m.amplitude == "power"

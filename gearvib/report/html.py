@@ -118,7 +118,8 @@ def render_html(sections: Sequence[Section], *, title: str, subtitle: str = "",
     """
     images = images if images is not None else FigureImages((HTML_DPI,))
     toc = "\n".join(f'<li><a href="#{s.id}">{escape(s.title)}</a></li>' for s in sections)
-    front, parts = [], []
+    front: list[str] = []
+    parts: list[str] = []
     for s in sections:
         inner = "\n".join(_block(b, s.id, images) for b in s.blocks)
         (front if s.front else parts).append(

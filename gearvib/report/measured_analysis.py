@@ -197,7 +197,7 @@ def analyse_measurement(measurement: Measurement, *, gearset: Any = None,
                      "natural frequencies; orders are those of the reference shaft, and rises "
                      "are classified against the order rays and vertical lines the map shows")
     fmax = min(st.frequency_max_hz or fmax_auto, 0.5 * fs)
-    if gs is not None:
+    if model is not None:  # a gear set
         for g in model.mesh_frequency_groups():
             f_ref = float(g.frequency_per_rpm) * in_per_ref
             # every mesh order inside the map down to a quarter of the top speed
@@ -227,7 +227,8 @@ def analyse_measurement(measurement: Measurement, *, gearset: Any = None,
     nyq_order = 0.95 * 0.5 * fs * 60.0 / max(hi, 1e-300)
     top_order = max((k * 60 * f for _, f, k in groups), default=0.0)
     max_order = min(nyq_order, 1.1 * top_order) if top_order else min(nyq_order, 60.0)
-    ref_kw = ({"angle": m.angle.values} if m.angle is not None else {"rpm": rpm})
+    ref_kw: dict[str, Any] = ({"angle": m.angle.values} if m.angle is not None
+                              else {"rpm": rpm})
     try:
         res_o = max(0.05, 1.5 / max(1.0, _revolutions(m)) * 4)
         ospec = order_spectrum(x.values, fs, **ref_kw, window="hann", amplitude="rms",
@@ -240,7 +241,8 @@ def analyse_measurement(measurement: Measurement, *, gearset: Any = None,
         opk = select_peaks(opk, (opk.order > 0.5) & (opk.order <= max_order))
         olines = ([catalogue_lines(label_cat, axis="order", speed_uncertainty=2e-3)]
                   if model is not None else [shaft_lines(1.0, max_order, "order")])
-        if rig is not None and BEARING_FAMILIES & set(label_cat.family):
+        if rig is not None and label_cat is not None \
+                and BEARING_FAMILIES & set(label_cat.family):
             olines.append(catalogue_lines(label_cat, axis="order", speed_uncertainty=2e-3,
                                           families=BEARING_FAMILIES))
         ow = peak_half_widths(ospec.order, to_db(ospec.values, ospec.amplitude),
@@ -285,8 +287,8 @@ def analyse_measurement(measurement: Measurement, *, gearset: Any = None,
         lines.append(modal_lines(fn, names=names, kinds=("natural",),
                                  uncertainty=st.tolerance))
     mean_rpm = float(np.mean(rpm))
-    if cat is not None and not varying and (rig is None
-                                            or BEARING_FAMILIES & set(label_cat.family)):
+    if label_cat is not None and not varying and (rig is None
+                                                  or BEARING_FAMILIES & set(label_cat.family)):
         lines.append(catalogue_lines(label_cat, speed_rpm=mean_rpm, axis="frequency",
                                      speed_uncertainty=max(1e-3, (hi - lo) / max(hi, 1e-300)),
                                      families=BEARING_FAMILIES if rig is not None else None))
@@ -305,6 +307,7 @@ def analyse_measurement(measurement: Measurement, *, gearset: Any = None,
                            band=(0.0, fmax), max_coincidence=MAX_LABEL_CHANCE)
     regions = (resonance_regions(resonances, rpm_gap=_REGION_GAP * hi)
                if resonances is not None else [])
+    owner = model if model is not None else rig
     prov = [("measurement", name or m.name),
             ("file", str(m.source.get("file") or "(in memory)")),
             ("format", str(m.source.get("format", ""))),
@@ -312,9 +315,9 @@ def analyse_measurement(measurement: Measurement, *, gearset: Any = None,
             ("channels", ", ".join(m.source.get("channels", []))),
             ("speed reference", m.reference),
             ("gear set" if rig is None else "machine (shafts and bearings)",
-             (f"{(model or rig).meta.get('name', '')}"
+             (f"{owner.meta.get('name', '')}"
               + (f" ({gearset})" if isinstance(gearset, str | os.PathLike) else "")
-              if model is not None or rig is not None else "(none)")),
+              if owner is not None else "(none)")),
             *settings_rows(st, ("map_resolution_hz", "map_overlap", "threshold_db",
                                 "tolerance", "n_max", "orders", "frequency_max_hz",
                                 "cut_orders", "order_resolution")),

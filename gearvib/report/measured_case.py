@@ -134,7 +134,7 @@ class MeasuredCase:
         """One row per channel of the measurement: name, units, description, role."""
         m = self.measurement
         ref = m.source.get("reference_channel")
-        rows = []
+        rows: list[tuple[str, ...]] = []
         for k, v in m.signals.data_vars.items():
             role = ("speed reference" if k == ref else
                     "analysed" if k == self.channel else
@@ -180,7 +180,7 @@ class MeasuredCase:
         """Natural frequencies with their type and dominant mesh (strain energy)."""
         if self.modal is None:
             return []
-        rows = []
+        rows: list[tuple[str, ...]] = []
         modal = self.modal
         for i, (f, kind) in enumerate(zip(modal.frequencies_hz, modal.kinds, strict=True)):
             if kind == "rigid-body":

@@ -216,7 +216,7 @@ class SimulationComparison:
 
     def peak_rows(self) -> list[tuple[str, ...]]:
         """One row per order line: status, orders, levels, differences, catalogue label."""
-        rows = []
+        rows: list[tuple[str, ...]] = []
         for p, lab in zip(self.result.peaks, self.order_labels or [""] * len(
                 self.result.peaks), strict=True):
             def f(v: float, fmt: str) -> str:
@@ -230,7 +230,7 @@ class SimulationComparison:
 
     def line_rows(self) -> list[tuple[str, ...]]:
         """One row per frequency-locked line of the measurement."""
-        rows = []
+        rows: list[tuple[str, ...]] = []
         for ln, pars in zip(self.result.lines, self.parameters or [[]] * len(
                 self.result.lines), strict=True):
             if not ln.mode:
@@ -355,6 +355,7 @@ def compare_with_simulation(measured: Measurement | str | os.PathLike | xr.Datas
     labels: list[str] = []
     params: list[list[ParameterShare]] = []
     if model is not None and modal is not None:
+        assert names is not None  # set with modal
         ratios = dict(model.kinematic_ratios)
         if reference is not None and not ratios.get(reference):
             raise ValueError(f"reference = {reference!r} is not a rotating member of the gear "

@@ -93,8 +93,8 @@ def spectra_figure(mc: MeasuredCase, figsize: tuple[float, float] = (8.0, 6.4)) 
         ax.plot(mc.peaks.frequency, y, "v", color="C3", ms=4)
         labelled.append((ax, mc.peaks.frequency, y,
                          [_short(mc.identification, i, "Hz") for i in range(len(mc.peaks))]))
-    if n == 2:
-        os_ = mc.order_spectrum
+    os_ = mc.order_spectrum
+    if os_ is not None:  # n == 2
         ax = axes[1]
         ax.plot(os_.order, to_db(os_.values, os_.amplitude), lw=0.7, color="C2")
         for _, f_ref, k in mc.mesh_groups:
@@ -111,10 +111,12 @@ def spectra_figure(mc: MeasuredCase, figsize: tuple[float, float] = (8.0, 6.4)) 
                      f"{os_.n_averages} averages", fontsize=9)
         ax.grid(True, alpha=0.3)
         if mc.order_peaks is not None and len(mc.order_peaks):
+            order_ident = mc.order_identification
+            assert order_ident is not None  # identified with the peaks
             y = to_db(mc.order_peaks.amplitude, os_.spectrum.amplitude)
             ax.plot(mc.order_peaks.order, y, "v", color="C3", ms=4)
             labelled.append((ax, mc.order_peaks.order, y,
-                             [_short(mc.order_identification, i, "order")
+                             [_short(order_ident, i, "order")
                               for i in range(len(mc.order_peaks))]))
     fig.suptitle(f"{mc.name}: {mc.channel} ('?' unexplained, '~' only chance-level labels)",
                  fontsize=10)

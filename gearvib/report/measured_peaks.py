@@ -143,7 +143,7 @@ def peak_table_rows(ident: PeakIdentification | None, peaks: Peaks | None,
     if ident is None or peaks is None or sp is None:
         return []
     lv = to_db(peaks.amplitude, sp.amplitude)
-    rows = []
+    rows: list[tuple[str, ...]] = []
     for i in range(len(ident)):
         ms = ident.matches[i]
         status = str(ident.status[i])

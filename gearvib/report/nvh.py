@@ -157,8 +157,8 @@ def catalogue_orders(catalogue: Any, *, reference_member: str = "") -> dict[str,
                 rows = np.flatnonzero((fam == family) & (h == 1) & vis & (member == m)
                                       & (np.sign(sb) == sign))
                 if rows.size:
-                    i = int(rows[np.argmin(np.abs(sb[rows]))])
-                    add(formula[i] + (f" ({m})" if several else ""), order[i])
+                    j = int(rows[np.argmin(np.abs(sb[rows]))])
+                    add(formula[j] + (f" ({m})" if several else ""), order[j])
     for i in np.flatnonzero(np.isin(fam, _FAULTS) & (h == 1) & vis):
         add(f"{member[i]} fault", order[i])
     for i in np.flatnonzero((fam == "planet_pass") & (h == 1) & vis):
@@ -287,7 +287,7 @@ def cut_level_rows(sl: SignalLevels) -> list[tuple[str, ...]]:
     lv = sl.levels
     if lv is None:
         return []
-    rows = []
+    rows: list[tuple[str, ...]] = []
     for o, name, top, at, med in lv.order_statistics():
         rows.append((f"{o:.4g}", name, "–" if not np.isfinite(top) else f"{top:.1f}",
                      "–" if not np.isfinite(at) else f"{at:.0f}",

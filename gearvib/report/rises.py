@@ -107,7 +107,7 @@ def rise_table_rows(res: Resonances, on_order: Callable[[int], str]) -> list[tup
         ``spot``.
     """
     feature = {"natural frequency": "f_i", "spot": "spot"}
-    rows = []
+    rows: list[tuple[str, ...]] = []
     for i in range(len(res)):
         on = on_order(i) if res.order[i] else feature.get(str(res.feature[i]), "–")
         rows.append((f"{res.rpm[i]:.0f}", f"{res.frequency[i]:.0f}", on,

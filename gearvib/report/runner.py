@@ -198,7 +198,7 @@ def _gearset(ds: xr.Dataset) -> dict:
     return gs if isinstance(gs, dict) else {}
 
 
-def _load_inputs(inputs: Sequence[RunInput]) -> list[tuple[str, xr.Dataset]]:
+def _load_inputs(inputs: Sequence[RunInput] | RunInput) -> list[tuple[str, xr.Dataset]]:
     if isinstance(inputs, str | os.PathLike | xr.Dataset):
         inputs = [inputs]
     if not inputs:
@@ -293,7 +293,7 @@ def build_report(paths_or_datasets: Sequence[RunInput] | RunInput, out_dir: str 
         The output folder is not usable (before any computation).
     """
     AnalysisSettings().with_cuts(cut_orders, order_resolution)  # checked before any file
-    runs = _load_inputs(paths_or_datasets)  # type: ignore[arg-type]
+    runs = _load_inputs(paths_or_datasets)
     settings_of: dict[str, AnalysisSettings | None] = {}
     for name, ds in runs:  # before any analysis: the maps must fit into memory
         t = ds["time"].values
@@ -344,7 +344,7 @@ def _build(runs: list[tuple[str, xr.Dataset]], folder: _OutputFolder, *, title: 
                                                     subtitle=subtitle, images=images))
     atomic_write(html_path, lambda tmp: tmp.write_text(text, encoding="utf-8"))
     log.info("report written: %s, %s (%d pages)", html_path, pdf_path, pages)
-    return ReportPaths(html=html_path, pdf=pdf_path, pdf_pages=int(pages),  # type: ignore[arg-type]
+    return ReportPaths(html=html_path, pdf=pdf_path, pdf_pages=int(pages),
                        sections=tuple(s.id for s in sections), cases=tuple(names),
                        comparisons=comparisons)
 

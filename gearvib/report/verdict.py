@@ -195,17 +195,17 @@ def summary_blocks(cases: Sequence[CaseSummary], *, inputs: Sequence[tuple[str, 
             out.append(Block("heading", cs.case))
         sl = cs.primary
         rows = _strongest_rows(cs)
-        if sl is None:
+        if sl is None or sl.levels is None:  # (primary has levels)
             out.append(Block("text", f"{cs.case}: no order cuts, so no resonance ranking "
                              "(see the notes of the order-cut section)."))
-        elif not sl.levels.varying_speed:  # type: ignore[union-attr]
+        elif not sl.levels.varying_speed:
             out.append(Block("text", f"{cs.case}: no run-up: constant speed "
-                             f"({span(*sl.levels.speed_range, 'min⁻¹')}), so the order cuts "  # type: ignore[union-attr]
+                             f"({span(*sl.levels.speed_range, 'min⁻¹')}), so the order cuts "
                              "are levels over time and there is no resonance over speed to "
                              "rank; the key numbers give the levels at this speed."))
         elif not rows:
             out.append(Block("text", f"{cs.case}: no order cut of the {sl.signal} rises "
-                             f"{sl.levels.min_rise_db:g} dB or more above its surroundings "  # type: ignore[union-attr]
+                             f"{sl.levels.min_rise_db:g} dB or more above its surroundings "
                              "in this run: no resonance to inspect."))
         else:
             first = rows[0]

@@ -50,7 +50,7 @@ def _default_housing(model: AssembledModel, name: str) -> str | tuple[str, ...]:
 def add_sensors(model: AssembledModel, sensors: Sequence) -> AssembledModel:
     """:meth:`AssembledModel.with_sensors` (see there)."""
     new = sensors_from_list(list(sensors))
-    checked = []
+    checked: list[Tacho | HousingSensor] = []
     bodies = {b["name"]: b["role"] for b in model.meta.get("bodies", [])}
     for s in new:
         if isinstance(s, Tacho):
@@ -61,8 +61,8 @@ def add_sensors(model: AssembledModel, sensors: Sequence) -> AssembledModel:
             checked.append(replace(s, member=member))
             continue
         assert isinstance(s, HousingSensor)
-        member = s.member or _default_housing(model, s.name)
-        for one in members_of(member):
+        housing = s.member or _default_housing(model, s.name)
+        for one in members_of(housing):
             if one not in bodies:
                 raise SensorError(f"sensor {s.name!r}: member {one!r} is not a body of the set")
             if not housing_meshes(model, one):
@@ -78,7 +78,7 @@ def add_sensors(model: AssembledModel, sensors: Sequence) -> AssembledModel:
                 raise SensorError(f"sensor {s.name!r}: bearings: {b!r} has no elastic radial "
                                   "bearing (members with one: "
                                   f"{', '.join(elastic) or 'none'})")
-        checked.append(replace(s, member=member))
+        checked.append(replace(s, member=housing))
     every = (*model.sensors, *checked)
     check_unique(every)
     return replace(model, sensors=every)

@@ -82,6 +82,7 @@ def path_force(result, model: AssembledModel, sensor: HousingSensor) -> np.ndarr
     meshes = model.meta["meshes"]
     theta_s = math.radians(sensor.angle_deg)
     p = np.zeros(result.time.size)
+    assert sensor.member is not None  # add_sensors fills it in
     for member in members_of(sensor.member):
         _add_member_forces(p, result, model, sensor, member, planets, meshes, theta_s)
     for b, gain in sensor.bearings:
@@ -103,6 +104,7 @@ def _add_member_forces(p: np.ndarray, result, model: AssembledModel, sensor: Hou
     rotation, both follow the window of the planet's angle relative to the sensor.
     """
     theta_h = _rotation(result, member)
+    assert sensor.member is not None  # add_sensors fills it in
     wanted = set(members_of(sensor.member))
     for k in housing_meshes(model, member):
         planet = planets[meshes[k]["gear2"]]

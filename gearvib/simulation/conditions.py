@@ -13,6 +13,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -83,7 +84,8 @@ class DriveCoupling:
     def to_dict(self) -> dict:
         """``{"stiffness", "damping"}`` and, for rigid-body sensing, ``"sensing"`` (a run's
         configuration text; an input coupling's is as it was before the field existed)."""
-        out = {"stiffness": float(self.stiffness), "damping": float(self.damping)}
+        out: dict[str, Any] = {"stiffness": float(self.stiffness),
+                               "damping": float(self.damping)}
         if self.sensing != "input":
             out["sensing"] = self.sensing
         return out
@@ -194,10 +196,13 @@ class TorqueDriven:
     max_rpm: float = 6000.0
 
     def __post_init__(self) -> None:
-        if np.ndim(self.input_torque) == 0:
-            tt, tv = (0.0,), (float(self.input_torque),)
+        torque: Any = self.input_torque  # as given: checked here
+        tt: tuple[float, ...]
+        tv: tuple[float, ...]
+        if np.ndim(torque) == 0:
+            tt, tv = (0.0,), (float(torque),)
         else:
-            a, b = self.input_torque
+            a, b = torque
             tt = tuple(float(v) for v in np.asarray(a, dtype=float).ravel())
             tv = tuple(float(v) for v in np.asarray(b, dtype=float).ravel())
             if len(tt) != len(tv) or len(tt) < 1 or np.any(np.diff(tt) <= 0):

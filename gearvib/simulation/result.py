@@ -399,7 +399,7 @@ def build_result(
     duration: float,
     gyroscopic: bool,
     config: Mapping | str | None,
-    natural_frequencies: Sequence[float] | None,
+    natural_frequencies: Sequence[float] | np.ndarray | None,
     wall: float,
 ) -> RunUpResult:
     """Turn the decimated state history of a run into a :class:`RunUpResult`.

@@ -242,6 +242,8 @@ def prepare_run(
     coupling = None
     sensing = None
     free_rigid = False
+    duration: float | None
+    load: tuple[float, float, float]
     if isinstance(conditions, SpeedRamp | SpeedTable):
         ipar[kn.IP_MODE] = kn.DRIVE_SPEED
         t_nodes, rpm = conditions.table()
@@ -278,7 +280,9 @@ def prepare_run(
     elif isinstance(conditions, TorqueDriven | MotorDriven):
         if isinstance(conditions, TorqueDriven):
             ipar[kn.IP_MODE] = kn.DRIVE_TORQUE
-            tt, tv = conditions.input_torque
+            table = conditions.input_torque
+            assert isinstance(table, tuple)  # __post_init__ stores (times, torques)
+            tt, tv = table
             torque_tab = np.vstack([np.array(tt), np.array(tv)])
             drive = "torque"
         else:
@@ -300,7 +304,9 @@ def prepare_run(
         free_rigid = bool(
             np.abs(k_mean @ rigid).max() <= 1e-9 * np.abs(k_mean).max() * np.abs(rigid).max()
         )
-        speed_max = max(abs(conditions.max_rpm), abs(conditions.start_rpm)) * RAD_S_PER_RPM
+        max_rpm = conditions.max_rpm
+        assert max_rpm is not None  # __post_init__ fills it in
+        speed_max = max(abs(max_rpm), abs(conditions.start_rpm)) * RAD_S_PER_RPM
         duration = conditions.duration
     else:
         raise TypeError(f"unsupported operating conditions {type(conditions).__name__}")
@@ -360,7 +366,7 @@ def prepare_run(
         duration,
         speed_max,
         coupling,
-        tuple(float(x) for x in load),
+        (float(load[0]), float(load[1]), float(load[2])),
         drive,
         torque_sign,
         law,

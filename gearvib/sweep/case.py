@@ -248,8 +248,8 @@ def _run_group(tasks: list[CaseTask]) -> list[CaseOutcome]:
     if not pending:
         return [outcomes[k] for k in range(len(tasks))]
     run = pending[0][1].case.run
-    kw = dict(dt=run.get("dt"), fs_out=run.get("fs_out"),
-              gyroscopic=bool(run.get("gyroscopic")))
+    kw: dict[str, Any] = dict(dt=run.get("dt"), fs_out=run.get("fs_out"),
+                              gyroscopic=bool(run.get("gyroscopic")))
     parts = [list(range(len(pending)))]  # first try all together (the common case) ...
     for part in parts:
         members = [pending[j] for j in part]

@@ -186,7 +186,8 @@ def combine_summaries(sweep: Sweep, cases: Sequence[SweepCase],
             v = s[name]
             idx = tuple(np.asarray([dims[str(d)].index(x) for x in s[d].values.tolist()])
                         for d in v.dims)
-            arr[(i, *np.ix_(*idx))] = v.values
+            where: tuple[Any, ...] = (i, *np.ix_(*idx))
+            arr[where] = v.values
         if arr.dtype == object:
             arr = arr.astype(str)
         data[name] = xr.Variable(("case", *map(str, var.dims)), arr, dict(var.attrs))

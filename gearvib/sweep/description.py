@@ -188,6 +188,14 @@ class Parameter:
             if v is not None and not isinstance(v, str):
                 raise ConfigError(f"{where}.{k} must be a string")
 
+    @property
+    def listed(self) -> tuple:
+        """``values``, which a parameter of a grid or zip sweep always has."""
+        if self.values is None:
+            raise ConfigError(f"parameter {self.path!r}: give values = [...] (a distribution "
+                              "needs mode = 'random')")
+        return self.values
+
     @classmethod
     def from_dict(cls, table: Any, where: str) -> Parameter:
         """Checked parameter from a ``[[parameter]]`` table."""
@@ -345,11 +353,11 @@ class Sweep:
             raise ConfigError("a sweep needs at least one [[parameter]]")
         object.__setattr__(self, "parameters", params)
         paths = [p.path for p in params]
-        for p in paths:
-            if p in _RESERVED:
-                raise ConfigError(f"parameter path {p!r} is the name of a dimension or "
+        for path in paths:
+            if path in _RESERVED:
+                raise ConfigError(f"parameter path {path!r} is the name of a dimension or "
                                   "coordinate of sweep.nc; vary its elements instead (e.g. "
-                                  f"'{p}.0.<key>')")
+                                  f"'{path}.0.<key>')")
         dup = sorted({p for p in paths if paths.count(p) > 1})
         if dup:
             raise ConfigError(f"parameter path {dup[0]!r} is listed twice")
@@ -370,6 +378,7 @@ class Sweep:
                                                                           else 0):
                     raise ConfigError(f"mode = 'random' needs {k} = an integer "
                                       f"{'>= 1' if k == 'samples' else '>= 0'}, got {v!r}")
+            assert self.samples is not None  # (checked just above)
             if self.samples > self.max_cases:
                 raise ConfigError(f"samples = {self.samples} is more than max_cases = "
                                   f"{self.max_cases}; raise max_cases (at most "
@@ -384,15 +393,15 @@ class Sweep:
                     raise ConfigError(f"parameter {p.path!r}: a distribution needs mode = "
                                       "'random'")
         if self.mode == "zip":
-            n0 = len(params[0].values)  # type: ignore[arg-type]
+            n0 = len(params[0].listed)
             for p in params[1:]:
-                if len(p.values) != n0:  # type: ignore[arg-type]
+                if len(p.listed) != n0:
                     raise ConfigError(f"mode = 'zip' needs as many values for every parameter:"
                                       f" {params[0].path!r} has {n0}, {p.path!r} has "
-                                      f"{len(p.values)}")  # type: ignore[arg-type]
+                                      f"{len(p.listed)}")
         n = self.n_cases
         if n > self.max_cases:
-            sizes = " x ".join(str(len(p.values)) for p in params)  # type: ignore[arg-type]
+            sizes = " x ".join(str(len(p.listed)) for p in params)
             what = f"the grid has {sizes} = {n} cases" if self.mode == "grid" else \
                 f"the sweep has {n} cases"
             raise ConfigError(f"{what}, more than max_cases = {self.max_cases}; use fewer "
@@ -408,10 +417,11 @@ class Sweep:
     def n_cases(self) -> int:
         """Number of cases (computed without building them)."""
         if self.mode == "random":
-            return int(self.samples)  # type: ignore[arg-type]
+            assert self.samples is not None  # __post_init__: random mode needs samples
+            return int(self.samples)
         if self.mode == "zip":
-            return len(self.parameters[0].values)  # type: ignore[arg-type]
-        return math.prod(len(p.values) for p in self.parameters)  # type: ignore[arg-type]
+            return len(self.parameters[0].listed)
+        return math.prod(len(p.listed) for p in self.parameters)
 
     def load_base(self) -> tuple[dict, str | None]:
         """The base description with the sweep's ``[simulation]`` merged, and its directory."""
@@ -434,11 +444,12 @@ class Sweep:
     def _values(self) -> list[tuple]:
         ps = self.parameters
         if self.mode == "grid":
-            return list(itertools.product(*(p.values for p in ps)))  # type: ignore[misc]
+            return list(itertools.product(*(p.listed for p in ps)))
         if self.mode == "zip":
-            return list(zip(*(p.values for p in ps), strict=True))  # type: ignore[misc]
+            return list(zip(*(p.listed for p in ps), strict=True))
         rng = np.random.default_rng(self.seed)
-        cols = [p.sample(rng, int(self.samples)) for p in ps]  # type: ignore[arg-type]
+        assert self.samples is not None  # __post_init__: random mode needs samples
+        cols = [p.sample(rng, int(self.samples)) for p in ps]
         return list(zip(*cols, strict=True))
 
     def _label(self, p: Parameter, v: Any) -> str:

@@ -20,6 +20,7 @@ tables) are placed at equal spacing in the order of their values.
 
 from __future__ import annotations
 
+import functools
 import io
 import json
 import math
@@ -245,10 +246,14 @@ def _heat_figure(ds, da, name, params, ok) -> Figure:
     return fig
 
 
+def _write_bytes(data: bytes, path: Path) -> int:
+    return path.write_bytes(data)
+
+
 def _scatter_figure(ds, da, name, params, ok) -> Figure:
     _, vals, panels, _ = _series(da)
     worst = np.nanmax(vals, axis=0) if vals.shape[0] > 1 else vals[0]
-    axes_spec = []
+    axes_spec: list[tuple[np.ndarray, list[str] | None, str]] = []
     for p in params:
         if p.get("has_values_coordinate") and p.get("distribution"):
             el = parameter_values(ds, p).values
@@ -272,7 +277,7 @@ def _scatter_figure(ds, da, name, params, ok) -> Figure:
     scale, unit = _units(da)
     fig, axes = _new_figure(len(axes_spec))
     over = " (largest over the meshes)" if "mesh" in da.dims else ""
-    for ax, (x, cats, label) in zip(axes, axes_spec, strict=True):
+    for ax, (x, ticks, label) in zip(axes, axes_spec, strict=True):
         for k, panel in enumerate(panels[:8]):
             for glabel, member in groups:
                 sel = ok & member
@@ -282,7 +287,7 @@ def _scatter_figure(ds, da, name, params, ok) -> Figure:
         ax.set_xlabel(label)
         ax.set_ylabel(f"{name} [{unit}]")
         ax.grid(True, alpha=0.3)
-        _set_categories(ax, "x", cats)
+        _set_categories(ax, "x", ticks)
     if panels[0] is not None or len(groups) > 1:
         axes[0].legend(fontsize=7)
     fig.suptitle(f"{name}{over}", fontsize=10)
@@ -375,7 +380,7 @@ def build_sweep_report(ds: xr.Dataset, out_dir: str | Path) -> Path:
     parts = []
     for f in figs:
         png = _png(f.figure)
-        atomic_write(figdir / f"{f.name}.png", lambda tmp, b=png: tmp.write_bytes(b))
+        atomic_write(figdir / f"{f.name}.png", functools.partial(_write_bytes, png))
         parts.append(f'<figure id="{escape(f.name)}"><img src="figures/{escape(f.name)}.png" '
                      f'alt="{escape(f.title)}"><figcaption>{escape(f.name)}: '
                      f"{escape(f.title)}</figcaption></figure>")

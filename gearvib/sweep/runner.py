@@ -235,6 +235,7 @@ def run_sweep(sweep: Sweep, out_dir: str | os.PathLike, *, workers: int | None =
             stack.enter_context(worker_environment())
             executor = local_executor(min(n_workers, max(1, len(units))),
                                       start_method=start_method)
+        assert executor is not None  # given or made just above
         parallel = not isinstance(executor, SerialExecutor)
         if parallel:  # compile once here; the workers load the kernels from numba's cache
             _warm_up(cases[0], batched)

@@ -289,7 +289,7 @@ def _order_levels(out: _Vars, name: str, da: xr.DataArray, ds: xr.Dataset, span:
     rpm = ref_rpm[span]
     inp = ds["input_speed"].values[span]
     ok = rpm >= _MIN_SPEED_FRACTION * rpm.max() if rpm.size and rpm.max() > 0 else None
-    other = [d for d in da.dims if d != "time"]
+    other = [str(d) for d in da.dims if d != "time"]
     orders = np.asarray(s.orders)
     shape = (*(da.sizes[d] for d in other), orders.size)
     level = np.full(shape, np.nan)
@@ -409,7 +409,7 @@ def summarise_run(ds: xr.Dataset, model: AssembledModel, conditions: Conditions,
                if v.attrs.get("gearvib_quantity") == VIRTUAL_SENSOR_QUANTITY and "time" in v.dims]
     for name in sensors:
         da = ds[name]
-        other = [d for d in da.dims if d != "time"]
+        other = [str(d) for d in da.dims if d != "time"]
         x = da.transpose(*other, "time").values[..., keep]
         out.add(f"{name}_rms", tuple(other), np.sqrt(np.mean(x * x, axis=-1)),
                 str(da.attrs.get("units", "1")), f"rms of the virtual sensor {name} over the "
@@ -423,9 +423,9 @@ def summarise_run(ds: xr.Dataset, model: AssembledModel, conditions: Conditions,
         ref_rpm = _reference_rpm(ds, model, s.order_reference)
         for name, da, label in signals:
             _order_levels(out, name, da, ds, span, ref_rpm, s, label)
-            for d in da.dims:
-                if d != "time" and d in ds.coords and d not in coords:
-                    coords[str(d)] = ds[d].variable.copy()
+            for axis_dim in da.dims:
+                if axis_dim != "time" and axis_dim in ds.coords and axis_dim not in coords:
+                    coords[str(axis_dim)] = ds[axis_dim].variable.copy()
         if s.order_reference.startswith("mesh"):
             what = "mesh orders" + (f" of {s.order_reference[5:]}"
                                     if s.order_reference != "mesh" else "")

@@ -86,6 +86,9 @@ def test_wheel_holds_every_package_and_data_file(wheel):
     for folder in ("presets", "recipes"):
         data = {p.name for p in (ROOT / "gearvib" / folder).glob("*.toml")}
         assert data and all(f"gearvib/{folder}/{n}" in names for n in data), folder
+    # PEP 561 markers: without them a type checker ignores the packages' annotations
+    typed = {f"{p}/py.typed" for p in ("gearvib", "analysis")}
+    assert typed <= names, f"py.typed missing from the wheel: {sorted(typed - names)}"
     meta = next(n for n in names if n.endswith(".dist-info/METADATA"))
     import gearvib
 
