@@ -588,13 +588,14 @@ def phasing_shifts(z_gear: int, planet_angles_rad: Sequence[float], *, pass_orde
         raise ValueError(f"mesh_harmonics = {mesh_harmonics!r} is not admissible (an integer "
                          "1 .. 1000)")
     n = psi.size
-    out = []
+    angles = [float(a) for a in psi]
+    out: list[tuple[float, ...]] = []
     for m in range(1, int(mesh_harmonics) + 1):
-        if omega == 0.0 or phasing_factor(psi, -m * int(z_gear)) > 0.0:
+        if omega == 0.0 or phasing_factor(angles, -m * int(z_gear)) > 0.0:
             out.append((0.0,))
             continue
         for r in range(1, n + 1):
-            qs = [q for q in (r, -r) if phasing_factor(psi, q - m * int(z_gear)) > 0.0]
+            qs = [q for q in (r, -r) if phasing_factor(angles, q - m * int(z_gear)) > 0.0]
             if qs:
                 out.append(tuple(float(q * omega) for q in qs))
                 break

@@ -255,8 +255,8 @@ def main() -> None:
                     "of main) timed side by side")
     ap.add_argument("--warm-caches", action="store_true", help="one untimed run per tree "
                     "first (numba caches)")
-    ap.add_argument("--quick", action="store_true", help="smoke run: a 3 s record, the timed fresh and "
-                    "warm diagnosis once, crack candidates only, no accuracy records")
+    ap.add_argument("--quick", action="store_true", help="smoke run: a 3 s record, the timed "
+                    "fresh and warm diagnosis once, crack candidates only, no accuracy records")
     ap.add_argument("--work", help="folder of the accuracy records' candidate libraries (one "
                     "per speed profile; kept and reused; default temporary)")
     args = ap.parse_args()
