@@ -207,7 +207,8 @@ def waterfall_figure(
     ax.set_xlabel("frequency [Hz]")
     ax.set_ylabel(("speed [min⁻¹]" if lv.varying_speed else "time [s]")
                   + " (trace baseline)")
-    ax.set_title(f"{w.name}: waterfall of {n} spectra\n{w.window}, RBW {w.resolution_hz:.3g} "
+    spectra = "1 spectrum" if n == 1 else f"{n} spectra"
+    ax.set_title(f"{w.name}: waterfall of {spectra}\n{w.window}, RBW {w.resolution_hz:.3g} "
                  f"Hz, {w.amplitude} level in dB re {w.level_reference}, "
                  f"{dynamic_range_db:g} dB shown", fontsize=9)
     if ax.get_legend_handles_labels()[0]:
