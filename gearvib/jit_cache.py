@@ -5,8 +5,9 @@ The first ``gearvib simulate`` or ``gearvib demo`` on a machine compiles the ker
 cache (:mod:`analysis.jit` chooses its folder). The command line tells the user before a
 compilation starts (:func:`first_run_notice`), so a long first run is not mistaken for a hang.
 
-The test reads numba's cache index of the main kernel (:func:`gearvib.kernels.integrate_chunk`):
-the file ``kernels.integrate_chunk-<line>.py<version>.nbi`` in the cache folder, as numba
+The test reads numba's cache index of the main kernel
+(:func:`gearvib.kernels.integrate_chunk_compiled`): the file
+``kernels.integrate_chunk_compiled-<line>.py<version>.nbi`` in the cache folder, as numba
 itself loads it (its stamp must match the source file's modification time and size, else numba
 ignores it), and looks for an entry compiled for this CPU (numba's codegen "magic tuple":
 target triple, CPU name and features). Every kernel of a run is compiled at its first call and
@@ -40,7 +41,7 @@ def kernels_cached() -> bool | None:
     try:
         from gearvib import kernels
 
-        dispatcher = kernels.integrate_chunk
+        dispatcher = kernels.integrate_chunk_compiled
         if dispatcher.signatures:  # compiled (or loaded) in this process already
             return True
         cache = dispatcher._cache
