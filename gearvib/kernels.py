@@ -1482,6 +1482,11 @@ def generic_pass() -> int:
     return int(_GENERIC_PASS[0].address)
 
 
+def generic_pass_compiled() -> bool:
+    """Whether this process has compiled (or loaded) the generic faulty-mesh pass."""
+    return bool(_GENERIC_PASS)
+
+
 def with_pass(system: tuple) -> tuple:
     """``system`` (:meth:`KernelSystem.astuple`) ready for the compiled kernels: itself when
     it has no faulty mesh or its ``ints[H_FPASS]`` holds a pass, else with a copy of ``ints``
