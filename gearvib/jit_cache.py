@@ -1,9 +1,10 @@
 """Whether numba's cache holds the simulation kernels for this machine (a first run or not).
 
 The first ``gearvib simulate`` or ``gearvib demo`` on a machine compiles the kernels of
-:mod:`gearvib.kernels` (tens of seconds of CPU); later runs load them from numba's on-disk
-cache (:mod:`analysis.jit` chooses its folder). The command line tells the user before a
-compilation starts (:func:`first_run_notice`), so a long first run is not mistaken for a hang.
+:mod:`gearvib.kernels` (about 15 s of CPU; the first report adds its order analysis); later
+runs load them from numba's on-disk cache (:mod:`analysis.jit` chooses its folder). The
+command line tells the user before a compilation starts (:func:`first_run_notice`), so a long
+first run is not mistaken for a hang.
 
 The test reads numba's cache index of the main kernel
 (:func:`gearvib.kernels.integrate_chunk_compiled`): the file
@@ -23,8 +24,8 @@ from __future__ import annotations
 __all__ = ["FIRST_RUN_NOTICE", "first_run_notice", "kernels_cached"]
 
 FIRST_RUN_NOTICE = (
-    "gearvib: compiling the simulation kernels (first run on this machine, about half a "
-    "minute to a minute of CPU; later runs load them from the cache)")
+    "gearvib: compiling the simulation kernels (first run on this machine, about 15-30 s "
+    "of CPU; later runs load them from the cache)")
 """The line the command line prints before a run that compiles the kernels."""
 
 
