@@ -11,8 +11,10 @@ checkout (``--baseline``, default ``/work/main``; another git worktree of the pr
   empty numba cache (its own ``NUMBA_CACHE_DIR``): the compilation of the kernel and of every
   function it calls, and for the faulty case the compilation of its faulty-mesh pass;
 * **steps/s**: the kernel's run time afterwards, RK4 steps per CPU second over a window of the
-  1 s run-up 0 -> 4000 min^-1 at 60 N m (from t = 0.4 s, the median of the window's repetitions),
-  and a check value of the last recorded row (equal for both checkouts: the same results).
+  1 s run-up 0 -> 4000 min^-1 at 60 N m (``--window`` simulated seconds from t = 0.4 s, the
+  median of ``--reps`` windows), and a check value of the last recorded row (equal for both
+  checkouts: the same results). ``--warm`` compares the run time alone, on the user's numba
+  cache (each checkout compiles once, then loads its kernel).
 
 The two checkouts run alternately (A, B, A, B, ...) in fresh processes, each process on a new
 cache folder; the medians over the rounds and their ratios are printed with the load average
@@ -128,6 +130,12 @@ def main() -> None:
     parser.add_argument("--rounds", type=int, default=3, help="A/B rounds (default 3)")
     parser.add_argument("--case", action="append", choices=sorted(CASES),
                         help="case (repeatable; default all)")
+    parser.add_argument("--window", type=float, default=0.02,
+                        help="simulated seconds of the run-time window (default 0.02)")
+    parser.add_argument("--reps", type=int, default=20, help="windows per process (default 20)")
+    parser.add_argument("--warm", action="store_true",
+                        help="run time only: the user's numba cache (compiled once, then "
+                             "loaded), no fresh compilation")
     args = parser.parse_args()
     cases = args.case or list(CASES)
     if args.quick:
@@ -145,9 +153,10 @@ def main() -> None:
         for case in cases:
             for name in ("baseline", "this"):  # interleaved, fresh process and cache each
                 results.setdefault((case, name), []).append(
-                    run_worker(roots[name], case, 0.02, 5, fresh=True))
+                    run_worker(roots[name], case, args.window, args.reps, fresh=not args.warm))
     load1 = os.getloadavg()[0]
-    print(f"paper-case1, {args.rounds} rounds interleaved, fresh numba cache per process; "
+    cache = "the user's numba cache (--warm)" if args.warm else "fresh numba cache per process"
+    print(f"paper-case1, {args.rounds} rounds interleaved, {cache}; "
           f"load average {load0:.1f} before, {load1:.1f} after; {time.time() - t0:.0f} s")
     print(f"this: {roots['this']}\nbaseline: {roots['baseline']}")
     print(f"{'case':8s} {'code':9s} {'first call [s CPU]':>20s} {'numba compile':>14s} "
