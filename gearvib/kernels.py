@@ -111,6 +111,7 @@ __all__ = [
     "DRIVE_SPEED",
     "DRIVE_TORQUE",
     "MESH_OUT_COLUMNS",
+    "PASS_SIGNATURE",
     "STATUS_DEFLECTION",
     "STATUS_NONFINITE",
     "STATUS_OK",
@@ -122,9 +123,12 @@ __all__ = [
     "flank_forces",
     "flank_forces_two_lines",
     "flank_forces_viscous",
+    "generic_pass",
+    "generic_pass_compiled",
     "insert_split",
     "integrate",
     "integrate_chunk",
+    "integrate_chunk_compiled",
     "jump_positions",
     "n_signals",
     "need_interval",
@@ -136,6 +140,7 @@ __all__ = [
     "speed_at",
     "speed_profile",
     "table_at",
+    "with_pass",
     "work_shape",
 ]
 
