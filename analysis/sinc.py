@@ -294,7 +294,9 @@ def _decimate(fine, fir, over, first, out):  # pragma: no cover - compiled
             streams[r, :] = 0.0
             if m_hi > m_lo:
                 g0 = (base + m_lo) * over + r
-                streams[r, m_lo:m_hi] = fine[c, g0 : g0 + (m_hi - m_lo - 1) * over + 1 : over]
+                for m in range(m_hi - m_lo):  # a loop, not a slice assignment: numba
+                    # would compile its shape-mismatch message (~5 s at the first run)
+                    streams[r, m_lo + m] = fine[c, g0 + m * over]
         for j0 in range(0, n_out, chunk):
             j1 = min(n_out, j0 + chunk)
             n = j1 - j0

@@ -14,7 +14,8 @@ amplitude, severity or tooth) shares the source and its compiled code.
 The source compiles to a C-callable function (``numba.cfunc``) of six data pointers, which the
 generic kernel calls through :data:`gearvib.kernels.H_FPASS` (an indirect call; a compiled
 numba function would take every array as a struct, about 15 ns a call) with the lengths of
-the integer and the float block. It is compiled once
+the integer block, the float block and the tables (:data:`gearvib.kernels.PASS_SIGNATURE`,
+the signature of the generic pass :func:`gearvib.kernels.generic_pass` too). It is compiled once
 per source (about a second) and then loaded from numba's cache next to the generated module
 (:func:`gearvib.kernels_batch.specialised_folder`, written atomically by
 :func:`gearvib.kernels_batch.write_once`; one module per source and process).
@@ -241,8 +242,8 @@ def pass_source(ints: np.ndarray, tables: np.ndarray) -> str:
         "U = np.uint64\n"
         "F = types.CPointer(types.float64)\n"
         "I = types.CPointer(types.int64)\n\n\n"
-        "@cfunc(types.void(F, F, F, I, F, F, types.intp, types.intp), cache=True)\n"
-        "def fault_pass(yp, dyp, mp, ip, vp, tp, n_ints, n_vals):\n"
+        "@cfunc(types.void(F, F, F, I, F, F, types.intp, types.intp, types.intp), cache=True)\n"
+        "def fault_pass(yp, dyp, mp, ip, vp, tp, n_ints, n_vals, n_tab):\n"
         f"    y = carray(yp, ({2 * n},))\n"
         f"    dy = carray(dyp, ({2 * n},))\n"
         f"    mesh_out = carray(mp, ({n_mesh}, {kn.MESH_OUT_COLUMNS}))\n"

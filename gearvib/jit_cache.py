@@ -1,12 +1,14 @@
 """Whether numba's cache holds the simulation kernels for this machine (a first run or not).
 
 The first ``gearvib simulate`` or ``gearvib demo`` on a machine compiles the kernels of
-:mod:`gearvib.kernels` (tens of seconds of CPU); later runs load them from numba's on-disk
-cache (:mod:`analysis.jit` chooses its folder). The command line tells the user before a
-compilation starts (:func:`first_run_notice`), so a long first run is not mistaken for a hang.
+:mod:`gearvib.kernels` (about 15 s of CPU; the first report adds its order analysis); later
+runs load them from numba's on-disk cache (:mod:`analysis.jit` chooses its folder). The
+command line tells the user before a compilation starts (:func:`first_run_notice`), so a long
+first run is not mistaken for a hang.
 
-The test reads numba's cache index of the main kernel (:func:`gearvib.kernels.integrate_chunk`):
-the file ``kernels.integrate_chunk-<line>.py<version>.nbi`` in the cache folder, as numba
+The test reads numba's cache index of the main kernel
+(:func:`gearvib.kernels.integrate_chunk_compiled`): the file
+``kernels.integrate_chunk_compiled-<line>.py<version>.nbi`` in the cache folder, as numba
 itself loads it (its stamp must match the source file's modification time and size, else numba
 ignores it), and looks for an entry compiled for this CPU (numba's codegen "magic tuple":
 target triple, CPU name and features). Every kernel of a run is compiled at its first call and
@@ -22,8 +24,8 @@ from __future__ import annotations
 __all__ = ["FIRST_RUN_NOTICE", "first_run_notice", "kernels_cached"]
 
 FIRST_RUN_NOTICE = (
-    "gearvib: compiling the simulation kernels (first run on this machine, about half a "
-    "minute to a minute of CPU; later runs load them from the cache)")
+    "gearvib: compiling the simulation kernels (first run on this machine, about 15-30 s "
+    "of CPU; later runs load them from the cache)")
 """The line the command line prints before a run that compiles the kernels."""
 
 
@@ -40,7 +42,7 @@ def kernels_cached() -> bool | None:
     try:
         from gearvib import kernels
 
-        dispatcher = kernels.integrate_chunk
+        dispatcher = kernels.integrate_chunk_compiled
         if dispatcher.signatures:  # compiled (or loaded) in this process already
             return True
         cache = dispatcher._cache  # numba's private cache objects

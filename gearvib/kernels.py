@@ -35,7 +35,11 @@ Healthy meshes never enter that path, so runs without faults are unchanged bit f
 :func:`gearvib.simulate.simulate` runs that pass as straight-line code generated and compiled
 for the fault configuration (:mod:`gearvib.fault_pass`; its address in ``ints[H_FPASS]``,
 called by :func:`_call_pass`): the same floating-point operations without the sparse loops,
-record reads and law dispatch. A packed system without that address takes the generic pass.
+record reads and law dispatch. A packed system without that address takes the generic pass
+(:func:`generic_pass`, the same laws as a C function of the same signature, compiled on first
+use): :func:`integrate_chunk`, :func:`evaluate_rhs` and :func:`rhs_loop` hand the compiled
+kernels a system whose ``ints[H_FPASS]`` holds one or the other (:func:`with_pass`). The
+compiled right-hand side holds no fault law at all, so a run without faults compiles none.
 
 Drive (``ipar[IP_MODE]``):
 
@@ -92,7 +96,7 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 from llvmlite import ir
-from numba import njit, types
+from numba import carray, cfunc, njit, types
 from numba.extending import intrinsic
 
 from analysis.jit import prepare_cache
@@ -107,6 +111,7 @@ __all__ = [
     "DRIVE_SPEED",
     "DRIVE_TORQUE",
     "MESH_OUT_COLUMNS",
+    "PASS_SIGNATURE",
     "STATUS_DEFLECTION",
     "STATUS_NONFINITE",
     "STATUS_OK",
@@ -118,9 +123,12 @@ __all__ = [
     "flank_forces",
     "flank_forces_two_lines",
     "flank_forces_viscous",
+    "generic_pass",
+    "generic_pass_compiled",
     "insert_split",
     "integrate",
     "integrate_chunk",
+    "integrate_chunk_compiled",
     "jump_positions",
     "n_signals",
     "need_interval",
@@ -132,6 +140,7 @@ __all__ = [
     "speed_at",
     "speed_profile",
     "table_at",
+    "with_pass",
     "work_shape",
 ]
 
@@ -317,8 +326,8 @@ _FLOAT_BLOCKS = (
 H_NI = H_DV + 1  # number of entries of the sparse input column
 H_NO = H_DV + 2  # ... and of the output column
 #: Address of the faulty-mesh pass compiled for this system (:mod:`gearvib.fault_pass`), 0:
-#: the generic pass. Set only in the process that runs the kernel (an address is no value
-#: to pickle): :func:`pack` writes 0.
+#: the generic pass (:func:`with_pass`). Set only in the process that runs the kernel (an
+#: address is no value to pickle): :func:`pack` writes 0.
 H_FPASS = H_DV + 3
 #: Number of entries of the drive sensing row (0: the drive acts on the input coordinate).
 H_ND = H_DV + 4
@@ -1358,12 +1367,13 @@ def _faulty_meshes(y, dy, mesh_out, ints, vals, tables, hdr):
     """The meshes with faults under their own law (``mesh_out[m, 7]`` set): forces added to
     ``dy`` and ``mesh_out[m, :7]`` written as in :func:`_rhs`.
 
-    One pass after the healthy meshes (compiled into the right-hand side; no fault code in
-    the loop of the healthy meshes). Mesh-wide deviations (eccentricity, rigid pin errors)
-    shift the table law; pitch offsets alone take the mean-offset law where it holds
-    (:func:`_mean_offset`), stiffness-only tooth faults the stiffness law
-    (:func:`_stiffness_flanks`), everything else the pair law (:func:`_faulty_flanks`).
-    ``hdr``: the right-hand side's mesh header (:func:`_mesh_header`), not read again.
+    One pass after the healthy meshes, compiled apart as the generic pass
+    (:func:`generic_pass`) and called by the right-hand side through ``ints[H_FPASS]``.
+    Mesh-wide deviations (eccentricity, rigid pin errors) shift the table law; pitch offsets
+    alone take the mean-offset law where it holds (:func:`_mean_offset`), stiffness-only
+    tooth faults the stiffness law (:func:`_stiffness_flanks`), everything else the pair law
+    (:func:`_faulty_flanks`).
+    ``hdr``: the mesh header (:func:`_mesh_header`).
     """
     n = _U(ints[H_N])
     n_table = tables.shape[2]
@@ -1424,20 +1434,78 @@ def _faulty_meshes(y, dy, mesh_out, ints, vals, tables, hdr):
 @intrinsic
 def _call_pass(typingctx, address, y, dy, mesh_out, ints, vals, tables):
     """Call the compiled faulty-mesh pass at ``address``: a C function of the data pointers
-    of ``y, dy, mesh_out, ints, vals, tables`` and the lengths of ``ints`` and ``vals``
-    (:mod:`gearvib.fault_pass`). An indirect call with plain pointers and integers: a compiled
-    numba function would take every array as a struct."""
+    of ``y, dy, mesh_out, ints, vals, tables`` and the lengths of ``ints``, ``vals`` and
+    ``tables`` (:data:`PASS_SIGNATURE`; :mod:`gearvib.fault_pass`, :func:`generic_pass`). An
+    indirect call with plain pointers and integers: a compiled numba function would take
+    every array as a struct."""
     sig = types.void(address, y, dy, mesh_out, ints, vals, tables)
 
     def codegen(context, builder, signature, args):
         arrays = [context.make_array(ty)(context, builder, val)
                   for ty, val in zip(signature.args[1:], args[1:], strict=True)]
-        params = [a.data for a in arrays] + [arrays[3].nitems, arrays[4].nitems]
+        params = [a.data for a in arrays] + [arrays[3].nitems, arrays[4].nitems,
+                                             arrays[5].nitems]
         fnty = ir.FunctionType(ir.VoidType(), [p.type for p in params])
         builder.call(builder.inttoptr(args[0], fnty.as_pointer()), params)
         return context.get_dummy_value()
 
     return sig, codegen
+
+
+_F64P = types.CPointer(types.float64)
+#: The C signature of a faulty-mesh pass (:func:`_call_pass`): pointers to ``y, dy, mesh_out,
+#: ints, vals, tables`` and the lengths of ``ints``, ``vals`` and ``tables``.
+PASS_SIGNATURE = types.void(_F64P, _F64P, _F64P, types.CPointer(types.int64), _F64P, _F64P,
+                            types.intp, types.intp, types.intp)
+
+
+def _generic_pass(yp, dyp, mp, ip, vp, tp, n_ints, n_vals, n_tab):  # pragma: no cover - jit
+    """The generic faulty-mesh pass (:func:`_faulty_meshes`) as a C function of
+    :data:`PASS_SIGNATURE`, compiled by :func:`generic_pass` on first use."""
+    ints = carray(ip, (n_ints,))
+    n = ints[H_N]
+    n_mesh = ints[H_NMESH]
+    y = carray(yp, (2 * n,))
+    dy = carray(dyp, (2 * n,))
+    mesh_out = carray(mp, (n_mesh, MESH_OUT_COLUMNS))
+    vals = carray(vp, (n_vals,))
+    tables = carray(tp, (2, n_mesh, n_tab // (2 * n_mesh)))
+    _faulty_meshes(y, dy, mesh_out, ints, vals, tables, _mesh_header(ints))
+
+
+_GENERIC_PASS: list = []
+
+
+def generic_pass() -> int:
+    """Address of the generic faulty-mesh pass (:func:`_faulty_meshes` as a C function),
+    compiled at the first call in the process (loaded from numba's cache after the first
+    run on a machine). The kernels call it for a system with faults whose ``ints[H_FPASS]``
+    is 0 (:func:`integrate_chunk`, :func:`evaluate_rhs`, :func:`rhs_loop`); a run without
+    faults never compiles it."""
+    if not _GENERIC_PASS:
+        _GENERIC_PASS.append(cfunc(PASS_SIGNATURE, cache=True)(_generic_pass))
+    return int(_GENERIC_PASS[0].address)
+
+
+def generic_pass_compiled() -> bool:
+    """Whether this process has compiled (or loaded) the generic faulty-mesh pass."""
+    return bool(_GENERIC_PASS)
+
+
+def with_pass(system: tuple) -> tuple:
+    """``system`` (:meth:`KernelSystem.astuple`) ready for the compiled kernels: itself when
+    it has no faulty mesh or its ``ints[H_FPASS]`` holds a pass, else with a copy of ``ints``
+    holding the address of the generic pass (:func:`generic_pass`; the caller's arrays are
+    not changed)."""
+    ints = system[0]
+    if ints[H_FPASS] != 0:
+        return system
+    frec = int(ints[H_FREC])
+    if not np.any(ints[frec: frec + int(ints[H_NMESH])] >= 0):
+        return system
+    ints = ints.copy()
+    ints[H_FPASS] = generic_pass()
+    return (ints, *system[1:])
 
 
 @njit(cache=True, _nrt=False)
@@ -1545,15 +1613,10 @@ def _rhs(t, y, dy, mesh_out, ints, vals, tables, speed_tab, torque_tab):
                                                     vals[mc + m])
         _add_mesh_forces(dy, ints, vals, mesh_out, m, n, hdr, two_lines, fl, fr, ke, st, d, s,
                          dr)
-    if faulty:
-        fpass = ints[H_FPASS]
-        if fpass != 0:  # the pass compiled for this system's faults
-            _call_pass(fpass, y, dy, mesh_out, ints, vals, tables)
-        else:
-            _faulty_meshes(y, dy, mesh_out, ints, vals, tables, hdr)
+    if faulty:  # the pass compiled for this system's faults, or the generic one
+        _call_pass(ints[H_FPASS], y, dy, mesh_out, ints, vals, tables)
 
 
-@njit(cache=True)
 def evaluate_rhs(t: float, y: np.ndarray, system: tuple) -> tuple[np.ndarray, np.ndarray]:
     """Right-hand side at one state (allocating; for tests and cross-checks, not for loops).
 
@@ -1565,6 +1628,12 @@ def evaluate_rhs(t: float, y: np.ndarray, system: tuple) -> tuple[np.ndarray, np
         Per mesh ``F_left, -F_right, k_eff, contact state, delta``, the mesh position ``s`` and
         ``delta_R`` (the first columns of the kernels' scratch).
     """
+    return _evaluate_rhs(t, y, with_pass(system))
+
+
+@njit(cache=True)
+def _evaluate_rhs(t, y, system):
+    """:func:`evaluate_rhs` of a system ready for the kernels (:func:`with_pass`)."""
     ints, vals, tables, speed_tab, torque_tab = system
     dy = np.empty(2 * ints[H_N])
     mesh_out = np.zeros((ints[H_NMESH], MESH_OUT_COLUMNS))
@@ -1578,7 +1647,6 @@ def evaluate_rhs(t: float, y: np.ndarray, system: tuple) -> tuple[np.ndarray, np
     return dy, mesh_out[:, :7].copy()
 
 
-@njit(cache=True)
 def rhs_loop(states: np.ndarray, t0: float, dt: float, n_eval: int, system: tuple,
              dy: np.ndarray, mesh_out: np.ndarray) -> float:
     """``n_eval`` right-hand sides at the rows of ``states`` (cycled), times ``t0 + r dt``.
@@ -1586,6 +1654,12 @@ def rhs_loop(states: np.ndarray, t0: float, dt: float, n_eval: int, system: tupl
     For benchmarks (``benchmarks/bench_kernel.py``): the right-hand side of the kernels alone,
     without allocation; returns the sum of the last entries of ``dy`` (a check value).
     """
+    return _rhs_loop(states, t0, dt, n_eval, with_pass(system), dy, mesh_out)
+
+
+@njit(cache=True)
+def _rhs_loop(states, t0, dt, n_eval, system, dy, mesh_out):
+    """:func:`rhs_loop` of a system ready for the kernels (:func:`with_pass`)."""
     ints, vals, tables, speed_tab, torque_tab = system
     check = 0.0
     r = 0
@@ -1747,7 +1821,6 @@ def _short_step_limits(vals, fv0, dt):
     return vals[fv0 + 1] * z**2.5 / om, vals[fv0 + 2] * z ** (5.0 / 3.0) / om
 
 
-@njit(cache=True)
 def integrate_chunk(
     y: np.ndarray,
     first_step: int,
@@ -1791,6 +1864,18 @@ def integrate_chunk(
     status : ndarray of int64, shape (2,)
         Set to ``(STATUS_*, global step)``; ``STATUS_OK`` when all steps were done.
     """
+    integrate_chunk_compiled(y, first_step, n_steps, dt, with_pass(system), record,
+                             record_offset, flank_state, contact_changes, count_until, work,
+                             mesh_out, status)
+
+
+@njit(cache=True)
+def integrate_chunk_compiled(y, first_step, n_steps, dt, system, record, record_offset,
+                             flank_state, contact_changes, count_until, work, mesh_out,
+                             status):
+    """The compiled kernel of :func:`integrate_chunk`, for a system ready for it
+    (:func:`with_pass`: a system with faults must hold the address of its faulty-mesh pass
+    in ``ints[H_FPASS]``)."""
     ints, vals, tables, speed_tab, torque_tab = system
     n = ints[H_N]
     n_mesh = ints[H_NMESH]

@@ -22,6 +22,7 @@ SCRIPTS = sorted(BENCHMARKS.glob("bench_*.py"))
 EXPECTED = {
     "bench_bearing_alarms.py": "false alarms (a bearing cause likely)",
     "bench_cli.py": "gearvib simulate paper-case1",
+    "bench_compile.py": "first call [s CPU] this / baseline",
     "bench_envelope.py": "x faster;",
     "bench_faults.py": "1 sensor + planet pin error 10 um",
     "bench_floquet.py": "stability chart, 3 speeds",

@@ -14,7 +14,7 @@ import gearvib.jit_cache as jit_cache
 from gearvib.cli import main
 
 _ASK = ("from gearvib.jit_cache import kernels_cached; from gearvib import kernels; "
-        "print(kernels_cached(), kernels.integrate_chunk._cache._cache_path)")
+        "print(kernels_cached(), kernels.integrate_chunk_compiled._cache._cache_path)")
 
 
 def _ask(cache: Path) -> tuple[str, Path]:
@@ -33,7 +33,7 @@ def test_cold_and_warm_cache_are_told_apart(tmp_path):
     cfg, base = load_config("paper-case1")  # this process's cache holds the kernel after this
     simulate(assemble(gearset_from_dict(cfg, base=base)), SpeedRamp(1000, 1000, 0.002),
              progress=False)
-    warm = Path(kernels.integrate_chunk._cache._cache_path)
+    warm = Path(kernels.integrate_chunk_compiled._cache._cache_path)
     empty = tmp_path / "cache"
     empty.mkdir()
     answer, folder = _ask(empty)  # a fresh cache folder: the first run compiles
@@ -41,13 +41,13 @@ def test_cold_and_warm_cache_are_told_apart(tmp_path):
     # the main kernel's index and data copied in (same source: numba's stamp matches)
     folder.mkdir(parents=True, exist_ok=True)
     copied = 0
-    for f in warm.glob("kernels.integrate_chunk-*"):
+    for f in warm.glob("kernels.integrate_chunk_compiled-*"):
         shutil.copy2(f, folder / f.name)
         copied += 1
     assert copied >= 2
     assert _ask(empty)[0] == "True"
     # the data file alone (no index) counts as cold; a damaged index as unknown (no notice)
-    index = next(folder.glob("kernels.integrate_chunk-*.nbi"))
+    index = next(folder.glob("kernels.integrate_chunk_compiled-*.nbi"))
     content = index.read_bytes()
     index.unlink()
     assert _ask(empty)[0] == "False"

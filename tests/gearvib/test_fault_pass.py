@@ -186,3 +186,41 @@ def test_a_source_numba_refuses_gives_the_generic_pass_with_a_warning(monkeypatc
         assert fp.pass_address(generic[0], generic[2]) == 0
     assert not any(str(getattr(mod, "__file__", None) or "").startswith(str(tmp_path))
                    for mod in list(sys.modules.values()))  # the failed module not registered
+
+
+def test_with_pass_hands_the_kernels_a_pass_without_changing_the_callers_arrays() -> None:
+    """A healthy system goes to the compiled kernels as it is; a faulty one without a pass gets
+    a copy of ``ints`` holding the generic pass's address (the caller's arrays unchanged); one
+    with its compiled pass keeps it."""
+    base = assemble(load_gearset("paper-case1"))
+    _, healthy, _ = _packed(base)
+    assert kn.with_pass(healthy) is healthy
+    _, faulty, compiled = _packed(base.with_faults([Crack("sun", 3, severity=0.3)]))
+    ready = kn.with_pass(faulty)
+    assert faulty[0][kn.H_FPASS] == 0  # the caller's array is not changed
+    assert ready[0] is not faulty[0]
+    assert ready[0][kn.H_FPASS] == kn.generic_pass() != 0
+    np.testing.assert_array_equal(np.delete(ready[0], kn.H_FPASS),
+                                  np.delete(faulty[0], kn.H_FPASS))
+    assert all(a is b for a, b in zip(ready[1:], faulty[1:], strict=True))
+    assert kn.with_pass(compiled) is compiled
+
+
+_HEALTHY_RUN = """
+import gearvib.kernels as kn
+from gearvib.assembly import assemble
+from gearvib.config import load_gearset
+from gearvib.simulate import SpeedRamp, simulate
+simulate(assemble(load_gearset("paper-case1")), SpeedRamp(1000, 1000, 0.002), progress=False)
+print(kn.generic_pass_compiled())
+"""
+
+
+def test_a_run_without_faults_does_not_compile_the_generic_pass() -> None:
+    """The generic pass is compiled on first use only (a fresh process, the kernels from the
+    cache or compiled): a healthy run leaves it uncompiled."""
+    import subprocess
+
+    out = subprocess.run([sys.executable, "-c", _HEALTHY_RUN], capture_output=True, text=True,
+                         check=True, timeout=600).stdout.split()
+    assert out[-1] == "False"
