@@ -42,6 +42,7 @@ import numpy as np
 import xarray as xr
 from scipy import ndimage, signal, stats
 
+from analysis.catalogue import phasing_factor
 from analysis.cf import cf_dataset
 from analysis.checks import (
     require_instance,
@@ -572,8 +573,6 @@ def phasing_shifts(z_gear: int, planet_angles_rad: Sequence[float], *, pass_orde
     McFadden, P. D., Smith, J. D. (1985). Proc. IMechE C 199, 65-70. Inalpolat, M.,
     Kahraman, A. (2009). J. Sound Vib. 323, 677-696.
     """
-    from analysis.catalogue import phasing_factor
-
     if isinstance(z_gear, bool) or not isinstance(z_gear, int | np.integer) \
             or not 0 < abs(int(z_gear)) <= 100_000:
         raise ValueError(f"z_gear = {z_gear!r} is not admissible (a non-zero integer, |z| <= "

@@ -9,7 +9,7 @@ of ``ax=``).
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
@@ -97,12 +97,11 @@ def envelope_spectrum_figure(
                               "analysis.envelope_orders.EnvelopeOrderSpectrum"), "result")
     fams = _families(families)
     fig, ax = _axes(ax, figsize)
-    # imported here: analysis.envelope_orders imports this module
-    from analysis.envelope_orders import EnvelopeOrderSpectrum
-
-    if isinstance(result, EnvelopeOrderSpectrum):
-        is_order, axis = True, result.order
-        res = f"RBW {result.resolution_orders:.3g} orders"
+    # told apart by their axis: both result modules import this one (no import back)
+    if hasattr(result, "order"):
+        by_order = cast("EnvelopeOrderSpectrum", result)
+        is_order, axis = True, by_order.order
+        res = f"RBW {by_order.resolution_orders:.3g} orders"
         what = "squared envelope order spectrum"
     else:
         is_order, axis = False, result.frequency
