@@ -46,12 +46,15 @@ def work(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def results(work):
+    """The diagnoses in this process (workers=1: the test run's own workers keep the cores
+    busy; a process pool would only add its start-up; the pool runs in the CLI test and in
+    tests/cli/test_interrupts.py)."""
     out = {}
     for i, (name, (fault, _)) in enumerate(FAULTS.items()):
         rec = record_from_run(_measure([fault], seed=10 + i))
-        out[name] = diagnose(rec, "paper-case1", library=work, workers=2)
+        out[name] = diagnose(rec, "paper-case1", library=work, workers=1)
     out["healthy"] = diagnose(record_from_run(_measure([], seed=99)), "paper-case1",
-                              library=work, workers=2)
+                              library=work, workers=1)
     return out
 
 
@@ -102,11 +105,11 @@ def test_evidence_and_dataset(results):
 def test_measured_baseline(work):
     base = record_from_run(_measure([], seed=7), name="baseline")
     healthy = diagnose(record_from_run(_measure([], seed=8)), "paper-case1", baseline=base,
-                       library=work, workers=2)
+                       library=work, workers=1)
     assert healthy.causes[0].cause == "none"
     fault, _member = FAULTS["eccentricity-sun"]
     d = diagnose(record_from_run(_measure([fault], seed=9)), "paper-case1", baseline=base,
-                 library=work, workers=2)
+                 library=work, workers=1)
     assert (d.causes[0].cause, d.causes[0].member) == ("eccentricity", "sun")
     assert d.attrs["baseline"] == "measured"
 
@@ -133,7 +136,7 @@ def test_records_of_one_operating_point_share_the_candidates(work, duration, spe
     fault, member = FAULTS["eccentricity-sun"]
     ds = synthetic_measurement("paper-case1", [fault], speed_rpm=speed, duration=duration,
                                noise=0.02, seed=21)
-    d = diagnose(record_from_run(ds), "paper-case1", library=work, workers=2)
+    d = diagnose(record_from_run(ds), "paper-case1", library=work, workers=1)
     assert d.timing["simulated"] == 0 and d.timing["reused"] == 25
     assert (d.causes[0].cause, d.causes[0].member) == ("eccentricity", member)
 
@@ -207,7 +210,7 @@ def test_parallel_pinion_and_wolfrom_planet_named_first(tmp_path, case, fault, k
     path.write_text(PLANETARY_AND_PAIR if case == "pair" else heavy_wolfrom())
     ds = synthetic_measurement(str(path), [fault], speed_rpm=SPEED, duration=duration,
                                noise=0.02, seed=21)
-    d = diagnose(record_from_run(ds), str(path), work_dir=tmp_path / "runs", workers=2,
+    d = diagnose(record_from_run(ds), str(path), work_dir=tmp_path / "runs", workers=1,
                  kinds=kinds, revolutions=8)
     table = [(c.cause, c.member, round(c.score, 3)) for c in d.causes]
     top = d.causes[0]
@@ -224,7 +227,7 @@ def test_parallel_pinion_and_wolfrom_planet_named_first(tmp_path, case, fault, k
     # the same gearbox healthy (another noise seed; the candidate runs are reused): nothing
     healthy = diagnose(record_from_run(synthetic_measurement(
         str(path), [], speed_rpm=SPEED, duration=duration, noise=0.02, seed=22)), str(path),
-        work_dir=tmp_path / "runs", workers=2, kinds=kinds, revolutions=8)
+        work_dir=tmp_path / "runs", workers=1, kinds=kinds, revolutions=8)
     assert healthy.causes[0].cause == "none"
     assert all(c.score < healthy.threshold for c in healthy.causes if c.cause != "none")
 

@@ -47,7 +47,7 @@ def diagnoses(tmp_path_factory):
     for name, (spec, _) in RECORDS.items():
         path = write_record(spec, tmp / f"{name}.nc")
         rec = Record.from_measurement(load_measurement(str(path)), name=name)
-        out[name] = diagnose(rec, "paper-case1", library=tmp / "library", workers=2)
+        out[name] = diagnose(rec, "paper-case1", library=tmp / "library", workers=1)
     return out
 
 
