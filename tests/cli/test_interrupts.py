@@ -325,7 +325,7 @@ def test_sweep_interrupted_while_writing_sweep_nc(tmp_path):
 def test_sweep_killed_leaves_no_worker_and_resumes(tmp_path):
     """SIGKILL of the command: the kernel ends its workers (PR_SET_PDEATHSIG); the next call
     removes their temporary files and reuses the finished runs."""
-    r, workers = _sweep_and_signal(tmp_path, signal.SIGKILL, delay=0.5)
+    r, workers = _sweep_and_signal(tmp_path, signal.SIGKILL, delay=0.5, duration=0.2)
     assert r.returncode == -signal.SIGKILL and len(workers) >= 2, r
     time.sleep(0.3)
     assert not [w for w in workers if _running(w)], workers
