@@ -281,7 +281,7 @@ def atomic_write(dest: str | os.PathLike, write: Callable[[Path], T], *,
     ----------
     dest : path-like
         Destination; its directory must exist. An existing file is replaced only once the new
-        one is complete.
+        one is complete; a device, FIFO or socket is refused (a rename would replace it).
     write : callable
         ``write(tmp_path)`` writes the whole content to ``tmp_path``; its result is returned.
     abandonable : bool
@@ -306,6 +306,11 @@ def atomic_write(dest: str | os.PathLike, write: Callable[[Path], T], *,
         raise FileNotFoundError(f"directory of {dest} does not exist")
     if dest.is_dir():
         raise IsADirectoryError(f"{dest} is a directory (give a file name)")
+    if dest.exists() and not dest.is_file():
+        # a device, FIFO or socket: the rename would replace the node itself (as root,
+        # /dev/null would become a regular file)
+        raise ValueError(f"{dest} is not a regular file (a device, FIFO or socket); give the "
+                         "name of a file to write")
     temporary = tempfiles.temp_path(dest)
     # an abandonable write goes into a private folder of that name: once the folder is gone,
     # the abandoned writer cannot create its file again (tempfiles docstring)
