@@ -36,8 +36,11 @@ family's ``n`` lines; the chance that noise reaches that sum is bounded by the u
 the Gamma(``n``, 1) distribution (the sum of ``n`` exponential variables; capping only lowers
 the sum). The cap keeps a single strong line (an unexplained tone, an eccentricity's first
 harmonic) from carrying the family: with ``cap = 10`` a line adds at most 10, so a family of
-10 harmonics needs several lines well above the noise to reach a chance of 1e-4. The
-false-positive rates measured on records without the fault are stated in
+10 harmonics needs several lines well above the noise to reach a chance of 1e-4. A family is
+*detected* (:attr:`ImpactEvidence.detected`) at a chance of at most :data:`IMPACT_CHANCE`
+with at least :data:`MIN_STRONG` lines 6 dB over the noise and, in the envelope, its
+strongest lines no more than :data:`MIN_RELATIVE_DB` under the strongest shaft-order line.
+The false-positive rates measured on records without the fault are stated in
 ``docs/diagnosis.md``.
 
 References
@@ -70,8 +73,8 @@ if TYPE_CHECKING:
     import matplotlib.figure
     import xarray as xr
 
-__all__ = ["IMPACT_CAP", "IMPACT_CHANCE", "IMPACT_HARMONICS", "MIN_RELATIVE_DB", "ImpactCheck",
-           "ImpactEvidence", "ImpactFamily", "impact_check"]
+__all__ = ["IMPACT_CAP", "IMPACT_CHANCE", "IMPACT_HARMONICS", "MIN_RELATIVE_DB", "MIN_STRONG",
+           "ImpactCheck", "ImpactEvidence", "ImpactFamily", "impact_check"]
 
 IMPACT_CAP = 10.0
 """Largest contribution of one line (its power over the mean noise power) to a family's sum."""
@@ -92,7 +95,11 @@ own modulation is no tooth fault's impact."""
 
 STRONG = 4.0
 """A line at least this many times the mean noise power (6 dB; chance e^-4 = 1.8 % for noise)
-counts as *strong* in the evidence text."""
+counts as *strong*."""
+
+MIN_STRONG = 3
+"""Strong lines a detected family needs: an impact train fills several harmonics, a single
+tone (or one noise peak) only one (as for the bearing families, ``docs/diagnosis.md``)."""
 
 _LN2 = math.log(2.0)
 _MIN_LINES = 3
@@ -152,9 +159,10 @@ class ImpactEvidence:
 
     @property
     def detected(self) -> bool:
-        """Chance at most :data:`IMPACT_CHANCE` and, in the envelope, the lines no more than
-        :data:`MIN_RELATIVE_DB` below the healthy set's strongest modulation."""
-        return (self.lines > 0 and self.chance <= IMPACT_CHANCE
+        """Chance at most :data:`IMPACT_CHANCE`, at least :data:`MIN_STRONG` strong lines
+        and, in the envelope, the lines no more than :data:`MIN_RELATIVE_DB` below the
+        healthy set's strongest modulation."""
+        return (self.lines > 0 and self.chance <= IMPACT_CHANCE and self.strong >= MIN_STRONG
                 and not self.relative_db < MIN_RELATIVE_DB)
 
     def text(self) -> str:
