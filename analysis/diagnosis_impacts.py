@@ -388,7 +388,7 @@ def impact_check(x: Any, fs: float, rpm: Any, *, mesh_orders: Sequence[float],
 
     # order tracking up to the sample rate's limit at the top speed
     top = fs / 2.56 / (float(np.max(rv)) / 60.0)
-    spr = int(2 ** math.ceil(math.log2(max(2.56 * top, 8.0))))
+    spr = next_fast_len(max(8, math.ceil(2.56 * top)))  # the whole record is one FFT
     ang = resample_to_angle(xv, fs, rpm=rv, samples_per_rev=spr, max_order=top, min_rpm=0.0)
     revs = int(ang.values.size // spr)
     if revs < 4:
@@ -405,7 +405,9 @@ def impact_check(x: Any, fs: float, rpm: Any, *, mesh_orders: Sequence[float],
     hi = 0.0
     whole = np.zeros(nb, bool)
     whole[::revs] = True
-    noise = _noise_mean(np.where(whole, np.median(power[~whole]), power), revs, width)
+    # the whole orders (the healthy set's lattice, a synchronous comb) stand out of the noise:
+    # the running median takes the next bin's power there
+    noise = _noise_mean(np.where(whole, np.roll(power, -1), power), revs, width)
     level = 10.0 ** (present_db / 10.0)
     for z in meshes:
         absent = 0  # the run of present harmonics from the first ends at two absent ones
@@ -432,6 +434,10 @@ def impact_check(x: Any, fs: float, rpm: Any, *, mesh_orders: Sequence[float],
     env -= float(np.mean(env))
     env *= np.hanning(env.size)
     es = rfft(env)
+    # the envelope is read up to the highest harmonic checked (families and shaft orders)
+    rates = [f.fundamental for f in fams if not _is_whole(f.fundamental, 1e-6)]
+    e_top = harmonics * max([*rates, *known.tolist(), 1.0]) + 2.0 * width
+    es = es[:min(es.size, math.ceil(e_top * revs) + 1)]
     e_pow = es.real ** 2 + es.imag ** 2
     e_order = np.arange(e_pow.size) / revs
     e_ratio = e_pow / _noise_mean(e_pow, revs, width)
