@@ -366,9 +366,9 @@ def impact_check(x: Any, fs: float, rpm: Any, *, mesh_orders: Sequence[float],
     if not np.all(meshes > 0):
         raise ValueError("mesh_orders must all be > 0")
     fams = list(families)
-    for f in fams:
-        if not isinstance(f, ImpactFamily):
-            raise TypeError(f"families: {f!r} is not an ImpactFamily")
+    for item in fams:
+        if not isinstance(item, ImpactFamily):
+            raise TypeError(f"families: {item!r} is not an ImpactFamily")
     known = np.abs(require_real_array(known_orders, "known_orders", ndim=1, min_size=0,
                                       max_abs=1e6))
     known = known[known > 0]
@@ -453,10 +453,10 @@ def impact_check(x: Any, fs: float, rpm: Any, *, mesh_orders: Sequence[float],
     sync_sel = (order >= lo) & ~near
     out = []
     for fam in fams:
-        f = fam.fundamental
+        f = float(fam.fundamental)
         if _is_whole(f, 1e-6):
-            k = np.arange(math.ceil(lo / f), math.floor(top / f) + 1)
-            idx = np.rint(k * f * revs).astype(np.int64)
+            comb = np.arange(math.ceil(lo / f), math.floor(top / f) + 1)
+            idx = np.rint(comb * f * revs).astype(np.int64)
             idx = idx[(idx >= 0) & (idx < nb)]
             idx = idx[sync_sel[idx]]
             out.append(_evidence(fam, "synchronous", power[idx] / noise[idx], cap))
