@@ -450,27 +450,26 @@ def sideband_ratios(profile: OrderProfile, fundamental: float, mesh_order: float
     floor = (ndimage.percentile_filter(amp, float(floor_percentile), size=size, mode="nearest")
              if with_noise else None)
 
-    def index(o: float) -> int:
-        return int(np.rint((o - order[0]) / step))
+    def index(o: np.ndarray) -> np.ndarray:
+        return np.rint((o - order[0]) / step).astype(np.int64)
 
-    def at(o: float) -> float:
+    def at(o: np.ndarray) -> np.ndarray:  # the largest bin within one bin of each line
         i = index(o)
-        return float(amp[max(i - 1, 0):i + 2].max())
+        return np.maximum(np.maximum(amp[np.maximum(i - 1, 0)], amp[i]),
+                          amp[np.minimum(i + 1, amp.size - 1)])
 
-    ratios, noise = [], []
+    harm = []
     for m in range(1, int(mesh_harmonics) + 1):
-        centre = m * fm
-        if centre + k_max * f > order[-1] - step:
+        if m * fm + k_max * f > order[-1] - step:
             break
-        ref = at(centre)
-        if not ref > 0:
-            continue
-        for k in ks:
-            o = centre + k * f
-            ratios.append(at(o) / ref)
-            if floor is not None:
-                noise.append(float(floor[index(o)]) / ref)
-    return np.asarray(ratios, float), np.asarray(noise, float)
+        harm.append(m)
+    centres = np.asarray(harm, dtype=np.int64) * fm
+    ref = at(centres)
+    centres, ref = centres[ref > 0], ref[ref > 0]
+    lines = centres[:, None] + ks[None, :] * f  # harmonic-major
+    ratios = (at(lines) / ref[:, None]).ravel()
+    noise = (floor[index(lines)] / ref[:, None]).ravel() if floor is not None else np.empty(0)
+    return ratios, noise
 
 
 def impulse_mismatch_db(measured: np.ndarray, noise: np.ndarray,

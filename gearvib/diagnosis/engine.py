@@ -56,6 +56,7 @@ from gearvib.diagnosis.candidates import (
     severity_text,
 )
 from gearvib.diagnosis.cases import ProfileJob, ProfileSettings, profile_case
+from gearvib.diagnosis.impacts import member_impacts
 from gearvib.diagnosis.library import default_library, entry_key, library_folder, load_entry
 from gearvib.diagnosis.lines import (
     MemberLines,
@@ -454,6 +455,10 @@ def diagnose(measured: Record, config: str, *, baseline: Record | None = None,
     fams = family_table(lines, members, max_order)
     fam_ev = family_evidence(order, d_meas, dead, fams)
     fam_by = {f.family: f for f in fam_ev}
+    # the local faults' impacts: their rate in the envelope, their comb above the mesh band
+    impacts, impact_by = member_impacts(measured.signal[:n_use], measured.fs, c_rpm[:n_use],
+                                        lines=lines, members=members, ms=ms, model=kin.model,
+                                        name=measured.name)
     peaks = rising_peaks(order, d_meas, dead)
     # strongest rises first
     strength = np.interp(peaks, order, d_meas) if peaks.size else np.array([])
@@ -493,6 +498,8 @@ def diagnose(measured: Record, config: str, *, baseline: Record | None = None,
         cause_fams[(cause, mem)] = fe
         if fe is not None:
             ev.append(fe.text())
+        if (cause, mem) in impact_by and impact_by[(cause, mem)].lines:
+            ev.append(impact_by[(cause, mem)].text())
         if mem in groups:
             ev.append("the planets are interchangeable (equally spaced): which planet cannot "
                       "be told without a carrier phase reference")
@@ -505,7 +512,7 @@ def diagnose(measured: Record, config: str, *, baseline: Record | None = None,
         if fault_lines is not None:
             causes.extend(bearing_causes(fault_lines, float(threshold)))
     causes = rank_causes(causes, float(threshold), families=cause_fams, mismatch=mismatch,
-                         local_kinds=LOCAL_KINDS, none_evidence=(
+                         local_kinds=LOCAL_KINDS, impacts=impact_by, none_evidence=(
                              f"{peaks.size} rising peaks above the noise deadband of "
                              f"{dead:.1f} dB",))
     lead = causes[0]
@@ -540,7 +547,11 @@ def diagnose(measured: Record, config: str, *, baseline: Record | None = None,
     if close and not nxt:
         nxt.append("a second sensor position and another load: the leading causes differ "
                    "little on this record")
+    detected = [e.family for e in impacts.evidence if e.detected]
     notes = [f"order locking: {locking}", *mode_notes,
+             f"tooth-fault impacts (envelope without the mesh lattice; comb above the mesh "
+             f"band, orders {impacts.band[0]:.0f}-{impacts.band[1]:.0f}): "
+             + (f"detected for {', '.join(detected)}" if detected else "none detected"),
              f"resolution {1 / revolutions:.4g} {kin.reference} orders, {meas.segments} "
              f"segments, band up to order {max_order:.0f} ({max_order / mesh:.1f} mesh "
              "harmonics" + (" of the fastest mesh)" if len(set(meshes)) > 1 else ")"),

@@ -11,7 +11,10 @@ ranked list a user reads:
   :data:`FAMILY_HITS` rising peaks on its family's lines at a coincidence chance of at most
   :data:`FAMILY_CHANCE` (:func:`analysis.diagnosis.family_evidence`): the measurement shows
   the member's fault frequencies even where the simulated signature (its assumed transfer
-  path and fault model) does not match them well;
+  path and fault model) does not match them well; or, for a local tooth fault, at any score
+  with the member's tooth impacts *detected* in the record
+  (:attr:`analysis.diagnosis_impacts.ImpactEvidence.detected`: the fault rate in the
+  envelope, or its comb above the mesh band);
 * **unlikely**: neither.
 
 Likely causes come first, then possible ones, then the others, each by score. ``none`` leads
@@ -28,6 +31,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import replace
 
 from analysis.diagnosis import Cause, FamilyEvidence
+from analysis.diagnosis_impacts import ImpactEvidence
 
 __all__ = ["FAMILY_CHANCE", "FAMILY_HITS", "KIND_MARGIN", "KIND_MAX_MISMATCH_DB",
            "LOCAL_FAULT", "POSSIBLE_MARGIN", "SUPPORTED_MARGIN", "SUPPORT_CHANCE",
@@ -63,12 +67,18 @@ LOCAL_FAULT = "local_tooth_fault"
 _ORDER = {"likely": 0, "possible": 1, "unlikely": 2}
 
 
-def _verdict(c: Cause, threshold: float, fam: FamilyEvidence | None) -> tuple[str, str]:
+def _verdict(c: Cause, threshold: float, fam: FamilyEvidence | None,
+             impact: ImpactEvidence | None = None) -> tuple[str, str]:
     if c.score >= threshold:
         return "likely", ""
     if c.score >= threshold - POSSIBLE_MARGIN:
         return "possible", (f"possible: score {c.score:.2f} near the threshold "
                             f"{threshold:.2f}")
+    if impact is not None and impact.detected:
+        return "possible", (f"possible: the member's tooth impacts stand in the record "
+                            f"({impact.family}, {impact.method}, chance {impact.chance:.2g}) "
+                            f"though the simulated signature explains the measured rises "
+                            f"poorly (score {c.score:.2f})")
     if fam is None or fam.hits == 0:
         return "unlikely", ""
     lines = (f"{fam.hits} of {fam.rising} rising peaks on its lines, coincidence chance "
@@ -88,7 +98,8 @@ def rank_causes(causes: Sequence[Cause], threshold: float, *,
                 families: Mapping[tuple[str, str], FamilyEvidence | None],
                 mismatch: Mapping[tuple[str, str], float],
                 local_kinds: Sequence[str], none_evidence: Sequence[str] = (),
-                none_reason: str | None = None) -> list[Cause]:
+                none_reason: str | None = None,
+                impacts: Mapping[tuple[str, str], ImpactEvidence] | None = None) -> list[Cause]:
     """The causes with their verdicts, best first, with ``none`` or the kind fallback first.
 
     Parameters
@@ -111,6 +122,10 @@ def rank_causes(causes: Sequence[Cause], threshold: float, *,
     none_reason : str, optional
         Its first evidence line (default: no simulated candidate explains the measured
         differences and no fault family carries the measured rises, with the best score).
+    impacts : mapping, optional
+        ``(cause, member) -> ImpactEvidence`` of the local tooth faults
+        (:func:`gearvib.diagnosis.impacts.member_impacts`): detected impacts make a local
+        tooth fault (one of ``local_kinds``) at least possible.
 
     Returns
     -------
@@ -136,7 +151,8 @@ def rank_causes(causes: Sequence[Cause], threshold: float, *,
         if c.verdict:  # judged by its own evidence (a bearing's lines)
             ranked.append(c)
             continue
-        v, why = _verdict(c, threshold, families.get((c.cause, c.member)))
+        imp = (impacts or {}).get((c.cause, c.member)) if c.cause in local_kinds else None
+        v, why = _verdict(c, threshold, families.get((c.cause, c.member)), imp)
         ranked.append(replace(c, verdict=v, evidence=(*c.evidence, why) if why else c.evidence))
     ranked.sort(key=lambda c: (_ORDER[c.verdict], -c.score, c.cause, c.member))
     best = max((c.score for c in ranked), default=0.0)

@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from analysis.diagnosis import Cause, FamilyEvidence, family_evidence, family_lines
+from analysis.diagnosis_impacts import IMPACT_CHANCE, MIN_RELATIVE_DB, ImpactEvidence
 from gearvib.diagnosis.verdict import (
     FAMILY_CHANCE,
     FAMILY_HITS,
@@ -79,6 +80,43 @@ def test_a_score_near_the_threshold_with_its_family_behind_it_is_possible():
     assert "21 of 515" in out[0].evidence[-1]
     # the same score without its family behind it: nothing stands out
     out = _rank(causes, {("crack", "ring"): _fam(21, 515, SUPPORT_CHANCE * 2, "ring_fault")})
+    assert out[0].cause == "none"
+
+
+def _impact(chance, relative_db=-3.0, method="envelope", family="ring_fault"):
+    return ImpactEvidence(family, 4.0, method, 10, 6, 40.0, chance, relative_db)
+
+
+def test_detected_tooth_impacts_make_the_members_local_faults_possible():
+    """The 4-planet ring fault of the independent benchmark: no simulated signature explains
+    the record (scores 0.00-0.01), but its impacts stand above the mesh band: the ring's local
+    faults are possible and lead, the other causes stay unlikely."""
+    imp = _impact(1.4e-6, float("nan"), "synchronous")
+    causes = [Cause("pitting", "ring", 0.006, (), "p ring"),
+              Cause("crack", "ring", 0.0, (), "c ring"),
+              Cause("pin_error", "planet", 0.16, (), "pin"),
+              Cause("eccentricity", "sun", 0.1, (), "ecc")]
+    impacts = {("pitting", "ring"): imp, ("crack", "ring"): imp}
+    out = rank_causes(causes, T, families={}, mismatch={}, local_kinds=LOCAL, impacts=impacts)
+    assert out[0].member == "ring" and out[0].verdict == "possible"
+    assert out[0].cause in (*LOCAL, LOCAL_FAULT)
+    assert "tooth impacts" in " ".join(out[0].evidence)
+    assert {(c.cause, c.verdict) for c in out if c.member != "ring"} == {
+        ("pin_error", "unlikely"), ("eccentricity", "unlikely")}
+    # impacts only count for local tooth faults: an eccentricity keeps its verdict
+    out = rank_causes(causes, T, families={}, mismatch={}, local_kinds=LOCAL,
+                      impacts={("eccentricity", "sun"): imp})
+    assert out[0].cause == "none"
+
+
+@pytest.mark.parametrize(("chance", "relative_db"), [(IMPACT_CHANCE * 3, 0.0),
+                                                     (1e-12, MIN_RELATIVE_DB - 1.0)])
+def test_impacts_not_detected_leave_none_first(chance, relative_db):
+    imp = _impact(chance, relative_db)
+    assert not imp.detected
+    causes = [Cause("crack", "ring", 0.05, (), "c"), Cause("crack", "sun", 0.1, (), "s")]
+    out = rank_causes(causes, T, families={}, mismatch={}, local_kinds=LOCAL,
+                      impacts={("crack", "ring"): imp})
     assert out[0].cause == "none"
 
 
