@@ -329,6 +329,19 @@ def _solve_args() -> A:
 A = tuple[tuple, dict]
 
 
+def _impact_families() -> list[Any]:
+    from analysis.diagnosis_impacts import ImpactFamily
+
+    return [ImpactFamily("f", 1.3)]
+
+
+@functools.cache
+def _impact() -> Any:
+    from analysis.diagnosis_impacts import impact_check
+
+    return impact_check(x(), FS, rpm(), mesh_orders=[7.0], families=_impact_families())
+
+
 def _c(*args: Any, **kwargs: Any) -> Callable[[], A]:
     """A baseline whose arguments are callables evaluated lazily (or plain values)."""
 
@@ -486,6 +499,10 @@ BASELINES: dict[str, Callable[[], A]] = {
     "analysis.diagnosis.signature_score": _c(lambda: np.ones(10), lambda: np.ones(10),
                                              deadband=1.0),
     "analysis.diagnosis.with_noise_floor": _c(lambda: _profile(), 40.0),
+    # diagnosis_impacts, diagnosis_impact_plots
+    "analysis.diagnosis_impacts.impact_check": _c(x, FS, rpm, mesh_orders=[7.0],
+                                                  families=_impact_families),
+    "analysis.diagnosis_impact_plots.impact_figure": _c(_impact),
     # envelope
     "analysis.envelope.band_attributes": _c(lambda: _band(), None, 2, FS),
     "analysis.envelope.choose_band": _c(lambda: (200.0, 600.0), FS, x),
