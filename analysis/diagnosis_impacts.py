@@ -101,8 +101,15 @@ MIN_STRONG = 3
 """Strong lines a detected family needs: an impact train fills several harmonics, a single
 tone (or one noise peak) only one (as for the bearing families, ``docs/diagnosis.md``)."""
 
+BACKGROUND_DB = 6.0
+"""Background (the running median between the whole orders) over the record's noise floor
+[dB] around a mesh harmonic at which the harmonic counts as present however smeared its
+lines are."""
+
 _LN2 = math.log(2.0)
+_BACKGROUND = 10.0 ** (BACKGROUND_DB / 10.0)
 _MIN_LINES = 3
+_MIN_COMB = 10
 
 
 @dataclass(frozen=True)
@@ -409,6 +416,10 @@ def impact_check(x: Any, fs: float, rpm: Any, *, mesh_orders: Sequence[float],
     # the running median takes the next bin's power there
     noise = _noise_mean(np.where(whole, np.roll(power, -1), power), revs, width)
     level = 10.0 ** (present_db / 10.0)
+    # the record's noise floor: the quietest background below the anti-alias roll-off at the
+    # top (a running median: about 1 dB under the mean level of white noise, its spread)
+    body = (order > span) & (order < 0.9 * top)
+    floor = float(np.min(noise[body])) if np.any(body) else float(np.min(noise))
     for z in meshes:
         absent = 0  # the run of present harmonics from the first ends at two absent ones
         for h in range(1, int(top / z) + 2):
@@ -419,7 +430,11 @@ def impact_check(x: Any, fs: float, rpm: Any, *, mesh_orders: Sequence[float],
                 continue
             near[i0:i1] = True
             ii = np.arange(math.ceil(i0 / revs) * revs, i1, revs)
-            if absent < 2 and ii.size and np.any(power[ii] > level * noise[ii]):
+            line = absent < 2 and ii.size and np.any(power[ii] > level * noise[ii])
+            # a mesh smeared by the speed reference (a 1-pulse tacho on a run-up) raises the
+            # background around it instead: BACKGROUND_DB over the floor, whatever the run
+            smeared = float(np.max(noise[i0:i1])) > _BACKGROUND * floor
+            if line or smeared:
                 hi, absent = max(hi, c), 0
             else:
                 absent += 1
@@ -442,6 +457,9 @@ def impact_check(x: Any, fs: float, rpm: Any, *, mesh_orders: Sequence[float],
     e_order = np.arange(e_pow.size) / revs
     e_ratio = e_pow / _noise_mean(e_pow, revs, width)
     tol = 2.0 / revs
+    # a shaft so slow that its multiples lie closer than 4 tolerances would explain every
+    # line: it explains none (as the known families of the bearing check)
+    known = known[known > 4.0 * tol]
     # the healthy set's strongest modulation: the largest line at the shafts' first harmonics
     ref = 0.0
     for q in known:
@@ -459,6 +477,8 @@ def impact_check(x: Any, fs: float, rpm: Any, *, mesh_orders: Sequence[float],
             idx = np.rint(comb * f * revs).astype(np.int64)
             idx = idx[(idx >= 0) & (idx < nb)]
             idx = idx[sync_sel[idx]]
+            if idx.size < _MIN_COMB:  # too short a band: no comb to speak of
+                idx = idx[:0]
             out.append(_evidence(fam, "synchronous", power[idx] / noise[idx], cap))
             continue
         ks = [k for k in range(1, harmonics + 1)
