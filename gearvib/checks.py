@@ -11,6 +11,11 @@ a message that names the key, the value and what is admissible.
 The messages of those layers have different wordings, which their tests and their users rely
 on; a :class:`Wording` selects one (:data:`TABLE`, :data:`RUN`, :data:`RECIPE`, :data:`ITEM`).
 
+The arguments of the Python API (constructors and functions a script calls) are checked with
+:func:`check_real`, :func:`check_count`, :func:`check_text` and :func:`check_items` at the
+public boundary, before any work: numpy scalars count as numbers there, a value shown in a
+message is cut to 40 characters (:func:`short`), and the message names the parameter.
+
 Examples
 --------
 >>> check_number(0.5, "[simulation].duration", low=1e-6, wording=RUN)
@@ -25,25 +30,46 @@ ValueError: [[fault]] #1 (crack): depth = -1.0 is not admissible (admissible: 0 
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any, SupportsFloat, cast
 
+import numpy as np
+
 __all__ = [
+    "API",
     "ITEM",
+    "NUMBER_TYPES",
     "RECIPE",
     "RUN",
     "TABLE",
     "Wording",
+    "check_count",
     "check_integer",
+    "check_items",
     "check_number",
+    "check_real",
+    "check_text",
+    "cut",
     "short",
 ]
 
+NUMBER_TYPES: tuple[type, ...] = (int, float, np.integer, np.floating)
+"""What the Python API takes for a number (a bool, ``np.bool_``, str or bytes is none)."""
+
 
 def short(value: Any) -> str:
-    """``repr`` of a value, shortened to 40 characters for a one-line message."""
+    """``repr`` of a value on one line, shortened to 40 characters for a one-line message."""
     text = repr(value)
+    if "\n" in text:
+        text = " ".join(text.split())
     return text if len(text) <= 40 else text[:37] + "..."
+
+
+def cut(text: str, limit: int = 40) -> str:
+    """A name as a message shows it: whole, or its first ``limit - 3`` characters and
+    ``...``."""
+    return text if len(text) <= limit else text[:limit - 3] + "..."
 
 
 @dataclass(frozen=True)
@@ -93,6 +119,8 @@ RECIPE = Wording(terse=True)
 """Study recipes (``[analysis]``, ``[run]``)."""
 ITEM = Wording(finite="finite", interval=True, full=True)
 """``[[fault]]`` and ``[[sensor]]`` items."""
+API = Wording(finite="finite")
+"""Arguments of the Python API (:func:`check_real`)."""
 
 
 def check_number(value: Any, name: str, *, low: float | None = None,
@@ -190,3 +218,76 @@ def check_integer(value: Any, name: str, *, low: int | None = None, high: int | 
     if high is not None and v > high:
         raise error(wording.refusal(name, wording.shown(v), f"<= {high}"))
     return v
+
+
+def check_real(value: Any, name: str, *, low: float | None = None, high: float | None = None,
+               low_open: bool = False, high_open: bool = False, allow_inf: bool = False,
+               optional: bool = False, error: type[Exception] = ValueError) -> Any:
+    """A number argument of the Python API as a float (:func:`check_number` with numpy
+    scalars admitted and the :data:`API` wording).
+
+    Parameters
+    ----------
+    value : Any
+        The argument.
+    name : str
+        How the message names it (the parameter, e.g. ``"mass of body 'sun'"``).
+    low, high, low_open, high_open
+        Admissible range (as :func:`check_number`).
+    allow_inf : bool
+        ``+inf`` is admissible (a rigid stiffness, :data:`gearvib.structure.RIGID`).
+    optional : bool
+        ``None`` is admissible (returned as is).
+    error : type
+        Exception class raised.
+
+    Returns
+    -------
+    float or None
+    """
+    if optional and value is None:
+        return None
+    if (allow_inf and isinstance(value, float | np.floating) and value == math.inf):
+        return math.inf
+    return check_number(value, name, low=low, high=high, low_open=low_open,
+                        high_open=high_open, error=error, types=NUMBER_TYPES, wording=API)
+
+
+def check_count(value: Any, name: str, *, low: int | None = None, high: int | None = None,
+                optional: bool = False, error: type[Exception] = ValueError) -> Any:
+    """An integer argument of the Python API in ``low .. high`` (an ``int`` or a numpy
+    integer; a float, even a whole one, a bool or a string is refused), as an ``int``."""
+    if optional and value is None:
+        return None
+    return check_integer(value, name, low=low, high=high, error=error,
+                         types=(int, np.integer), wording=API)
+
+
+def check_text(value: Any, name: str, *, optional: bool = False, empty: bool = False,
+               error: type[Exception] = ValueError) -> Any:
+    """A string argument (a name, a member, a kind): a ``str``, not empty unless ``empty``;
+    ``None`` too if ``optional``."""
+    if optional and value is None:
+        return None
+    if not isinstance(value, str):
+        raise error(f"{name} must be a string, got {short(value)}")
+    if not value and not empty:
+        raise error(f"{name} must not be empty")
+    return value
+
+
+def check_items(values: Any, cls: type | tuple[type, ...], name: str, *,
+                error: type[Exception] = TypeError) -> tuple:
+    """A list or tuple whose items are all instances of ``cls``, as a tuple.
+
+    The message names the parameter, the item and the class expected (``bodies[2] must be a
+    Body; got str``) instead of the ``AttributeError`` a wrong item would raise later.
+    """
+    if not isinstance(values, Sequence) or isinstance(values, str | bytes):
+        raise error(f"{name} must be a list or tuple, got {short(values)}")
+    classes = cls if isinstance(cls, tuple) else (cls,)
+    expected = " or ".join(c.__name__ for c in classes)
+    for i, v in enumerate(values):
+        if not isinstance(v, classes):
+            raise error(f"{name}[{i}] must be a {expected}; got {type(v).__name__}")
+    return tuple(values)

@@ -32,12 +32,13 @@ from typing import Any, cast
 from gearvib.checks import TABLE, check_integer, check_number
 from gearvib.checks import short as _short
 from gearvib.faults.description import FaultError, faults_from_list
-from gearvib.geometry import Toothing
+from gearvib.geometry import MAX_TEETH, Toothing
 from gearvib.paths import exists, is_file
 from gearvib.sensors.description import SensorError, sensors_from_list
-from gearvib.stages import HOUSING, multi_stage, parallel_stage, stage_prefix
+from gearvib.stages import HOUSING, MAX_STAGES, multi_stage, parallel_stage, stage_prefix
 from gearvib.stiffness import stiffness_from_dict
 from gearvib.structure import (
+    MAX_PLANETS,
     RIGID,
     Body,
     Coupling,
@@ -87,10 +88,6 @@ class ConfigError(ValueError):
     """
 
 
-MAX_TEETH = 10_000
-"""Largest tooth number (absolute value) accepted."""
-MAX_PLANETS = 64
-"""Largest number of planets (or planet pairs) accepted."""
 MAX_LIST = 100_000
 """Longest list of numbers accepted in a description (stiffness curves, tables)."""
 MAX_DAMPING_RATIO = 10.0
@@ -117,8 +114,6 @@ MAX_FOURIER = 1_000
 _TOP = {"name", "title", "description", "type", "operation", "geometry", "bodies", "meshes",
         "body", "mesh", "coupling", "stage1", "stage2", "shaft", "simulation", "references",
         "fault", "sensor", "rolling_bearing"}
-MAX_STAGES = 16
-"""Most stages of a ``multi-stage`` description."""
 _STAGE_KEY = re.compile(r"stage([1-9][0-9]?)")
 """Top-level keys of the stages of a ``multi-stage`` description (``stage1`` ...)."""
 _COMMON_TOP = {"name", "title", "description", "type", "simulation", "references", "body",
