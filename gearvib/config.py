@@ -36,7 +36,7 @@ from gearvib.geometry import MAX_TEETH, Toothing
 from gearvib.paths import exists, is_file
 from gearvib.sensors.description import SensorError, sensors_from_list
 from gearvib.stages import HOUSING, MAX_STAGES, multi_stage, parallel_stage, stage_prefix
-from gearvib.stiffness import stiffness_from_dict
+from gearvib.stiffness import MAX_FOURIER, MAX_STIFFNESS, stiffness_from_dict
 from gearvib.structure import (
     MAX_PLANETS,
     RIGID,
@@ -92,9 +92,6 @@ MAX_LIST = 100_000
 """Longest list of numbers accepted in a description (stiffness curves, tables)."""
 MAX_DAMPING_RATIO = 10.0
 """Largest mesh damping ratio accepted."""
-MAX_STIFFNESS = 1e40
-"""Largest stiffness [N/m, N m/rad] accepted (a value that large is refused later for the
-steps it needs, naming them; beyond it the matrices overflow)."""
 MAX_DAMPING = 1e12
 """Largest damping [N s/m, N m s/rad] accepted."""
 MASS_RANGE = (1e-9, 1e9)
@@ -107,8 +104,6 @@ MAX_SHIFT = 10.0
 """Largest profile-shift coefficient (absolute value) accepted."""
 MAX_BODIES = 200
 """Most ``[[body]]``, ``[[mesh]]`` or ``[[coupling]]`` entries accepted."""
-MAX_FOURIER = 1_000
-"""Most Fourier coefficients of a stiffness model (the tables hold 2048 samples per cycle)."""
 
 
 _TOP = {"name", "title", "description", "type", "operation", "geometry", "bodies", "meshes",
@@ -1083,7 +1078,7 @@ def preset_text(name: str) -> str:
     if name in list_rigs():
         return resources.files("gearvib.rigs").joinpath(f"{name}.toml").read_text("utf-8")
     if name not in list_presets():
-        raise ConfigError(f"unknown preset {name!r} (available: "
+        raise ConfigError(f"unknown preset {_short(name)} (available: "
                           f"{', '.join(list_presets() + list_rigs())})")
     return resources.files("gearvib.presets").joinpath(f"{name}.toml").read_text("utf-8")
 
@@ -1239,7 +1234,7 @@ def load_config(name_or_path: str | Path) -> tuple[dict, Path | None]:
     name = str(name_or_path)
     if name not in list_presets() and name not in list_rigs():
         raise ConfigError(
-            f"unknown preset {name!r} (available: "
+            f"unknown preset {_short(name)} (available: "
             f"{', '.join(list_presets() + list_rigs())}; or give a path to a .toml file)"
         )
     return tomllib.loads(preset_text(name)), None

@@ -35,6 +35,7 @@ from typing import Any
 from gearvib.checks import RUN, check_number
 from gearvib.checks import short as _short
 from gearvib.config import ConfigError
+from gearvib.kinematics import MAX_SPEED_RPM
 from gearvib.simulation.conditions import (
     Conditions,
     DriveCoupling,
@@ -63,8 +64,6 @@ _ONLY = {
 
 MAX_TABLE = 100_000
 """Longest motor characteristic table accepted."""
-MAX_SPEED_RPM = 1e9
-"""Largest speed magnitude accepted [min^-1] (a run that fast is then refused for its size)."""
 MAX_TORQUE = 1e12
 """Largest torque magnitude accepted [N m] (also the coefficients of ``load_torque``)."""
 MIN_DURATION = 1e-6
