@@ -44,12 +44,16 @@ __all__ = [
     "RUN",
     "TABLE",
     "Wording",
+    "check_config",
     "check_count",
+    "check_frequencies",
     "check_integer",
     "check_items",
+    "check_matrix",
     "check_number",
     "check_real",
     "check_text",
+    "check_vector",
     "cut",
     "short",
 ]
@@ -291,3 +295,65 @@ def check_items(values: Any, cls: type | tuple[type, ...], name: str, *,
         if not isinstance(v, classes):
             raise error(f"{name}[{i}] must be a {expected}; got {type(v).__name__}")
     return tuple(values)
+
+
+MAX_MATRIX = 10_000
+"""Largest system matrix (rows) the Python API takes (eigenproblems are O(n^3))."""
+
+
+def check_matrix(value: Any, name: str, n: int | None = None, *,
+                 max_abs: float = 1e100) -> np.ndarray:
+    """A finite square float matrix of at most :data:`MAX_MATRIX` rows (``n`` when given),
+    whose entries are at most ``max_abs`` in magnitude (products stay finite)."""
+    from analysis.checks import require_real_array
+
+    arr = require_real_array(value, name, ndim=2, max_abs=max_abs)
+    if arr.shape[0] != arr.shape[1] or arr.shape[0] > MAX_MATRIX:
+        raise ValueError(f"{name} must be a square (n, n) matrix, n <= {MAX_MATRIX}; got shape "
+                         f"{arr.shape}")
+    if n is not None and arr.shape[0] != n:
+        raise ValueError(f"{name} must be ({n}, {n}); got shape {arr.shape}")
+    return arr
+
+
+def check_vector(value: Any, name: str, n: int, *, max_abs: float = 1e100) -> np.ndarray:
+    """A finite float vector of ``n`` values of magnitude at most ``max_abs``."""
+    from analysis.checks import require_real_array
+
+    arr = require_real_array(value, name, ndim=1, max_abs=max_abs)
+    if arr.size != n:
+        raise ValueError(f"{name} must hold {n} values; got {arr.size}")
+    return arr
+
+
+def check_config(config: Any, name: str = "config") -> Any:
+    """A caller's configuration stored with a run: ``None``, a mapping, or the JSON text of
+    one (parsed here, so that a run does not fail at its end)."""
+    import json
+    from collections.abc import Mapping
+
+    if config is None or isinstance(config, Mapping):
+        return config
+    if not isinstance(config, str):
+        raise TypeError(f"{name} must be a mapping or its JSON text; got "
+                        f"{type(config).__name__}")
+    try:
+        value = json.loads(config)
+    except (json.JSONDecodeError, RecursionError) as exc:
+        raise ValueError(f"{name} is not JSON text ({str(exc).splitlines()[0][:80]})") from None
+    if not isinstance(value, dict):
+        raise ValueError(f"{name} must be the JSON text of an object; got {short(value)}")
+    return config
+
+
+def check_frequencies(values: Any, name: str = "natural_frequencies") -> Any:
+    """``None`` or a 1-D array of finite frequencies >= 0 [Hz] (at most 1e12 Hz each and
+    :data:`MAX_MATRIX` of them)."""
+    if values is None:
+        return None
+    from analysis.checks import require_real_array
+
+    arr = require_real_array(values, name, ndim=1, min_size=0, max_abs=1e12)
+    if arr.size > MAX_MATRIX or (arr.size and arr.min() < 0):
+        raise ValueError(f"{name} must be at most {MAX_MATRIX} frequencies >= 0 [Hz]")
+    return arr

@@ -617,6 +617,7 @@ BASELINES: dict[str, Callable[[], A]] = {
     "gearvib.simulation.frequencies.elastic_frequencies": _c(
         lambda: modal().frequencies_hz, lambda: _stiffness_mass()[0],
         lambda: _stiffness_mass()[1]),
+    "gearvib.simulation.frequencies.check_mass": _c(lambda: _stiffness_mass()[0]),
     "gearvib.simulation.frequencies.stiffest_matrix": _c(model, 1.0),
     "gearvib.simulation.frequencies.undamped_frequencies": _c(lambda: _stiffness_mass()[0],
                                                               lambda: _stiffness_mass()[1]),
