@@ -62,12 +62,13 @@ NUMBER_TYPES: tuple[type, ...] = (int, float, np.integer, np.floating)
 """What the Python API takes for a number (a bool, ``np.bool_``, str or bytes is none)."""
 
 
-def short(value: Any) -> str:
-    """``repr`` of a value on one line, shortened to 40 characters for a one-line message."""
+def short(value: Any, limit: int = 40) -> str:
+    """``repr`` of a value on one line, shortened to ``limit`` characters for a one-line
+    message."""
     text = repr(value)
     if "\n" in text:
         text = " ".join(text.split())
-    return text if len(text) <= 40 else text[:37] + "..."
+    return text if len(text) <= limit else text[:limit - 3] + "..."
 
 
 def cut(text: str, limit: int = 40) -> str:
@@ -90,8 +91,9 @@ class Wording:
         A number's admissible range is written whole, around the quantity's ``symbol``
         (``0 <= depth <= 1``), instead of by the one bound it violates (``>= 0``).
     full : bool
-        Refused values are shown whole (``repr``; an integer too large for a float by its first
-        20 digits and its number of digits) instead of shortened to 40 characters.
+        Refused values are shown whole (``repr``, up to 200 characters; an integer too large
+        for a float by its first 20 digits and its number of digits) instead of shortened to
+        40 characters.
     terse : bool
         ``"<name> = <value>; admissible: a number >= 0"`` instead of ``"<name> = <value> is not
         admissible (admissible: >= 0)"``, with the value as given; an integer is then refused
@@ -106,7 +108,7 @@ class Wording:
 
     def shown(self, value: Any) -> str:
         """The value as a message shows it."""
-        return repr(value) if self.full else short(value)
+        return short(value, 200) if self.full else short(value)
 
     def refusal(self, name: str, shown: str, admissible: str) -> str:
         """The message refusing ``name = shown``."""

@@ -71,8 +71,14 @@ SLOW = {
 DOCUMENTED: tuple[type[BaseException], ...] = (
     ValueError, TypeError, SimulationError, GearvibFileError, OutputError)
 #: Parameters that name a file or folder gearvib writes to: hostile values stay in the
-#: temporary folder (the suite may run as root; /dev/zero must not be replaced by a file).
-DESTINATIONS = {"dest", "out_dir", "work_dir", "library", "run_path"}
+#: temporary folder (the suite may run as root; /dev/zero must not be replaced by a file), and
+#: an ``OSError`` naming the path (no such folder, not writable) is a documented refusal.
+DESTINATIONS = {"dest", "out_dir", "work_dir", "library", "run_path",
+                "gearvib.io.write_netcdf.path"}
+
+
+def is_destination(name: str, pname: str) -> bool:
+    return pname in DESTINATIONS or f"{name}.{pname}" in DESTINATIONS
 #: Errors some callables document besides those (a network error when no Dask scheduler
 #: listens: their baseline address has none, so their baseline is refused).
 EXTRA_ERRORS: dict[str, tuple[type[BaseException], ...]] = {
@@ -83,7 +89,8 @@ EXTRA_ERRORS: dict[str, tuple[type[BaseException], ...]] = {
 #: parameters whose default is inf: a rigid torsional support; no natural frequency (0 Hz)
 #: leaves the admissible step unbounded.
 INF_ADMISSIBLE = {("gearvib.structure.Support", "torsional"),
-                  ("gearvib.simulation.step.choose_step", "f_nat_max")}
+                  ("gearvib.simulation.step.choose_step", "f_nat_max"),
+                  ("gearvib.io.sanitize_attrs", "attrs")}  # returns the values it is given
 #: Callables that still fail the property, with what fails (run as expected failures).
 KNOWN: dict[str, str] = {}
 
@@ -247,7 +254,8 @@ def nonfinite(value: Any, depth: int = 0) -> bool:
     return False
 
 
-def outcome(name: str, args: tuple, kwargs: dict) -> tuple[str, Any]:
+def outcome(name: str, args: tuple, kwargs: dict,
+            extra: tuple[type[BaseException], ...] = ()) -> tuple[str, Any]:
     """(``"result"``, the result), (``"refused"``, the message) or a description of the
     failure."""
     func = CALLABLES[name]
@@ -259,7 +267,7 @@ def outcome(name: str, args: tuple, kwargs: dict) -> tuple[str, Any]:
             with np.errstate(all="warn", under="ignore"):  # underflow: no inf/NaN
                 value = _consume(func(*args, **kwargs))
             result = "result"
-        except DOCUMENTED + EXTRA_ERRORS.get(name, ()) as exc:
+        except DOCUMENTED + EXTRA_ERRORS.get(name, ()) + extra as exc:
             msg = str(exc).strip()
             value = msg
             if "\n" in msg or not msg:
@@ -345,15 +353,16 @@ def test_hostile_argument(name: str) -> None:
     def run(data: Any) -> None:
         which = data.draw(st.sampled_from(params), label="parameter")
         pname = _parameter_name(name, which)
+        destination = is_destination(name, pname)
         a, kw = list(args), dict(kwargs)
         if which.startswith("#"):
             i = int(which[1:])
             old = a[i]
-            a[i] = new = data.draw(_hostile(old, pname in DESTINATIONS), label="value")
+            a[i] = new = data.draw(_hostile(old, destination), label="value")
         else:
             old = kw.get(which)
-            kw[which] = new = data.draw(_hostile(old, pname in DESTINATIONS), label="value")
-        got, value = outcome(name, tuple(a), kw)
+            kw[which] = new = data.draw(_hostile(old, destination), label="value")
+        got, value = outcome(name, tuple(a), kw, (OSError,) if destination else ())
         if (got == "result" and not base_nonfinite and value is not new and nonfinite(value)
                 and not _is_default(name, pname, new)):
             if not ((name, pname) in INF_ADMISSIBLE
