@@ -248,7 +248,7 @@ def probe_scheduler(address: str, timeout: float = CONNECT_TIMEOUT_S) -> None:
         if protocol not in _PROBED:
             return
         host, port = parse_host_port(location)
-    except ValueError:
+    except ValueError as exc:
         raise ValueError(f"scheduler address {short(address)} is not admissible: "
                          f"{cut(' '.join(str(exc).split()), 120)} (give e.g. "
                          "'tcp://10.0.0.5:8786')") from None
