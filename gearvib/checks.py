@@ -51,6 +51,7 @@ __all__ = [
     "check_items",
     "check_matrix",
     "check_number",
+    "check_path",
     "check_real",
     "check_text",
     "check_vector",
@@ -359,3 +360,24 @@ def check_frequencies(values: Any, name: str = "natural_frequencies") -> Any:
     if arr.size > MAX_MATRIX or (arr.size and arr.min() < 0):
         raise ValueError(f"{name} must be at most {MAX_MATRIX} frequencies >= 0 [Hz]")
     return arr
+
+
+def check_path(value: Any, name: str) -> Any:
+    """A file or folder name: a ``str`` or path-like, without NUL, at most 4096 characters
+    and 255 per component (what POSIX file systems take); returned as a ``pathlib.Path``.
+
+    The message shows the name cut to 200 characters (an ``OSError`` would echo it whole).
+    """
+    import os
+    from pathlib import Path
+
+    if not isinstance(value, str | os.PathLike):
+        raise TypeError(f"{name} must be a path (str or path-like); got {type(value).__name__}")
+    text = os.fspath(value)
+    if not isinstance(text, str):
+        raise TypeError(f"{name} must be a text path; got {type(text).__name__}")
+    p = Path(text)
+    if "\x00" in text or len(text) > 4096 or any(len(part) > 255 for part in p.parts):
+        raise ValueError(f"{name} = {cut(repr(text), 200)} is not a usable file name (no NUL, "
+                         "at most 4096 characters and 255 per part)")
+    return p

@@ -35,7 +35,7 @@ import numpy as np
 
 from gearvib import tempfiles
 from gearvib.cfdata import STRLEN_SUFFIX, PlainDataset, PlainVariable
-from gearvib.checks import cut
+from gearvib.checks import check_path, cut
 from gearvib.interrupts import check_interrupted, run_abandonable
 from gearvib.memory import RunSizeError, format_bytes, require_memory
 from gearvib.paths import is_file
@@ -310,7 +310,7 @@ def atomic_write(dest: str | os.PathLike, write: Callable[[Path], T], *,
     the rename where possible. Only SIGKILL can leave it;
     :func:`gearvib.tempfiles.remove_stale` removes it later.
     """
-    dest = Path(dest)
+    dest = check_path(dest, "dest")
     if not callable(write):
         raise TypeError(f"write must be callable; got {type(write).__name__}")
     if not isinstance(abandonable, bool):

@@ -30,6 +30,7 @@ from typing import Any
 
 import xarray as xr
 
+from analysis.checks import require_instance
 from analysis.fft import set_workers
 from analysis.readers.ncimage import open_image
 from analysis.threads import one_blas_thread
@@ -210,6 +211,7 @@ def run_case(task: CaseTask) -> CaseOutcome:
         combination of values, the simulation blows up or the summary is impossible (e.g. an
         empty window); other exceptions propagate.
     """
+    require_instance(task, CaseTask, "task")
     return _in_worker(_run, task)
 
 

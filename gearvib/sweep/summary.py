@@ -26,12 +26,20 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+from analysis.checks import require_instance
 from analysis.orders import order_cuts
 from gearvib.checks import check_items, check_real
 from gearvib.checks import short as _short
 from gearvib.config import ConfigError, check_keys
 from gearvib.model import AssembledModel
-from gearvib.simulate import Conditions, static_tooth_forces
+from gearvib.simulate import (
+    Conditions,
+    MotorDriven,
+    SpeedRamp,
+    SpeedTable,
+    TorqueDriven,
+    static_tooth_forces,
+)
 from gearvib.stability import stability_over_speed
 from gearvib.sweep.loadfactor import mesh_loads
 
@@ -63,6 +71,9 @@ _KEYS = {"window_s", "window_rpm", "orders", "order_reference", "order_signals",
 _SIGNAL = re.compile(r"^([A-Za-z_][A-Za-z0-9_]*)(?:\[(.*)\])?$")
 _MIN_SPEED_FRACTION = 0.01
 
+
+RUN_VARIABLES = ("time", "normal_force", "mesh_deflection", "input_speed", "mesh_frequency")
+"""Variables of a run that :func:`summarise_run` reads."""
 
 @dataclass(frozen=True)
 class OrderSignal:
@@ -399,6 +410,18 @@ def summarise_run(ds: xr.Dataset, model: AssembledModel, conditions: Conditions,
         The window holds no sample, an order signal's selection names an unknown label, or
         ``order_reference`` is not a member.
     """
+    require_instance(ds, xr.Dataset, "ds")
+    missing = [v for v in RUN_VARIABLES if v not in ds.variables]
+    if missing:
+        raise ValueError(f"ds is not a gearvib run: variable {missing[0]!r} is missing")
+    require_instance(model, AssembledModel, "model")
+    if not isinstance(conditions, SpeedRamp | SpeedTable | TorqueDriven | MotorDriven):
+        raise TypeError(f"conditions must be SpeedRamp, SpeedTable, TorqueDriven or "
+                        f"MotorDriven; got {type(conditions).__name__}")
+    if settings is not None:
+        require_instance(settings, SummarySettings, "settings")
+    if not isinstance(gyroscopic, bool):
+        raise TypeError(f"gyroscopic must be a bool; got {type(gyroscopic).__name__}")
     s = settings or SummarySettings()
     keep = _window_mask(ds, s)
     idx = np.flatnonzero(keep)

@@ -362,6 +362,12 @@ def sensor() -> Any:
     return HousingSensor("acc", 90.0, housing_modes=(HousingMode(2000.0, 0.05, 1.0),))
 
 
+def tacho() -> Any:
+    from gearvib.sensors import Tacho
+
+    return Tacho()
+
+
 def sensed_model() -> Any:
     from gearvib.sensors import add_sensors
 
@@ -671,8 +677,7 @@ BASELINES: dict[str, Callable[[], A]] = {
     "gearvib.sensors.description.sensors_from_list": _c(
         lambda: [{"name": "acc", "angle_deg": 90.0, "housing_modes": [
             {"frequency_hz": 2000.0, "damping_ratio": 0.05, "gain": 1.0}]}]),
-    "gearvib.sensors.signal.tacho_signal": _c(lambda: np.linspace(0, 20, 64),
-                                              lambda: __import__("gearvib.sensors").sensors.Tacho()),
+    "gearvib.sensors.signal.tacho_signal": _c(lambda: np.linspace(0, 20, 64), tacho),
     "gearvib.sensors.signal.window_weight": _c("hann", 90.0, lambda: np.linspace(-1, 1, 9)),
     # rolling_bearings
     "gearvib.rolling_bearings.RollingBearingSpec": _c("input bearing", "sun", 9, 7.94e-3,

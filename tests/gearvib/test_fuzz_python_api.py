@@ -316,6 +316,15 @@ def _default(name: str, pname: str) -> Any:
     return None if p is None or p.default is p.empty else p.default
 
 
+def _inf_documented(name: str, pname: str, value: Any) -> bool:
+    """Whether a result holding inf is documented for ``value`` of ``pname``: +inf where the
+    default is inf (a rigid stiffness), and :data:`INF_ADMISSIBLE`."""
+    if (name, pname) in INF_ADMISSIBLE:
+        return True
+    return (isinstance(value, float) and value == math.inf
+            and _default(name, pname) == math.inf)
+
+
 def _is_default(name: str, pname: str, value: Any) -> bool:
     """Whether ``value`` is the parameter's default (a result then is the documented one)."""
     p = inspect.signature(CALLABLES[name]).parameters.get(pname)
@@ -364,10 +373,8 @@ def test_hostile_argument(name: str) -> None:
             kw[which] = new = data.draw(_hostile(old, destination), label="value")
         got, value = outcome(name, tuple(a), kw, (OSError,) if destination else ())
         if (got == "result" and not base_nonfinite and value is not new and nonfinite(value)
-                and not _is_default(name, pname, new)):
-            if not ((name, pname) in INF_ADMISSIBLE
-                    or (new == math.inf and _default(name, pname) == math.inf)):
-                got = f"a result holding NaN/inf for {pname} = {new!r:.80}"
+                and not _is_default(name, pname, new) and not _inf_documented(name, pname, new)):
+            got = f"a result holding NaN/inf for {pname} = {new!r:.80}"
         if got == "result" and _is_number(old) and isinstance(new, bool | np.bool_ | str | bytes):
             got = f"{pname} = {new!r:.80} taken for a number"
         COUNTS["calls"] += 1
