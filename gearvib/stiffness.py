@@ -50,7 +50,7 @@ MAX_STIFFNESS = 1e40
 """Largest stiffness accepted [N/m] (its products with deflections stay finite)."""
 MAX_FOURIER = 1_000
 """Most harmonics of a :class:`FourierStiffness`."""
-MAX_TABLE = 1 << 20
+MAX_TABLE = 1 << 16
 """Largest stiffness table (values per mesh cycle, :meth:`MeshStiffness.table`)."""
 
 

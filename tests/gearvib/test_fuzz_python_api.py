@@ -55,7 +55,7 @@ from tests.gearvib import fuzz_support as fz
 HANG_S = 30
 CAP_BYTES = 3 << 30
 MAX_MESSAGE = 1000
-EXAMPLES = fz.examples(4)  # hostile calls per callable
+EXAMPLES = fz.examples(3)  # hostile calls per callable
 FEW = fz.examples(1)  # for the callables whose one call takes more than ~0.1 s
 SLOW = {
     "gearvib.report.runner.run_study", "gearvib.report.runner.build_report",
@@ -109,7 +109,11 @@ def _scalars() -> list[Any]:
 
 def _arrays(base: np.ndarray) -> list[Any]:
     """Hostile versions of an array argument."""
-    a = np.asarray(base)
+    with np.errstate(all="ignore"):
+        return _array_versions(np.asarray(base))
+
+
+def _array_versions(a: np.ndarray) -> list[Any]:
     out: list[Any] = [a[:0], a.reshape(-1)[:1], np.zeros(0), np.stack([a, a]), a[..., None]]
     if a.size and a.dtype.kind in "fiu":
         f = a.astype(float)
@@ -119,7 +123,7 @@ def _arrays(base: np.ndarray) -> list[Any]:
             out.append(b)
         out += [f * 1e300, -f, np.zeros_like(f), f.astype(bool), f.astype(str),
                 f.astype(complex), f.astype(object), f[::-1].copy(), np.full_like(f, 1e-300),
-                np.resize(f, 10**6)]
+                np.resize(f, 200_001)]
     return out
 
 
@@ -151,26 +155,30 @@ def _is_number(v: Any) -> bool:
         v, bool | np.bool_)
 
 
-@st.composite
-def _hostile(draw: Any, base: Any, destination: bool) -> Any:
-    pools = [st.sampled_from(_scalars()), st.floats(), st.integers(-(2**70), 2**70)]
+def _pool(base: Any, destination: bool) -> list[Any]:
+    """The hostile values of an argument whose admissible value is ``base`` (besides the
+    floats and integers hypothesis draws)."""
+    pool = list(_scalars())
     if isinstance(base, np.ndarray) and base.dtype.kind in "fiub":
-        pools.insert(0, st.sampled_from(_arrays(base)))
+        pool = _arrays(base) + pool
     elif isinstance(base, list | tuple) and base and all(_is_number(v) for v in base):
-        pools.insert(0, st.sampled_from(_arrays(np.asarray(base, dtype=float))))
+        pool = _arrays(np.asarray(base, dtype=float)) + pool
     elif isinstance(base, list | tuple) and base:
-        pools.insert(0, st.sampled_from([type(base)(), [None], [base[0]] * 3, (object(),),
-                                         *([v] for v in _objects())]))
+        pool = [type(base)(), [None], [base[0]] * 3, (object(),),
+                *([v] for v in _objects()), *pool]
     if destination:
-        pools.insert(0, st.sampled_from(_write_paths()))
+        pool = _write_paths() + pool
     elif isinstance(base, str | Path):
-        pools.insert(0, st.sampled_from(_read_paths()))
+        pool = _read_paths() + pool
     if not _is_number(base) and not isinstance(base, np.ndarray | str | Path) and base is not None:
-        pools.insert(0, st.sampled_from(_objects()))
+        pool = _objects() + pool
     if isinstance(base, dict):
-        pools.insert(0, st.sampled_from([{}, {"x": 1}, {k: math.nan for k in base},
-                                         {k: "x" for k in base}]))
-    return draw(st.one_of(pools))
+        pool = [{}, {"x": 1}, {k: math.nan for k in base}, {k: "x" for k in base}, *pool]
+    return pool
+
+
+def _hostile(pool: list[Any]) -> st.SearchStrategy:
+    return st.one_of(st.sampled_from(pool), st.floats(), st.integers(-(2**70), 2**70))
 
 
 class Hang(Exception):
@@ -354,6 +362,8 @@ def test_hostile_argument(name: str) -> None:
         COUNTS[base] += 1
         return
 
+    pools: dict[str, list[Any]] = {}
+
     @settings(max_examples=FEW if name in SLOW else EXAMPLES, deadline=None,
               derandomize=fz.derandomize(), database=None,
               suppress_health_check=list(HealthCheck),
@@ -364,13 +374,14 @@ def test_hostile_argument(name: str) -> None:
         pname = _parameter_name(name, which)
         destination = is_destination(name, pname)
         a, kw = list(args), dict(kwargs)
+        old = a[int(which[1:])] if which.startswith("#") else kw.get(which)
+        if which not in pools:  # built once per parameter (arrays of 10^5 values)
+            pools[which] = _pool(old, destination)
+        new = data.draw(_hostile(pools[which]), label="value")
         if which.startswith("#"):
-            i = int(which[1:])
-            old = a[i]
-            a[i] = new = data.draw(_hostile(old, destination), label="value")
+            a[int(which[1:])] = new
         else:
-            old = kw.get(which)
-            kw[which] = new = data.draw(_hostile(old, destination), label="value")
+            kw[which] = new
         got, value = outcome(name, tuple(a), kw, (OSError,) if destination else ())
         if (got == "result" and not base_nonfinite and value is not new and nonfinite(value)
                 and not _is_default(name, pname, new) and not _inf_documented(name, pname, new)):
@@ -385,6 +396,36 @@ def test_hostile_argument(name: str) -> None:
             raise AssertionError(f"{name}({pname}=<hostile>): {got}")
 
     run()
+
+
+def _number_arguments() -> list[tuple[str, str]]:
+    """``(callable, parameter)`` of every argument of a baseline given as a float."""
+    out = []
+    for name, build in sorted(cases.BASELINES.items()):
+        if name in EXTRA_ERRORS:
+            continue
+        args, kwargs = build()
+        out += [(name, f"#{i}") for i, v in enumerate(args) if type(v) is float]
+        out += [(name, k) for k, v in kwargs.items() if type(v) is float]
+    return out
+
+
+@pytest.mark.parametrize("value", [math.nan, math.inf, True])
+def test_every_number_refuses_nan_inf_and_bool(value: Any) -> None:
+    """NaN, inf and a bool given for any number of a baseline call are refused (a regression
+    of one check shows here even when the drawn examples above miss it)."""
+    failures = []
+    for name, which in _number_arguments():
+        args, kwargs = cases.BASELINES[name]()
+        if which.startswith("#"):
+            args = (*args[:int(which[1:])], value, *args[int(which[1:]) + 1:])
+        else:
+            kwargs = {**kwargs, which: value}
+        got, _ = outcome(name, args, kwargs)
+        if got != "refused" and not (value == math.inf and _inf_documented(
+                name, _parameter_name(name, which), value)):
+            failures.append(f"{name}({_parameter_name(name, which)}={value!r}): {got[:80]}")
+    assert not failures, f"{len(failures)} accepted or failed: {failures[:20]}"
 
 
 def test_tally():
