@@ -16,10 +16,15 @@ documented gearvib error (:data:`DOCUMENTED`: ``ConfigError``, ``RunSizeError``,
 with a one-line message of at most :data:`MAX_MESSAGE` characters; never another exception,
 never a numpy overflow/invalid :class:`RuntimeWarning`, never a result holding NaN or inf
 where the baseline's holds none (a silent NaN/inf), never a bool, string or bytes taken for a
-number, never a hang (an alarm ends a call after :data:`HANG_S` s - a hang detector, not a
-timing assertion) and never a :class:`MemoryError`: the address space is capped at
-:data:`CAP_BYTES` above the process's size while the suite runs, so a size check that is
-missing shows as a MemoryError instead of a swapping machine.
+number, never a hang (an alarm ends a call after :data:`HANG_S` s, :data:`SLOW_HANG_S` for the
+entry points that simulate or render - a hang detector, not a timing assertion) and never a
+:class:`MemoryError`: the address space is capped at :data:`CAP_BYTES` above the process's
+size while the suite runs, so a size check that is missing shows as a MemoryError instead of
+a swapping machine.
+
+Every run is limited to :data:`MAX_STEPS` internal steps (``simulate``'s default
+``max_steps`` is patched while the suite runs: ``run_study``, ``run_sweep`` and ``diagnose``
+take no budget), so an argument asking for a long run is refused by the run-size check.
 
 ``GEARVIB_FUZZ_EXAMPLES=N`` runs ``N`` fresh random hostile calls per callable (the long
 campaign; ``GEARVIB_FUZZ_REPORT=<file.json>`` collects the counts); unset, each callable gets
@@ -53,6 +58,9 @@ from tests.gearvib import fuzz_python_api_cases as cases
 from tests.gearvib import fuzz_support as fz
 
 HANG_S = 30
+SLOW_HANG_S = 120  # the entry points that render reports or simulate (wall time, loaded CI)
+MAX_STEPS = 2_000_000  # step budget of every run (simulate's default patched): a long run
+                       # an argument asks for is refused (RunSizeError) rather than run
 CAP_BYTES = 3 << 30
 MAX_MESSAGE = 1000
 EXAMPLES = fz.examples(3)  # hostile calls per callable
@@ -186,7 +194,7 @@ class Hang(Exception):
 
 
 def _alarm(signum: int, frame: Any) -> None:
-    raise Hang(f"no result after {HANG_S} s")
+    raise Hang("no result in time")
 
 
 @pytest.fixture(scope="module", autouse=True)
@@ -206,6 +214,10 @@ def _guarded(tmp_path_factory: Any) -> Any:
     _objects()
     cases.case_analysis()
     patch = pytest.MonkeyPatch()
+    from gearvib import simulate as sim
+
+    for func in (sim.simulate, sim.simulate_batch):  # run_study, run_sweep, diagnose call them
+        patch.setitem(inspect.unwrap(func).__kwdefaults__, "max_steps", MAX_STEPS)
     if not fz.ENV:  # CI: the reports' checks and analysis run, their rendering (~9 s) does not
         from gearvib.report import runner
 
@@ -270,7 +282,7 @@ def outcome(name: str, args: tuple, kwargs: dict,
     value: Any = None
     with warnings.catch_warnings(record=True) as seen:
         warnings.simplefilter("always")
-        signal.alarm(HANG_S)
+        signal.alarm(SLOW_HANG_S if name in SLOW else HANG_S)
         try:
             with np.errstate(all="warn", under="ignore"):  # underflow: no inf/NaN
                 value = _consume(func(*args, **kwargs))
@@ -285,7 +297,7 @@ def outcome(name: str, args: tuple, kwargs: dict,
             else:
                 result = "refused"
         except Hang:
-            result = f"hang (> {HANG_S} s)"
+            result = f"hang (> {SLOW_HANG_S if name in SLOW else HANG_S} s)"
         except Exception as exc:  # the property: nothing else (MemoryError included)
             result = f"{type(exc).__name__}: {str(exc)[:300]}"
         finally:
