@@ -42,6 +42,7 @@ import numpy as np
 from analysis.checks import require_instance, require_real_array
 from gearvib.checks import check_count, check_items, short
 from gearvib.geometry import MAX_TEETH, MeshGeometry, planet_tooth_angle
+from gearvib.structure import Body, Mesh
 
 __all__ = ["TOOTH_MAP_COLUMNS", "mesh_tooth_map", "pair_teeth"]
 
@@ -83,9 +84,6 @@ def mesh_tooth_map(meshes, bodies: Mapping, resolved: Mapping, s0: np.ndarray,
     centre : mapping of str to ndarray
         Centre of every body at the reference configuration [m].
     """
-    from gearvib.assembly import ResolvedMesh
-    from gearvib.structure import Body, Mesh
-
     meshes = check_items(meshes, Mesh, "meshes")
     for key, mapping in (("bodies", bodies), ("resolved", resolved), ("centre", centre)):
         require_instance(mapping, Mapping, key)
@@ -93,8 +91,8 @@ def mesh_tooth_map(meshes, bodies: Mapping, resolved: Mapping, s0: np.ndarray,
     if s0.size != len(meshes):
         raise ValueError(f"s0 needs one mesh position per mesh ({len(meshes)}); got {s0.size}")
     for m in meshes:
-        if not isinstance(resolved.get(m.name), ResolvedMesh):
-            raise ValueError(f"resolved has no ResolvedMesh for mesh {short(m.name)}")
+        require_instance(resolved.get(m.name), "gearvib.assembly.ResolvedMesh",
+                         f"resolved[{short(m.name)}]")  # by name: assembly imports teeth
         for g in (m.gear1, m.gear2):
             if not isinstance(bodies.get(g), Body):
                 raise ValueError(f"bodies has no Body {short(g)} (of mesh {short(m.name)})")
