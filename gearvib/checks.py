@@ -32,6 +32,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any, SupportsFloat, cast
 
 import numpy as np
@@ -362,14 +363,13 @@ def check_frequencies(values: Any, name: str = "natural_frequencies") -> Any:
     return arr
 
 
-def check_path(value: Any, name: str) -> Any:
+def check_path(value: Any, name: str) -> Path:
     """A file or folder name: a ``str`` or path-like, without NUL, at most 4096 characters
     and 255 per component (what POSIX file systems take); returned as a ``pathlib.Path``.
 
     The message shows the name cut to 200 characters (an ``OSError`` would echo it whole).
     """
     import os
-    from pathlib import Path
 
     if not isinstance(value, str | os.PathLike):
         raise TypeError(f"{name} must be a path (str or path-like); got {type(value).__name__}")

@@ -156,11 +156,11 @@ def parallel_stage(*, z_pinion: int, z_wheel: int, module: float, pinion: Body, 
     (signed ``z_wheel``: an internal wheel turns with the pinion); an idler reverses the sense
     once more and leaves the magnitude. Mesh frequency ``f = z_pinion |n_pinion| / 60``.
     """
-    for key, body in (("pinion", pinion), ("wheel", wheel)):
-        require_instance(body, Body, key)
-    for key, body in (("housing", housing), ("idler", idler)):
-        if body is not None:
-            require_instance(body, Body, key)
+    for key, part in (("pinion", pinion), ("wheel", wheel)):
+        require_instance(part, Body, key)
+    for key, optional in (("housing", housing), ("idler", idler)):
+        if optional is not None:
+            require_instance(optional, Body, key)
     require_instance(mesh, MeshSpec, "mesh")
     if idler_mesh is not None:
         require_instance(idler_mesh, MeshSpec, "idler_mesh")

@@ -704,9 +704,9 @@ def diagnose(measured: Record, config: str, *, baseline: Record | None = None,
         check_path(library, "library")
     if work_dir is not None:
         check_path(work_dir, "work_dir")
-    for key, flag in (("keep_runs", keep_runs), ("progress", progress)):
+    for flag_name, flag in (("keep_runs", keep_runs), ("progress", progress)):
         if not isinstance(flag, bool):
-            raise TypeError(f"{key} must be True or False; got {short(flag)}")
+            raise TypeError(f"{flag_name} must be True or False; got {short(flag)}")
     if workers is not None:
         check_count(workers, "workers", low=1, high=MAX_WORKERS)
     if sensors is not None and (isinstance(sensors, str) or not isinstance(

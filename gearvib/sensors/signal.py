@@ -86,14 +86,15 @@ def path_force(result, model: AssembledModel, sensor: HousingSensor) -> np.ndarr
     require_instance(result, "gearvib.simulation.result.RunUpResult", "result")
     require_instance(model, AssembledModel, "model")
     require_instance(sensor, HousingSensor, "sensor")
-    if sensor.member is None:
+    housing = sensor.member
+    if housing is None:
         raise ValueError("sensor has no housing member: take it from the model's sensors "
                          "(add_sensors fills it in)")
     planets = {p["name"]: p for p in model.meta.get("planets", [])}
     meshes = model.meta["meshes"]
     theta_s = math.radians(sensor.angle_deg)
     p = np.zeros(result.time.size)
-    for member in members_of(sensor.member):
+    for member in members_of(housing):
         _add_member_forces(p, result, model, sensor, member, planets, meshes, theta_s)
     for b, gain in sensor.bearings:
         fx = result.bearing_force[result.bearing_names.index(f"{b}.x")]
@@ -114,7 +115,7 @@ def _add_member_forces(p: np.ndarray, result, model: AssembledModel, sensor: Hou
     rotation, both follow the window of the planet's angle relative to the sensor.
     """
     theta_h = _rotation(result, member)
-    wanted = set(members_of(sensor.member))
+    wanted = set(members_of(sensor.member or member))
     for k in housing_meshes(model, member):
         planet = planets[meshes[k]["gear2"]]
         if member != meshes[k]["gear1"] and meshes[k]["gear1"] in wanted:

@@ -39,7 +39,9 @@ RAD_S_PER_RPM = 2.0 * math.pi / 60.0
 #: What a drive coupling's angle and speed are taken from (:class:`DriveCoupling`).
 SENSING = ("input", "rigid-body")
 MAX_TABLE = 100_000
-"""Longest speed, torque or motor table accepted."""
+"""Longest motor characteristic of a description (``[simulation].motor``)."""
+MAX_DRIVE_TABLE = 10_000_000
+"""Longest speed, torque or motor table of a conditions object (a table given in Python)."""
 MAX_TORQUE = 1e12
 """Largest torque magnitude accepted [N m] (also the coefficients of ``load_torque``)."""
 MAX_DURATION = 1e7
@@ -59,10 +61,11 @@ def _torque(value: Any, name: str, *, optional: bool = False) -> Any:
 
 
 def _table(values: Any, name: str, *, bound: float) -> tuple[float, ...]:
-    """A 1-D table of finite numbers with magnitudes up to ``bound`` (at most MAX_TABLE)."""
+    """A 1-D table of finite numbers with magnitudes up to ``bound`` (at most
+    :data:`MAX_DRIVE_TABLE`)."""
     arr = require_real_array(values, name, min_size=0, max_abs=bound).ravel()
-    if arr.size > MAX_TABLE:
-        raise ValueError(f"{name}: {arr.size} values (admissible: at most {MAX_TABLE})")
+    if arr.size > MAX_DRIVE_TABLE:
+        raise ValueError(f"{name}: {arr.size} values (admissible: at most {MAX_DRIVE_TABLE})")
     return tuple(float(v) for v in arr)
 
 
