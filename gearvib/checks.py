@@ -12,9 +12,14 @@ The messages of those layers have different wordings, which their tests and thei
 on; a :class:`Wording` selects one (:data:`TABLE`, :data:`RUN`, :data:`RECIPE`, :data:`ITEM`).
 
 The arguments of the Python API (constructors and functions a script calls) are checked with
-:func:`check_real`, :func:`check_count`, :func:`check_text` and :func:`check_items` at the
-public boundary, before any work: numpy scalars count as numbers there, a value shown in a
-message is cut to 40 characters (:func:`short`), and the message names the parameter.
+:func:`check_real`, :func:`check_count`, :func:`check_text`, :func:`check_items`,
+:func:`check_instance` and :func:`check_array` at the public boundary, before any work: numpy
+scalars count as numbers there, a value shown in a message is cut to 40 characters
+(:func:`short`), and the message names the parameter. :func:`check_instance` and
+:func:`check_array` apply the rules and wording of :func:`analysis.checks.require_instance`
+and :func:`analysis.checks.require_real_array`: the model and simulation layers do not import
+the ``analysis`` package, whose import registers its xarray accessor and so imports xarray
+(``gearvib modes`` and ``gearvib simulate`` stay without it).
 
 Examples
 --------
@@ -45,9 +50,11 @@ __all__ = [
     "RUN",
     "TABLE",
     "Wording",
+    "check_array",
     "check_config",
     "check_count",
     "check_frequencies",
+    "check_instance",
     "check_integer",
     "check_items",
     "check_matrix",
@@ -284,9 +291,10 @@ def check_text(value: Any, name: str, *, optional: bool = False, empty: bool = F
     return value
 
 
-def check_items(values: Any, cls: type | tuple[type, ...], name: str, *,
+def check_items(values: Any, cls: type | str | tuple[type | str, ...], name: str, *,
                 error: type[Exception] = TypeError) -> tuple:
-    """A list or tuple whose items are all instances of ``cls``, as a tuple.
+    """A list or tuple whose items are all instances of ``cls`` (classes or dotted class
+    names, as :func:`check_instance`), as a tuple.
 
     The message names the parameter, the item and the class expected (``bodies[2] must be a
     Body; got str``) instead of the ``AttributeError`` a wrong item would raise later.
@@ -294,9 +302,13 @@ def check_items(values: Any, cls: type | tuple[type, ...], name: str, *,
     if not isinstance(values, Sequence) or isinstance(values, str | bytes):
         raise error(f"{name} must be a list or tuple, got {short(values)}")
     classes = cls if isinstance(cls, tuple) else (cls,)
-    expected = " or ".join(c.__name__ for c in classes)
+    expected = " or ".join(c.rsplit(".", 1)[-1] if isinstance(c, str) else c.__name__
+                           for c in classes)
     for i, v in enumerate(values):
-        if not isinstance(v, classes):
+        dotted = {f"{c.__module__}.{c.__qualname__}" for c in type(v).__mro__}
+        if not any((isinstance(c, str) and c in dotted) or (isinstance(c, type)
+                                                            and isinstance(v, c))
+                   for c in classes):
             raise error(f"{name}[{i}] must be a {expected}; got {type(v).__name__}")
     return tuple(values)
 
@@ -309,9 +321,7 @@ def check_matrix(value: Any, name: str, n: int | None = None, *,
                  max_abs: float = 1e100) -> np.ndarray:
     """A finite square float matrix of at most :data:`MAX_MATRIX` rows (``n`` when given),
     whose entries are at most ``max_abs`` in magnitude (products stay finite)."""
-    from analysis.checks import require_real_array
-
-    arr = require_real_array(value, name, ndim=2, max_abs=max_abs)
+    arr = check_array(value, name, ndim=2, max_abs=max_abs)
     if arr.shape[0] != arr.shape[1] or arr.shape[0] > MAX_MATRIX:
         raise ValueError(f"{name} must be a square (n, n) matrix, n <= {MAX_MATRIX}; got shape "
                          f"{arr.shape}")
@@ -322,9 +332,7 @@ def check_matrix(value: Any, name: str, n: int | None = None, *,
 
 def check_vector(value: Any, name: str, n: int, *, max_abs: float = 1e100) -> np.ndarray:
     """A finite float vector of ``n`` values of magnitude at most ``max_abs``."""
-    from analysis.checks import require_real_array
-
-    arr = require_real_array(value, name, ndim=1, max_abs=max_abs)
+    arr = check_array(value, name, ndim=1, max_abs=max_abs)
     if arr.size != n:
         raise ValueError(f"{name} must hold {n} values; got {arr.size}")
     return arr
@@ -355,9 +363,7 @@ def check_frequencies(values: Any, name: str = "natural_frequencies") -> Any:
     :data:`MAX_MATRIX` of them)."""
     if values is None:
         return None
-    from analysis.checks import require_real_array
-
-    arr = require_real_array(values, name, ndim=1, min_size=0, max_abs=1e12)
+    arr = check_array(values, name, ndim=1, min_size=0, max_abs=1e12)
     if arr.size > MAX_MATRIX or (arr.size and arr.min() < 0):
         raise ValueError(f"{name} must be at most {MAX_MATRIX} frequencies >= 0 [Hz]")
     return arr
@@ -381,3 +387,75 @@ def check_path(value: Any, name: str) -> Path:
         raise ValueError(f"{name} = {cut(repr(text), 200)} is not a usable file name (no NUL, "
                          "at most 4096 characters and 255 per part)")
     return p
+
+
+def _class_name(cls: type) -> str:
+    if cls.__module__ == "builtins":
+        return cls.__qualname__
+    return f"{cls.__module__}.{cls.__qualname__}"
+
+
+def check_instance(value: Any, cls: type | str | tuple[type | str, ...], name: str) -> Any:
+    """Return ``value``; raise :class:`TypeError` unless it is an instance of ``cls`` (a class,
+    the dotted name of one -- for a module that must not import the class's module -- or a
+    tuple of them): ``model must be a gearvib.model.AssembledModel; got GearSet``."""
+    classes = cls if isinstance(cls, tuple) else (cls,)
+    dotted = {f"{c.__module__}.{c.__qualname__}" for c in type(value).__mro__}
+    for c in classes:
+        if (isinstance(c, str) and c in dotted) or (isinstance(c, type) and isinstance(value, c)):
+            return value
+    expected = " or ".join(c if isinstance(c, str) else _class_name(c) for c in classes)
+    article = "an" if expected[0] in "aeiouAEIOU" else "a"
+    raise TypeError(f"{name} must be {article} {expected}; got {type(value).__name__}")
+
+
+def check_array(values: Any, name: str, *, ndim: int | None = None, min_size: int = 1,
+                max_abs: float | None = None, finite: bool = True) -> np.ndarray:
+    """``values`` as a float64 array of real numbers, checked before any arithmetic on it.
+
+    Parameters
+    ----------
+    values : array_like
+        The argument.
+    name : str
+        Name of the parameter in messages.
+    ndim : int, optional
+        Required number of dimensions.
+    min_size : int
+        Fewest values admissible.
+    max_abs : float, optional
+        Largest magnitude admissible.
+    finite : bool
+        Refuse NaN and inf.
+
+    Raises
+    ------
+    TypeError
+        Not real numbers: bool, complex, str or object dtype (no silent conversion).
+    ValueError
+        A ragged nesting, wrong number of dimensions, too few values, NaN/inf, or a magnitude
+        above ``max_abs``.
+    """
+    try:
+        arr = np.asarray(values)
+    except ValueError:  # a ragged nesting
+        raise ValueError(f"{name} must be a rectangular array of real numbers") from None
+    if arr.dtype.kind not in "iuf":
+        raise TypeError(f"{name} must hold real numbers; got dtype {arr.dtype}")
+    if ndim is not None and arr.ndim != ndim:
+        raise ValueError(f"{name} must be a {ndim}-D array; got shape {arr.shape}")
+    if arr.size < min_size:
+        raise ValueError(f"{name} needs at least {min_size} value(s); got {arr.size}")
+    arr = arr.astype(np.float64, copy=False)
+    if not arr.size or not (finite or max_abs is not None):
+        return arr
+    hi, lo = float(arr.max()), float(arr.min())
+    if finite and not (math.isfinite(hi) and math.isfinite(lo)):
+        first = int(np.flatnonzero(~np.isfinite(arr.ravel()))[0])
+        raise ValueError(f"{name}: non-finite value (NaN or inf) at flat index {first}; only "
+                         "finite values are admissible")
+    if max_abs is not None and not max(hi, -lo) <= max_abs:
+        first = int(np.flatnonzero(~(np.abs(arr.ravel()) <= max_abs))[0])
+        raise ValueError(f"{name}: a magnitude above {max_abs:g} at flat index {first}; "
+                         f"admissible: |value| <= {max_abs:g} (check the units)")
+    return arr

@@ -30,8 +30,7 @@ from typing import Any
 
 import numpy as np
 
-from analysis.checks import require_real_array
-from gearvib.checks import check_count, check_real, short
+from gearvib.checks import check_array, check_count, check_real, short
 
 __all__ = [
     "MAX_TEETH",
@@ -69,7 +68,7 @@ def involute(alpha: float | np.ndarray) -> float | np.ndarray:
         ``alpha`` is not a real number (or array of them) with ``|alpha| < pi/2``.
     """
     if isinstance(alpha, np.ndarray | list | tuple):
-        a = require_real_array(alpha, "alpha", min_size=0, max_abs=0.5 * math.pi)
+        a = check_array(alpha, "alpha", min_size=0, max_abs=0.5 * math.pi)
         if a.size and not float(np.abs(a).max()) < 0.5 * math.pi:
             raise ValueError("alpha: a magnitude of pi/2 or more (admissible: |alpha| < pi/2)")
         return np.tan(a) - a
@@ -669,7 +668,7 @@ def check_planet_angles(
         overlapping planets.
     """
     zs, zr = _check_set(z_sun, z_ring)
-    psi = require_real_array(angles, "planet angles").ravel()
+    psi = check_array(angles, "planet angles").ravel()
     tol = check_real(tol, "tol", low=0.0)
     n_tot = zs - zr
     if psi.size > n_tot:
@@ -877,7 +876,7 @@ def mesh_phases(z_central: int, planet_angles) -> np.ndarray:
         set the sun (``z_s``) and ring (signed ``z_r``) phases are equal.
     """
     check_count(z_central, "z_central", low=-MAX_TEETH, high=MAX_TEETH)
-    psi = require_real_array(planet_angles, "planet_angles", min_size=0, max_abs=1e9)
+    psi = check_array(planet_angles, "planet_angles", min_size=0, max_abs=1e9)
     g = np.mod(z_central * psi / (2.0 * math.pi), 1.0)
     g[np.isclose(g, 1.0, rtol=0, atol=1e-9)] = 0.0
     return g

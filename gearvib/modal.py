@@ -30,8 +30,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 import scipy.linalg
 
-from analysis.checks import require_instance
-from gearvib.checks import check_real
+from gearvib.checks import check_instance, check_real
 from gearvib.kinematics import MAX_SPEED_RPM
 from gearvib.model import FLANK_NAMES, AssembledModel
 
@@ -269,7 +268,7 @@ def modal_analysis(model: AssembledModel, *, carrier_speed_rpm: float = 0.0,
     -------
     ModalResult
     """
-    require_instance(model, AssembledModel, "model")
+    check_instance(model, AssembledModel, "model")
     carrier_speed_rpm = check_real(carrier_speed_rpm, "carrier_speed_rpm", low=-MAX_SPEED_RPM,
                                    high=MAX_SPEED_RPM)
     stiffness_scale = check_real(stiffness_scale, "stiffness_scale", low=1e-12, high=1e12)

@@ -26,8 +26,7 @@ import math
 from collections.abc import Sequence
 from dataclasses import replace
 
-from analysis.checks import require_instance
-from gearvib.checks import check_count, check_items, check_real, check_text, short
+from gearvib.checks import check_count, check_instance, check_items, check_real, check_text, short
 from gearvib.geometry import MAX_TEETH, Toothing, mesh_geometry
 from gearvib.structure import (
     RIGID,
@@ -157,17 +156,17 @@ def parallel_stage(*, z_pinion: int, z_wheel: int, module: float, pinion: Body, 
     once more and leaves the magnitude. Mesh frequency ``f = z_pinion |n_pinion| / 60``.
     """
     for key, part in (("pinion", pinion), ("wheel", wheel)):
-        require_instance(part, Body, key)
+        check_instance(part, Body, key)
     for key, optional in (("housing", housing), ("idler", idler)):
         if optional is not None:
-            require_instance(optional, Body, key)
-    require_instance(mesh, MeshSpec, "mesh")
+            check_instance(optional, Body, key)
+    check_instance(mesh, MeshSpec, "mesh")
     if idler_mesh is not None:
-        require_instance(idler_mesh, MeshSpec, "idler_mesh")
+        check_instance(idler_mesh, MeshSpec, "idler_mesh")
     for key, text in (("fixed", fixed), ("input", input), ("output", output), ("name", name)):
         check_text(text, key, empty=key == "fixed")
     if config is not None:
-        require_instance(config, dict, "config")
+        check_instance(config, dict, "config")
     check_count(z_pinion, "z_pinion", low=1, high=MAX_TEETH)
     check_count(z_wheel, "z_wheel", low=-MAX_TEETH, high=MAX_TEETH)
     check_count(z_idler, "z_idler", low=1, high=MAX_TEETH, optional=True)
@@ -278,7 +277,7 @@ def multi_stage(stages: Sequence[GearSet], *,
     n = len(stages)
     check_text(name, "name")
     if config is not None:
-        require_instance(config, dict, "config")
+        check_instance(config, dict, "config")
     if prefixes is None:
         prefixes = [stage_prefix(k + 1) for k in range(n)]
     prefixes = list(check_items(prefixes, str, "prefixes"))

@@ -27,8 +27,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from analysis.checks import require_real_array
-from gearvib.checks import check_count, check_real, short
+from gearvib.checks import check_array, check_count, check_real, short
 from gearvib.geometry import MeshGeometry
 from gearvib.paths import is_file
 
@@ -348,7 +347,7 @@ class FourierStiffness(MeshStiffness):
 
     @staticmethod
     def _coeffs(name: str, values: ArrayLike) -> np.ndarray:
-        arr = require_real_array(values, name, min_size=0, max_abs=MAX_STIFFNESS).ravel()
+        arr = check_array(values, name, min_size=0, max_abs=MAX_STIFFNESS).ravel()
         if arr.size > MAX_FOURIER:
             raise ValueError(f"{name}: {arr.size} coefficients (admissible: at most "
                              f"{MAX_FOURIER})")
@@ -443,7 +442,7 @@ class PairSuperposition(MeshStiffness):
             raise TypeError(f"single_pair = {short(single_pair)} must be callable")
         self.contact_ratio = _contact_ratio(contact_ratio)
         self.single_pair = single_pair
-        bp = [] if breakpoints is None else [float(b) for b in require_real_array(
+        bp = [] if breakpoints is None else [float(b) for b in check_array(
             breakpoints, "breakpoints", ndim=1, min_size=0, max_abs=1e6)]
         if len(bp) > MAX_TABLE:
             raise ValueError(f"breakpoints: {len(bp)} values (admissible: at most {MAX_TABLE})")
@@ -564,8 +563,8 @@ class TabulatedPair(PairSuperposition):
         source: str | None = None,
     ) -> None:
         eps = _contact_ratio(contact_ratio)
-        u = require_real_array(position, "position", min_size=0).ravel()
-        k = require_real_array(stiffness, "stiffness", min_size=0, max_abs=MAX_STIFFNESS).ravel()
+        u = check_array(position, "position", min_size=0).ravel()
+        k = check_array(stiffness, "stiffness", min_size=0, max_abs=MAX_STIFFNESS).ravel()
         if u.size > MAX_TABLE:
             raise ValueError(f"position: {u.size} values (admissible: at most {MAX_TABLE})")
         if u.size != k.size or u.size < 2:

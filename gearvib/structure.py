@@ -18,8 +18,7 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field, replace
 from typing import Literal
 
-from analysis.checks import require_real_array
-from gearvib.checks import check_count, check_items, check_real, check_text, cut, short
+from gearvib.checks import check_array, check_count, check_items, check_real, check_text, cut, short
 from gearvib.geometry import (
     MAX_TEETH,
     MeshGeometry,
@@ -439,15 +438,14 @@ class GearSet:
         return replace(self, sensors=self.sensors + sensors_from_list(list(sensors)))
 
     def __post_init__(self) -> None:
-        from gearvib.faults.description import Fault
-        from gearvib.rolling_bearings import RollingBearingSpec
-        from gearvib.sensors.description import HousingSensor, Tacho
-
         check_text(self.name, "name of a gear set")
+        # the classes of faults, sensors and bearings by name: their modules import
+        # numpy-light gearvib only, but the bearings' imports analysis (xarray)
         for label, cls in (("bodies", Body), ("meshes", Mesh), ("couplings", Coupling),
-                           ("fixed", str), ("faults", Fault),
-                           ("sensors", (HousingSensor, Tacho)),
-                           ("rolling_bearings", RollingBearingSpec)):
+                           ("fixed", str), ("faults", "gearvib.faults.description.Fault"),
+                           ("sensors", ("gearvib.sensors.description.HousingSensor",
+                                        "gearvib.sensors.description.Tacho")),
+                           ("rolling_bearings", "gearvib.rolling_bearings.RollingBearingSpec")):
             object.__setattr__(self, label, check_items(getattr(self, label), cls, label))
         check_text(self.input, "input")
         check_text(self.output, "output")
@@ -957,7 +955,7 @@ def check_stepped_planet_angles(z_sun: int, z_ring2: int, z_planet1: int, z_plan
     for key, z in (("z_sun", z_sun), ("z_ring2", z_ring2), ("z_planet1", z_planet1),
                    ("z_planet2", z_planet2)):
         check_count(z, key, low=-MAX_TEETH, high=MAX_TEETH)
-    angles = [float(a) for a in require_real_array(angles, "angles", ndim=1)]
+    angles = [float(a) for a in check_array(angles, "angles", ndim=1)]
     if len(angles) > MAX_PLANETS:
         raise ValueError(f"angles: {len(angles)} planets (admissible: at most {MAX_PLANETS})")
     tol = check_real(tol, "tol", low=0.0)

@@ -39,8 +39,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from analysis.checks import require_instance, require_real_array
-from gearvib.checks import check_count, check_items, short
+from gearvib.checks import check_array, check_count, check_instance, check_items, short
 from gearvib.geometry import MAX_TEETH, MeshGeometry, planet_tooth_angle
 from gearvib.structure import Body, Mesh
 
@@ -54,7 +53,7 @@ TOOTH_MAP_COLUMNS = ("sign1", "tooth1", "sign2", "tooth2")
 def pair_teeth(tooth_map_row: np.ndarray, z1: int, z2: int, j: int) -> tuple[int, int]:
     """Teeth of gear1 and gear2 in pair ``j`` of a mesh (``tooth_map_row`` of
     :func:`mesh_tooth_map`)."""
-    row = require_real_array(tooth_map_row, "tooth_map_row", ndim=1, max_abs=1e15)
+    row = check_array(tooth_map_row, "tooth_map_row", ndim=1, max_abs=1e15)
     if row.size != 4 or not np.all(row == np.round(row)):
         raise ValueError(f"tooth_map_row must hold 4 integers ({', '.join(TOOTH_MAP_COLUMNS)}); "
                          f"got {short(tooth_map_row)}")
@@ -86,12 +85,12 @@ def mesh_tooth_map(meshes, bodies: Mapping, resolved: Mapping, s0: np.ndarray,
     """
     meshes = check_items(meshes, Mesh, "meshes")
     for key, mapping in (("bodies", bodies), ("resolved", resolved), ("centre", centre)):
-        require_instance(mapping, Mapping, key)
-    s0 = require_real_array(s0, "s0", ndim=1, min_size=0, max_abs=1e9)
+        check_instance(mapping, Mapping, key)
+    s0 = check_array(s0, "s0", ndim=1, min_size=0, max_abs=1e9)
     if s0.size != len(meshes):
         raise ValueError(f"s0 needs one mesh position per mesh ({len(meshes)}); got {s0.size}")
     for m in meshes:
-        require_instance(resolved.get(m.name), "gearvib.assembly.ResolvedMesh",
+        check_instance(resolved.get(m.name), "gearvib.assembly.ResolvedMesh",
                          f"resolved[{short(m.name)}]")  # by name: assembly imports teeth
         for g in (m.gear1, m.gear2):
             if not isinstance(bodies.get(g), Body):
@@ -100,7 +99,7 @@ def mesh_tooth_map(meshes, bodies: Mapping, resolved: Mapping, s0: np.ndarray,
             if not (isinstance(c, np.ndarray | list | tuple) and np.shape(c) == (2,)):
                 raise ValueError(f"centre of {short(g)} must be an (x, y) pair [m]; got "
                                  f"{short(c)}")
-            require_real_array(c, f"centre of {short(g)}", max_abs=1e6)
+            check_array(c, f"centre of {short(g)}", max_abs=1e6)
     out = np.zeros((len(meshes), 4), dtype=np.int64)
     c_ref: dict[str, float] = {}
     planet_ref: dict[tuple, float] = {}

@@ -15,8 +15,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from analysis.checks import require_instance
-from gearvib.checks import short
+from gearvib.checks import check_instance, short
 from gearvib.faults.description import (
     Fault,
     FaultError,
@@ -73,12 +72,12 @@ class MeshLine:
 
 
 def _bodies(model: AssembledModel) -> dict[str, str]:
-    require_instance(model, AssembledModel, "model")
+    check_instance(model, AssembledModel, "model")
     return {b["name"]: b["role"] for b in model.meta.get("bodies", [])}
 
 
 def _meshes(model: AssembledModel) -> list[dict]:
-    require_instance(model, AssembledModel, "model")
+    check_instance(model, AssembledModel, "model")
     meshes = model.meta.get("meshes", [])
     if len(meshes) != model.n_mesh:
         raise FaultError("the model carries no mesh description (meta['meshes']); faults need "
@@ -90,7 +89,7 @@ def mesh_lines(model: AssembledModel) -> list[MeshLine]:
     """Lines of action of every mesh, rebuilt from the model's description as the assembly
     builds them (``n_L = cos a t + sigma sin a e``, ``n_R = cos a t - sigma sin a e``, ``e``
     from gear1's centre to gear2's, ``t`` = ``e`` turned by +90 deg)."""
-    require_instance(model, AssembledModel, "model")
+    check_instance(model, AssembledModel, "model")
     planets = {p["name"]: p for p in model.meta.get("planets", [])}
 
     def centre(name: str) -> np.ndarray:
@@ -133,7 +132,7 @@ def fault_targets(model: AssembledModel, fault: Fault) -> list[Target]:
         Unknown member or mate, a member without teeth, a tooth out of range, a stepped planet
         whose toothing is not selected by ``mate``.
     """
-    require_instance(fault, Fault, "fault")
+    check_instance(fault, Fault, "fault")
     bodies = _bodies(model)
     meshes = _meshes(model)
     label = f"{fault.kind} fault on {short(fault.member)}"
@@ -193,7 +192,7 @@ def fault_targets(model: AssembledModel, fault: Fault) -> list[Target]:
 
 def add_faults(model: AssembledModel, faults: Sequence) -> AssembledModel:
     """:meth:`AssembledModel.with_faults` (see there)."""
-    require_instance(model, AssembledModel, "model")
+    check_instance(model, AssembledModel, "model")
     new = faults_from_list(list(faults))
     every = (*model.faults, *new)
     backlash = np.array(model.mesh_backlash, dtype=float, copy=True)

@@ -38,8 +38,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from analysis.checks import require_real_array
-from gearvib.checks import ITEM, check_count, check_integer, check_number, short
+from gearvib.checks import ITEM, check_array, check_count, check_integer, check_number, cut, short
 from gearvib.paths import is_file
 
 __all__ = [
@@ -82,7 +81,7 @@ MAX_CURVE = 100_000
 def _where(d: Mapping, index: int | None) -> str:
     kind = d.get("kind", "?") if isinstance(d, Mapping) else "?"
     head = "[[fault]]" if index is None else f"[[fault]] #{index + 1}"
-    return f"{head} ({kind})"
+    return f"{head} ({cut(str(kind))})"
 
 
 def _number(value: Any, where: str, key: str, *, low: float | None = None,
@@ -146,9 +145,9 @@ class PairCurve:
 
     def __post_init__(self) -> None:
         try:
-            u = require_real_array(self.position, "crack curve: position", min_size=0,
+            u = check_array(self.position, "crack curve: position", min_size=0,
                                    finite=False)
-            k = require_real_array(self.stiffness, "crack curve: stiffness", min_size=0,
+            k = check_array(self.stiffness, "crack curve: stiffness", min_size=0,
                                    finite=False)
         except (TypeError, ValueError) as exc:
             raise FaultError(str(exc)) from None

@@ -8,8 +8,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import replace
 
-from analysis.checks import require_instance
-from gearvib.checks import short
+from gearvib.checks import check_instance, short
 from gearvib.model import AssembledModel
 from gearvib.sensors.description import (
     HousingSensor,
@@ -34,7 +33,7 @@ def housing_meshes(model: AssembledModel, member: str | tuple[str, ...]) -> list
     parallel stage's housing holds the wheel's axis; the pinion's mesh with it is seen
     there). Several members: the union.
     """
-    require_instance(model, AssembledModel, "model")
+    check_instance(model, AssembledModel, "model")
     if not (isinstance(member, str) or (isinstance(member, tuple) and member
                                         and all(isinstance(m, str) for m in member))):
         raise TypeError(f"member must be a member name or a tuple of them; got {short(member)}")
@@ -55,7 +54,7 @@ def _default_housing(model: AssembledModel, name: str) -> str | tuple[str, ...]:
 
 def add_sensors(model: AssembledModel, sensors: Sequence) -> AssembledModel:
     """:meth:`AssembledModel.with_sensors` (see there)."""
-    require_instance(model, AssembledModel, "model")
+    check_instance(model, AssembledModel, "model")
     new = sensors_from_list(list(sensors))
     checked: list[Tacho | HousingSensor] = []
     bodies = {b["name"]: b["role"] for b in model.meta.get("bodies", [])}

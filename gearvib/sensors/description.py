@@ -25,8 +25,7 @@ from typing import Any
 
 import numpy as np
 
-from analysis.checks import require_real_array
-from gearvib.checks import ITEM, check_count, check_number, short
+from gearvib.checks import ITEM, check_array, check_count, check_number, short
 from gearvib.paths import is_file
 
 __all__ = [
@@ -148,11 +147,11 @@ class MeasuredFrf:
         if not isinstance(self.source, str):
             raise SensorError(f"frf: source must be a string, got {short(self.source)}")
         try:
-            f = require_real_array(self.frequency, f"frf {short(self.source)}: frequency",
+            f = check_array(self.frequency, f"frf {short(self.source)}: frequency",
                                    ndim=1, min_size=2, max_abs=MAX_MODE_HZ * 100)
-            re = require_real_array(self.real, f"frf {short(self.source)}: real", ndim=1,
+            re = check_array(self.real, f"frf {short(self.source)}: real", ndim=1,
                                     min_size=2, max_abs=MAX_GAIN)
-            im = require_real_array(self.imag, f"frf {short(self.source)}: imag", ndim=1,
+            im = check_array(self.imag, f"frf {short(self.source)}: imag", ndim=1,
                                     min_size=2, max_abs=MAX_GAIN)
         except (TypeError, ValueError) as exc:
             raise SensorError(str(exc)) from None

@@ -43,8 +43,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from analysis.checks import require_instance, require_real_array
-from gearvib.checks import check_real, short
+from gearvib.checks import check_array, check_instance, check_real, short
 from gearvib.model import AssembledModel
 from gearvib.sensors.apply import housing_meshes, members_of
 from gearvib.sensors.description import HousingSensor, Tacho
@@ -59,7 +58,7 @@ def window_weight(window: str, width_deg: float, delta: np.ndarray) -> np.ndarra
         raise ValueError(f"window = {short(window)} is not admissible (admissible: hann, "
                          "exponential, rectangular)")
     width_deg = check_real(width_deg, "width_deg", low=1e-6, high=360.0)
-    delta = require_real_array(delta, "delta", min_size=0, max_abs=1e9)
+    delta = check_array(delta, "delta", min_size=0, max_abs=1e9)
     # |delta| wrapped to 0..pi (nearest multiple of 2 pi removed)
     d = np.abs(delta - (2.0 * np.pi) * np.rint(delta * (0.5 / np.pi)))
     width = math.radians(width_deg)
@@ -83,9 +82,9 @@ def _rotation(result, member: str) -> np.ndarray:
 
 def path_force(result, model: AssembledModel, sensor: HousingSensor) -> np.ndarray:
     """The windowed force sum ``p(t)`` a sensor sees [N] (module docstring)."""
-    require_instance(result, "gearvib.simulation.result.RunUpResult", "result")
-    require_instance(model, AssembledModel, "model")
-    require_instance(sensor, HousingSensor, "sensor")
+    check_instance(result, "gearvib.simulation.result.RunUpResult", "result")
+    check_instance(model, AssembledModel, "model")
+    check_instance(sensor, HousingSensor, "sensor")
     housing = sensor.member
     if housing is None:
         raise ValueError("sensor has no housing member: take it from the model's sensors "
@@ -129,9 +128,9 @@ def _add_member_forces(p: np.ndarray, result, model: AssembledModel, sensor: Hou
 def housing_response(p: np.ndarray, fs: float, sensor: HousingSensor) -> np.ndarray:
     """Acceleration [m s-2] of the housing response to the path force ``p`` [N] sampled at
     ``fs`` (module docstring)."""
-    p = require_real_array(p, "p", ndim=1, min_size=0, max_abs=1e100)
+    p = check_array(p, "p", ndim=1, min_size=0, max_abs=1e100)
     fs = check_real(fs, "fs [Hz]", low=0.0, low_open=True, high=1e12)
-    require_instance(sensor, HousingSensor, "sensor")
+    check_instance(sensor, HousingSensor, "sensor")
     n = p.size
     if n == 0:
         return p.copy()
@@ -154,8 +153,8 @@ def tacho_signal(angle: np.ndarray, tacho: Tacho) -> np.ndarray:
     two samples centred there, so a trigger that interpolates its level crossing between two
     samples finds the edge exactly (as a measured, anti-alias filtered edge).
     """
-    require_instance(tacho, Tacho, "tacho")
-    angle = require_real_array(angle, "angle", ndim=1, min_size=0, max_abs=1e12)
+    check_instance(tacho, Tacho, "tacho")
+    angle = check_array(angle, "angle", ndim=1, min_size=0, max_abs=1e12)
     x = angle * tacho.pulses_per_rev / (2.0 * math.pi)
     duty = tacho.duty
     state = ((x - np.floor(x)) < duty).astype(float)
@@ -183,8 +182,8 @@ def add_sensor_signals(result, model: AssembledModel):
     has housing sensors but no tacho, a default tacho with one pulse per revolution of the
     input member) gives ``tacho``.
     """
-    require_instance(result, "gearvib.simulation.result.RunUpResult", "result")
-    require_instance(model, AssembledModel, "model")
+    check_instance(result, "gearvib.simulation.result.RunUpResult", "result")
+    check_instance(model, AssembledModel, "model")
     fs = float(result.step.fs_out)
     acc = [s for s in model.sensors if isinstance(s, HousingSensor)]
     tachos = [s for s in model.sensors if isinstance(s, Tacho)]

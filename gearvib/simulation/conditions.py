@@ -17,8 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from analysis.checks import require_real_array
-from gearvib.checks import check_real, short
+from gearvib.checks import check_array, check_real, short
 from gearvib.kinematics import MAX_SPEED_RPM
 
 __all__ = [
@@ -63,7 +62,7 @@ def _torque(value: Any, name: str, *, optional: bool = False) -> Any:
 def _table(values: Any, name: str, *, bound: float) -> tuple[float, ...]:
     """A 1-D table of finite numbers with magnitudes up to ``bound`` (at most
     :data:`MAX_DRIVE_TABLE`)."""
-    arr = require_real_array(values, name, min_size=0, max_abs=bound).ravel()
+    arr = check_array(values, name, min_size=0, max_abs=bound).ravel()
     if arr.size > MAX_DRIVE_TABLE:
         raise ValueError(f"{name}: {arr.size} values (admissible: at most {MAX_DRIVE_TABLE})")
     return tuple(float(v) for v in arr)

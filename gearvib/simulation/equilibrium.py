@@ -13,9 +13,8 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
-from analysis.checks import require_instance
 from gearvib import kernels as kn
-from gearvib.checks import check_count, check_items, check_real, check_vector
+from gearvib.checks import check_count, check_instance, check_items, check_real, check_vector
 from gearvib.simulation.errors import SimulationError
 from gearvib.simulation.frequencies import check_mass
 
@@ -327,7 +326,7 @@ def static_equilibrium(
     SimulationError
         If no equilibrium exists (unbalanced load on a free member) or the contact sets cycle.
     """
-    require_instance(system, kn.KernelSystem, "system")
+    check_instance(system, kn.KernelSystem, "system")
     n = system.n_dof
     mass = check_mass(mass)
     if mass.shape[0] != n:

@@ -8,8 +8,7 @@ from typing import Any
 import numpy as np
 import scipy.linalg
 
-from analysis.checks import require_instance, require_real_array
-from gearvib.checks import check_matrix
+from gearvib.checks import check_array, check_instance, check_matrix
 from gearvib.modal import rigid_body_mask
 from gearvib.model import AssembledModel
 
@@ -45,7 +44,7 @@ def elastic_frequencies(freqs: np.ndarray, mass: np.ndarray | None = None,
     them a mode below 1e-6 of the highest frequency is rigid (adequate unless a support is many
     orders stiffer than the meshes).
     """
-    freqs = require_real_array(freqs, "freqs", ndim=1, min_size=0, max_abs=1e100)
+    freqs = check_array(freqs, "freqs", ndim=1, min_size=0, max_abs=1e100)
     if freqs.size and freqs.min() < 0:
         raise ValueError("freqs must be >= 0 [Hz]")
     if (mass is None) != (stiffness is None):
@@ -66,6 +65,6 @@ def elastic_frequencies(freqs: np.ndarray, mass: np.ndarray | None = None,
 def stiffest_matrix(model: AssembledModel, torque_sign: float = 1.0) -> np.ndarray:
     """Constant stiffness plus every loaded flank at its stiffest (both flanks if j < 0;
     :meth:`AssembledModel.mesh_contacts`)."""
-    require_instance(model, AssembledModel, "model")
+    check_instance(model, AssembledModel, "model")
     contacts = model.mesh_contacts(torque_sign)
     return model.stiffness + contacts.stiffness_matrix(contacts.peak)

@@ -10,11 +10,10 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from analysis.checks import require_instance, require_real_array
 from gearvib import __version__
 from gearvib import kernels as kn
 from gearvib.cfdata import PlainDataset, PlainVariable, time_attrs
-from gearvib.checks import check_config, check_frequencies, check_real
+from gearvib.checks import check_array, check_config, check_frequencies, check_instance, check_real
 from gearvib.model import AssembledModel
 from gearvib.phases import mesh_phase_table
 from gearvib.simulation.conditions import (
@@ -40,7 +39,7 @@ INTEGRATOR = "classical Runge-Kutta 4, fixed step, sub-steps ending at stiffness
 
 def model_sha256(model: AssembledModel) -> str:
     """SHA-256 of every array and name of the model (provenance of a run)."""
-    require_instance(model, AssembledModel, "model")
+    check_instance(model, AssembledModel, "model")
     h = hashlib.sha256()
     for name in (
         "mass",
@@ -418,17 +417,17 @@ def build_result(
     ``out`` holds the decimated sample rows of the kernels (layout in :mod:`gearvib.kernels`);
     forces, deflections, bearing forces and speeds are derived from them here.
     """
-    require_instance(model, AssembledModel, "model")
-    require_instance(conditions, (SpeedRamp, SpeedTable, TorqueDriven, MotorDriven), "conditions")
-    require_instance(setup, RunSetup, "setup")
-    require_instance(step, StepChoice, "step")
+    check_instance(model, AssembledModel, "model")
+    check_instance(conditions, (SpeedRamp, SpeedTable, TorqueDriven, MotorDriven), "conditions")
+    check_instance(setup, RunSetup, "setup")
+    check_instance(step, StepChoice, "step")
     n, nm = model.n_dof, model.n_mesh
-    taps = require_real_array(taps, "taps", ndim=1)
-    out = require_real_array(out, "out", ndim=2, max_abs=1e100)
+    taps = check_array(taps, "taps", ndim=1)
+    out = check_array(out, "out", ndim=2, max_abs=1e100)
     if out.shape[1] != kn.n_signals(n, nm) or out.shape[0] < 1:
         raise ValueError(f"out must have {kn.n_signals(n, nm)} columns (the kernel signals of "
                          f"the model) and rows; got shape {out.shape}")
-    changes = require_real_array(changes, "changes", ndim=1, min_size=0, max_abs=2.0**62)
+    changes = check_array(changes, "changes", ndim=1, min_size=0, max_abs=2.0**62)
     if changes.size != nm or np.any(changes < 0) or np.any(changes != np.round(changes)):
         raise ValueError(f"changes must hold {nm} counts >= 0 (one per mesh)")
     duration = check_real(duration, "duration [s]", low=0.0, low_open=True)

@@ -8,9 +8,8 @@ from typing import Any
 
 import numpy as np
 
-from analysis.checks import require_instance
 from gearvib import kernels as kn
-from gearvib.checks import check_count, check_matrix, check_vector
+from gearvib.checks import check_count, check_instance, check_matrix, check_vector
 from gearvib.faults.law import FaultLaw, build_fault_law
 from gearvib.model import AssembledModel
 from gearvib.simulation.conditions import (
@@ -54,7 +53,7 @@ def check_model(model: AssembledModel) -> None:
     TypeError
         ``model`` is not an :class:`~gearvib.model.AssembledModel`.
     """
-    require_instance(model, AssembledModel, "model")
+    check_instance(model, AssembledModel, "model")
     n = model.n_dof
     for name in ("mass", "stiffness", "damping", "gyroscopic", "centripetal"):
         a = np.asarray(getattr(model, name))
@@ -152,7 +151,7 @@ def default_coupling(model: AssembledModel, torque_sign: float = 1.0) -> DriveCo
     elastic modes are exactly those of the free set whenever the set's own damping does not
     act on it either (``C r = 0``: no torsional damper to ground on a turning member).
     """
-    require_instance(model, AssembledModel, "model")
+    check_instance(model, AssembledModel, "model")
     rigid = model.rigid_body_velocity()
     k_in = int(model.rotation_dofs[model.input_member])
     mass = np.asarray(model.mass, float)
@@ -202,7 +201,7 @@ def coupling_matrices(mass: np.ndarray, rigid: np.ndarray, k_in: int,
     that needs a symmetric mean system.
     """
     mass, rigid, k_in = _drive_arrays(mass, rigid, k_in)
-    require_instance(coupling, DriveCoupling, "coupling")
+    check_instance(coupling, DriveCoupling, "coupling")
     n = mass.shape[0]
     if coupling.sensing == "rigid-body":
         p = drive_sensing(mass, rigid, k_in)
@@ -250,7 +249,7 @@ def prepare_run(
     TypeError
         For an unsupported conditions object.
     """
-    require_instance(model, AssembledModel, "model")
+    check_instance(model, AssembledModel, "model")
     if not isinstance(gyroscopic, bool | np.bool_):
         raise TypeError(f"gyroscopic must be a bool; got {type(gyroscopic).__name__}")
     n = model.n_dof

@@ -15,8 +15,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from analysis.checks import require_instance
-from gearvib.checks import check_count, check_real
+from gearvib.checks import check_count, check_instance, check_real
 from gearvib.memory import RunSizeError, require_memory
 from gearvib.simulation.decimation import filter_length
 from gearvib.simulation.step import DEFAULT_FS_OUT, StepChoice
@@ -114,7 +113,7 @@ def check_run_size(step: StepChoice, duration: float, *, n_dof: int, n_mesh: int
         Too many steps for ``max_steps``, or more memory than available; the message names
         the parameters (duration, dt and what sets it, fs_out) and what to change.
     """
-    require_instance(step, StepChoice, "step")
+    check_instance(step, StepChoice, "step")
     duration = check_real(duration, "duration [s]", low=0.0, low_open=True)
     for key, v in (("n_dof", n_dof), ("n_mesh", n_mesh), ("n_signals", n_signals),
                    ("n_stored", n_stored)):
