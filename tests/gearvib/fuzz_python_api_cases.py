@@ -243,6 +243,7 @@ def base_structure() -> Any:
     return BaseStructure(sun, planet, car, lumped_mesh())
 
 
+@functools.cache
 def setup() -> Any:
     from gearvib.simulate import prepare_run
 
@@ -368,12 +369,14 @@ def tacho() -> Any:
     return Tacho()
 
 
+@functools.cache
 def sensed_model() -> Any:
     from gearvib.sensors import add_sensors
 
     return add_sensors(model(), [sensor()])
 
 
+@functools.cache
 def sensed_run() -> Any:
     from gearvib.simulate import simulate
 
