@@ -80,24 +80,27 @@ def kernel_table(pieces: int = _PIECES, degree: int = _DEGREE) -> np.ndarray:
 
     On piece ``p`` (``f`` in ``[p / P, (p + 1) / P)``) with ``u = 2 (f P - p) - 1`` in
     ``[-1, 1)``, weight ``k`` is ``sum_d table[p, d, k] u**d``. ``pieces`` lies in
-    ``1 .. MAX_PIECES`` and ``degree`` in ``1 .. MAX_DEGREE`` (a fit costs ~2 ms per piece).
+    ``1 .. MAX_PIECES`` and ``degree`` in ``1 .. MAX_DEGREE``.
     """
     pieces = _bounded_int(pieces, "pieces", 1, MAX_PIECES)
     degree = _bounded_int(degree, "degree", 1, MAX_DEGREE)
     nodes = np.cos(np.pi * (np.arange(3 * degree) + 0.5) / (3 * degree))
-    table = np.zeros((pieces, degree + 1, 2 * HALF_TAPS))
-    for p in range(pieces):
-        f = (p + 0.5 + 0.5 * nodes) / pieces
-        cheb = np.polynomial.chebyshev.chebfit(nodes, exact_kernel(f), degree)
-        for k in range(2 * HALF_TAPS):
-            mono = np.polynomial.chebyshev.cheb2poly(cheb[:, k])
-            table[p, : mono.size, k] = mono
-    return table
+    # every piece is fitted at the same nodes u: one least-squares operator (Chebyshev basis,
+    # then to powers of u) maps a piece's sampled weights to its polynomial coefficients
+    cheb_fit = np.linalg.pinv(np.polynomial.chebyshev.chebvander(nodes, degree))
+    to_powers = np.zeros((degree + 1, degree + 1))  # column j: T_j(u) in powers of u
+    for j in range(degree + 1):
+        mono = np.polynomial.chebyshev.cheb2poly(np.eye(degree + 1)[j])
+        to_powers[: mono.size, j] = mono
+    fit = to_powers @ cheb_fit  # (degree + 1, nodes)
+    f = (np.arange(pieces)[:, None] + 0.5 + 0.5 * nodes[None, :]) / pieces
+    weights = exact_kernel(f.ravel()).reshape(pieces, nodes.size, 2 * HALF_TAPS)
+    return np.ascontiguousarray(np.einsum("dn,pnk->pdk", fit, weights))
 
 
 @functools.cache
 def _default_table() -> np.ndarray:
-    # computed on first use, not on import (0.6 s of numpy polynomial fits); kept writeable:
+    # computed on first use, not on import; kept writeable:
     # a read-only array would be another numba signature (a second compilation)
     return kernel_table()
 

@@ -5,7 +5,8 @@ Run ``python3 benchmarks/bench_compile.py [--quick] [--baseline PATH] [--rounds 
 (:func:`gearvib.kernels.integrate_chunk`) and, for a model with faults, its faulty-mesh pass
 (:mod:`gearvib.fault_pass`); later runs load both from numba's cache. For ``paper-case1``
 healthy and with a 30 % sun crack it prints, side by side for this checkout and a baseline
-checkout (``--baseline``, default ``/work/main``; another git worktree of the project):
+checkout (``--baseline PATH``, required outside ``--quick``: another git worktree of the
+project, e.g. ``git worktree add ../base <commit>``):
 
 * **first call [s CPU]**: CPU time of the first call of the kernel in a fresh process with an
   empty numba cache (its own ``NUMBA_CACHE_DIR``): the compilation of the kernel and of every
@@ -30,11 +31,11 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import statistics
 import subprocess
 import sys
 import tempfile
 import time
+from statistics import median
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
@@ -113,10 +114,6 @@ def run_worker(root: str, case: str, window: float, reps: int, fresh: bool) -> d
     return json.loads(proc.stdout.strip().splitlines()[-1])
 
 
-def _med(x: list[float]) -> float:
-    return statistics.median(x)
-
-
 def _spread(x: list[float]) -> str:
     return f"{min(x):.3g}-{max(x):.3g}"
 
@@ -125,8 +122,9 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true",
                         help="smoke run: this checkout, warm cache, tiny window")
-    parser.add_argument("--baseline", default="/work/main",
-                        help="checkout to compare with (default /work/main)")
+    parser.add_argument("--baseline", metavar="PATH",
+                        help="checkout to compare with (required outside --quick), e.g. a "
+                             "worktree made by `git worktree add ../base <commit>`")
     parser.add_argument("--rounds", type=int, default=3, help="A/B rounds (default 3)")
     parser.add_argument("--case", action="append", choices=sorted(CASES),
                         help="case (repeatable; default all)")
@@ -142,9 +140,15 @@ def main() -> None:
         res = run_worker(ROOT, "healthy", 0.002, 1, fresh=False)
         how = "compiled" if res["numba"] > 0.5 else "loaded from the cache"
         print(f"quick: paper-case1 first call {res['first']:.2f} s CPU ({how}), "
-              f"{_med(res['rates']):.0f} steps/s, check {res['check']:.6g}")
+              f"{median(res['rates']):.0f} steps/s, check {res['check']:.6g}")
         print("first call [s CPU] this / baseline: (not measured in --quick)")
         return
+    if not args.baseline:
+        parser.error("--baseline PATH is required outside --quick (a checkout of the project "
+                     "to compare with)")
+    if not os.path.isfile(os.path.join(args.baseline, "gearvib", "kernels.py")):
+        parser.error(f"--baseline {args.baseline!r} is not a checkout of gearvib (no "
+                     "gearvib/kernels.py there)")
     roots = {"this": ROOT, "baseline": os.path.abspath(args.baseline)}
     load0 = os.getloadavg()[0]
     t0 = time.time()
@@ -166,15 +170,16 @@ def main() -> None:
             rs = results[(case, name)]
             first = [r["first"] for r in rs]
             comp = [r["numba"] for r in rs]
-            rate = [_med(r["rates"]) for r in rs]
+            rate = [median(r["rates"]) for r in rs]
             checks = {r["check"] for r in rs}
-            print(f"{case:8s} {name:9s} {_med(first):7.1f} ({_spread(first):>11s}) "
-                  f"{_med(comp):14.1f} {_med(rate):10.0f} ({_spread(rate)})  "
+            print(f"{case:8s} {name:9s} {median(first):7.1f} ({_spread(first):>11s}) "
+                  f"{median(comp):14.1f} {median(rate):10.0f} ({_spread(rate)})  "
                   f"{', '.join(f'{c:.12g}' for c in sorted(checks))}")
         a = results[(case, "this")]
         b = results[(case, "baseline")]
-        ratio_first = _med([r["first"] for r in a]) / _med([r["first"] for r in b])
-        ratio_rate = _med([_med(r["rates"]) for r in a]) / _med([_med(r["rates"]) for r in b])
+        ratio_first = median([r["first"] for r in a]) / median([r["first"] for r in b])
+        ratio_rate = (median([median(r["rates"]) for r in a])
+                      / median([median(r["rates"]) for r in b]))
         same = {r["check"] for r in a} == {r["check"] for r in b}
         print(f"{case:8s} first call [s CPU] this / baseline: {ratio_first:.2f}; "
               f"steps/s this / baseline: {ratio_rate:.2f}; same check value: {same}")

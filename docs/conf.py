@@ -30,6 +30,7 @@ extensions = [
     "sphinx.ext.autosummary",
     "sphinx.ext.mathjax",
     "numpydoc",
+    "numpydoc_template_cache",  # docs/sphinxext: numpydoc's template compiled once per build
     "sphinx_gallery.gen_gallery",
 ]
 

@@ -291,7 +291,7 @@ def atomic_write(dest: str | os.PathLike, write: Callable[[Path], T], *,
     ----------
     dest : path-like
         Destination; its directory must exist. An existing file is replaced only once the new
-        one is complete.
+        one is complete; a device, FIFO or socket is refused (a rename would replace it).
     write : callable
         ``write(tmp_path)`` writes the whole content to ``tmp_path``; its result is returned.
     abandonable : bool
@@ -322,8 +322,15 @@ def atomic_write(dest: str | os.PathLike, write: Callable[[Path], T], *,
             raise FileNotFoundError(f"directory of {shown} does not exist")
         if dest.is_dir():
             raise IsADirectoryError(f"{shown} is a directory (give a file name)")
-    except ValueError:  # a NUL character
-        raise ValueError(f"{cut(repr(str(dest)), 200)} is not a file name") from None
+        if dest.exists() and not dest.is_file():
+            # a device, FIFO or socket: the rename would replace the node itself (as root,
+            # /dev/null would become a regular file)
+            raise ValueError(f"{shown} is not a regular file (a device, FIFO or socket); give "
+                             "the name of a file to write")
+    except ValueError as exc:
+        if "\x00" not in str(dest):  # raised above, with its message
+            raise
+        raise ValueError(f"{cut(repr(str(dest)), 200)} is not a file name") from exc
     except OSError as exc:
         if exc.strerror is None:  # raised above, with its message
             raise

@@ -125,7 +125,7 @@ def write_netcdf(ds: xr.Dataset, path: str | os.PathLike[str], *, compress: bool
     ds : xarray.Dataset
         Dataset following the layout (checked by :func:`validate_dataset`).
     path : path-like
-        Target file.
+        Target file (a device, FIFO or socket is refused: the rename would replace it).
     compress : bool, optional
         zlib level 4 with shuffle on the data variables (default True).
 
@@ -158,6 +158,10 @@ def write_netcdf(ds: xr.Dataset, path: str | os.PathLike[str], *, compress: bool
                 enc.update(zlib=True, complevel=4, shuffle=True)
         encoding[str(v)] = enc
     directory = target.parent if str(target.parent) else Path(".")
+    if target.exists() and not (target.is_file() or target.is_dir()):
+        # a device, FIFO or socket: the rename would replace the node itself
+        raise ValueError(f"{target} is not a regular file (a device, FIFO or socket); give the "
+                         "name of a file to write")
     # a private temporary folder named like gearvib's temporary files (.<name>.gearvib-<host>-
     # <pid>-<8 chars>.tmp: the next gearvib command in the folder removes it after a SIGKILL)
     # holds the file; once it is removed, a write abandoned by an interrupt cannot create the

@@ -38,7 +38,7 @@ class ProfileSettings:
         Names of the virtual sensors to order-track.
     carrier_per_input : float
         Speed of the reference shaft of the orders (the carrier of a planetary set,
-        :func:`gearvib.diagnosis.engine.order_reference`) per unit input speed.
+        :func:`gearvib.diagnosis.lines.order_reference`) per unit input speed.
     max_order : float
         Highest order of the reference shaft.
     revolutions : int

@@ -16,17 +16,15 @@ import functools
 import json
 import math
 import os
-import re
 import tempfile
 import time as _time
 import warnings
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from analysis.checks import require_instance, require_real_array
+from analysis.checks import require_instance
 from analysis.diagnosis import (
     DEFAULT_REVOLUTIONS,
     DEFAULT_THRESHOLD,
@@ -36,12 +34,10 @@ from analysis.diagnosis import (
     deadband_db,
     dynamic_range_db,
     family_evidence,
-    family_lines,
     impulse_mismatch_db,
     near_modes,
     order_locking,
     order_profile,
-    phasing_shifts,
     prominence_db,
     rising_peaks,
     shaft_line_mask,
@@ -50,8 +46,8 @@ from analysis.diagnosis import (
     with_noise_floor,
 )
 from gearvib import tempfiles
-from gearvib.checks import check_count, check_path, check_real, check_text, short
-from gearvib.config import ConfigError, gearset_from_dict
+from gearvib.checks import check_count, check_path, check_real, short
+from gearvib.config import ConfigError
 from gearvib.diagnosis.bearings import bearing_causes, bearing_fault_lines
 from gearvib.diagnosis.candidates import (
     KINDS,
@@ -63,6 +59,16 @@ from gearvib.diagnosis.candidates import (
 )
 from gearvib.diagnosis.cases import ProfileJob, ProfileSettings, profile_case
 from gearvib.diagnosis.library import default_library, entry_key, library_folder, load_entry
+from gearvib.diagnosis.lines import (
+    MemberLines,
+    cause_family,
+    family_table,
+    kinematics,
+    member_lines,
+    order_reference,
+)
+from gearvib.diagnosis.record import Record
+from gearvib.diagnosis.rig import diagnose_rig, first_bins
 from gearvib.diagnosis.verdict import LOCAL_FAULT, rank_causes
 from gearvib.execution import MAX_WORKERS
 from gearvib.simulation.conditions import MAX_DURATION
@@ -145,296 +151,6 @@ def simulated_duration(start_rpm: float, end_rpm: float, input_per_carrier: floa
     revs = revolutions * (SIM_SEGMENTS + 1) / 2 + 1
     fc_mean = 0.5 * (start_rpm + end_rpm) / input_per_carrier / 60.0
     return math.ceil(100.0 * revs / fc_mean) / 100.0 + SKIP_S
-
-
-@dataclass(frozen=True)
-class Record:
-    """A housing signal with the speed of a shaft, sample by sample.
-
-    Attributes
-    ----------
-    signal : numpy.ndarray
-        Samples [units].
-    fs : float
-        Sample rate [Hz].
-    speed_rpm : numpy.ndarray
-        Speed of ``member`` at every sample [min-1].
-    member : str
-        The shaft the speed belongs to (default: the gear set's input member).
-    units : str
-    name : str
-    channel : str, optional
-        The channel of ``measurement`` the signal is.
-    measurement : Measurement, optional
-        The measurement the record was taken from (:meth:`from_measurement`): the bearing
-        check uses its speed reference (tacho angle, stated speed) as it is.
-    """
-
-    signal: np.ndarray
-    fs: float
-    speed_rpm: np.ndarray
-    member: str | None = None
-    units: str = "m s-2"
-    name: str = "measured"
-    channel: str | None = None
-    measurement: Any = field(default=None, repr=False, compare=False)
-
-    def __post_init__(self) -> None:
-        check_text(self.name, "name")
-        w = short(self.name)
-        for key in ("member", "channel"):
-            check_text(getattr(self, key), f"{w}: {key}", optional=True)
-        check_text(self.units, f"{w}: units", empty=True)
-        try:
-            s = require_real_array(self.signal, f"{w}: signal", finite=False)
-            v = require_real_array(self.speed_rpm, f"{w}: speed_rpm", finite=False)
-        except TypeError as exc:
-            raise ValueError(str(exc)) from None
-        if s.ndim != 1 or v.shape != s.shape:
-            raise ValueError(f"{w}: signal and speed need one value per sample "
-                             f"(signal {s.shape}, speed {v.shape})")
-        if not np.all(np.isfinite(s)):
-            raise ValueError(f"{w}: the signal has non-finite samples")
-        if not np.all(np.isfinite(v)):
-            raise ValueError(f"{w}: the speed has non-finite samples")
-        if isinstance(self.fs, bool) or not isinstance(self.fs, int | float | np.integer
-                                                        | np.floating):
-            raise ValueError(f"{w}: sample rate fs = {short(self.fs)} is not a number")
-        fs = check_real(self.fs, f"{w}: sample rate fs [Hz]")
-        if not fs > 0:
-            raise ValueError(f"{w}: sample rate {self.fs!r} Hz is not admissible "
-                             "(admissible: finite, > 0)")
-        if self.measurement is not None:
-            from analysis.measurement import Measurement
-
-            if not isinstance(self.measurement, Measurement):
-                raise TypeError(f"measurement must be an analysis.measurement.Measurement; got "
-                                f"{type(self.measurement).__name__}")
-
-    @property
-    def duration(self) -> float:
-        """Record length [s]."""
-        return self.signal.size / self.fs
-
-    @classmethod
-    def from_measurement(cls, m: Any, channel: str | None = None, member: str | None = None,
-                         name: str = "measured") -> Record:
-        """From an :class:`analysis.measurement.Measurement` (its channel and speed).
-
-        ``member``: the shaft whose speed the measurement's reference gives (default: the
-        ``member`` attribute of its reference channel, e.g. a simulated tacho's, else the
-        gear set's input member).
-        """
-        x = m.channel(channel)
-        t = np.asarray(x["time"].values, float)
-        fs = (t.size - 1) / (t[-1] - t[0])
-        sp = m.speed_rpm
-        rpm = np.interp(t, np.asarray(sp["time"].values, float), np.asarray(sp.values, float))
-        if member is None:
-            ch = m.source.get("reference_channel")
-            if ch and ch in m.signals:
-                member = str(m.signals[ch].attrs.get("member", "")) or None
-        return cls(np.asarray(x.values, float), float(fs), rpm, member,
-                   str(x.attrs.get("units", "1")), name, str(x.name), m)
-
-    def to_measurement(self) -> Any:
-        """The record as an :class:`analysis.measurement.Measurement`: the one it was taken
-        from, else its signal with its speed (a stated constant speed when the speed does not
-        vary, a speed channel otherwise)."""
-        if self.measurement is not None:
-            return self.measurement
-        import xarray as xr
-
-        from analysis.measurement import load_measurement
-
-        t = np.arange(self.signal.size) / self.fs
-        ch = self.channel or self.name
-        ds = xr.Dataset({ch: ("time", np.asarray(self.signal, float),
-                              {"units": self.units, "long_name": f"{self.name} signal"})},
-                        coords={"time": ("time", t, {"units": "s", "long_name": "time"})})
-        rpm = np.abs(np.asarray(self.speed_rpm, float))
-        if float(np.ptp(rpm)) == 0.0:
-            return load_measurement(ds, channel=ch, rpm=float(rpm[0]))
-        ds["speed"] = ("time", rpm, {"units": "min-1", "long_name": "shaft speed"})
-        return load_measurement(ds, channel=ch, speed="speed")
-
-
-def _first_bins(p: OrderProfile, n: int) -> OrderProfile:
-    """The profile's first ``n`` order bins (profiles of one diagnosis on a common band)."""
-    return OrderProfile(p.order[:n], p.amplitude[:n], p.units, p.revolutions, p.segments,
-                        p.speed_rpm, p.name)
-
-
-def order_reference(gs: Any, model: Any) -> str:
-    """The shaft whose orders a diagnosis counts.
-
-    The carrier when exactly one carrier turns (every simple, Wolfrom and Ravigneaux set, and
-    a train with one planetary stage: the fault frequencies of its members are then orders of
-    moderate size); otherwise (several planetary stages, parallel stages only) the slowest
-    turning shaft, so that every fault frequency is an order of at least its own.
-
-    Parameters
-    ----------
-    gs : GearSet
-        The gear set.
-    model : AssembledModel
-        Its assembly (kinematic ratios).
-
-    Returns
-    -------
-    str
-        The member's name (``"carrier"`` for every simple set with a turning carrier).
-    """
-    r = model.kinematic_ratios
-    carriers = [b.name for b in gs.bodies if b.role == "carrier" and abs(r.get(b.name, 0.0))
-                > 1e-12]
-    if len(carriers) == 1:
-        return carriers[0]
-    on_moving = {b.name for b in gs.bodies if b.role == "planet"
-                 and abs(r.get(str(b.carrier), 0.0)) > 1e-12}
-    shafts = [(abs(r[b.name]), i, b.name) for i, b in enumerate(gs.bodies)
-              if abs(r.get(b.name, 0.0)) > 1e-12 and b.name not in on_moving]
-    return min(shafts)[2]
-
-
-@dataclass(frozen=True)
-class _Kinematics:
-    """The healthy gear set, its assembly, the reference of the orders
-    (:func:`order_reference`), its catalogue in reference orders and the member speeds in
-    reference orders."""
-
-    gs: Any
-    model: Any
-    reference: str
-    cat: Any
-    ms: dict[str, float]
-
-    def ratio(self, member: str) -> float:
-        """Reference speed per unit speed of ``member``."""
-        if member not in self.ms or self.ms[member] == 0:
-            raise ConfigError(f"the speed reference {member!r} is not a rotating member of the "
-                              "gear set (admissible: "
-                              f"{', '.join(k for k, v in self.ms.items() if v)})")
-        return 1.0 / abs(self.ms[member])
-
-
-def _kinematics(cfg: dict, base: Path | None) -> _Kinematics:
-    from gearvib.assembly import assemble
-    from gearvib.catalogue import gear_set_catalogue
-
-    gs = gearset_from_dict(cfg, base=base)
-    model = assemble(gs)
-    reference = order_reference(gs, model)
-    cat = gear_set_catalogue(gs, model=model, reference=reference, speed_rpm=1000.0,
-                             mesh_harmonics=4, harmonics=6, sidebands=3)
-    return _Kinematics(gs, model, reference, cat,
-                       {k: float(v) for k, v in cat.member_speeds.items()})
-
-
-_DIGITS = re.compile(r"\d+$")
-
-
-@dataclass(frozen=True)
-class _Lines:
-    """Kinematic lines of a candidate member (orders of the reference shaft).
-
-    ``fault``: the fundamental of a local tooth fault (its catalogue family's first line),
-    ``rotation``: its rotation relative to its carrier (eccentricity), ``carrier``: its
-    carrier's rotation (pin errors), ``mesh``: the mesh frequency its faults modulate; the
-    ``*_family`` names key the family evidence; ``fault_shifts``: per mesh harmonic, where
-    the planet phasing moves the fault's sidebands (:func:`analysis.diagnosis.phasing_shifts`;
-    None: not moved).
-    """
-
-    fault: float | None
-    fault_family: str
-    rotation: float
-    rotation_family: str
-    carrier: float
-    carrier_family: str
-    mesh: float
-    fault_shifts: tuple[tuple[float, ...], ...] | None = None
-
-
-def _member_lines(cat: Any, ms: dict[str, float], members: list[Any],
-                  model: Any) -> dict[str, _Lines]:
-    """Lines of every candidate member from the catalogue (reference orders).
-
-    The fault fundamental is the catalogue's first line of the member's fault family
-    (``sun_fault``, ``ring_fault``, ``planet_fault`` or ``gear_fault``); the mesh order the
-    catalogue's mesh line nearest to the member's own mesh frequency. Family keys are the
-    catalogue family names where one member has them (``sun_fault``, ``planet_rotation``,
-    ``carrier``: a simple set), else qualified by the member (``gear_fault stage2.pinion``).
-    """
-    fam = np.asarray(cat.family)
-    order = np.asarray(cat.order, float)
-    first = (np.asarray(cat.harmonic) == 1) & (np.asarray(cat.sideband) == 0)
-    member_col = np.asarray(cat.member).astype(str)
-    mesh_lines = np.sort(order[(fam == "mesh") & first])
-    # the mesh rate |z_1 (n_1 - n_c)| of every mesh a member's teeth take part in
-    rates: dict[str, list[float]] = {}
-    planets = {p["name"]: p["carrier"] for p in model.meta.get("planets", [])}
-    for d in model.meta.get("meshes", []):
-        if d.get("z1") is None:
-            continue
-        rate = abs(int(d["z1"]) * (ms[d["gear1"]] - ms[planets[d["gear2"]]]))
-        for g in (d["gear1"], d["gear2"]):
-            rates.setdefault(str(g), []).append(rate)
-    found: dict[str, tuple[str, str, float | None]] = {}
-    for m in members:
-        cat_name = m.name if not m.planets else (_DIGITS.sub("", m.target) or m.target)
-        fault = None
-        fault_fam = ""
-        for family in ("sun_fault", "ring_fault", "planet_fault", "gear_fault"):
-            sel = (fam == family) & first & (member_col == cat_name)
-            if sel.any():
-                fault, fault_fam = float(order[sel][0]), family
-                break
-        found[m.name] = (cat_name, fault_fam, fault)
-    names_of: dict[str, set[str]] = {}
-    for cat_name, family, _ in found.values():
-        names_of.setdefault(family, set()).add(cat_name)
-    count = {family: len(names) for family, names in names_of.items()}
-    turning = sorted({m.carrier for m in members if abs(ms.get(m.carrier, 0.0)) > 0})
-    out = {}
-    for m in members:
-        cat_name, family, fault = found[m.name]
-        # the member's own (first) mesh frequency, snapped to the catalogue's line
-        own = rates.get(m.target, [])
-        if not mesh_lines.size:
-            mesh = 0.0
-        elif own:
-            mesh = float(mesh_lines[np.argmin(np.abs(mesh_lines - own[0]))])
-        else:
-            mesh = float(mesh_lines[-1])
-        key = family if count.get(family, 0) == 1 else f"{family} {cat_name}"
-        c_key = "carrier" if len(turning) <= 1 else f"carrier {m.carrier}"
-        out[m.name] = _Lines(fault, key, abs(ms.get(m.target, 0.0) - ms.get(m.carrier, 0.0)),
-                             f"{cat_name}_rotation", abs(ms.get(m.carrier, 0.0)), c_key, mesh,
-                             _fault_shifts(m.target, family, ms, model, planets))
-    return out
-
-
-def _fault_shifts(gear: str, family: str, ms: dict[str, float], model: Any,
-                  planets: dict[str, str]) -> tuple[tuple[float, ...], ...] | None:
-    """Per mesh harmonic, where the planet phasing puts the sidebands of a local fault on the
-    central gear ``gear`` (:func:`analysis.diagnosis.phasing_shifts`, the sensor on the
-    housing); None for another family or a gear without planet meshes."""
-    if family not in ("sun_fault", "ring_fault"):
-        return None
-    meshes = [d for d in model.meta.get("meshes", []) if str(d["gear1"]) == gear
-              and d.get("z1") is not None and d["gear2"] in planets]
-    if not meshes:
-        return None
-    carrier = planets[meshes[0]["gear2"]]
-    mates = {d["gear2"] for d in meshes if planets[d["gear2"]] == carrier}
-    psi = [math.radians(float(p["angle_deg"])) for p in model.meta.get("planets", [])
-           if p["name"] in mates]
-    z = int(meshes[0]["z1"])
-    rel = ms[gear] - ms[carrier]
-    pass_order = math.copysign(1.0, z * rel) * ms[carrier] if rel else 0.0
-    return tuple(phasing_shifts(z, psi, pass_order=pass_order,
-                                mesh_harmonics=FAMILY_MESH_HARMONICS))
 
 
 def _library(library: str | os.PathLike | bool | None,
@@ -536,45 +252,6 @@ def _fit_ramp(t: np.ndarray, rpm: np.ndarray) -> tuple[float, float]:
     return float(b), float(b + a * t[-1])
 
 
-FAMILY_MESH_HARMONICS = 6
-"""Mesh harmonics whose sidebands a family's lines include (the family evidence)."""
-
-
-def _family_table(lines: dict[str, _Lines], members: list[Any], max_order: float
-                  ) -> dict[str, tuple[float, np.ndarray]]:
-    """Catalogue families of the candidate members: their fault lines, rotations (turning
-    members) and carriers, each with harmonics and sidebands of the member's mesh."""
-    base: dict[str, tuple[float, float, Any]] = {}
-    for m in members:
-        ln = lines[m.name]
-        if ln.fault is not None:
-            base.setdefault(ln.fault_family, (ln.fault, ln.mesh, ln.fault_shifts))
-    for m in members:
-        ln = lines[m.name]
-        if m.turns:
-            base.setdefault(ln.rotation_family, (ln.rotation, ln.mesh, None))
-    for m in members:
-        ln = lines[m.name]
-        base.setdefault(ln.carrier_family, (ln.carrier, ln.mesh, None))
-    out = {}
-    for name, (f, mesh, shifts) in base.items():
-        if f > 0:
-            out[name] = (f, family_lines(f, mesh_order=mesh,
-                                         mesh_harmonics=FAMILY_MESH_HARMONICS, harmonics=10,
-                                         shifts=shifts,
-                                         sidebands=10, max_order=max_order))
-    return out
-
-
-def _cause_family(cause: str, lines: _Lines) -> str:
-    """The family whose lines a cause raises: its member's fault, rotation or carrier."""
-    if cause in LOCAL_KINDS:
-        return lines.fault_family
-    if cause == "eccentricity":
-        return lines.rotation_family
-    return lines.carrier_family
-
-
 KIND_WEIGHT = 0.1
 """Score per dB of impulse mismatch (:func:`analysis.diagnosis.impulse_mismatch_db`) by which
 a local tooth-fault kind falls behind the best-matching kind of its member
@@ -583,7 +260,7 @@ a local tooth-fault kind falls behind the best-matching kind of its member
 
 def _local_kind_scores(best: dict[tuple[str, str], tuple[float, Candidate]],
                        candidates: list[Candidate], profiles: list[list[OrderProfile]],
-                       meas: OrderProfile, lines: dict[str, _Lines]
+                       meas: OrderProfile, lines: dict[str, MemberLines]
                        ) -> tuple[dict[tuple[str, str], float], dict[tuple[str, str], float]]:
     """Scores of the local tooth-fault kinds of each member, ranked by their impulse.
 
@@ -723,16 +400,16 @@ def diagnose(measured: Record, config: str, *, baseline: Record | None = None,
         raise ValueError("keep_runs = True needs work_dir (the folder of the run files)")
     cfg, base = load_config(config)
     if cfg.get("type") == "shafts":  # a machine without gears: its bearings' lines only
-        return _diagnose_rig(measured, cfg, base, config=str(config), baseline=baseline,
+        return diagnose_rig(measured, cfg, base, config=str(config), baseline=baseline,
                              threshold=float(threshold), revolutions=int(revolutions))
     candidates = candidate_faults(cfg, kinds, base=base)
-    kin = _kinematics(cfg, base)
+    kin = kinematics(cfg, base)
     ms = kin.ms
     input_member = kin.gs.input
     member = measured.member or input_member
     ratio = kin.ratio(member)
     members = candidate_members(kin.gs, kin.model)
-    lines = _member_lines(kin.cat, ms, members, kin.model)
+    lines = member_lines(kin.cat, ms, members, kin.model)
     meshes = [ln.mesh for ln in lines.values() if ln.mesh > 0]
     if not meshes:
         raise ConfigError("diagnosis: the gear set has no meshes with tooth numbers")
@@ -777,7 +454,7 @@ def diagnose(measured: Record, config: str, *, baseline: Record | None = None,
     order = meas.order[:n]
 
     def cut(p: OrderProfile) -> OrderProfile:
-        return _first_bins(p, n)
+        return first_bins(p, n)
 
     def prom(p: OrderProfile) -> np.ndarray:
         return prominence_db(cut(p))
@@ -801,7 +478,7 @@ def diagnose(measured: Record, config: str, *, baseline: Record | None = None,
     shafts = shaft_line_mask(order, [v for k, v in ms.items() if k != "ground"])
     scores = {lab: signature_score(d_meas, sig, deadband=dead, exclude=shafts)
               for lab, sig in signatures.items()}
-    fams = _family_table(lines, members, max_order)
+    fams = family_table(lines, members, max_order)
     fam_ev = family_evidence(order, d_meas, dead, fams)
     fam_by = {f.family: f for f in fam_ev}
     peaks = rising_peaks(order, d_meas, dead)
@@ -839,7 +516,7 @@ def diagnose(measured: Record, config: str, *, baseline: Record | None = None,
             ev.append(f"sideband pattern of the fault impulse (sidebands over their mesh "
                       f"harmonic, shape): {mismatch[(cause, mem)]:.1f} dB from the measured one "
                       f"(cosine score {best[(cause, mem)][0]:.2f})")
-        fe = fam_by.get(_cause_family(cause, lines[mem])) if mem in lines else None
+        fe = fam_by.get(cause_family(cause, lines[mem])) if mem in lines else None
         cause_fams[(cause, mem)] = fe
         if fe is not None:
             ev.append(fe.text())
@@ -912,62 +589,4 @@ def diagnose(measured: Record, config: str, *, baseline: Record | None = None,
                   line_check=fault_lines)
     # timing: not part of the report or the Dataset (same input, same output)
     d.timing = {"simulation_s": sim_time, "total_s": _time.perf_counter() - t0, **counts}
-    return d
-
-
-def _diagnose_rig(measured: Record, cfg: dict, base: Path | None, *, config: str,
-                  baseline: Record | None, threshold: float, revolutions: int) -> Diagnosis:
-    """Diagnosis of a machine without gears (``type = "shafts"``): the causes are the faults of
-    its declared rolling bearings, judged by their lines (:mod:`gearvib.diagnosis.bearings`);
-    nothing is simulated. The order profiles (measured, baseline) are kept for the report."""
-    from gearvib.config import description_from_dict
-
-    t0 = _time.perf_counter()
-    rig = description_from_dict(cfg, base=base)
-    ref = measured.member or rig.input
-    fl = bearing_fault_lines(measured.to_measurement(), rig, channel=measured.channel,
-                             reference=ref)
-    if fl is None:
-        raise ConfigError(f"diagnosis: {rig.name!r} has no gears and declares no rolling "
-                          "bearing; a machine without gears is diagnosed by its bearings' "
-                          "lines: add [[rolling_bearing]] tables")
-    names = ", ".join(b.name for b in rig.bearings())
-    causes = rank_causes(bearing_causes(fl, threshold), threshold, families={}, mismatch={},
-                         local_kinds=(), none_reason=(
-                             f"no fault family of {names} is detected in the envelope "
-                             "spectrum, and none is possible"))
-    top_line = max(f.harmonics * f.order + f.sidebands * f.sideband_order for f in fl.families)
-
-    def profile(r: Record, name: str) -> OrderProfile:
-        rpm = np.abs(r.speed_rpm)
-        nyq = 0.45 * r.fs / (float(rpm.max()) / 60.0)
-        return order_profile(r.signal, r.fs, rpm, max_order=min(nyq, 1.3 * top_line + 2.0),
-                             revolutions=revolutions, name=name, units=r.units)
-
-    meas = profile(measured, "measured")
-    base_prof = profile(baseline, "baseline") if baseline is not None else meas
-    n = min(meas.order.size, base_prof.order.size)
-
-    def cut(p: OrderProfile) -> OrderProfile:
-        return _first_bins(p, n)
-
-    meas, base_prof = cut(meas), cut(base_prof)
-    d_meas = prominence_db(meas) - prominence_db(base_prof)
-    lead = causes[0]
-    nxt = []
-    if lead.verdict != "likely" and any(c.verdict == "possible" for c in causes):
-        nxt.append("a longer record (finer envelope spectrum, lower chance of a coincidence) "
-                   "and a sensor nearer the bearing")
-    notes = [f"{rig.name} is a machine without gears: the causes are the faults of its "
-             "declared rolling bearings, judged by their lines in the envelope spectrum; "
-             "nothing is simulated", *fl.notes]
-    if baseline is not None:
-        notes.append("the baseline's order profile is shown; the bearing check uses the "
-                     "measurement alone")
-    attrs = {"gear_set": config, "speed_member": ref,
-             "baseline": "measured" if baseline is not None else "none (machine without gears)",
-             "machine": "shafts and rolling bearings, no gears"}
-    d = Diagnosis(causes, threshold, meas.order, meas, base_prof, d_meas,
-                  deadband_db(d_meas), {}, [], nxt, notes, ref, attrs, line_check=fl)
-    d.timing = {"simulation_s": 0.0, "total_s": _time.perf_counter() - t0}
     return d

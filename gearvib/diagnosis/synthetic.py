@@ -89,7 +89,7 @@ def record_from_run(ds: xr.Dataset, sensor: str | None = None, *, name: str = "m
     """A :class:`gearvib.diagnosis.Record` of a run's sensor, the speed from its tacho channel
     (:func:`analysis.measurement.load_measurement`)."""
     from analysis.measurement import load_measurement
-    from gearvib.diagnosis.engine import Record
+    from gearvib.diagnosis.record import Record
 
     m = load_measurement(ds, channel=sensor, tacho="tacho")
     return Record.from_measurement(m, sensor, name=name)

@@ -5,12 +5,13 @@ Both writers render the same list of :class:`~gearvib.report.figures.Section` ob
 (caption, header, rows) and figures (caption, figure builder). This module holds what must be
 identical in both documents beyond the blocks themselves:
 
-* :class:`FigureImages` calls each figure builder once and keeps the figure as PNG at every
-  resolution the writers ask for (the HTML embeds :data:`HTML_DPI`, the PDF :data:`PDF_DPI`), so
-  the two documents show the same pictures and no figure is computed twice. A figure is drawn
-  once, at the highest resolution; the lower ones are that image reduced (box filter), which
-  halves the drawing time of a report. PNGs carry no ``Software`` tag: the same input gives the
-  same bytes.
+* :class:`FigureImages` calls each figure builder once and keeps the figure's pixels at every
+  resolution the writers ask for (the HTML embeds a PNG at :data:`HTML_DPI`, the PDF places the
+  pixels at :data:`PDF_DPI`), so the two documents show the same pictures and no figure is
+  computed twice. A figure is drawn once, at the highest resolution; the lower ones are that
+  image reduced (box filter), which halves the drawing time of a report. The PDF writer takes
+  the pixels as they are (no PNG encoded and decoded again); a PNG is encoded only where one
+  is embedded, without ``Software`` tag: the same input gives the same bytes.
 * the text of an empty table (:data:`EMPTY_TABLE`), of a figure that could not be drawn
   (:func:`missing_figure_text`), the closing line (:func:`footer_text`) and which paragraphs
   are emphasised (:func:`is_emphasised`).
@@ -28,6 +29,7 @@ from gearvib.report.sections import Block
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
+    from PIL import Image
 
 __all__ = [
     "EMPTY_TABLE",
@@ -35,11 +37,13 @@ __all__ = [
     "PDF_DPI",
     "FigureImage",
     "FigureImages",
+    "figure_pixels",
     "figure_png",
     "figure_pngs",
     "footer_text",
     "is_emphasised",
     "missing_figure_text",
+    "png_bytes",
 ]
 
 EMPTY_TABLE = "(none)"
@@ -59,7 +63,7 @@ def figure_png(fig: Figure, *, dpi: int = HTML_DPI) -> bytes:
 
 
 def figure_pngs(fig: Figure, dpis: Iterable[int]) -> dict[int, bytes]:
-    """PNG bytes of a figure at several resolutions, drawn once.
+    """PNG bytes of a figure at several resolutions, drawn once (:func:`figure_pixels`).
 
     Parameters
     ----------
@@ -71,10 +75,36 @@ def figure_pngs(fig: Figure, dpis: Iterable[int]) -> dict[int, bytes]:
     Returns
     -------
     dict of int to bytes
-        PNG per resolution: ``round(width_in * dpi)`` by ``round(height_in * dpi)`` pixels, RGBA.
-        The figure is drawn at the highest resolution; each lower one is that image reduced
-        with a box filter (the mean of the pixels each new pixel covers). No ``Software``
-        tag (the same figure gives the same bytes).
+        PNG (RGB) per resolution, without ``Software`` tag (the same figure gives the same
+        bytes).
+    """
+    return {dpi: png_bytes(image) for dpi, image in figure_pixels(fig, dpis).items()}
+
+
+def png_bytes(image: Image.Image) -> bytes:
+    """An image as PNG bytes (no ``Software`` tag: the same pixels give the same bytes)."""
+    buf = io.BytesIO()
+    image.save(buf, format="png")
+    return buf.getvalue()
+
+
+def figure_pixels(fig: Figure, dpis: Iterable[int]) -> dict[int, Image.Image]:
+    """The pixels of a figure at several resolutions, drawn once.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        The figure (drawn on an Agg canvas; its ``dpi`` is restored afterwards).
+    dpis : iterable of int
+        Resolutions [dots per inch of the figure size].
+
+    Returns
+    -------
+    dict of int to PIL.Image.Image
+        RGB image per resolution: ``round(width_in * dpi)`` by ``round(height_in * dpi)``
+        pixels. The figure is drawn at the highest resolution; each lower one is that image
+        reduced with a box filter (the mean of the pixels each new pixel covers). The report
+        figures are opaque: the alpha channel is dropped.
     """
     import numpy as np
     from matplotlib.backends.backend_agg import FigureCanvasAgg
@@ -88,42 +118,40 @@ def figure_pngs(fig: Figure, dpis: Iterable[int]) -> dict[int, bytes]:
     fig.dpi = top
     try:
         canvas.draw()
-        full = Image.fromarray(np.asarray(canvas.buffer_rgba()).copy(), mode="RGBA")
+        full = Image.fromarray(np.asarray(canvas.buffer_rgba()), mode="RGBA").convert("RGB")
     finally:
         fig.dpi = saved
     out = {}
     for dpi in wanted:
         size = (max(1, round(w_in * dpi)), max(1, round(h_in * dpi)))
-        image = full if size == full.size else full.resize(size, Image.Resampling.BOX)
-        buf = io.BytesIO()
-        image.save(buf, format="png")
-        out[dpi] = buf.getvalue()
+        out[dpi] = full if size == full.size else full.resize(size, Image.Resampling.BOX)
     return out
 
 
 @dataclass(frozen=True)
 class FigureImage:
-    """One report figure as PNG.
+    """One report figure, as pixels at every resolution it was rendered at.
 
     Attributes
     ----------
     width_in, height_in : float
-        Figure size [in]; the PNG at ``dpi`` has ``round(width_in * dpi)`` pixels across.
-    png : dict of int to bytes
-        PNG bytes per resolution [dpi].
+        Figure size [in]; the image at ``dpi`` has ``round(width_in * dpi)`` pixels across.
+    pixels : dict of int to PIL.Image.Image
+        RGB image per resolution [dpi].
     """
 
     width_in: float
     height_in: float
-    png: dict[int, bytes] = field(repr=False)
+    pixels: dict[int, Image.Image] = field(repr=False)
+    _png: dict[int, bytes] = field(default_factory=dict, init=False, repr=False, compare=False)
 
     @property
     def aspect(self) -> float:
         """Height over width."""
         return self.height_in / self.width_in
 
-    def at(self, dpi: int) -> bytes:
-        """PNG bytes at ``dpi`` (one of the resolutions the figure was rendered at).
+    def image(self, dpi: int) -> Image.Image:
+        """The RGB image at ``dpi`` (one of the resolutions the figure was rendered at).
 
         Raises
         ------
@@ -131,9 +159,21 @@ class FigureImage:
             The figure was not rendered at ``dpi``.
         """
         try:
-            return self.png[dpi]
+            return self.pixels[dpi]
         except KeyError:
-            raise KeyError(f"figure rendered at {sorted(self.png)} dpi, not {dpi}") from None
+            raise KeyError(f"figure rendered at {sorted(self.pixels)} dpi, not {dpi}") from None
+
+    def at(self, dpi: int) -> bytes:
+        """PNG bytes at ``dpi`` (encoded on the first call).
+
+        Raises
+        ------
+        KeyError
+            The figure was not rendered at ``dpi``.
+        """
+        if dpi not in self._png:
+            self._png[dpi] = png_bytes(self.image(dpi))
+        return self._png[dpi]
 
 
 class FigureImages:
@@ -170,7 +210,7 @@ class FigureImages:
         image = None
         if fig is not None:
             w, h = (float(v) for v in fig.get_size_inches())
-            image = FigureImage(w, h, figure_pngs(fig, self.dpis))
+            image = FigureImage(w, h, figure_pixels(fig, self.dpis))
         self._cache[id(block)] = (block, image)
         return image
 

@@ -90,12 +90,12 @@ def place_labels(fig: Figure, ax: Any, labels: Sequence[Any], *, pad: float = 1.
                  avoid: Sequence[Any] = ()) -> list[Any]:
     """Annotate ``ax`` with every label that fits without overlapping another.
 
-    The figure is laid out and drawn once, then each label is tried at its offsets in turn and
-    kept at the first one where its box (grown by ``pad`` pixels) overlaps no label placed
-    before and no artist in ``avoid`` (e.g. the title, a legend), and stays inside the figure;
-    a label that fits nowhere is left out (the tables carry it). The layout is then frozen, so
-    the saved figure shows the boxes that were checked. With ``ax=None``, ``labels`` are
-    ``(axes, Label)`` pairs (labels of several panels placed together).
+    The figure is laid out once (nothing rasterised), then each label is tried at its offsets
+    in turn and kept at the first one where its box (grown by ``pad`` pixels) overlaps no label
+    placed before and no artist in ``avoid`` (e.g. the title, a legend), and stays inside the
+    figure; a label that fits nowhere is left out (the tables carry it). The layout is then
+    frozen, so the saved figure shows the boxes that were checked. With ``ax=None``, ``labels``
+    are ``(axes, Label)`` pairs (labels of several panels placed together).
 
     Returns
     -------
@@ -107,7 +107,7 @@ def place_labels(fig: Figure, ax: Any, labels: Sequence[Any], *, pad: float = 1.
         from matplotlib.backends.backend_agg import FigureCanvasAgg
 
         FigureCanvasAgg(fig)
-    fig.canvas.draw()  # the one layout and draw: the text extents below need no other
+    fig.draw_without_rendering()  # the one layout: the text extents below need no other
     # an Agg canvas (made above if needed); FigureCanvasBase does not declare the method
     renderer = fig.canvas.get_renderer()  # type: ignore[attr-defined]
     fig.set_layout_engine("none")

@@ -27,11 +27,11 @@ dates, so the same input gives the same bytes.
 from __future__ import annotations
 
 import contextlib
-import io
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
+from typing import TYPE_CHECKING
 from xml.sax.saxutils import escape
 
 import matplotlib
@@ -71,6 +71,9 @@ from gearvib.report.document import (
     is_emphasised,
     missing_figure_text,
 )
+
+if TYPE_CHECKING:
+    from PIL import Image
 
 __all__ = ["PAGE", "PageLayout", "column_widths", "write_pdf"]
 
@@ -407,9 +410,9 @@ def _table(b: Block, styles: _Styles) -> tuple[list[Flowable], bool]:
 class _Picture(Flowable):
     """A figure image at the text width, centred; :class:`_KeepFigure` may shrink it a little."""
 
-    def __init__(self, png: bytes, width: float, height: float) -> None:
+    def __init__(self, image: Image.Image, width: float, height: float) -> None:
         super().__init__()
-        self.png = png
+        self.image = image
         self.full_width, self.full_height = width, height
         self.scale = 1.0
         self.spaceBefore = 6.0
@@ -421,7 +424,7 @@ class _Picture(Flowable):
     def draw(self) -> None:
         w, h = self.full_width * self.scale, self.full_height * self.scale
         # mask=None: the figures are opaque, no soft mask for the constant alpha channel
-        self.canv.drawImage(ImageReader(io.BytesIO(self.png)),
+        self.canv.drawImage(ImageReader(self.image),
                             0.5 * (self.available_width - w), 0, w, h, mask=None)
 
 
@@ -459,7 +462,7 @@ def _figure(b: Block, images: FigureImages, styles: _Styles) -> list[Flowable]:
     if h > _FIGURE_MAX_HEIGHT * PAGE.text_height:
         h = _FIGURE_MAX_HEIGHT * PAGE.text_height
         w = h / image.aspect
-    return [_Picture(image.at(PDF_DPI), w, h), Paragraph(_text(b.text), styles.figure_caption)]
+    return [_Picture(image.image(PDF_DPI), w, h), Paragraph(_text(b.text), styles.figure_caption)]
 
 
 # --------------------------------------------------------------------------- story

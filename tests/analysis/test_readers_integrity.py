@@ -685,3 +685,14 @@ def test_uff_and_tdms_memory_guards(tmp_path, monkeypatch):
     monkeypatch.setattr(integrity, "available_memory", lambda: 50_000)
     _refused(uff, r"pyuff's parse of the file needs .* of memory")
     _refused(tdms, r"group 'rig' .* needs .* of memory")
+
+
+def test_write_netcdf_refuses_a_fifo_and_leaves_it_in_place(tmp_path):
+    """A device, FIFO or socket is not replaced by the atomic rename (as root, a write to
+    /dev/null would have made it a regular file); a FIFO stands in for a device here."""
+    fifo = tmp_path / "pipe"
+    os.mkfifo(fifo)
+    ds = build_dataset([ChannelData("a", np.linspace(0, 1, 50), "V")], 100.0, source_format="t")
+    with pytest.raises(ValueError, match="pipe is not a regular file"):
+        write_netcdf(ds, fifo)
+    assert fifo.is_fifo() and list(tmp_path.iterdir()) == [fifo]

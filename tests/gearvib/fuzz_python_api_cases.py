@@ -750,7 +750,7 @@ BASELINES: dict[str, Callable[[], A]] = {
     "gearvib.sweep.summary.summarise_run": _c(run_ds, model, ramp),
     "gearvib.sweep.description.sweep_from_dict": _c(sweep_dict),
     # diagnosis
-    "gearvib.diagnosis.engine.Record": _c(lambda: np.ones(256), 4096.0,
+    "gearvib.diagnosis.record.Record": _c(lambda: np.ones(256), 4096.0,
                                           lambda: np.full(256, 1500.0), "sun"),
     "gearvib.diagnosis.candidates.candidate_faults": _c(cfg_copy, ("crack", "pin_error")),
     "gearvib.diagnosis.engine.diagnose": _c(record, "paper-case1", kinds=(), library=False,

@@ -55,13 +55,12 @@ def _run(systems, y0, dt, n_steps, monkeypatch, kernel):
     return kb.integrate_batch(systems, np.array(y0), dt, n_steps)
 
 
-@pytest.mark.parametrize("case", ["paper-case1", "paper-case1-elastic", "bearing", "other",
-                                  "viscous"])
+# "viscous" holds the bearing stiffness per lane and both damping laws (sun meshes viscous,
+# ring meshes gated): every case compiles its own kernel (~20 s), so none repeats another
+@pytest.mark.parametrize("case", ["paper-case1", "paper-case1-elastic", "other", "viscous"])
 def test_specialised_kernel_is_bit_identical(case, monkeypatch):
     if case == "other":
         runs, dt = _other_topology(), 5e-6
-    elif case == "bearing":
-        runs, dt = _preset_variants("paper-case1-elastic", radial=True), 8e-6
     elif case == "viscous":
         runs, dt = _preset_variants("paper-case1-elastic", radial=True, viscous=True), 8e-6
     else:

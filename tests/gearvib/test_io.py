@@ -190,3 +190,15 @@ def test_remove_temporary_empties_a_folder_that_is_being_refilled(
     link.symlink_to(target)
     assert not tempfiles.remove_temporary(link)  # never follows a link
     assert (target / "file").exists()
+
+
+def test_a_fifo_is_refused_and_left_in_place(tmp_path: Path, dataset: xr.Dataset) -> None:
+    """A device, FIFO or socket is not replaced by the atomic rename (as root, a write to
+    /dev/null would have made it a regular file); a FIFO stands in for a device here."""
+    import os
+
+    fifo = tmp_path / "run.nc"
+    os.mkfifo(fifo)
+    with pytest.raises(ValueError, match=r"run\.nc is not a regular file"):
+        write_netcdf(dataset, fifo)
+    assert fifo.is_fifo() and list(tmp_path.iterdir()) == [fifo]
