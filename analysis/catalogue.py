@@ -32,7 +32,13 @@ from typing import Any
 import numpy as np
 
 from analysis.cf import cf_dataset
-from analysis.checks import require_finite, require_instance, require_positive, require_real
+from analysis.checks import (
+    require_finite,
+    require_instance,
+    require_positive,
+    require_real,
+    shown,
+)
 
 __all__ = [
     "FAMILIES",
@@ -587,11 +593,11 @@ def kinematic_catalogue(
         raise ValueError(f"speeds[{GROUND!r}] must be 0 (the housing is at rest)")
     sp[GROUND] = 0.0
     if reference not in sp:
-        raise ValueError(f"reference = {reference!r} is not a member with a speed (members: "
+        raise ValueError(f"reference = {shown(reference)} is not a member with a speed (members: "
                          f"{', '.join(sorted(sp))})")
     f_ref = abs(sp[reference])
     if f_ref == 0.0:
-        raise ValueError(f"reference = {reference!r} is at rest; choose a rotating shaft")
+        raise ValueError(f"reference = {shown(reference)} is at rest; choose a rotating shaft")
     fixed_list = [fixed] if isinstance(fixed, str) else list(fixed)
     for f in fixed_list:
         if f not in sp:
@@ -601,7 +607,7 @@ def kinematic_catalogue(
                              "rest")
     sensor = sensor if sensor is not None else (fixed_list[0] if fixed_list else GROUND)
     if sensor not in sp:
-        raise ValueError(f"sensor = {sensor!r} is not a member with a speed")
+        raise ValueError(f"sensor = {shown(sensor)} is not a member with a speed")
     mesh_harmonics = _int_param(mesh_harmonics, "mesh_harmonics", 1)
     harmonics = _int_param(harmonics, "harmonics", 1)
     sidebands = _int_param(sidebands, "sidebands", 0)

@@ -6,6 +6,7 @@ admissible, so that a user looking at a measured file knows what to fix.
 
 from __future__ import annotations
 
+import math
 import warnings
 from collections.abc import Sequence
 from typing import Any, TypeVar
@@ -31,6 +32,7 @@ __all__ = [
     "require_size",
     "require_square",
     "sample_rate",
+    "shown",
     "time_or_rate",
     "uniform_rate",
 ]
@@ -49,8 +51,21 @@ def require_finite(values: ArrayLike, name: str) -> np.ndarray:
         Samples of a channel or a parameter.
     name : str
         Name used in the error message.
+
+    Raises
+    ------
+    TypeError
+        Not real numbers (bool, str, complex or object values: no silent conversion).
+    ValueError
+        Empty, or NaN/inf.
     """
-    arr = np.asarray(values, dtype=float)
+    try:
+        arr = np.asarray(values)
+    except ValueError:  # a ragged nesting
+        raise ValueError(f"{name} must be a rectangular array of real numbers") from None
+    if arr.dtype.kind not in "iuf":
+        raise TypeError(f"{name} must hold real numbers; got dtype {arr.dtype}")
+    arr = arr.astype(float, copy=False)
     if arr.size == 0:
         raise ValueError(f"{name}: channel is empty (needs at least one sample)")
     bad = ~np.isfinite(arr)
@@ -63,13 +78,30 @@ def require_finite(values: ArrayLike, name: str) -> np.ndarray:
     return arr
 
 
+def shown(value: Any) -> str:
+    """``repr`` of a value on one line, cut to 40 characters (an error message shows it)."""
+    text = " ".join(repr(value).split())
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
 def require_positive(value: float, name: str, *, allow_zero: bool = False) -> float:
-    """Return ``value`` as float; raise unless it is finite and > 0 (or >= 0)."""
-    v = float(value)
+    """Return ``value`` as float; raise unless it is finite and > 0 (or >= 0).
+
+    A bool, a string or bytes is not a number (:class:`TypeError`); an integer too large for
+    a float is refused like an infinite value.
+    """
+    if isinstance(value, bool | np.bool_ | str | bytes):
+        raise TypeError(f"{name} = {shown(value)} is not admissible: must be a real number "
+                        f"(got {type(value).__name__})")
+    try:
+        v = float(value)
+    except OverflowError:
+        v = math.inf
     ok = np.isfinite(v) and (v >= 0.0 if allow_zero else v > 0.0)
     if not ok:
         bound = ">= 0" if allow_zero else "> 0"
-        raise ValueError(f"{name} = {value!r} is not admissible: must be finite and {bound}")
+        raise ValueError(f"{name} = {shown(value)} is not admissible: must be finite and "
+                         f"{bound}")
     return v
 
 
@@ -83,12 +115,15 @@ def require_real(value: Any, name: str) -> float:
         value, int | float | np.integer | np.floating
     ):
         raise TypeError(
-            f"{name} = {value!r} is not admissible: must be a real number "
+            f"{name} = {shown(value)} is not admissible: must be a real number "
             f"(got {type(value).__name__})"
         )
-    v = float(value)
+    try:
+        v = float(value)
+    except OverflowError:  # an integer of hundreds of digits
+        v = math.inf
     if not np.isfinite(v):
-        raise ValueError(f"{name} = {value!r} is not admissible: must be finite")
+        raise ValueError(f"{name} = {shown(value)} is not admissible: must be finite")
     return v
 
 

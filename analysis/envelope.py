@@ -49,6 +49,7 @@ from analysis.checks import (
     require_positive,
     require_real,
     require_real_array,
+    shown,
     time_or_rate,
 )
 from analysis.envelope_plots import envelope_spectrum_figure, squared_envelope_figure
@@ -115,7 +116,7 @@ def choose_band(band: BandSpec, fs: float, x: np.ndarray, *, max_level: int | No
     else:
         if isinstance(band, str) or np.ndim(band) != 1 or np.size(band) != 2:
             raise ValueError(
-                f"band = {band!r} is not admissible: (low, high) in Hz, a Band, a Kurtogram "
+                f"band = {shown(band)} is not admissible: (low, high) in Hz, a Band, a Kurtogram "
                 "or None (chosen by the fast kurtogram)"
             )
         lo, hi = band

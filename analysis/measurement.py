@@ -42,7 +42,7 @@ import numpy as np
 import xarray as xr
 
 from analysis.cf import cf_dataset, elapsed_seconds, labels_from_cf
-from analysis.checks import require_finite_blocks, require_instance, uniform_rate
+from analysis.checks import require_finite_blocks, require_instance, shown, uniform_rate
 from analysis.inputs import ANGLE_UNITS, find_reference
 from analysis.measurement_options import (
     apply_calibration,
@@ -168,7 +168,7 @@ class Measurement:
             name = self.vibration_channels[0]
         if name not in self.signals.data_vars:
             raise ValueError(
-                f"channel = {name!r} is not a channel of the measurement; channels: "
+                f"channel = {shown(name)} is not a channel of the measurement; channels: "
                 f"{list(self.signals.data_vars)}"
             )
         return self.signals[name]
@@ -752,7 +752,8 @@ def load_measurement(
     if channel is not None:
         _require_channel(signals, channel, "channel")
         if channel in reference_vars:
-            raise ValueError(f"channel = {channel!r} is the speed reference; choose a vibration "
+            raise ValueError(f"channel = {shown(channel)} is the speed reference; "
+                             f"choose a vibration "
                              f"channel: {vib}")
         vib = [channel] + [c for c in vib if c != channel]
     prov.update(channels=[str(k) for k in signals.data_vars], vibration_channels=vib,

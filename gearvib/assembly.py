@@ -57,6 +57,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg
 
+from gearvib.checks import check_count
 from gearvib.geometry import (
     MeshGeometry,
     planet_mesh_position,
@@ -64,6 +65,7 @@ from gearvib.geometry import (
     sun_ring_phase,
 )
 from gearvib.model import AssembledModel
+from gearvib.stiffness import MAX_TABLE
 from gearvib.structure import RIGID, Body, GearSet, Mesh
 from gearvib.teeth import mesh_tooth_map
 
@@ -104,6 +106,8 @@ class ResolvedMesh:
 
 def resolve_mesh(mesh: Mesh) -> ResolvedMesh:
     """Merge a mesh's tooth geometry with its lumped overrides."""
+    if not isinstance(mesh, Mesh):
+        raise TypeError(f"mesh must be a Mesh; got {type(mesh).__name__}")
     g = mesh.geometry
     if g is None:  # lumped: Mesh requires both base radii and the pressure angle then
         assert mesh.base_radius1 is not None and mesh.base_radius2 is not None
@@ -271,6 +275,9 @@ def assemble(gs: GearSet, *, n_table: int = N_TABLE) -> AssembledModel:
         has more than one rigid-body degree of freedom, or meshes without tooth numbers that
         need a mesh position.
     """
+    if not isinstance(gs, GearSet):
+        raise TypeError(f"gs must be a GearSet; got {type(gs).__name__}")
+    check_count(n_table, "n_table", low=1, high=MAX_TABLE)
     resolved = {m.name: resolve_mesh(m) for m in gs.meshes}
     axial = any(r.base_helix_angle != 0.0 for r in resolved.values())
     coords = _Coordinates(gs.bodies, axial)

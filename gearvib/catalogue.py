@@ -15,6 +15,7 @@ from collections.abc import Sequence
 from typing import Any
 
 from analysis.catalogue import KinematicCatalogue, RollingBearing, ToothMesh, kinematic_catalogue
+from analysis.checks import require_instance
 from gearvib.model import AssembledModel
 from gearvib.structure import GearSet
 
@@ -91,6 +92,8 @@ def gear_set_catalogue(
     -------
     KinematicCatalogue
     """
+    if model is not None:
+        require_instance(model, AssembledModel, "model")
     if isinstance(gear_set, GearSet):
         meshes, angles = _from_gear_set(gear_set)
         if model is None:

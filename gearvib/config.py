@@ -32,12 +32,13 @@ from typing import Any, cast
 from gearvib.checks import TABLE, check_integer, check_number
 from gearvib.checks import short as _short
 from gearvib.faults.description import FaultError, faults_from_list
-from gearvib.geometry import Toothing
+from gearvib.geometry import MAX_TEETH, Toothing
 from gearvib.paths import exists, is_file
 from gearvib.sensors.description import SensorError, sensors_from_list
-from gearvib.stages import HOUSING, multi_stage, parallel_stage, stage_prefix
-from gearvib.stiffness import stiffness_from_dict
+from gearvib.stages import HOUSING, MAX_STAGES, multi_stage, parallel_stage, stage_prefix
+from gearvib.stiffness import MAX_FOURIER, MAX_STIFFNESS, stiffness_from_dict
 from gearvib.structure import (
+    MAX_PLANETS,
     RIGID,
     Body,
     Coupling,
@@ -87,17 +88,10 @@ class ConfigError(ValueError):
     """
 
 
-MAX_TEETH = 10_000
-"""Largest tooth number (absolute value) accepted."""
-MAX_PLANETS = 64
-"""Largest number of planets (or planet pairs) accepted."""
 MAX_LIST = 100_000
 """Longest list of numbers accepted in a description (stiffness curves, tables)."""
 MAX_DAMPING_RATIO = 10.0
 """Largest mesh damping ratio accepted."""
-MAX_STIFFNESS = 1e40
-"""Largest stiffness [N/m, N m/rad] accepted (a value that large is refused later for the
-steps it needs, naming them; beyond it the matrices overflow)."""
 MAX_DAMPING = 1e12
 """Largest damping [N s/m, N m s/rad] accepted."""
 MASS_RANGE = (1e-9, 1e9)
@@ -110,15 +104,11 @@ MAX_SHIFT = 10.0
 """Largest profile-shift coefficient (absolute value) accepted."""
 MAX_BODIES = 200
 """Most ``[[body]]``, ``[[mesh]]`` or ``[[coupling]]`` entries accepted."""
-MAX_FOURIER = 1_000
-"""Most Fourier coefficients of a stiffness model (the tables hold 2048 samples per cycle)."""
 
 
 _TOP = {"name", "title", "description", "type", "operation", "geometry", "bodies", "meshes",
         "body", "mesh", "coupling", "stage1", "stage2", "shaft", "simulation", "references",
         "fault", "sensor", "rolling_bearing"}
-MAX_STAGES = 16
-"""Most stages of a ``multi-stage`` description."""
 _STAGE_KEY = re.compile(r"stage([1-9][0-9]?)")
 """Top-level keys of the stages of a ``multi-stage`` description (``stage1`` ...)."""
 _COMMON_TOP = {"name", "title", "description", "type", "simulation", "references", "body",
@@ -1088,7 +1078,7 @@ def preset_text(name: str) -> str:
     if name in list_rigs():
         return resources.files("gearvib.rigs").joinpath(f"{name}.toml").read_text("utf-8")
     if name not in list_presets():
-        raise ConfigError(f"unknown preset {name!r} (available: "
+        raise ConfigError(f"unknown preset {_short(name)} (available: "
                           f"{', '.join(list_presets() + list_rigs())})")
     return resources.files("gearvib.presets").joinpath(f"{name}.toml").read_text("utf-8")
 
@@ -1244,7 +1234,7 @@ def load_config(name_or_path: str | Path) -> tuple[dict, Path | None]:
     name = str(name_or_path)
     if name not in list_presets() and name not in list_rigs():
         raise ConfigError(
-            f"unknown preset {name!r} (available: "
+            f"unknown preset {_short(name)} (available: "
             f"{', '.join(list_presets() + list_rigs())}; or give a path to a .toml file)"
         )
     return tomllib.loads(preset_text(name)), None

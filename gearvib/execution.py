@@ -48,6 +48,8 @@ from collections.abc import Callable, Iterator
 from concurrent.futures import Executor, Future, ProcessPoolExecutor
 from typing import Any
 
+from gearvib.checks import cut, short
+
 __all__ = [
     "CONNECT_TIMEOUT_S",
     "THREAD_VARIABLES",
@@ -108,7 +110,7 @@ def default_workers() -> int:
 def _check_workers(workers: Any) -> int:
     if isinstance(workers, bool) or not isinstance(workers, int) or \
             not 1 <= workers <= MAX_WORKERS:
-        raise ValueError(f"workers = {workers!r}; admissible: an integer 1..{MAX_WORKERS}")
+        raise ValueError(f"workers = {short(workers)}; admissible: an integer 1..{MAX_WORKERS}")
     return workers
 
 
@@ -165,7 +167,7 @@ def local_executor(workers: int, *, start_method: str | None = None) -> Executor
         return SerialExecutor()
     method = start_method or default_start_method()
     if method not in multiprocessing.get_all_start_methods():
-        raise ValueError(f"start_method = {method!r}; admissible here: "
+        raise ValueError(f"start_method = {short(method)}; admissible here: "
                          f"{', '.join(multiprocessing.get_all_start_methods())}")
     return ProcessPoolExecutor(max_workers=n, mp_context=multiprocessing.get_context(method),
                                initializer=init_worker)
@@ -214,7 +216,7 @@ def check_connect_timeout(timeout: Any) -> float:
     """A connect timeout [s]: a number in (0, :data:`MAX_CONNECT_TIMEOUT_S`]."""
     if isinstance(timeout, bool) or not isinstance(timeout, int | float) or not (
             0 < timeout <= MAX_CONNECT_TIMEOUT_S):
-        raise ValueError(f"connect timeout = {timeout!r} is not admissible: a time in (0, "
+        raise ValueError(f"connect timeout = {short(timeout)} is not admissible: a time in (0, "
                          f"{MAX_CONNECT_TIMEOUT_S:g}] s")
     return float(timeout)
 
@@ -247,9 +249,10 @@ def probe_scheduler(address: str, timeout: float = CONNECT_TIMEOUT_S) -> None:
             return
         host, port = parse_host_port(location)
     except ValueError as exc:
-        raise ValueError(f"scheduler address {address!r} is not admissible: {exc} (give "
-                         "e.g. 'tcp://10.0.0.5:8786')") from None
-    where = f"cannot connect to the Dask scheduler at {address!r}"
+        raise ValueError(f"scheduler address {short(address)} is not admissible: "
+                         f"{cut(' '.join(str(exc).split()), 120)} (give e.g. "
+                         "'tcp://10.0.0.5:8786')") from None
+    where = f"cannot connect to the Dask scheduler at {short(address, 200)}"
     try:
         with socket.create_connection((host, int(port)), timeout=timeout):
             pass
@@ -257,7 +260,7 @@ def probe_scheduler(address: str, timeout: float = CONNECT_TIMEOUT_S) -> None:
         raise OSError(f"{where}: nothing listens there (connection refused); start the "
                       "scheduler (dask scheduler) or check the address") from None
     except socket.gaierror as exc:
-        raise OSError(f"{where}: unknown host {host!r} ({exc.strerror})") from None
+        raise OSError(f"{where}: unknown host {short(host)} ({exc.strerror})") from None
     except TimeoutError:
         raise OSError(f"{where}: no answer within {timeout:g} s (host down, or a firewall "
                       "drops the connection); a longer connect timeout waits more") from None
@@ -338,7 +341,8 @@ def dask_executor(address: str, *, timeout: float = CONNECT_TIMEOUT_S) -> tuple[
         client = Client(address, timeout=timeout, set_as_default=False)
     except (OSError, TimeoutError) as exc:
         text = " ".join(str(exc).split())
-        raise OSError(f"cannot connect to the Dask scheduler at {address!r}: {text}") from None
+        raise OSError(f"cannot connect to the Dask scheduler at {short(address, 200)}: "
+                      f"{text[:200]}") from None
     return client.get_executor(), client
 
 
@@ -370,6 +374,9 @@ def executor_for(workers: int | None = 1, scheduler: str | None = None,
     """
     n = default_workers() if workers is None else _check_workers(workers)
     if executor is not None:
+        if not isinstance(executor, Executor):
+            raise TypeError(f"executor must be a concurrent.futures.Executor; got "
+                            f"{type(executor).__name__}")
         yield executor, n
         return
     if scheduler is not None:

@@ -42,6 +42,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from analysis.checks import require_instance
 from analysis.envelope import EnvelopeSpectrum, envelope_spectrum
 from analysis.envelope_orders import EnvelopeOrderSpectrum, envelope_order_spectrum
 from analysis.line_evidence import (
@@ -52,6 +53,12 @@ from analysis.line_evidence import (
     line_evidence,
 )
 from analysis.lines import LineFamily, check_lines
+from gearvib.checks import check_count, check_items, check_real, check_text
+
+MAX_ORDER = 1e6
+"""Largest order of a fault family [orders of the reference shaft]."""
+MAX_HARMONICS = 1000
+"""Most harmonics (or sidebands per side) of a fault family."""
 
 if TYPE_CHECKING:
     import xarray as xr
@@ -127,6 +134,14 @@ class FaultFamily:
     harmonics: int = 3
     sidebands: int = 0
 
+    def __post_init__(self) -> None:
+        check_text(self.source, "source")
+        check_text(self.kind, "kind")
+        check_real(self.order, "order", low=0.0, low_open=True, high=MAX_ORDER)
+        check_real(self.sideband_order, "sideband_order", low=0.0, high=MAX_ORDER)
+        check_count(self.harmonics, "harmonics", low=1, high=MAX_HARMONICS)
+        check_count(self.sidebands, "sidebands", low=0, high=MAX_HARMONICS)
+
     @property
     def label(self) -> str:
         """Short label, e.g. ``"BPFI"``."""
@@ -141,6 +156,12 @@ class FaultFamily:
         """The family on an axis ``scale`` times the orders (1: orders; ``f_ref`` [Hz]: Hz)."""
         return LineFamily(self.name, self.order * scale, self.harmonics,
                           self.sideband_order * scale, self.sidebands)
+
+
+def _catalogue(catalogue: Any) -> None:
+    from analysis.catalogue import KinematicCatalogue
+
+    require_instance(catalogue, KinematicCatalogue, "catalogue")
 
 
 def catalogue_families(catalogue: KinematicCatalogue, bearings: Sequence[RollingBearing] = (),
@@ -163,6 +184,12 @@ def catalogue_families(catalogue: KinematicCatalogue, bearings: Sequence[Rolling
     list of FaultFamily
         Per bearing BPFO, BPFI, BSF, FTF, then the gear faults, in catalogue order.
     """
+    from analysis.catalogue import RollingBearing
+
+    _catalogue(catalogue)
+    bearings = check_items(bearings, RollingBearing, "bearings")
+    check_count(harmonics, "harmonics", low=1, high=MAX_HARMONICS)
+    check_count(sidebands, "sidebands", low=0, high=MAX_HARMONICS)
     speeds = dict(catalogue.member_speeds)
     rings = {b.name: abs(speeds.get(b.inner, 0.0) - speeds.get(b.outer, 0.0)) for b in bearings}
     first = (catalogue.harmonic == 1) & (catalogue.sideband == 0)
@@ -187,6 +214,8 @@ def catalogue_families(catalogue: KinematicCatalogue, bearings: Sequence[Rolling
 
 def known_families(catalogue: KinematicCatalogue, top_order: float) -> list[LineFamily]:
     """The shaft and mesh harmonics of a catalogue up to ``top_order`` (known lines)."""
+    _catalogue(catalogue)
+    top_order = check_real(top_order, "top_order", low=0.0, high=MAX_ORDER)
     first = (catalogue.harmonic == 1) & (catalogue.sideband == 0)
     out = []
     seen: set[float] = set()
@@ -227,6 +256,9 @@ def confirmed_catalogue(catalogue: KinematicCatalogue, fault_lines: FaultLines |
     """
     import dataclasses
 
+    _catalogue(catalogue)
+    if fault_lines is not None:
+        require_instance(fault_lines, FaultLines, "fault_lines")
     ok: set[tuple[str, str]] = set()
     if fault_lines is not None:
         for ev in (fault_lines.envelope_evidence, fault_lines.order_evidence):
@@ -453,9 +485,22 @@ def check_fault_lines(measurement: Measurement, families: Sequence[FaultFamily],
     ValueError
         No families; a band or ``min_bandwidth`` the envelope functions refuse.
     """
-    fams = tuple(families)
+    from analysis.measurement import Measurement
+
+    require_instance(measurement, Measurement, "measurement")
+    fams = check_items(families, FaultFamily, "families")
     if not fams:
         raise ValueError("families: give at least one fault family (catalogue_families)")
+    known = check_items(known, LineFamily, "known")
+    check_text(channel, "channel", optional=True)
+    if min_bandwidth is not None:
+        min_bandwidth = check_real(min_bandwidth, "min_bandwidth", low=0.0, low_open=True)
+    if not isinstance(order_spectrum, bool):
+        from analysis.orders import OrderSpectrum
+
+        require_instance(order_spectrum, OrderSpectrum, "order_spectrum")
+    max_chance = check_real(max_chance, "max_chance", low=0.0, high=1.0)
+    min_harmonics = check_count(min_harmonics, "min_harmonics", low=1, high=MAX_HARMONICS)
     x = measurement.channel(channel)
     fs = measurement.fs
     rpm = np.asarray(measurement.speed_rpm.values, dtype=float)

@@ -30,7 +30,10 @@ from typing import Any
 
 import numpy as np
 
+from gearvib.checks import check_array, check_count, check_real, short
+
 __all__ = [
+    "MAX_TEETH",
     "MeshGeometry",
     "Toothing",
     "admissible_planet_angles",
@@ -50,11 +53,28 @@ __all__ = [
 ]
 
 _TOL = 1e-9
+MAX_TEETH = 10_000
+"""Largest tooth number (absolute value) accepted."""
+MIN_MODULE, MAX_MODULE = 1e-5, 1.0
+"""Admissible normal module [m] (the limits of a description's ``module``)."""
 
 
 def involute(alpha: float | np.ndarray) -> float | np.ndarray:
-    """Involute function ``inv(alpha) = tan(alpha) - alpha`` [rad]."""
-    return np.tan(alpha) - alpha
+    """Involute function ``inv(alpha) = tan(alpha) - alpha`` [rad].
+
+    Raises
+    ------
+    ValueError, TypeError
+        ``alpha`` is not a real number (or array of them) with ``|alpha| < pi/2``.
+    """
+    if isinstance(alpha, np.ndarray | list | tuple):
+        a = check_array(alpha, "alpha", min_size=0, max_abs=0.5 * math.pi)
+        if a.size and not float(np.abs(a).max()) < 0.5 * math.pi:
+            raise ValueError("alpha: a magnitude of pi/2 or more (admissible: |alpha| < pi/2)")
+        return np.tan(a) - a
+    a = check_real(alpha, "alpha", low=-0.5 * math.pi, high=0.5 * math.pi, low_open=True,
+                   high_open=True)
+    return np.tan(a) - a
 
 
 def inverse_involute(value: float) -> float:
@@ -65,8 +85,7 @@ def inverse_involute(value: float) -> float:
     ValueError
         If ``value`` is negative or not finite.
     """
-    if not math.isfinite(value) or value < 0.0:
-        raise ValueError(f"involute value {value!r} is not admissible (admissible: finite, >= 0)")
+    value = check_real(value, "involute value", low=0.0)
     if value == 0.0:
         return 0.0
     # inv is monotonic on [0, pi/2); bracket up to 1.5 rad (inv(1.5) = 12.6). Near pi/2 the
@@ -99,12 +118,14 @@ def inverse_involute(value: float) -> float:
 
 
 def _finite(name: str, value: Any) -> float:
-    if isinstance(value, bool) or not isinstance(value, int | float | np.floating | np.integer):
-        raise ValueError(f"{name} = {value!r} must be a real number")
-    v = float(value)
-    if not math.isfinite(v):
-        raise ValueError(f"{name} = {v!r} must be finite")
-    return v
+    return check_real(value, name)
+
+
+def _toothings(**gears: Any) -> None:
+    """Refuse an argument that is not a :class:`Toothing` (by its parameter name)."""
+    for name, g in gears.items():
+        if not isinstance(g, Toothing):
+            raise TypeError(f"{name} must be a Toothing; got {type(g).__name__}")
 
 
 def _deg(angle: float) -> float:
@@ -162,13 +183,13 @@ class Toothing:
     dedendum: float = 1.25
 
     def __post_init__(self) -> None:
-        if isinstance(self.z, bool) or not isinstance(self.z, int | np.integer):
-            raise ValueError(f"tooth number z = {self.z!r} must be an integer")
+        check_count(self.z, "tooth number z", low=-MAX_TEETH, high=MAX_TEETH)
         if abs(int(self.z)) < 3:
             raise ValueError(f"tooth number z = {self.z} is not admissible (admissible: |z| >= 3)")
         m = _finite("module", self.module)
-        if m <= 0.0:
-            raise ValueError(f"module = {m!r} m is not admissible (admissible: > 0)")
+        if not MIN_MODULE <= m <= MAX_MODULE:
+            raise ValueError(f"module = {m!r} m is not admissible (admissible: {MIN_MODULE:g} "
+                             f"to {MAX_MODULE:g} m)")
         a = _finite("pressure_angle", self.pressure_angle)
         if not 0.0 < a < math.radians(45.0):
             raise ValueError(
@@ -179,14 +200,10 @@ class Toothing:
             raise ValueError(
                 f"helix_angle = {_deg(b):.4g}° is not admissible (admissible: |beta| < 45°)"
             )
-        _finite("profile_shift", self.profile_shift)
-        w = _finite("face_width", self.face_width)
-        if w <= 0.0:
-            raise ValueError(f"face_width = {w!r} m is not admissible (admissible: > 0)")
+        check_real(self.profile_shift, "profile_shift", low=-10.0, high=10.0)
+        check_real(self.face_width, "face_width", low=0.0, low_open=True, high=10.0)
         for name in ("addendum", "dedendum"):
-            v = _finite(name, getattr(self, name))
-            if v <= 0.0:
-                raise ValueError(f"{name} = {v!r} is not admissible (admissible: > 0)")
+            check_real(getattr(self, name), name, low=0.0, low_open=True, high=10.0)
         if self.root_radius <= 0.0:
             raise ValueError(
                 f"root radius of gear z = {self.z} is {self.root_radius:.4g} m "
@@ -386,6 +403,7 @@ class MeshGeometry:
 
 
 def _check_pair(gear1: Toothing, gear2: Toothing) -> None:
+    _toothings(gear1=gear1, gear2=gear2)
     if gear1.internal and gear2.internal:
         raise ValueError("both gears are internal (z < 0); at most one gear may be internal")
     for name in ("module", "pressure_angle"):
@@ -556,8 +574,7 @@ def mesh_geometry(
 # --- planetary assembly ---------------------------------------------------------------------
 def _check_set(z_sun: int, z_ring: int) -> tuple[int, int]:
     for name, v in (("z_sun", z_sun), ("z_ring", z_ring)):
-        if isinstance(v, bool) or not isinstance(v, int | np.integer):
-            raise ValueError(f"{name} = {v!r} must be an integer")
+        check_count(v, name, low=-MAX_TEETH, high=MAX_TEETH)
     if z_sun < 3:
         raise ValueError(f"z_sun = {z_sun} is not admissible (admissible: >= 3)")
     if z_ring >= 0:
@@ -604,8 +621,7 @@ def admissible_planet_angles(z_sun: int, z_ring: int, n_planets: int | None = No
     dmin = 2.0 * math.pi / n_tot
     if n_planets is None:
         return np.arange(n_tot) * dmin
-    if isinstance(n_planets, bool) or not isinstance(n_planets, int | np.integer):
-        raise ValueError(f"n_planets = {n_planets!r} must be an integer")
+    check_count(n_planets, "n_planets")
     if not 1 <= n_planets <= n_tot:
         raise ValueError(f"n_planets = {n_planets} is not admissible (admissible: 1..{n_tot})")
     k = np.array([int(Fraction(n * n_tot, n_planets).__round__()) for n in range(n_planets)])
@@ -652,10 +668,12 @@ def check_planet_angles(
         overlapping planets.
     """
     zs, zr = _check_set(z_sun, z_ring)
-    psi = np.asarray(angles, dtype=float).ravel()
-    if psi.size == 0 or not np.all(np.isfinite(psi)):
-        raise ValueError(f"planet angles {angles!r} must be a non-empty array of finite numbers")
+    psi = check_array(angles, "planet angles").ravel()
+    tol = check_real(tol, "tol", low=0.0)
     n_tot = zs - zr
+    if psi.size > n_tot:
+        raise ValueError(f"planet angles: {psi.size} planets, more than the {n_tot} admissible "
+                         "positions (z_sun + |z_ring|)")
     dmin_deg = 360.0 / n_tot
     for p in psi[1:]:
         rel = (p - psi[0]) % (2.0 * math.pi)
@@ -701,7 +719,8 @@ def planet_tooth_number(z_sun: int, z_ring: int, rounding: str = "down") -> int:
     """
     zs, zr = _check_set(z_sun, z_ring)
     if rounding not in ("down", "up"):
-        raise ValueError(f"rounding = {rounding!r} is not admissible (admissible: 'down', 'up')")
+        raise ValueError(f"rounding = {short(rounding)} is not admissible (admissible: 'down', "
+                         "'up')")
     d = -zr - zs
     return d // 2 if rounding == "down" else (d + 1) // 2
 
@@ -745,10 +764,16 @@ def planet_profile_shift(
     ``inv alpha_wt = inv alpha_t + 2 tan alpha_n (x1+x2)/(z1+z2)``, signed ``z``), so
     ``f(x_p) = a_sp - a_rp`` has one root, found by bisection to the last bit of ``x_p``.
     """
+    _toothings(sun=sun, ring=ring)
     if sun.internal or not ring.internal:
         raise ValueError("sun must be external (z > 0) and ring internal (z < 0)")
-
-    zp = int(z_planet)
+    zp = check_count(z_planet, "z_planet", high=MAX_TEETH)
+    if not (isinstance(bracket, tuple | list) and len(bracket) == 2):
+        raise ValueError(f"bracket = {short(bracket)} is not admissible (admissible: two "
+                         "numbers (low, high))")
+    lo_b = check_real(bracket[0], "bracket[0]")
+    hi_b = check_real(bracket[1], "bracket[1]", low=lo_b, low_open=True)
+    bracket = (lo_b, hi_b)
     if zp < 3:
         raise ValueError(f"z_planet = {z_planet} is not admissible (admissible: >= 3)")
     mt = sun.transverse_module
@@ -813,6 +838,8 @@ def planetary_meshes(
     ValueError
         If ``a_sp > a_rp`` (no common distance without tooth overlap) or a mesh is invalid.
     """
+    _toothings(sun=sun, ring=ring, planet=planet)
+    centre_distance = check_real(centre_distance, "centre_distance", optional=True)
     a_sp = _free_centre_distance(sun, planet)
     a_rp = _free_centre_distance(ring, planet)
     if centre_distance is None:
@@ -848,11 +875,8 @@ def mesh_phases(z_central: int, planet_angles) -> np.ndarray:
         ``s_n = s_1 - gamma_n (mod 1)`` (see :func:`planet_mesh_offsets`). For an assemblable
         set the sun (``z_s``) and ring (signed ``z_r``) phases are equal.
     """
-    if isinstance(z_central, bool) or not isinstance(z_central, int | np.integer):
-        raise ValueError(f"z_central = {z_central!r} must be an integer")
-    psi = np.asarray(planet_angles, dtype=float)
-    if not np.all(np.isfinite(psi)):
-        raise ValueError("planet_angles must be finite")
+    check_count(z_central, "z_central", low=-MAX_TEETH, high=MAX_TEETH)
+    psi = check_array(planet_angles, "planet_angles", min_size=0, max_abs=1e9)
     g = np.mod(z_central * psi / (2.0 * math.pi), 1.0)
     g[np.isclose(g, 1.0, rtol=0, atol=1e-9)] = 0.0
     return g
@@ -904,6 +928,8 @@ def sun_ring_phase(sun_mesh: MeshGeometry, ring_mesh: MeshGeometry) -> float:
     with the lines of action.
     """
     for name, m, want_internal in (("sun_mesh", sun_mesh, False), ("ring_mesh", ring_mesh, True)):
+        if not isinstance(m, MeshGeometry):
+            raise TypeError(f"{name} must be a MeshGeometry; got {type(m).__name__}")
         if m.gear1.internal != want_internal or m.gear2.internal:
             raise ValueError(
                 f"{name}: gear1 must be the {'ring (z < 0)' if want_internal else 'sun (z > 0)'}"
@@ -932,6 +958,11 @@ def sun_ring_phase(sun_mesh: MeshGeometry, ring_mesh: MeshGeometry) -> float:
 def _planet_line(mesh: MeshGeometry, planet_is_gear1: bool, mate_direction: float):
     """Tangency angle ``tau``, base radius, half base thickness angle and flank side of the
     planet on the loaded line of action (see :func:`planet_mesh_position`)."""
+    if not isinstance(mesh, MeshGeometry):
+        raise TypeError(f"mesh must be a MeshGeometry; got {type(mesh).__name__}")
+    if not isinstance(planet_is_gear1, bool):
+        raise TypeError(f"planet_is_gear1 must be a bool; got {short(planet_is_gear1)}")
+    mate_direction = check_real(mate_direction, "mate_direction", low=-1e9, high=1e9)
     planet = mesh.gear1 if planet_is_gear1 else mesh.gear2
     if planet.internal:
         raise ValueError("planet_mesh_position needs an external planet (z > 0)")
@@ -988,6 +1019,7 @@ def planet_mesh_position(
     ``s = forward_direction (u - path_start) / p_bt (mod 1)``. For the sun and ring meshes of
     one planet this reproduces :func:`sun_ring_phase` (tested to 1e-12).
     """
+    tooth_angle = check_real(tooth_angle, "tooth_angle", low=-1e9, high=1e9)
     tau, rb, psi_b, counter_clockwise = _planet_line(mesh, planet_is_gear1, mate_direction)
     if counter_clockwise:
         dist = rb * (tooth_angle + psi_b - tau)
@@ -1017,6 +1049,7 @@ def planet_tooth_angle(
         mesh cycles ago (its flank meets the line of action at
         ``u = path_start + forward_direction frac(s) p_bt``).
     """
+    position = check_real(position, "position", low=-1e9, high=1e9)
     tau, rb, psi_b, counter_clockwise = _planet_line(mesh, planet_is_gear1, mate_direction)
     u = mesh.path_start + mesh.forward_direction * (position % 1.0) * mesh.base_pitch
     dist = mesh.tangency1 - u if planet_is_gear1 else u
@@ -1053,6 +1086,7 @@ def planet_mesh_offsets(
     ``s_n - s_1 = -z psi_n / 2 pi``; the assembly condition makes this the same for both.
     """
     psi = check_planet_angles(z_sun, z_ring, planet_angles)
+    sun_ring = check_real(sun_ring, "sun_ring")
     g = mesh_phases(z_sun, psi - psi[0])
     s = np.mod(-g, 1.0)
     r = np.mod(sun_ring - g, 1.0)

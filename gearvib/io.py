@@ -35,8 +35,10 @@ import numpy as np
 
 from gearvib import tempfiles
 from gearvib.cfdata import STRLEN_SUFFIX, PlainDataset, PlainVariable
+from gearvib.checks import check_path, cut
 from gearvib.interrupts import check_interrupted, run_abandonable
 from gearvib.memory import RunSizeError, format_bytes, require_memory
+from gearvib.paths import is_file
 
 if TYPE_CHECKING:
     import xarray as xr
@@ -83,6 +85,8 @@ def sanitize_attrs(attrs: Mapping) -> dict:
     nested or non-numeric sequences JSON and anything else ``str``; numbers, strings and 1-D
     numeric arrays are kept.
     """
+    if not isinstance(attrs, Mapping):
+        raise TypeError(f"attrs must be a mapping; got {type(attrs).__name__}")
     return {str(k): _sanitize_value(v) for k, v in attrs.items()}
 
 
@@ -156,6 +160,12 @@ def write_netcdf(ds: xr.Dataset | PlainDataset, path: str | os.PathLike) -> Path
     write one file at a time: the netCDF library is not thread-safe).
     """
     dest = Path(path)
+    if not isinstance(ds, PlainDataset):
+        import xarray
+
+        if not isinstance(ds, xarray.Dataset):
+            raise TypeError(f"ds must be an xarray.Dataset or a PlainDataset; got "
+                            f"{type(ds).__name__}")
     if isinstance(ds, PlainDataset):
         plain = _plain_file_content(ds)
         atomic_write(dest, lambda tmp: _write_plain(plain, tmp), abandonable=True)
@@ -300,17 +310,31 @@ def atomic_write(dest: str | os.PathLike, write: Callable[[Path], T], *,
     the rename where possible. Only SIGKILL can leave it;
     :func:`gearvib.tempfiles.remove_stale` removes it later.
     """
-    dest = Path(dest)
+    dest = check_path(dest, "dest")
+    if not callable(write):
+        raise TypeError(f"write must be callable; got {type(write).__name__}")
+    if not isinstance(abandonable, bool):
+        raise TypeError(f"abandonable must be a bool; got {type(abandonable).__name__}")
     directory = dest.parent if str(dest.parent) else Path(".")
-    if not directory.is_dir():
-        raise FileNotFoundError(f"directory of {dest} does not exist")
-    if dest.is_dir():
-        raise IsADirectoryError(f"{dest} is a directory (give a file name)")
-    if dest.exists() and not dest.is_file():
-        # a device, FIFO or socket: the rename would replace the node itself (as root,
-        # /dev/null would become a regular file)
-        raise ValueError(f"{dest} is not a regular file (a device, FIFO or socket); give the "
-                         "name of a file to write")
+    shown = cut(str(dest), 200)
+    try:
+        if not directory.is_dir():
+            raise FileNotFoundError(f"directory of {shown} does not exist")
+        if dest.is_dir():
+            raise IsADirectoryError(f"{shown} is a directory (give a file name)")
+        if dest.exists() and not dest.is_file():
+            # a device, FIFO or socket: the rename would replace the node itself (as root,
+            # /dev/null would become a regular file)
+            raise ValueError(f"{shown} is not a regular file (a device, FIFO or socket); give "
+                             "the name of a file to write")
+    except ValueError as exc:
+        if "\x00" not in str(dest):  # raised above, with its message
+            raise
+        raise ValueError(f"{cut(repr(str(dest)), 200)} is not a file name") from exc
+    except OSError as exc:
+        if exc.strerror is None:  # raised above, with its message
+            raise
+        raise OSError(exc.errno, f"{shown}: {exc.strerror}") from None
     temporary = tempfiles.temp_path(dest)
     # an abandonable write goes into a private folder of that name: once the folder is gone,
     # the abandoned writer cannot create its file again (tempfiles docstring)
@@ -371,16 +395,17 @@ def _no_space(exc: Exception, dest: Path, directory: Path) -> OSError | None:
     code = getattr(exc, "errno", None)
     if code not in (errno.ENOSPC, errno.EDQUOT):
         try:
-            free = shutil.disk_usage(directory).free
+            usage = shutil.disk_usage(directory)
         except OSError:
             return None
-        if free >= LOW_SPACE_BYTES:
+        free = usage.free
+        if free >= LOW_SPACE_BYTES or usage.total == 0:  # 0: /proc, /sys (nothing to fill)
             return None
         detail = f" ({format_bytes(free)} free on its file system when the write failed)"
     else:
         detail = ""
     what = "Disk quota exceeded" if code == errno.EDQUOT else "No space left on device"
-    error = OSError(f"{dest}: {what}{detail}; nothing was written")
+    error = OSError(f"{cut(str(dest), 200)}: {what}{detail}; nothing was written")
     error.errno = errno.ENOSPC if code is None else code
     return error
 
@@ -421,8 +446,8 @@ def read_run(path: str | os.PathLike) -> xr.Dataset:
         The declared data do not fit into the memory available (checked before loading).
     """
     p = Path(path)
-    if not p.is_file():
-        raise GearvibFileError(f"gearvib run file not found: {p}")
+    if not is_file(p):
+        raise GearvibFileError(f"gearvib run file not found: {cut(str(p), 200)}")
 
     def load() -> xr.Dataset:
         from analysis.cf import labels_from_cf

@@ -11,7 +11,8 @@ the internal mesh). Eliminating the planet gives Willis' equation.
 
 from __future__ import annotations
 
-import math
+from gearvib.checks import check_count, check_real, short
+from gearvib.geometry import MAX_TEETH
 
 __all__ = [
     "mesh_frequency",
@@ -21,10 +22,13 @@ __all__ = [
 ]
 
 _MEMBERS = ("sun", "ring", "carrier")
+MAX_SPEED_RPM = 1e9
+"""Largest speed accepted [min-1] (its products with tooth numbers stay finite)."""
 
 
 def _z(name: str, z: int, *, sign: int = 0) -> int:
-    if isinstance(z, bool) or not isinstance(z, int) or z == 0:
+    check_count(z, name, low=-MAX_TEETH, high=MAX_TEETH)
+    if z == 0:
         raise ValueError(f"{name} = {z!r} must be a non-zero integer (signed tooth number)")
     if sign > 0 and z < 0:
         raise ValueError(f"{name} = {z} is not admissible (admissible: > 0, external gear)")
@@ -37,12 +41,7 @@ def _z(name: str, z: int, *, sign: int = 0) -> int:
 
 
 def _speed(name: str, n: float) -> float:
-    if isinstance(n, bool) or not isinstance(n, int | float):
-        raise ValueError(f"{name} = {n!r} must be a real number [min^-1]")
-    v = float(n)
-    if not math.isfinite(v):
-        raise ValueError(f"{name} = {v!r} is not admissible (admissible: finite)")
-    return v
+    return check_real(n, f"{name} [min-1]", low=-MAX_SPEED_RPM, high=MAX_SPEED_RPM)
 
 
 def willis_ratio(z_central_a: int, z_central_b: int) -> float:
@@ -93,7 +92,7 @@ def simple_set_speeds(
     for name, m in (("fixed", fixed), ("input", input)):
         if m not in _MEMBERS:
             raise ValueError(
-                f"{name} = {m!r} is not admissible (admissible: {', '.join(_MEMBERS)})"
+                f"{name} = {short(m)} is not admissible (admissible: {', '.join(_MEMBERS)})"
             )
     if fixed == input:
         raise ValueError(f"fixed and input are both {fixed!r} (admissible: different members)")

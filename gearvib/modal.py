@@ -30,6 +30,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 import scipy.linalg
 
+from gearvib.checks import check_instance, check_real
+from gearvib.kinematics import MAX_SPEED_RPM
 from gearvib.model import FLANK_NAMES, AssembledModel
 
 if TYPE_CHECKING:
@@ -257,7 +259,7 @@ def modal_analysis(model: AssembledModel, *, carrier_speed_rpm: float = 0.0,
         (:meth:`AssembledModel.carrier_frame_operators`): modes without carrier rotation agree
         exactly, the others to second order (0.1 % at 3000 min^-1 on ``paper-case1-elastic``).
     stiffness_scale : float
-        Factor on every mesh stiffness (for sensitivity studies).
+        Factor on every mesh stiffness (for sensitivity studies), 1e-12 .. 1e12.
     torque_sign : float
         Sense of the mean load: +1 the input drives forward (default), -1 reversed (coast,
         every flank swapped).
@@ -266,10 +268,10 @@ def modal_analysis(model: AssembledModel, *, carrier_speed_rpm: float = 0.0,
     -------
     ModalResult
     """
-    if not math.isfinite(carrier_speed_rpm):
-        raise ValueError("carrier_speed_rpm must be finite")
-    if not stiffness_scale > 0:
-        raise ValueError(f"stiffness_scale = {stiffness_scale} must be > 0")
+    check_instance(model, AssembledModel, "model")
+    carrier_speed_rpm = check_real(carrier_speed_rpm, "carrier_speed_rpm", low=-MAX_SPEED_RPM,
+                                   high=MAX_SPEED_RPM)
+    stiffness_scale = check_real(stiffness_scale, "stiffness_scale", low=1e-12, high=1e12)
     contacts = model.mesh_contacts(torque_sign)
     k_contact = contacts.mean_stiffness() * stiffness_scale
     k = model.stiffness + contacts.stiffness_matrix(k_contact)

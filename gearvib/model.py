@@ -48,6 +48,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from gearvib.checks import check_real
+
 MESH_FREQUENCY_RTOL = 1e-9
 """Relative tolerance within which two meshes share one mesh frequency."""
 
@@ -738,8 +740,8 @@ class AssembledModel:
 
 def _torque_sign(value: float) -> float:
     """+1.0 or -1.0 from a nonzero finite sign argument."""
-    v = float(value)
-    if not (math.isfinite(v) and v != 0.0):
+    v = check_real(value, "torque_sign")
+    if v == 0.0:
         raise ValueError(f"torque_sign = {value!r} is not admissible (admissible: +1 or -1)")
     return 1.0 if v > 0 else -1.0
 

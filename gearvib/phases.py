@@ -20,6 +20,7 @@ import re
 from collections.abc import Mapping
 from typing import Any
 
+from gearvib.checks import check_instance
 from gearvib.model import AssembledModel
 
 __all__ = ["ATTRIBUTE", "mesh_phase_table", "run_mesh_phases"]
@@ -59,6 +60,7 @@ def mesh_phase_table(model: AssembledModel) -> dict[str, dict[str, Any]]:
     ring-planet, a stepped planet's second toothing), or planet-planet meshes between the same
     planet groups (planet names without their number) and tooth numbers.
     """
+    check_instance(model, AssembledModel, "model")
     planets = {str(p["name"]): p for p in model.meta.get("planets", [])}
     out: dict[str, dict[str, Any]] = {}
     first: dict[tuple, tuple[str, float]] = {}

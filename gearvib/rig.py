@@ -31,11 +31,11 @@ no dynamic model). ``gearvib.config.load_description`` reads either kind of desc
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 from typing import Any
 
 from analysis.catalogue import GROUND, KinematicCatalogue, RollingBearing, kinematic_catalogue
+from gearvib.checks import check_items, check_real, check_text, short
 from gearvib.rolling_bearings import RollingBearingSpec
 
 __all__ = ["MAX_SHAFTS", "Shaft", "ShaftRig"]
@@ -58,6 +58,12 @@ class Shaft:
 
     name: str
     ratio: float = 1.0
+
+    def __post_init__(self) -> None:
+        check_text(self.name, "name of a shaft")
+        if self.name == GROUND:
+            raise ValueError(f"name of a shaft = {self.name!r} is not admissible (the housing)")
+        check_ratio(self.ratio, f"ratio of shaft {short(self.name)}")
 
 
 @dataclass(frozen=True)
@@ -86,6 +92,24 @@ class ShaftRig:
     rolling_bearings: tuple[RollingBearingSpec, ...] = ()
     title: str = ""
     config: dict = field(default_factory=dict, compare=False, repr=False)
+
+    def __post_init__(self) -> None:
+        check_text(self.name, "name")
+        object.__setattr__(self, "shafts", check_items(self.shafts, Shaft, "shafts"))
+        if not 1 <= len(self.shafts) <= MAX_SHAFTS:
+            raise ValueError(f"shafts: {len(self.shafts)} shafts (admissible: 1 .. {MAX_SHAFTS})")
+        names = [sh.name for sh in self.shafts]
+        if len(set(names)) != len(names):
+            raise ValueError("shafts: every shaft needs its own name")
+        check_text(self.input, "input")
+        if self.input not in names:
+            raise ValueError(f"input = {short(self.input)} is not a shaft of the rig "
+                             f"(admissible: {short(names)})")
+        object.__setattr__(self, "rolling_bearings", check_items(
+            self.rolling_bearings, RollingBearingSpec, "rolling_bearings"))
+        check_text(self.title, "title", empty=True)
+        if not isinstance(self.config, dict):
+            raise TypeError(f"config must be a dict; got {type(self.config).__name__}")
 
     @property
     def kinematic_ratios(self) -> dict[str, float]:
@@ -141,10 +165,8 @@ class ShaftRig:
 
 def check_ratio(value: Any, where: str) -> float:
     """A shaft's speed ratio: a finite number with ``1e-6 <= |ratio| <= 1e6``."""
-    if isinstance(value, bool) or not isinstance(value, int | float):
-        raise ValueError(f"{where} must be a number, got {value!r}")
-    v = float(value)
-    if not (math.isfinite(v) and 1e-6 <= abs(v) <= 1e6):
+    v = check_real(value, where)
+    if not 1e-6 <= abs(v) <= 1e6:
         raise ValueError(f"{where} = {value!r} is not admissible (admissible: 1e-6 <= |ratio| "
                          "<= 1e6, negative for a reversed shaft)")
     return v

@@ -29,6 +29,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from analysis.catalogue import GROUND, RollingBearing
+from gearvib.checks import short
 
 __all__ = [
     "MAX_ROLLING",
@@ -111,7 +112,7 @@ class RollingBearingSpec:
         if not isinstance(self.name, str) or not self.name.strip() or len(self.name) > 100:
             raise RollingBearingError(f"name must be a non-empty string of at most 100 "
                                       f"characters, got {_short(self.name)}")
-        where = f"bearing {self.name!r}"
+        where = f"bearing {short(self.name)}"
         for key in ("member", "on"):
             v = getattr(self, key)
             if (v is not None or key == "member") and (not isinstance(v, str) or not v):
@@ -147,18 +148,18 @@ class RollingBearingSpec:
         RollingBearingError
             ``member`` or ``on`` is not a member of the set, or both are the same.
         """
-        where = f"[[rolling_bearing]] {self.name!r}"
+        where = f"[[rolling_bearing]] {short(self.name)}"
         names = sorted(members)
         if self.member not in members:
-            raise RollingBearingError(f"{where}: member = {self.member!r} is not a member of the "
-                                      f"gear set (admissible: {', '.join(names)})")
+            raise RollingBearingError(f"{where}: member = {short(self.member)} is not a member "
+                                      f"of the gear set (admissible: {', '.join(names)})")
         planet_carrier = members[self.member]
         on = self.on if self.on is not None else (planet_carrier or GROUND)
         if on != GROUND and on not in members:
-            raise RollingBearingError(f"{where}: on = {on!r} is not a member of the gear set "
+            raise RollingBearingError(f"{where}: on = {short(on)} is not a member of the gear set "
                                       f"(admissible: {GROUND}, {', '.join(names)})")
         if on == self.member:
-            raise RollingBearingError(f"{where}: on = {on!r} is the member the bearing "
+            raise RollingBearingError(f"{where}: on = {short(on)} is the member the bearing "
                                       "supports; name what carries the other ring")
         race = self.rotating_race or ("outer" if planet_carrier else "inner")
         inner, outer = (self.member, on) if race == "inner" else (on, self.member)
@@ -213,7 +214,7 @@ def rolling_bearings_from_list(tables: Any) -> tuple[RollingBearingSpec, ...]:
                                       f"{', '.join(sorted(_KEYS))})")
         missing = [k for k in _REQUIRED if k not in t]
         if missing:
-            raise RollingBearingError(f"{where}: missing key {missing[0]!r}")
+            raise RollingBearingError(f"{where}: missing key {short(missing[0])}")
         kw = {k: v for k, v in t.items() if k != "comment"}
         try:
             out.append(RollingBearingSpec(**kw))
@@ -222,5 +223,5 @@ def rolling_bearings_from_list(tables: Any) -> tuple[RollingBearingSpec, ...]:
     names = [b.name for b in out]
     dup = sorted({n for n in names if names.count(n) > 1})
     if dup:
-        raise RollingBearingError(f"[[rolling_bearing]]: name {dup[0]!r} is used twice")
+        raise RollingBearingError(f"[[rolling_bearing]]: name {short(dup[0])} is used twice")
     return tuple(out)

@@ -41,6 +41,7 @@ import numpy as np
 
 from analysis.threads import one_blas_thread
 from gearvib import kernels as kn
+from gearvib.checks import check_config, check_frequencies, check_items, check_real, short
 from gearvib.config import ConfigError
 from gearvib.fault_pass import with_fault_pass
 from gearvib.model import AssembledModel
@@ -241,6 +242,10 @@ def simulate(
         static equilibrium.
     """
     wall0 = _time.perf_counter()
+    if progress is not None and not isinstance(progress, bool | np.bool_):
+        raise TypeError(f"progress must be a bool or None; got {type(progress).__name__}")
+    config = check_config(config)
+    natural_frequencies = check_frequencies(natural_frequencies)
     prepared = _prepare_variant(model, conditions, dt, fs_out, duration, gyroscopic, max_steps)
     setup, step, run_duration = prepared.setup, prepared.step, prepared.duration
     acc0, y = prepared.acc0, prepared.y
@@ -383,6 +388,14 @@ def _prepare_variant(model, conditions, dt, fs_out, duration, gyroscopic, max_st
     """The set-up of a run up to its initial state: checks, step choice, run-size guard and
     static equilibrium (:func:`simulate` and every variant of :func:`simulate_batch`)."""
     check_model(model)
+    if duration is not None:
+        check_real(duration, "duration [s]", error=ConfigError)
+    if isinstance(max_steps, bool) or not isinstance(max_steps, int | np.integer) or not (
+            1 <= max_steps <= 10**15):
+        raise ConfigError(f"max_steps = {short(max_steps)} is not admissible (admissible: an "
+                          "integer in 1..1e15)")
+    for key, value in (("dt", dt), ("fs_out", fs_out)):
+        check_real(value, f"{key}", optional=True, error=ConfigError)
     setup = prepare_run(model, conditions, gyroscopic)
     system = setup.system
     n, nm = model.n_dof, model.n_mesh
@@ -390,10 +403,6 @@ def _prepare_variant(model, conditions, dt, fs_out, duration, gyroscopic, max_st
     if run_duration is None or not (run_duration > 0 and math.isfinite(run_duration)):
         raise ConfigError(f"duration = {run_duration!r} s is not admissible (admissible: > 0, "
                           "finite; the conditions define none)")
-    if isinstance(max_steps, bool) or not isinstance(max_steps, int | np.integer) or not (
-            1 <= max_steps <= 10**15):
-        raise ConfigError(f"max_steps = {max_steps!r} is not admissible (admissible: an "
-                          "integer in 1..1e15)")
     k_max = stiffest_matrix(model, setup.torque_sign)
     if setup.drive == "speed":
         k_max = with_coupling(k_max, setup.mass, setup.rigid, int(system.ipar[kn.IP_INPUT]),
@@ -507,12 +516,15 @@ def simulate_batch(
         inadmissible variant (prefixed with its index).
     """
     from gearvib import kernels_batch as kb  # only batches need it (start-up of a single run)
-    models = list(models) if not isinstance(models, AssembledModel) else [models]
+    models = (list(check_items(models, AssembledModel, "models"))
+              if not isinstance(models, AssembledModel) else [models])
     if not models:
         raise ValueError("simulate_batch needs at least one model (models is empty)")
     if errors not in ("raise", "return"):
-        raise ValueError(f"errors = {errors!r} is not admissible (admissible: 'raise', "
+        raise ValueError(f"errors = {short(errors)} is not admissible (admissible: 'raise', "
                          "'return')")
+    if not isinstance(gyroscopic, bool | np.bool_):
+        raise TypeError(f"gyroscopic must be a bool; got {type(gyroscopic).__name__}")
     nv = len(models)
     conds = list(conditions) if isinstance(conditions, list | tuple) else [conditions] * nv
     # a list or tuple holds one configuration per model; anything else is one for all
@@ -522,6 +534,8 @@ def simulate_batch(
     for name, seq in (("conditions", conds), ("config", configs)):
         if len(seq) != nv:
             raise ValueError(f"{name} must be one value or one per model ({nv}), got {len(seq)}")
+    for k, cfg in enumerate(configs):
+        check_config(cfg, f"config[{k}]" if isinstance(config, list | tuple) else "config")
     variants = []
     for k, (model, cond) in enumerate(zip(models, conds, strict=True)):
         if not isinstance(model, AssembledModel):
@@ -593,7 +607,15 @@ def batch_groups(
         Indices into ``models``; every index once.
     """
     from gearvib import kernels_batch as kb  # only batches need it (start-up of a single run)
-    models = list(models)
+    models = list(check_items(models, object, "models"))
+    for key, value in (("dt", dt), ("fs_out", fs_out), ("duration", duration)):
+        check_real(value, key, optional=True, low=0.0, low_open=True, error=ConfigError)
+    if isinstance(max_steps, bool) or not isinstance(max_steps, int | np.integer) or not (
+            1 <= max_steps <= 10**15):
+        raise ConfigError(f"max_steps = {short(max_steps)} is not admissible (admissible: an "
+                          "integer in 1..1e15)")
+    if not isinstance(gyroscopic, bool | np.bool_):
+        raise TypeError(f"gyroscopic must be a bool; got {type(gyroscopic).__name__}")
     nv = len(models)
     conds = list(conditions) if isinstance(conditions, list | tuple) else [conditions] * nv
     if len(conds) != nv:

@@ -51,6 +51,7 @@ from typing import Any
 
 import numpy as np
 
+from analysis.checks import require_instance, require_real_array
 from analysis.instability import (
     Candidates,
     FirstOrderWidths,
@@ -62,7 +63,9 @@ from analysis.instability import (
     instability_candidates,
     stability_chart,
 )
+from gearvib.checks import check_count, check_real, check_text, short
 from gearvib.execution import default_workers, executor_for
+from gearvib.kinematics import MAX_SPEED_RPM
 from gearvib.modal import ModalResult, modal_analysis
 from gearvib.model import AssembledModel, MeshContacts, MeshFrequencyGroup, interpolate_tables
 from gearvib.simulate import DriveCoupling, coupling_matrices, default_coupling
@@ -84,6 +87,16 @@ __all__ = [
     "stability_over_speed",
 ]
 
+MAX_GROUPS = 1000
+"""Most mesh-frequency groups (ratios) of :func:`common_period`."""
+MAX_CYCLE_BUDGET = 100_000
+"""Largest ``max_cycles`` (a search over that many periods)."""
+MAX_N = 100
+"""Largest order ``n`` of the theory candidates."""
+MAX_HARMONICS = 1000
+"""Most stiffness harmonics of :func:`first_order_regions`."""
+MAX_CHART_POINTS = 200_000
+"""Most points (speeds x parameter values) of a stability chart."""
 MAX_CYCLES = 256
 """Default budget of mesh cycles (all groups) in the common period of several mesh frequencies."""
 
@@ -215,14 +228,15 @@ def common_period(ratios: Sequence[float], *, max_cycles: int = MAX_CYCLES,
         frequency by at most ``max_detuning`` (the message names the detuning reached and how
         to proceed).
     """
-    r = np.asarray(ratios, dtype=float).ravel()
-    if r.size == 0 or not np.all(np.isfinite(r)) or np.any(r <= 0) or r[0] != 1.0:
-        raise ValueError(f"ratios = {list(r)} are not admissible: finite, > 0, first entry 1")
-    if int(max_cycles) != max_cycles or max_cycles < r.size:
+    r = require_real_array(ratios, "ratios", min_size=0).ravel()
+    if r.size == 0 or r.size > MAX_GROUPS or np.any(r <= 0) or r[0] != 1.0:
+        raise ValueError(f"ratios = {short(list(r))} are not admissible: 1 .. {MAX_GROUPS} "
+                         "finite ratios > 0, first entry 1")
+    check_count(max_cycles, "max_cycles", high=MAX_CYCLE_BUDGET)
+    if max_cycles < r.size:
         raise ValueError(f"max_cycles = {max_cycles!r} is not admissible: an integer >= "
                          f"{r.size} (one cycle per mesh frequency at least)")
-    if not max_detuning >= 0:
-        raise ValueError(f"max_detuning = {max_detuning!r} is not admissible: must be >= 0")
+    max_detuning = check_real(max_detuning, "max_detuning", low=0.0)
     if r.size == 1:
         return CommonPeriod("single", 1, (1,), (1.0,), (0.0,))
     best: tuple[float, int, np.ndarray, np.ndarray] | None = None
@@ -251,6 +265,24 @@ def common_period(ratios: Sequence[float], *, max_cycles: int = MAX_CYCLES,
                         tuple(0.0 if exact else float(x) for x in det))
 
 
+def _speeds(speeds_rpm: Any) -> np.ndarray:
+    """Chart speeds: an increasing 1-D array of 2 .. MAX_CHART_POINTS speeds > 0 [min-1]."""
+    speeds = require_real_array(speeds_rpm, "speeds_rpm", ndim=1, min_size=2,
+                                max_abs=MAX_SPEED_RPM)
+    if speeds.size > MAX_CHART_POINTS or not (speeds > 0).all():
+        raise ValueError(f"speeds_rpm must be 2 .. {MAX_CHART_POINTS} speeds > 0 [min-1]")
+    return speeds
+
+
+def _chart_options(refine: Any, floquet_options: Any, progress: Any) -> None:
+    if not isinstance(refine, bool):
+        raise TypeError(f"refine must be a bool; got {type(refine).__name__}")
+    if floquet_options is not None and not isinstance(floquet_options, dict):
+        raise TypeError(f"floquet_options must be a dict; got {type(floquet_options).__name__}")
+    if progress is not None and not isinstance(progress, bool):
+        raise TypeError(f"progress must be a bool or None; got {type(progress).__name__}")
+
+
 def cycle_budget(model: AssembledModel, *, max_detuning: float = MAX_DETUNING,
                  limit: int = 4 * MAX_CYCLES) -> int:
     """The smallest budget of mesh cycles (``MAX_CYCLES`` doubled up to ``limit``) at which
@@ -275,6 +307,9 @@ def cycle_budget(model: AssembledModel, *, max_detuning: float = MAX_DETUNING,
     int
         The budget to pass as ``max_cycles``.
     """
+    require_instance(model, AssembledModel, "model")
+    check_real(max_detuning, "max_detuning", low=0.0)
+    check_count(limit, "limit", low=1, high=MAX_CYCLE_BUDGET)
     groups = model.mesh_frequency_groups()
     if len(groups) < 2:
         return MAX_CYCLES
@@ -530,6 +565,11 @@ def periodic_system(model: AssembledModel, *, coupling: DriveCoupling | None = N
     torque_sign : float
         Sense of the mean load (+1: the input drives forward): selects the loaded flanks.
     """
+    require_instance(model, AssembledModel, "model")
+    if coupling is not None:
+        require_instance(coupling, DriveCoupling, "coupling")
+    check_count(max_cycles, "max_cycles", low=1, high=MAX_CYCLE_BUDGET)
+    check_real(max_detuning, "max_detuning", low=0.0)
     coupling = coupling or default_coupling(model, torque_sign)
     k_in = model.rotation_dofs[model.input_member]
     kd, cd = coupling_matrices(model.mass, model.rigid_body_velocity(), k_in, coupling)
@@ -618,6 +658,9 @@ def mesh_phasing(model: AssembledModel, modal: ModalResult | None = None, *,
     family). The modes are those of the loaded mean system (:func:`modal_analysis` with
     ``torque_sign``).
     """
+    require_instance(model, AssembledModel, "model")
+    if modal is not None:
+        require_instance(modal, ModalResult, "modal")
     modal = modal or modal_analysis(model, torque_sign=torque_sign)
     keep = np.array([k != "rigid-body" for k in modal.kinds], dtype=bool)
     planets = model.meta.get("planets", [])
@@ -655,6 +698,16 @@ def gear_set_candidates(model: AssembledModel, modal: ModalResult | None = None,
     sorted by speed. Combination frequencies of two groups (``l f_1 + m f_2``) are second order
     in the stiffness variation and not listed; the Floquet chart contains them.
     """
+    require_instance(model, AssembledModel, "model")
+    if modal is not None:
+        require_instance(modal, ModalResult, "modal")
+    check_count(n_max, "n_max", low=1, high=MAX_N)
+    if speed_range is not None:
+        if not (isinstance(speed_range, tuple | list) and len(speed_range) == 2):
+            raise ValueError(f"speed_range = {short(speed_range)} is not admissible (admissible: "
+                             "(low, high) [min-1])")
+        for i, v in enumerate(speed_range):
+            check_real(v, f"speed_range[{i}]", low=0.0, high=MAX_SPEED_RPM)
     modal = modal or modal_analysis(model, torque_sign=torque_sign)
     keep = np.array([k != "rigid-body" for k in modal.kinds], dtype=bool)
     freqs = modal.frequencies_hz[keep]
@@ -768,6 +821,18 @@ def stability_over_speed(model: AssembledModel, speeds_rpm: np.ndarray, *,
         Over the first mesh frequency (``mesh_frequency_per_rpm`` converts to speed); with
         several mesh frequencies the chart names them, gives their ratios and the method.
     """
+    require_instance(model, AssembledModel, "model")
+    _speeds(speeds_rpm)
+    if coupling is not None:
+        require_instance(coupling, DriveCoupling, "coupling")
+    check_count(n_max, "n_max", low=1, high=MAX_N)
+    check_count(max_cycles, "max_cycles", low=1, high=MAX_CYCLE_BUDGET)
+    check_real(max_detuning, "max_detuning", low=0.0)
+    if candidates is not None:
+        require_instance(candidates, Candidates, "candidates")
+    if modal is not None:
+        require_instance(modal, ModalResult, "modal")
+    _chart_options(refine, floquet_options, progress)
     speeds = np.asarray(speeds_rpm, dtype=float)
     if speeds.ndim != 1 or speeds.size < 2 or not (speeds > 0).all():
         raise ValueError("speeds_rpm must be an increasing 1-D array of positive speeds")
@@ -812,7 +877,7 @@ def _chart_executor(workers: int | None, scheduler: str | None, executor: Execut
     process; otherwise the sweeps' executors (:func:`gearvib.execution.executor_for`)."""
     n = default_workers() if workers is None else workers
     if isinstance(n, bool) or not isinstance(n, int) or n < 1:
-        raise ValueError(f"workers = {workers!r} is not admissible: an integer >= 1 or None")
+        raise ValueError(f"workers = {short(workers)} is not admissible: an integer >= 1 or None")
     if executor is None and scheduler is None and n == 1:
         yield None, 1
         return
@@ -855,6 +920,16 @@ def stability_map(model_for: Callable[[float], AssembledModel], speeds_rpm: np.n
     progress : bool or None
         Progress bar over the evaluations (None: on a terminal only).
     """
+    if not callable(model_for):
+        raise TypeError(f"model_for must be callable; got {type(model_for).__name__}")
+    n_speeds = _speeds(speeds_rpm).size
+    v = require_real_array(values, "values", min_size=1).ravel()
+    if v.size * n_speeds > MAX_CHART_POINTS:
+        raise ValueError(f"values x speeds_rpm: {v.size} x {n_speeds} points, more than "
+                         f"{MAX_CHART_POINTS} (each a Floquet computation of about 1-5 ms)")
+    check_text(parameter_name, "parameter_name")
+    check_text(parameter_units, "parameter_units")
+    _chart_options(refine, floquet_options, progress)
     speeds = np.asarray(speeds_rpm, dtype=float)
     vals = [float(v) for v in np.asarray(values, dtype=float).ravel()]
     if speeds.ndim != 1 or speeds.size < 2 or not (speeds > 0).all() or not vals:
@@ -887,6 +962,10 @@ def first_order_regions(model: AssembledModel, *, coupling: DriveCoupling | None
     ``mesh_frequency`` names the group; widths in Hz of that mesh frequency, speeds from its
     factor), sorted by the lower speed.
     """
+    require_instance(model, AssembledModel, "model")
+    if coupling is not None:
+        require_instance(coupling, DriveCoupling, "coupling")
+    check_count(l_max, "l_max", low=1, high=MAX_HARMONICS)
     system = periodic_system(model, coupling=coupling, torque_sign=torque_sign)
     groups = system.groups or model.mesh_frequency_groups()
     if len(groups) < 2:

@@ -26,7 +26,8 @@ import math
 from collections.abc import Sequence
 from dataclasses import replace
 
-from gearvib.geometry import Toothing, mesh_geometry
+from gearvib.checks import check_count, check_instance, check_items, check_real, check_text, short
+from gearvib.geometry import MAX_TEETH, Toothing, mesh_geometry
 from gearvib.structure import (
     RIGID,
     BaseStructure,
@@ -44,11 +45,13 @@ __all__ = ["HOUSING", "multi_stage", "parallel_stage", "stage_prefix"]
 
 HOUSING = "housing"
 """Default name of the fixed carrier (the gearbox housing) of a parallel stage."""
+MAX_STAGES = 16
+"""Most stages of a train."""
 
 
 def stage_prefix(index: int) -> str:
     """The name prefix of stage ``index`` (1-based) in a :func:`multi_stage` train."""
-    return f"stage{int(index)}."
+    return f"stage{check_count(index, 'index', low=1)}."
 
 
 def _mesh(name: str, g1: str, g2: str, t1: Toothing, t2: Toothing, spec: MeshSpec,
@@ -152,19 +155,30 @@ def parallel_stage(*, z_pinion: int, z_wheel: int, module: float, pinion: Body, 
     (signed ``z_wheel``: an internal wheel turns with the pinion); an idler reverses the sense
     once more and leaves the magnitude. Mesh frequency ``f = z_pinion |n_pinion| / 60``.
     """
-    if isinstance(z_pinion, bool) or not isinstance(z_pinion, int) or z_pinion <= 0:
-        raise ValueError(f"z_pinion = {z_pinion!r} is not admissible (admissible: an integer > 0, "
-                         "external toothing)")
-    if isinstance(z_wheel, bool) or not isinstance(z_wheel, int) or z_wheel == 0:
-        raise ValueError(f"z_wheel = {z_wheel!r} is not admissible (admissible: a non-zero "
-                         "integer, negative for an internal wheel)")
+    for key, part in (("pinion", pinion), ("wheel", wheel)):
+        check_instance(part, Body, key)
+    for key, optional in (("housing", housing), ("idler", idler)):
+        if optional is not None:
+            check_instance(optional, Body, key)
+    check_instance(mesh, MeshSpec, "mesh")
+    if idler_mesh is not None:
+        check_instance(idler_mesh, MeshSpec, "idler_mesh")
+    for key, text in (("fixed", fixed), ("input", input), ("output", output), ("name", name)):
+        check_text(text, key, empty=key == "fixed")
+    if config is not None:
+        check_instance(config, dict, "config")
+    check_count(z_pinion, "z_pinion", low=1, high=MAX_TEETH)
+    check_count(z_wheel, "z_wheel", low=-MAX_TEETH, high=MAX_TEETH)
+    check_count(z_idler, "z_idler", low=1, high=MAX_TEETH, optional=True)
+    if z_wheel == 0:
+        raise ValueError("z_wheel = 0 is not admissible (admissible: a non-zero integer, "
+                         "negative for an internal wheel)")
     if z_wheel < 0 and -z_wheel <= z_pinion:
         raise ValueError(f"z_wheel = {z_wheel} is not admissible with z_pinion = {z_pinion}: an "
                          f"internal wheel needs more teeth than its pinion (|z_wheel| > "
                          f"{z_pinion})")
     for label, v in (("axis_angle", axis_angle), ("idler_angle", idler_angle)):
-        if not math.isfinite(v):
-            raise ValueError(f"{label} = {v!r} must be finite")
+        check_real(v, label, low=-1e9, high=1e9)
     if housing is None:
         housing = Body(HOUSING, "carrier", 1.0, 1.0, Support())
     housing = replace(housing, role="carrier")
@@ -192,8 +206,6 @@ def parallel_stage(*, z_pinion: int, z_wheel: int, module: float, pinion: Body, 
                                                         p_b.name, t_w, t_p, mesh, a))
         return compose(name, [bs], fixed=(fixed,) if fixed else (), input=input,
                        output=output, config=config)
-    if isinstance(z_idler, bool) or not isinstance(z_idler, int) or z_idler <= 0:
-        raise ValueError(f"z_idler = {z_idler!r} is not admissible (admissible: an integer > 0)")
     if z_wheel < 0:
         raise ValueError("an idler is admissible between external gears only (z_wheel > 0)")
     if idler is None:
@@ -258,20 +270,26 @@ def multi_stage(stages: Sequence[GearSet], *,
     ValueError
         Fewer than two stages, prefixes or shafts of the wrong number, repeated prefixes.
     """
-    stages = list(stages)
-    if len(stages) < 2:
-        raise ValueError(f"a train needs at least two stages, got {len(stages)}")
+    stages = list(check_items(stages, GearSet, "stages"))
+    if not 2 <= len(stages) <= MAX_STAGES:
+        raise ValueError(f"a train needs at least two stages (and at most {MAX_STAGES}), got "
+                         f"{len(stages)}")
     n = len(stages)
+    check_text(name, "name")
+    if config is not None:
+        check_instance(config, dict, "config")
     if prefixes is None:
         prefixes = [stage_prefix(k + 1) for k in range(n)]
-    prefixes = list(prefixes)
+    prefixes = list(check_items(prefixes, str, "prefixes"))
     if len(prefixes) != n or len(set(prefixes)) != n:
-        raise ValueError(f"prefixes: {n} distinct names needed, got {prefixes!r}")
+        raise ValueError(f"prefixes: {n} distinct names needed, got {short(prefixes)}")
     if shafts is None:
         shafts = [(RIGID, 0.0)] * (n - 1)
-    shafts = list(shafts)
+    shafts = list(check_items(shafts, (tuple, list), "shafts"))
     if len(shafts) != n - 1:
         raise ValueError(f"shafts: {n - 1} shafts join {n} stages, got {len(shafts)}")
+    if any(len(s) != 2 for s in shafts):
+        raise ValueError("shafts: every shaft is a pair (stiffness, damping)")
     bodies: list[Body] = []
     meshes: list[Mesh] = []
     fixed: list[str] = []
@@ -284,7 +302,7 @@ def multi_stage(stages: Sequence[GearSet], *,
         own += [replace(c, body1=f"{prefix}{c.body1}", body2=f"{prefix}{c.body2}")
                 for c in stage.couplings]
     joints = [Coupling(f"{prefixes[k]}{stages[k].output}", f"{prefixes[k + 1]}"
-                       f"{stages[k + 1].input}", float(k_s), float(c_s))
+                       f"{stages[k + 1].input}", k_s, c_s)
               for k, (k_s, c_s) in enumerate(shafts)]
     return GearSet(name=name, bodies=tuple(bodies), meshes=tuple(meshes), fixed=tuple(fixed),
                    input=f"{prefixes[0]}{stages[0].input}",

@@ -27,6 +27,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
+from gearvib.checks import check_array, check_count, check_real, short
 from gearvib.geometry import MeshGeometry
 from gearvib.paths import is_file
 
@@ -44,19 +45,23 @@ __all__ = [
 ]
 
 _N_DENSE = 8192
+MAX_STIFFNESS = 1e40
+"""Largest stiffness accepted [N/m] (its products with deflections stay finite)."""
+MAX_FOURIER = 1_000
+"""Most harmonics of a :class:`FourierStiffness`."""
+MAX_TABLE = 1 << 16
+"""Largest stiffness table (values per mesh cycle, :meth:`MeshStiffness.table`)."""
 
 
 def _real(name: str, value: Any) -> float:
-    if isinstance(value, bool) or not isinstance(value, int | float | np.integer | np.floating):
-        raise ValueError(f"{name} = {value!r} must be a real number")
-    v = float(value)
-    if not math.isfinite(v):
-        raise ValueError(f"{name} = {v!r} is not admissible (admissible: finite number)")
-    return v
+    return check_real(value, name)
 
 
 def _stiff(name: str, value: Any, *, allow_zero: bool = False) -> float:
     v = _real(name, value)
+    if v > MAX_STIFFNESS:
+        raise ValueError(f"stiffness {name} = {v!r} N/m is not admissible (admissible: <= "
+                         f"{MAX_STIFFNESS:g})")
     if v < 0.0 or (v == 0.0 and not allow_zero):
         rng = ">= 0" if allow_zero else "> 0"
         raise ValueError(f"stiffness {name} = {v!r} N/m is not admissible (admissible: {rng})")
@@ -74,9 +79,7 @@ def _contact_ratio(value: Any, upper: float | None = None) -> float:
 
 
 def _lmax(l_max: Any) -> int:
-    if isinstance(l_max, bool) or not isinstance(l_max, int | np.integer) or l_max < 0:
-        raise ValueError(f"l_max = {l_max!r} is not admissible (admissible: integer >= 0)")
-    return int(l_max)
+    return check_count(l_max, "l_max", low=0, high=MAX_TABLE)
 
 
 class MeshStiffness(abc.ABC):
@@ -116,9 +119,8 @@ class MeshStiffness(abc.ABC):
 
     def table(self, n: int = 1024) -> np.ndarray:
         """Values at ``s = i / n``, ``i = 0 .. n-1`` (exact point values, no smoothing)."""
-        if isinstance(n, bool) or not isinstance(n, int | np.integer) or n < 1:
-            raise ValueError(f"table size n = {n!r} is not admissible (admissible: integer >= 1)")
-        return self(np.arange(int(n)) / int(n))
+        n = check_count(n, "table size n", low=1, high=MAX_TABLE)
+        return self(np.arange(n) / n)
 
     def _samples(self) -> np.ndarray:
         bp = np.mod(self._breakpoints(), 1.0)
@@ -345,12 +347,10 @@ class FourierStiffness(MeshStiffness):
 
     @staticmethod
     def _coeffs(name: str, values: ArrayLike) -> np.ndarray:
-        try:
-            arr = np.asarray(values, dtype=float).ravel()
-        except (TypeError, ValueError) as exc:
-            raise ValueError(f"{name} = {values!r} must be a sequence of numbers") from exc
-        if not np.all(np.isfinite(arr)):
-            raise ValueError(f"{name} coefficients {values!r} must be finite")
+        arr = check_array(values, name, min_size=0, max_abs=MAX_STIFFNESS).ravel()
+        if arr.size > MAX_FOURIER:
+            raise ValueError(f"{name}: {arr.size} coefficients (admissible: at most "
+                             f"{MAX_FOURIER})")
         return arr
 
     def _eval(self, u: np.ndarray) -> np.ndarray:
@@ -439,10 +439,13 @@ class PairSuperposition(MeshStiffness):
         breakpoints: Sequence[float] | np.ndarray | None = None,
     ) -> None:
         if not callable(single_pair):
-            raise ValueError(f"single_pair = {single_pair!r} must be callable")
+            raise TypeError(f"single_pair = {short(single_pair)} must be callable")
         self.contact_ratio = _contact_ratio(contact_ratio)
         self.single_pair = single_pair
-        bp = [] if breakpoints is None else [float(b) for b in breakpoints]
+        bp = [] if breakpoints is None else [float(b) for b in check_array(
+            breakpoints, "breakpoints", ndim=1, min_size=0, max_abs=1e6)]
+        if len(bp) > MAX_TABLE:
+            raise ValueError(f"breakpoints: {len(bp)} values (admissible: at most {MAX_TABLE})")
         eps = self.contact_ratio
         self._bp_u = np.unique(np.clip(np.array([0.0, eps, *bp]), 0.0, eps))
         probe = np.concatenate([np.linspace(0.0, eps, 1001, endpoint=False), self._bp_u[:-1]])
@@ -560,8 +563,10 @@ class TabulatedPair(PairSuperposition):
         source: str | None = None,
     ) -> None:
         eps = _contact_ratio(contact_ratio)
-        u = np.asarray(position, dtype=float).ravel()
-        k = np.asarray(stiffness, dtype=float).ravel()
+        u = check_array(position, "position", min_size=0).ravel()
+        k = check_array(stiffness, "stiffness", min_size=0, max_abs=MAX_STIFFNESS).ravel()
+        if u.size > MAX_TABLE:
+            raise ValueError(f"position: {u.size} values (admissible: at most {MAX_TABLE})")
         if u.size != k.size or u.size < 2:
             raise ValueError(
                 f"position ({u.size}) and stiffness ({k.size}) must have the same length >= 2"
@@ -855,12 +860,15 @@ def iso6336_stiffness(
     fewer teeth. Valid for steel/steel pairs, ``F_t K_A / b >= 100 N/mm`` (no load
     correction applied) and solid gear blanks unless ``C_R`` is set.
     """
+    if not isinstance(mesh, MeshGeometry):
+        raise TypeError(f"mesh must be a MeshGeometry; got {type(mesh).__name__}")
     for name, v in (("C_M", C_M), ("C_R", C_R)):
         if not 0.0 < _real(name, v) <= 1.0:
             raise ValueError(f"{name} = {v!r} is not admissible (admissible: 0 < {name} <= 1)")
     hfp = _real("basic_rack_dedendum", basic_rack_dedendum)
-    if hfp <= 0.0:
-        raise ValueError(f"basic_rack_dedendum = {hfp!r} is not admissible (admissible: > 0)")
+    if not 0.0 < hfp <= 10.0:
+        raise ValueError(f"basic_rack_dedendum = {hfp!r} is not admissible (admissible: > 0, "
+                         "<= 10)")
     lcf = _real("low_contact_factor", low_contact_factor)
     if not 0.9 <= lcf <= 1.0:
         raise ValueError(f"low_contact_factor = {lcf!r} is not admissible (admissible: 0.9 .. 1.0)")
@@ -999,17 +1007,21 @@ def stiffness_from_dict(
     """
     if not isinstance(d, dict):
         raise ValueError(f"stiffness table must be a dict, got {type(d).__name__}")
+    if mesh is not None and not isinstance(mesh, MeshGeometry):
+        raise TypeError(f"mesh must be a MeshGeometry; got {type(mesh).__name__}")
+    if base_dir is not None and not isinstance(base_dir, str | Path):
+        raise TypeError(f"base_dir must be a path; got {type(base_dir).__name__}")
     model = d.get("model")
     if not isinstance(model, str) or model not in _KEYS:
         raise ValueError(
-            f"stiffness model {model!r} is unknown (admissible: {', '.join(sorted(_KEYS))})"
+            f"stiffness model {short(model)} is unknown (admissible: {', '.join(sorted(_KEYS))})"
         )
     req, opt = _KEYS[model]
     keys = set(d) - {"model"}
     unknown = sorted(keys - req - opt)
     if unknown:
         raise ValueError(
-            f"unknown key {unknown[0]!r} for stiffness model {model!r} "
+            f"unknown key {short(unknown[0])} for stiffness model {model!r} "
             f"(admissible keys: {', '.join(sorted(req | opt))})"
         )
     missing = sorted(req - keys)

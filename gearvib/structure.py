@@ -18,8 +18,9 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field, replace
 from typing import Literal
 
-from gearvib.checks import short
+from gearvib.checks import check_array, check_count, check_items, check_real, check_text, cut, short
 from gearvib.geometry import (
+    MAX_TEETH,
     MeshGeometry,
     Toothing,
     check_planet_angles,
@@ -30,12 +31,14 @@ from gearvib.stiffness import MeshStiffness, stiffness_from_dict
 
 __all__ = [
     "DAMPING_LAWS",
+    "MAX_PLANETS",
     "RIGID",
     "BaseStructure",
     "Body",
     "Coupling",
     "GearSet",
     "Mesh",
+    "MeshSpec",
     "Support",
     "check_damping_law",
     "check_ravigneaux_clearances",
@@ -51,6 +54,8 @@ __all__ = [
 
 RIGID = math.inf
 """Stiffness value of a rigid support: the corresponding DOF is removed."""
+MAX_PLANETS = 64
+"""Largest number of planets (or planet pairs) accepted."""
 
 Role = Literal["central", "carrier", "planet"]
 
@@ -68,15 +73,9 @@ def check_damping_law(value: object, name: str) -> str:
 
 
 def _check_value(value: float, name: str, *, allow_zero: bool = True, allow_inf: bool = False):
-    v = float(value)
-    if math.isnan(v):
-        raise ValueError(f"{name} is NaN; admissible: a finite number >= 0")
-    if math.isinf(v) and not (allow_inf and v > 0):
-        raise ValueError(f"{name} = {v} is not admissible: must be finite")
-    if v < 0 or (v == 0 and not allow_zero):
-        bound = ">= 0" if allow_zero else "> 0"
-        raise ValueError(f"{name} = {v!r} is not admissible: must be {bound}")
-    return v
+    """A stiffness, damping, mass or inertia: a number >= 0 (> 0 unless ``allow_zero``),
+    finite (``+inf`` too where ``allow_inf``: rigid)."""
+    return check_real(value, name, low=0.0, low_open=not allow_zero, allow_inf=allow_inf)
 
 
 @dataclass(frozen=True)
@@ -143,19 +142,24 @@ class Body:
     radius: float | None = None
 
     def __post_init__(self) -> None:
+        check_text(self.name, "name of a body")
+        w = short(self.name)
         if self.role not in ("central", "carrier", "planet"):
             raise ValueError(
-                f"body {self.name!r}: role {self.role!r} is not admissible "
+                f"body {w}: role {short(self.role)} is not admissible "
                 "(central, carrier or planet)"
             )
-        _check_value(self.mass, f"mass of body {self.name!r}", allow_zero=False)
-        _check_value(self.inertia, f"inertia of body {self.name!r}", allow_zero=False)
+        _check_value(self.mass, f"mass of body {w}", allow_zero=False)
+        _check_value(self.inertia, f"inertia of body {w}", allow_zero=False)
+        if not isinstance(self.support, Support):
+            raise TypeError(f"support of body {w} must be a Support; got "
+                            f"{type(self.support).__name__}")
+        check_text(self.carrier, f"carrier of body {w}", optional=True)
         if self.role == "planet" and not self.carrier:
-            raise ValueError(f"planet {self.name!r} needs a carrier")
-        if not math.isfinite(self.angle):
-            raise ValueError(f"angle of planet {self.name!r} must be finite")
+            raise ValueError(f"planet {w} needs a carrier")
+        check_real(self.angle, f"angle of planet {w}")
         if self.radius is not None:
-            _check_value(self.radius, f"radius of planet {self.name!r}", allow_zero=False)
+            _check_value(self.radius, f"radius of planet {w}", allow_zero=False)
 
 
 @dataclass(frozen=True)
@@ -231,53 +235,69 @@ class Mesh:
     tooth_offset2: float = 0.0
 
     def __post_init__(self) -> None:
+        check_text(self.name, "name of a mesh")
+        w = short(self.name)
+        check_text(self.gear1, f"mesh {w}: gear1")
+        check_text(self.gear2, f"mesh {w}: gear2")
+        for label in ("toothing1", "toothing2"):
+            t = getattr(self, label)
+            if t is not None and not isinstance(t, Toothing):
+                raise TypeError(f"mesh {w}: {label} must be a Toothing; got {type(t).__name__}")
+        for label in ("base_radius1", "base_radius2", "pressure_angle", "damping",
+                      "damping_ratio", "phase", "centre_distance"):
+            check_real(getattr(self, label), f"mesh {w}: {label}", optional=True)
+        for label in ("helix_angle", "backlash", "tooth_offset1", "tooth_offset2"):
+            check_real(getattr(self, label), f"mesh {w}: {label}")
+        for label in ("z1", "z2"):
+            check_count(getattr(self, label), f"mesh {w}: {label}", optional=True,
+                        low=-MAX_TEETH, high=MAX_TEETH)
+        for label, model in (("stiffness", self.stiffness),
+                             ("back_stiffness", self.back_stiffness)):
+            if not (isinstance(model, MeshStiffness) or (model is None
+                                                         and label == "back_stiffness")):
+                raise TypeError(f"mesh {w}: {label} must be a MeshStiffness; got "
+                                f"{type(model).__name__}")
         geometric = self.toothing1 is not None and self.toothing2 is not None
         lumped = self.base_radius1 is not None and self.base_radius2 is not None
         if not (geometric or lumped):
             raise ValueError(
-                f"mesh {self.name!r} needs either toothing1/toothing2 or "
+                f"mesh {w} needs either toothing1/toothing2 or "
                 "base_radius1/base_radius2 (+ pressure_angle)"
             )
         if lumped and not geometric and self.pressure_angle is None:
-            raise ValueError(f"mesh {self.name!r}: lumped description needs pressure_angle")
+            raise ValueError(f"mesh {w}: lumped description needs pressure_angle")
         if self.pressure_angle is not None and not 0 <= self.pressure_angle < math.radians(60):
             raise ValueError(
-                f"mesh {self.name!r}: pressure_angle {math.degrees(self.pressure_angle):.3g}° "
+                f"mesh {w}: pressure_angle {math.degrees(self.pressure_angle):.3g}° "
                 "is not admissible (0° to 60°)"
             )
-        if not math.isfinite(self.backlash):
-            raise ValueError(f"mesh {self.name!r}: backlash must be finite")
         for key in ("base_radius1", "base_radius2"):
             v = getattr(self, key)
             if v is not None and not (math.isfinite(v) and v != 0.0):
-                raise ValueError(f"mesh {self.name!r}: {key} = {v!r} m is not admissible "
+                raise ValueError(f"mesh {w}: {key} = {v!r} m is not admissible "
                                  "(admissible: finite, non-zero; negative for an internal gear)")
         for key in ("z1", "z2"):
             v = getattr(self, key)
-            if v is not None and (isinstance(v, bool) or not isinstance(v, int) or v == 0):
-                raise ValueError(f"mesh {self.name!r}: {key} = {v!r} is not admissible "
+            if v is not None and v == 0:
+                raise ValueError(f"mesh {w}: {key} = {v!r} is not admissible "
                                  "(admissible: a non-zero signed tooth number)")
         if not (math.isfinite(self.helix_angle) and abs(self.helix_angle) < math.radians(45)):
-            raise ValueError(f"mesh {self.name!r}: helix_angle {math.degrees(self.helix_angle):.4g}"
+            raise ValueError(f"mesh {w}: helix_angle {math.degrees(self.helix_angle):.4g}"
                              "° is not admissible (|beta_b| < 45°)")
         if self.centre_distance is not None and not (math.isfinite(self.centre_distance)
                                                      and self.centre_distance > 0):
-            raise ValueError(f"mesh {self.name!r}: centre_distance = {self.centre_distance!r} m "
+            raise ValueError(f"mesh {w}: centre_distance = {self.centre_distance!r} m "
                              "is not admissible (admissible: > 0)")
-        for key in ("phase", "tooth_offset1", "tooth_offset2"):
-            v = getattr(self, key)
-            if v is not None and not math.isfinite(v):
-                raise ValueError(f"mesh {self.name!r}: {key} = {v!r} must be finite")
         if self.damping is not None:
-            _check_value(self.damping, f"damping of mesh {self.name!r}")
+            _check_value(self.damping, f"damping of mesh {w}")
         if self.damping_ratio is not None:
-            _check_value(self.damping_ratio, f"damping_ratio of mesh {self.name!r}")
-        check_damping_law(self.damping_law, f"damping_law of mesh {self.name!r}")
+            _check_value(self.damping_ratio, f"damping_ratio of mesh {w}")
+        check_damping_law(self.damping_law, f"damping_law of mesh {w}")
         for label, model in (("stiffness", self.stiffness), ("back_stiffness",
                                                               self.back_stiffness)):
             if model is not None and not model.min >= 0:
                 raise ValueError(
-                    f"mesh {self.name!r}: {label} reaches {model.min:.4g} N/m; "
+                    f"mesh {w}: {label} reaches {model.min:.4g} N/m; "
                     "admissible: >= 0"
                 )
 
@@ -299,9 +319,11 @@ class Coupling:
     damping: float = 0.0
 
     def __post_init__(self) -> None:
-        _check_value(self.stiffness, f"coupling {self.body1}-{self.body2} stiffness",
-                     allow_zero=False, allow_inf=True)
-        _check_value(self.damping, f"coupling {self.body1}-{self.body2} damping")
+        check_text(self.body1, "body1 of a coupling")
+        check_text(self.body2, "body2 of a coupling")
+        w = f"{short(self.body1)}-{short(self.body2)}"
+        _check_value(self.stiffness, f"coupling {w} stiffness", allow_zero=False, allow_inf=True)
+        _check_value(self.damping, f"coupling {w} damping")
 
 
 @dataclass(frozen=True)
@@ -319,6 +341,11 @@ class BaseStructure:
     mesh: Mesh
 
     def __post_init__(self) -> None:
+        for label, cls in (("central", Body), ("planet", Body), ("carrier", Body),
+                           ("mesh", Mesh)):
+            if not isinstance(getattr(self, label), cls):
+                raise TypeError(f"base structure: {label} must be a {cls.__name__}; got "
+                                f"{type(getattr(self, label)).__name__}")
         if self.central.role != "central":
             raise ValueError(f"base structure: {self.central.name!r} is not a central member")
         if self.planet.role != "planet" or self.planet.carrier != self.carrier.name:
@@ -411,45 +438,59 @@ class GearSet:
         return replace(self, sensors=self.sensors + sensors_from_list(list(sensors)))
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "faults", tuple(self.faults))
-        object.__setattr__(self, "sensors", tuple(self.sensors))
+        check_text(self.name, "name of a gear set")
+        # the classes of faults, sensors and bearings by name: their modules import
+        # numpy-light gearvib only, but the bearings' imports analysis (xarray)
+        for label, cls in (("bodies", Body), ("meshes", Mesh), ("couplings", Coupling),
+                           ("fixed", str), ("faults", "gearvib.faults.description.Fault"),
+                           ("sensors", ("gearvib.sensors.description.HousingSensor",
+                                        "gearvib.sensors.description.Tacho")),
+                           ("rolling_bearings", "gearvib.rolling_bearings.RollingBearingSpec")):
+            object.__setattr__(self, label, check_items(getattr(self, label), cls, label))
+        check_text(self.input, "input")
+        check_text(self.output, "output")
+        if not isinstance(self.config, dict):
+            raise TypeError(f"config must be a dict; got {type(self.config).__name__}")
         names = [b.name for b in self.bodies]
         dup = {n for n in names if names.count(n) > 1}
         if dup:
-            raise ValueError(f"gear set {self.name!r}: duplicate body names {sorted(dup)}")
+            raise ValueError(f"gear set {short(self.name)}: duplicate body names "
+                             f"{short(sorted(dup))}")
         known = set(names)
         by_name = {b.name: b for b in self.bodies}
         for b in self.bodies:
             if b.role == "planet" and (b.carrier not in known
                                        or by_name[b.carrier].role != "carrier"):
                 raise ValueError(
-                    f"planet {b.name!r}: carrier {b.carrier!r} is not a carrier of this set"
+                    f"planet {short(b.name)}: carrier {short(b.carrier)} is not a carrier of "
+                    "this set"
                 )
         mesh_names = [m.name for m in self.meshes]
         if len(set(mesh_names)) != len(mesh_names):
-            raise ValueError(f"gear set {self.name!r}: duplicate mesh names")
+            raise ValueError(f"gear set {short(self.name)}: duplicate mesh names")
         for m in self.meshes:
             for g in (m.gear1, m.gear2):
                 if g not in known:
-                    raise ValueError(f"mesh {m.name!r}: unknown body {g!r}")
+                    raise ValueError(f"mesh {short(m.name)}: unknown body {short(g)}")
             if by_name[m.gear2].role != "planet":
-                raise ValueError(f"mesh {m.name!r}: gear2 {m.gear2!r} must be a planet")
+                raise ValueError(f"mesh {short(m.name)}: gear2 {short(m.gear2)} must be a "
+                                 "planet")
             if by_name[m.gear1].role == "carrier":
-                raise ValueError(f"mesh {m.name!r}: a carrier has no teeth")
+                raise ValueError(f"mesh {short(m.name)}: a carrier has no teeth")
         for role_name, member in (("input", self.input), ("output", self.output)):
             if member not in known:
-                raise ValueError(f"{role_name} member {member!r} is not a body of the set "
-                                 f"(bodies: {sorted(known)})")
+                raise ValueError(f"{role_name} member {short(member)} is not a body of the set "
+                                 f"(bodies: {short(sorted(known))})")
         for f in self.fixed:
             if f not in known:
-                raise ValueError(f"fixed member {f!r} is not a body of the set")
+                raise ValueError(f"fixed member {short(f)} is not a body of the set")
             if f in (self.input, self.output):
-                raise ValueError(f"member {f!r} cannot be fixed and {self.input!r}/"
-                                 f"{self.output!r} at once")
+                raise ValueError(f"member {short(f)} cannot be fixed and {short(self.input)}/"
+                                 f"{short(self.output)} at once")
         for c in self.couplings:
             for g in (c.body1, c.body2):
                 if g not in known:
-                    raise ValueError(f"coupling: unknown body {g!r}")
+                    raise ValueError(f"coupling: unknown body {short(g)}")
 
     def bearings(self) -> list:
         """The ``[[rolling_bearing]]`` tables with their rings' members resolved (a planet's
@@ -501,13 +542,29 @@ def compose(name: str, base_structures: Iterable[BaseStructure], *, fixed: Seque
 
     Bodies that appear in several base structures must be the same object description.
     """
+    base_structures = check_items(list(base_structures) if isinstance(
+        base_structures, Iterable) and not isinstance(base_structures, str | bytes | dict)
+        else base_structures, BaseStructure, "base_structures")
+    extra_meshes = check_items(list(extra_meshes) if isinstance(extra_meshes, Iterable)
+                               and not isinstance(extra_meshes, str | bytes | dict)
+                               else extra_meshes, Mesh, "extra_meshes")
+    extra_bodies = check_items(list(extra_bodies) if isinstance(extra_bodies, Iterable)
+                               and not isinstance(extra_bodies, str | bytes | dict)
+                               else extra_bodies, Body, "extra_bodies")
+    couplings = check_items(list(couplings) if isinstance(couplings, Iterable)
+                            and not isinstance(couplings, str | bytes | dict)
+                            else couplings, Coupling, "couplings")
+    fixed = check_items(fixed, str, "fixed")
+    if config is not None and not isinstance(config, dict):
+        raise TypeError(f"config must be a dict; got {type(config).__name__}")
     bodies: dict[str, Body] = {}
     meshes: list[Mesh] = []
 
     def add(b: Body) -> None:
         old = bodies.get(b.name)
         if old is not None and old != b:
-            raise ValueError(f"body {b.name!r} is described differently in two base structures")
+            raise ValueError(f"body {short(b.name)} is described differently in two base "
+                             "structures")
         bodies[b.name] = b
 
     for bs in base_structures:
@@ -541,6 +598,17 @@ class MeshSpec:
     damping_law: str = "gated"
 
     def __post_init__(self) -> None:
+        for label in ("stiffness", "back_stiffness"):
+            model = getattr(self, label)
+            if not (isinstance(model, MeshStiffness | dict)
+                    or (model is None and label == "back_stiffness")):
+                raise TypeError(f"{label} must be a MeshStiffness or a stiffness table (dict); "
+                                f"got {type(model).__name__}")
+        check_real(self.backlash, "backlash")
+        if self.damping is not None:
+            _check_value(self.damping, "damping")
+        if self.damping_ratio is not None:
+            _check_value(self.damping_ratio, "damping_ratio")
         check_damping_law(self.damping_law, "damping_law")
 
     def resolve(self, geometry: MeshGeometry) -> MeshSpec:
@@ -583,19 +651,41 @@ def _base(central: Body, planet: Body, carrier: Body, t_central: Toothing, t_pla
         centre_distance))
 
 
+def _parts(**parts: object) -> None:
+    """Refuse a builder argument of the wrong class: bodies (:class:`Body`), mesh
+    descriptions (:class:`MeshSpec`, or ``None`` for an optional one), names (``str``) and
+    ``config`` (a dict or ``None``), by their parameter names."""
+    for name, value in parts.items():
+        if name == "config":
+            if value is not None and not isinstance(value, dict):
+                raise TypeError(f"config must be a dict; got {type(value).__name__}")
+        elif name.endswith("_mesh") or name == "mesh":
+            if not isinstance(value, MeshSpec) and value is not None:
+                raise TypeError(f"{name} must be a MeshSpec; got {type(value).__name__}")
+        elif name in ("fixed", "input", "output", "name"):
+            check_text(value, name, empty=name == "fixed")
+        elif not isinstance(value, Body):
+            raise TypeError(f"{name} must be a Body; got {type(value).__name__}")
+
+
 def _planet_angles(z_sun: int, z_ring: int, n_planets: int | None,
                    angles: Sequence[float] | None) -> list[float]:
+    n_planets = check_count(n_planets, "n_planets", low=1, high=MAX_PLANETS, optional=True)
     if angles is None:
-        if n_planets is None or n_planets < 1:
+        if n_planets is None:
             raise ValueError("give n_planets (>= 1) or planet angles")
         angles = [2 * math.pi * i / n_planets for i in range(n_planets)]
-    angles = [float(a) for a in angles]
-    check_planet_angles(z_sun, z_ring, angles)
+    angles = [float(a) for a in check_planet_angles(z_sun, z_ring, angles)]
+    if len(angles) > MAX_PLANETS:
+        raise ValueError(f"planet_angles: {len(angles)} planets (admissible: at most "
+                         f"{MAX_PLANETS})")
     return angles
 
 
 def _check_ring_and_sun(z_sun: int, z_ring: int, sun_key: str, ring_key: str) -> None:
     """Signs of the tooth numbers of a sun (external) and a ring (internal)."""
+    check_count(z_sun, sun_key, low=-MAX_TEETH, high=MAX_TEETH)
+    check_count(z_ring, ring_key, low=-MAX_TEETH, high=MAX_TEETH)
     if z_ring >= 0:
         raise ValueError(f"{ring_key} = {z_ring} must be negative (internal toothing)")
     if z_sun <= 0:
@@ -636,11 +726,20 @@ def check_ravigneaux_clearances(n_pairs: int, *, a_short: float, a_long: float, 
     ValueError
         Naming the two bodies (with the pair number), their clearance [mm] and how it follows.
     """
-    short, long_, ring, sun = names
+    n_pairs = check_count(n_pairs, "n_pairs", low=1, high=MAX_PLANETS)
+    for key, v in (("a_short", a_short), ("a_long", a_long), ("tip_short", tip_short),
+                   ("tip_long", tip_long), ("tip_ring", tip_ring),
+                   ("tip_sun_small", tip_sun_small)):
+        check_real(v, key, low=0.0, low_open=True)
+    check_real(offset, "offset", low=-2 * math.pi, high=2 * math.pi)
+    if not (isinstance(names, Sequence) and len(names) == 4
+            and all(isinstance(n, str) for n in names)):
+        raise ValueError(f"names = {short(names)} is not admissible (admissible: four names)")
+    short_, long_, ring, sun = (cut(n) for n in names)
     gap = tip_ring - (a_short + tip_short)
     if gap <= 0.0:
         raise ValueError(
-            f"Ravigneaux set cannot be built: {short} (every pair) collides with the {ring}: "
+            f"Ravigneaux set cannot be built: {short_} (every pair) collides with the {ring}: "
             f"clearance r_a,ring - (a_short + r_a,short) = {tip_ring * 1e3:.4f} - "
             f"({a_short * 1e3:.4f} + {tip_short * 1e3:.4f}) = {gap * 1e3:.4f} mm (must be "
             "> 0); use a smaller short planet or small sun, or a larger ring"
@@ -656,7 +755,7 @@ def check_ravigneaux_clearances(n_pairs: int, *, a_short: float, a_long: float, 
         psi = 2 * math.pi * i / n_pairs
         planets.append((f"{long_}{i + 1}", a_long * math.cos(psi), a_long * math.sin(psi),
                         tip_long, i))
-        planets.append((f"{short}{i + 1}", a_short * math.cos(psi + offset),
+        planets.append((f"{short_}{i + 1}", a_short * math.cos(psi + offset),
                         a_short * math.sin(psi + offset), tip_short, i))
     for k, (n1, x1, y1, r1, i1) in enumerate(planets):
         for n2, x2, y2, r2, i2 in planets[k + 1:]:
@@ -687,10 +786,14 @@ def simple_planetary(*, z_sun: int, z_ring: int, module: float, sun: Body, ring:
     when that leaves the centre distances unequal (``|z_ring| - z_sun`` odd), the planet
     profile shift is solved so that both meshes share one centre distance, unless given.
     """
-    if z_ring >= 0:
-        raise ValueError(f"z_ring = {z_ring} must be negative (internal toothing)")
-    if z_sun <= 0:
-        raise ValueError(f"z_sun = {z_sun} must be positive (external toothing)")
+    _parts(sun=sun, ring=ring, carrier=carrier, planet=planet, sun_mesh=sun_mesh,
+           ring_mesh=ring_mesh, fixed=fixed, input=input, output=output, name=name,
+           config=config)
+    for key, spec in (("sun_mesh", sun_mesh), ("ring_mesh", ring_mesh)):
+        if spec is None:
+            raise TypeError(f"{key} must be a MeshSpec; got NoneType")
+    _check_ring_and_sun(z_sun, z_ring, "z_sun", "z_ring")
+    z_planet = check_count(z_planet, "z_planet", low=3, high=MAX_TEETH, optional=True)
     if z_planet is None:
         z_planet = (abs(z_ring) - z_sun) // 2
     angles = _planet_angles(z_sun, z_ring, n_planets, planet_angles)
@@ -768,6 +871,15 @@ def wolfrom(*, z_sun: int, z_ring1: int, z_ring2: int, z_planet1: int, z_planet2
         (either step); if the centre distances of sun and ring 1 differ with a given
         ``profile_shift_planet1``; if a helix angle is out of range (``|beta| < 45°``).
     """
+    _parts(sun=sun, ring1=ring1, ring2=ring2, carrier=carrier, planet=planet,
+           sun_mesh=sun_mesh, ring_mesh=ring_mesh, ring1_mesh=ring1_mesh, ring2_mesh=ring2_mesh,
+           fixed=fixed, input=input, output=output, name=name, config=config)
+    if sun_mesh is None:
+        raise TypeError("sun_mesh must be a MeshSpec; got NoneType")
+    check_count(z_ring2, "z_ring2", low=-MAX_TEETH, high=MAX_TEETH)
+    check_real(step_offset, "step_offset")
+    check_real(helix_angle2, "helix_angle2", optional=True)
+    check_real(module2, "module2", optional=True, low=0.0, low_open=True)
     if ring1_mesh is None or ring2_mesh is None:
         if ring_mesh is None:
             raise ValueError("wolfrom: give ring_mesh, or both ring1_mesh and ring2_mesh")
@@ -840,7 +952,16 @@ def check_stepped_planet_angles(z_sun: int, z_ring2: int, z_planet1: int, z_plan
     ValueError
         Naming the planet angle, the condition and its value.
     """
+    for key, z in (("z_sun", z_sun), ("z_ring2", z_ring2), ("z_planet1", z_planet1),
+                   ("z_planet2", z_planet2)):
+        check_count(z, key, low=-MAX_TEETH, high=MAX_TEETH)
+    angles = [float(a) for a in check_array(angles, "angles", ndim=1)]
+    if len(angles) > MAX_PLANETS:
+        raise ValueError(f"angles: {len(angles)} planets (admissible: at most {MAX_PLANETS})")
+    tol = check_real(tol, "tol", low=0.0)
     g = math.gcd(int(z_planet1), int(z_planet2))
+    if g == 0:
+        raise ValueError("z_planet1 and z_planet2 must not both be 0")
     total = z_sun * z_planet2 - z_ring2 * z_planet1
     for psi in angles[1:]:
         k = total * ((psi - angles[0]) % (2 * math.pi)) / (2 * math.pi * g)
@@ -897,6 +1018,14 @@ def ravigneaux(*, z_sun_small: int, z_sun_large: int, z_ring: int, z_planet_shor
         circles overlap (the message names both bodies and the clearance); if the centre
         distances of large sun and ring differ with a given ``profile_shift_planet_long``.
     """
+    _parts(sun_small=sun_small, sun_large=sun_large, ring=ring, carrier=carrier,
+           planet_short=planet_short, planet_long=planet_long, sun_mesh=sun_mesh,
+           ring_mesh=ring_mesh, planet_mesh=planet_mesh, fixed=fixed, input=input,
+           output=output, name=name, config=config)
+    for key, spec in (("sun_mesh", sun_mesh), ("ring_mesh", ring_mesh),
+                      ("planet_mesh", planet_mesh)):
+        if spec is None:
+            raise TypeError(f"{key} must be a MeshSpec; got NoneType")
     check_ravigneaux_pairs(z_sun_small, z_sun_large, z_ring, n_pairs)
     if planet_mesh_phases is not None:
         planet_mesh_phases = [float(p) for p in planet_mesh_phases]
@@ -965,8 +1094,10 @@ def check_ravigneaux_pairs(z_sun_small: int, z_sun_large: int, z_ring: int,
     ValueError
         Naming the failed condition and its value.
     """
-    if isinstance(n_pairs, bool) or not isinstance(n_pairs, int) or n_pairs < 1:
-        raise ValueError(f"n_pairs = {n_pairs!r} is not admissible (admissible: integer >= 1)")
+    for key, z in (("z_sun_small", z_sun_small), ("z_sun_large", z_sun_large),
+                   ("z_ring", z_ring)):
+        check_count(z, key, low=-MAX_TEETH, high=MAX_TEETH)
+    check_count(n_pairs, "n_pairs", low=1, high=MAX_PLANETS)
     for label, total in (("z_sun_large + |z_ring|", z_sun_large - z_ring),
                          ("z_sun_small + z_sun_large", z_sun_small + z_sun_large)):
         if total % n_pairs:
@@ -983,6 +1114,9 @@ def prefixed(gs: GearSet, prefix: str) -> tuple[list[Body], list[Mesh]]:
 
     Used to combine stages (:func:`two_stage`, :func:`gearvib.stages.multi_stage`).
     """
+    if not isinstance(gs, GearSet):
+        raise TypeError(f"gs must be a GearSet; got {type(gs).__name__}")
+    check_text(prefix, "prefix", empty=True)
     ren = {b.name: f"{prefix}{b.name}" for b in gs.bodies}
     bodies = [replace(b, name=ren[b.name], carrier=ren.get(b.carrier) if b.carrier else None)
               for b in gs.bodies]
@@ -999,6 +1133,10 @@ def two_stage(stage1: GearSet, stage2: GearSet, *, shaft_stiffness: float = RIGI
     Bodies, meshes and the stages' own couplings are renamed with the prefixes ``s1.`` and
     ``s2.``; a torsional shaft (rigid by default) joins ``stage1.output`` and ``stage2.input``.
     """
+    for key, stage in (("stage1", stage1), ("stage2", stage2)):
+        if not isinstance(stage, GearSet):
+            raise TypeError(f"{key} must be a GearSet; got {type(stage).__name__}")
+    _parts(name=name, config=config)
     b1, m1 = prefixed(stage1, "s1.")
     b2, m2 = prefixed(stage2, "s2.")
     fixed = tuple(f"s1.{f}" for f in stage1.fixed) + tuple(f"s2.{f}" for f in stage2.fixed)

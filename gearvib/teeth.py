@@ -39,7 +39,9 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from gearvib.geometry import MeshGeometry, planet_tooth_angle
+from gearvib.checks import check_array, check_count, check_instance, check_items, short
+from gearvib.geometry import MAX_TEETH, MeshGeometry, planet_tooth_angle
+from gearvib.structure import Body, Mesh
 
 __all__ = ["TOOTH_MAP_COLUMNS", "mesh_tooth_map", "pair_teeth"]
 
@@ -51,7 +53,16 @@ TOOTH_MAP_COLUMNS = ("sign1", "tooth1", "sign2", "tooth2")
 def pair_teeth(tooth_map_row: np.ndarray, z1: int, z2: int, j: int) -> tuple[int, int]:
     """Teeth of gear1 and gear2 in pair ``j`` of a mesh (``tooth_map_row`` of
     :func:`mesh_tooth_map`)."""
-    s1, t1, s2, t2 = (int(v) for v in tooth_map_row)
+    row = check_array(tooth_map_row, "tooth_map_row", ndim=1, max_abs=1e15)
+    if row.size != 4 or not np.all(row == np.round(row)):
+        raise ValueError(f"tooth_map_row must hold 4 integers ({', '.join(TOOTH_MAP_COLUMNS)}); "
+                         f"got {short(tooth_map_row)}")
+    for key, z in (("z1", z1), ("z2", z2)):
+        check_count(z, key, low=-MAX_TEETH, high=MAX_TEETH)
+        if z == 0:
+            raise ValueError(f"{key} = 0 is not admissible (admissible: a signed tooth number)")
+    j = check_count(j, "j")
+    s1, t1, s2, t2 = (int(v) for v in row)
     return (s1 * j + t1) % abs(z1), (s2 * j + t2) % abs(z2)
 
 
@@ -72,6 +83,23 @@ def mesh_tooth_map(meshes, bodies: Mapping, resolved: Mapping, s0: np.ndarray,
     centre : mapping of str to ndarray
         Centre of every body at the reference configuration [m].
     """
+    meshes = check_items(meshes, Mesh, "meshes")
+    for key, mapping in (("bodies", bodies), ("resolved", resolved), ("centre", centre)):
+        check_instance(mapping, Mapping, key)
+    s0 = check_array(s0, "s0", ndim=1, min_size=0, max_abs=1e9)
+    if s0.size != len(meshes):
+        raise ValueError(f"s0 needs one mesh position per mesh ({len(meshes)}); got {s0.size}")
+    for m in meshes:
+        check_instance(resolved.get(m.name), "gearvib.assembly.ResolvedMesh",
+                         f"resolved[{short(m.name)}]")  # by name: assembly imports teeth
+        for g in (m.gear1, m.gear2):
+            if not isinstance(bodies.get(g), Body):
+                raise ValueError(f"bodies has no Body {short(g)} (of mesh {short(m.name)})")
+            c = centre.get(g)
+            if not (isinstance(c, np.ndarray | list | tuple) and np.shape(c) == (2,)):
+                raise ValueError(f"centre of {short(g)} must be an (x, y) pair [m]; got "
+                                 f"{short(c)}")
+            check_array(c, f"centre of {short(g)}", max_abs=1e6)
     out = np.zeros((len(meshes), 4), dtype=np.int64)
     c_ref: dict[str, float] = {}
     planet_ref: dict[tuple, float] = {}

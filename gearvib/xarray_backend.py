@@ -34,6 +34,9 @@ from typing import TYPE_CHECKING, Any
 
 from xarray.backends import BackendEntrypoint
 
+from gearvib.checks import cut
+from gearvib.paths import is_file
+
 if TYPE_CHECKING:
     import xarray as xr
 
@@ -66,15 +69,15 @@ def file_kind(path: str | os.PathLike) -> str:
     from gearvib.io import GearvibFileError
 
     p = Path(path)
-    if not p.is_file():
-        raise GearvibFileError(f"file not found: {p}")
+    if not is_file(p):
+        raise GearvibFileError(f"file not found: {cut(str(p), 200)}")
     from analysis.readers.ncimage import open_image
 
     try:
         with open_image(p) as nc:
             source = str(getattr(nc, "source", ""))
     except OSError as exc:
-        raise GearvibFileError(f"cannot read {p} as netCDF: {exc}") from None
+        raise GearvibFileError(f"cannot read {cut(str(p), 200)} as netCDF: {exc}") from None
     return "gearvib" if source.strip().startswith("gearvib") else "layout"
 
 

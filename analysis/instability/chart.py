@@ -39,6 +39,7 @@ from analysis.checks import (
     require_monotonic,
     require_positive,
     require_real,
+    shown,
 )
 from analysis.instability.floquet import floquet
 from analysis.instability.theory import Candidates
@@ -481,7 +482,7 @@ def attribute_region(lower_hz: float, upper_hz: float, candidates: Candidates, *
     require_instance(candidates, Candidates, "candidates")
     lo, hi = require_real(lower_hz, "lower_hz"), require_real(upper_hz, "upper_hz")
     if not 0.0 <= require_real(rtol, "rtol") < 1.0:
-        raise ValueError(f"rtol = {rtol!r} is not admissible: 0 <= rtol < 1 (relative)")
+        raise ValueError(f"rtol = {shown(rtol)} is not admissible: 0 <= rtol < 1 (relative)")
     require_real(min_share, "min_share")
     if factor is not None:
         require_positive(require_real(factor, "factor"), "factor")
@@ -689,10 +690,11 @@ def stability_chart(
     n_workers = default_workers() if workers is None else workers
     if isinstance(n_workers, bool) or not isinstance(n_workers, int | np.integer) \
             or n_workers < 1:
-        raise ValueError(f"workers = {workers!r} is not admissible: an integer >= 1 or None")
+        raise ValueError(f"workers = {shown(workers)} is not admissible: an integer >= 1 or "
+                         "None")
     n_workers = int(n_workers)
     if executor is not None and not isinstance(executor, Executor):
-        raise ValueError(f"executor = {executor!r} is not admissible: a "
+        raise ValueError(f"executor = {shown(executor)} is not admissible: a "
                          "concurrent.futures.Executor or None")
 
     rows = [None] if params is None else list(params)

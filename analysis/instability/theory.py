@@ -20,7 +20,13 @@ import numpy as np
 import scipy.linalg
 
 from analysis.cf import cf_dataset
-from analysis.checks import require_finite, require_mass_matrix, require_positive, require_square
+from analysis.checks import (
+    require_finite,
+    require_mass_matrix,
+    require_positive,
+    require_square,
+    shown,
+)
 
 __all__ = [
     "Candidates",
@@ -32,6 +38,9 @@ __all__ = [
     "rectangular_wave_harmonics",
     "rectangular_wave_pieces",
 ]
+
+MAX_N = 1000
+"""Largest order ``n`` of :func:`instability_candidates`."""
 
 KINDS = ("principal", "sum", "difference")
 FAMILY_KINDS = ("rotational", "translational", "planet")
@@ -397,8 +406,10 @@ def instability_candidates(
     mean stiffness, difference-type regions do not exist (see ``notes`` in the result).
     """
     f = _positive_frequencies(natural_frequencies_hz, "natural_frequencies_hz")
-    if int(n_max) != n_max or n_max < 1:
-        raise ValueError(f"n_max = {n_max!r} is not admissible: must be an integer >= 1")
+    if isinstance(n_max, bool) or not isinstance(n_max, int | np.integer) \
+            or not 1 <= n_max <= MAX_N:
+        raise ValueError(f"n_max = {shown(n_max)} is not admissible: must be an integer "
+                         f"1 .. {MAX_N}")
     kinds = tuple(kinds)
     bad = [k for k in kinds if k not in KINDS]
     if bad or not kinds:

@@ -25,6 +25,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+from gearvib.checks import short
 from gearvib.config import ConfigError
 
 __all__ = ["KINDS", "Candidate", "CandidateMember", "candidate_faults", "candidate_members",
@@ -263,9 +264,11 @@ def candidate_faults(cfg: dict, kinds: Sequence[str] = KINDS, *,
     from gearvib.assembly import assemble
     from gearvib.config import gearset_from_dict
 
-    bad = [k for k in kinds if k not in KINDS]
+    if isinstance(kinds, str) or not isinstance(kinds, list | tuple):
+        raise ConfigError(f"diagnosis: kinds must be a list of fault kinds, got {short(kinds)}")
+    bad = [k for k in kinds if not isinstance(k, str) or k not in KINDS]
     if bad:
-        raise ConfigError(f"diagnosis: unknown fault kind(s) {bad} (admissible: "
+        raise ConfigError(f"diagnosis: unknown fault kind(s) {short(bad)} (admissible: "
                           f"{', '.join(KINDS)})")
     if not isinstance(cfg, dict):
         raise ConfigError(f"diagnosis: a gear-set description must be a table, got "

@@ -24,6 +24,7 @@ from typing import Any
 
 import numpy as np
 
+from analysis.checks import require_instance
 from analysis.diagnosis import (
     DEFAULT_REVOLUTIONS,
     DEFAULT_THRESHOLD,
@@ -45,6 +46,7 @@ from analysis.diagnosis import (
     with_noise_floor,
 )
 from gearvib import tempfiles
+from gearvib.checks import check_count, check_path, check_real, short
 from gearvib.config import ConfigError
 from gearvib.diagnosis.bearings import bearing_causes, bearing_fault_lines
 from gearvib.diagnosis.candidates import (
@@ -69,6 +71,8 @@ from gearvib.diagnosis.lines import (
 from gearvib.diagnosis.record import Record
 from gearvib.diagnosis.rig import diagnose_rig, first_bins
 from gearvib.diagnosis.verdict import LOCAL_FAULT, rank_causes
+from gearvib.execution import MAX_WORKERS
+from gearvib.simulation.conditions import MAX_DURATION
 
 __all__ = ["ASSUMED_SENSORS", "Record", "diagnose", "order_reference"]
 
@@ -95,6 +99,8 @@ SKIP_S = 0.2
 """Start-up transient left out of every simulation [s]."""
 
 SIM_SEGMENTS = 3
+MAX_REVOLUTIONS = 10_000
+"""Most carrier revolutions per profile segment (``revolutions``)."""
 """Averaged segments of every simulated profile: a candidate is simulated over
 ``revolutions * (SIM_SEGMENTS + 1) / 2`` carrier revolutions (50 % overlap) plus one of
 margin and the start-up, whatever the record's length (``docs/diagnosis.md``)."""
@@ -367,6 +373,27 @@ def diagnose(measured: Record, config: str, *, baseline: Record | None = None,
     from gearvib.config import load_config
 
     t0 = _time.perf_counter()
+    require_instance(measured, Record, "measured")
+    if baseline is not None:
+        require_instance(baseline, Record, "baseline")
+    if not isinstance(config, str | os.PathLike):
+        raise TypeError(f"config must be a preset name or a file; got {type(config).__name__}")
+    if library is not None and not isinstance(library, bool):
+        check_path(library, "library")
+    if work_dir is not None:
+        check_path(work_dir, "work_dir")
+    for flag_name, flag in (("keep_runs", keep_runs), ("progress", progress)):
+        if not isinstance(flag, bool):
+            raise TypeError(f"{flag_name} must be True or False; got {short(flag)}")
+    if workers is not None:
+        check_count(workers, "workers", low=1, high=MAX_WORKERS)
+    if sensors is not None and (isinstance(sensors, str) or not isinstance(
+            sensors, list | tuple) or not all(isinstance(t, dict) for t in sensors)):
+        raise TypeError(f"sensors must be a list of [[sensor]] tables (dicts); got "
+                        f"{short(sensors)}")
+    check_count(revolutions, "revolutions", low=1, high=MAX_REVOLUTIONS)
+    check_real(max_duration, "max_duration [s]", low=0.01, high=MAX_DURATION)
+    check_real(threshold, "threshold")
     if not 0.0 < float(threshold) < 1.0:
         raise ValueError(f"threshold = {threshold!r} is not admissible (admissible: 0 < "
                          "threshold < 1)")

@@ -7,6 +7,8 @@ from typing import Any
 
 import numpy as np
 
+from gearvib.checks import check_array, check_real, check_text, short
+
 __all__ = ["Record"]
 
 
@@ -43,16 +45,36 @@ class Record:
     measurement: Any = field(default=None, repr=False, compare=False)
 
     def __post_init__(self) -> None:
-        s = np.asarray(self.signal, float)
-        v = np.asarray(self.speed_rpm, float)
+        check_text(self.name, "name")
+        w = short(self.name)
+        for key in ("member", "channel"):
+            check_text(getattr(self, key), f"{w}: {key}", optional=True)
+        check_text(self.units, f"{w}: units", empty=True)
+        try:
+            s = check_array(self.signal, f"{w}: signal", finite=False)
+            v = check_array(self.speed_rpm, f"{w}: speed_rpm", finite=False)
+        except TypeError as exc:
+            raise ValueError(str(exc)) from None
         if s.ndim != 1 or v.shape != s.shape:
-            raise ValueError(f"{self.name}: signal and speed need one value per sample "
+            raise ValueError(f"{w}: signal and speed need one value per sample "
                              f"(signal {s.shape}, speed {v.shape})")
         if not np.all(np.isfinite(s)):
-            raise ValueError(f"{self.name}: the signal has non-finite samples")
-        if not (np.isfinite(self.fs) and self.fs > 0):
-            raise ValueError(f"{self.name}: sample rate {self.fs!r} Hz is not admissible "
+            raise ValueError(f"{w}: the signal has non-finite samples")
+        if not np.all(np.isfinite(v)):
+            raise ValueError(f"{w}: the speed has non-finite samples")
+        if isinstance(self.fs, bool) or not isinstance(self.fs, int | float | np.integer
+                                                        | np.floating):
+            raise ValueError(f"{w}: sample rate fs = {short(self.fs)} is not a number")
+        fs = check_real(self.fs, f"{w}: sample rate fs [Hz]")
+        if not fs > 0:
+            raise ValueError(f"{w}: sample rate {self.fs!r} Hz is not admissible "
                              "(admissible: finite, > 0)")
+        if self.measurement is not None:
+            from analysis.measurement import Measurement
+
+            if not isinstance(self.measurement, Measurement):
+                raise TypeError(f"measurement must be an analysis.measurement.Measurement; got "
+                                f"{type(self.measurement).__name__}")
 
     @property
     def duration(self) -> float:

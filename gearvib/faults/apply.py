@@ -15,6 +15,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from gearvib.checks import check_instance, short
 from gearvib.faults.description import (
     Fault,
     FaultError,
@@ -71,10 +72,12 @@ class MeshLine:
 
 
 def _bodies(model: AssembledModel) -> dict[str, str]:
+    check_instance(model, AssembledModel, "model")
     return {b["name"]: b["role"] for b in model.meta.get("bodies", [])}
 
 
 def _meshes(model: AssembledModel) -> list[dict]:
+    check_instance(model, AssembledModel, "model")
     meshes = model.meta.get("meshes", [])
     if len(meshes) != model.n_mesh:
         raise FaultError("the model carries no mesh description (meta['meshes']); faults need "
@@ -86,6 +89,7 @@ def mesh_lines(model: AssembledModel) -> list[MeshLine]:
     """Lines of action of every mesh, rebuilt from the model's description as the assembly
     builds them (``n_L = cos a t + sigma sin a e``, ``n_R = cos a t - sigma sin a e``, ``e``
     from gear1's centre to gear2's, ``t`` = ``e`` turned by +90 deg)."""
+    check_instance(model, AssembledModel, "model")
     planets = {p["name"]: p for p in model.meta.get("planets", [])}
 
     def centre(name: str) -> np.ndarray:
@@ -128,9 +132,10 @@ def fault_targets(model: AssembledModel, fault: Fault) -> list[Target]:
         Unknown member or mate, a member without teeth, a tooth out of range, a stepped planet
         whose toothing is not selected by ``mate``.
     """
+    check_instance(fault, Fault, "fault")
     bodies = _bodies(model)
     meshes = _meshes(model)
-    label = f"{fault.kind} fault on {fault.member!r}"
+    label = f"{fault.kind} fault on {short(fault.member)}"
     if fault.member not in bodies:
         toothed = sorted({m["gear1"] for m in meshes} | {m["gear2"] for m in meshes})
         raise FaultError(f"{label}: no body {fault.member!r} in the gear set (bodies with "
@@ -187,6 +192,7 @@ def fault_targets(model: AssembledModel, fault: Fault) -> list[Target]:
 
 def add_faults(model: AssembledModel, faults: Sequence) -> AssembledModel:
     """:meth:`AssembledModel.with_faults` (see there)."""
+    check_instance(model, AssembledModel, "model")
     new = faults_from_list(list(faults))
     every = (*model.faults, *new)
     backlash = np.array(model.mesh_backlash, dtype=float, copy=True)

@@ -38,7 +38,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from gearvib.checks import ITEM, check_integer, check_number
+from gearvib.checks import ITEM, check_array, check_count, check_integer, check_number, cut, short
 from gearvib.paths import is_file
 
 __all__ = [
@@ -74,10 +74,14 @@ _CURVE_KEYS = {"path", "position_unit", "stiffness_unit", "position_column", "st
 _FILE_UNITS = {"m": 1.0, "um": 1e-6}
 
 
+MAX_CURVE = 100_000
+"""Most points of a single-pair stiffness curve."""
+
+
 def _where(d: Mapping, index: int | None) -> str:
     kind = d.get("kind", "?") if isinstance(d, Mapping) else "?"
     head = "[[fault]]" if index is None else f"[[fault]] #{index + 1}"
-    return f"{head} ({kind})"
+    return f"{head} ({cut(str(kind))})"
 
 
 def _number(value: Any, where: str, key: str, *, low: float | None = None,
@@ -95,7 +99,7 @@ def _integer(value: Any, where: str, key: str, *, low: int = 0) -> int:
 def _name(value: Any, where: str, key: str) -> str:
     if not isinstance(value, str) or not value.strip():
         raise FaultError(f"{where}: {key} must be a non-empty string (a body name), "
-                         f"got {value!r}")
+                         f"got {short(value)}")
     return value
 
 
@@ -105,14 +109,14 @@ def _mate(value: Any, where: str) -> tuple[str, ...]:
     items = [value] if isinstance(value, str) else value
     if not isinstance(items, list | tuple) or not items:
         raise FaultError(f"{where}: mate must be a body name or a non-empty list of body names, "
-                         f"got {value!r}")
+                         f"got {short(value)}")
     return tuple(_name(v, where, "mate") for v in items)
 
 
 def _deviations(values: Any, where: str, key: str) -> tuple[float, ...]:
     if not isinstance(values, list | tuple | np.ndarray) or len(values) < 2:
         raise FaultError(f"{where}: {key} must be a list with one deviation [m] per tooth "
-                         f"(>= 2 values), got {values!r}")
+                         f"(>= 2 values), got {short(values)}")
     return tuple(_number(v, where, f"{key}[{i}]", low=-MAX_DEVIATION, high=MAX_DEVIATION)
                  for i, v in enumerate(values))
 
@@ -140,8 +144,17 @@ class PairCurve:
     source: str | None = None
 
     def __post_init__(self) -> None:
-        u = np.asarray(self.position, dtype=float)
-        k = np.asarray(self.stiffness, dtype=float)
+        try:
+            u = check_array(self.position, "crack curve: position", min_size=0,
+                                   finite=False)
+            k = check_array(self.stiffness, "crack curve: stiffness", min_size=0,
+                                   finite=False)
+        except (TypeError, ValueError) as exc:
+            raise FaultError(str(exc)) from None
+        if u.size > MAX_CURVE:
+            raise FaultError(f"crack curve: {u.size} points (admissible: at most {MAX_CURVE})")
+        if self.source is not None and not isinstance(self.source, str):
+            raise FaultError(f"crack curve: source must be a string, got {short(self.source)}")
         if u.ndim != 1 or u.size < 2 or u.shape != k.shape:
             raise FaultError("crack curve: position and stiffness must be lists of equal "
                              "length >= 2")
@@ -152,7 +165,7 @@ class PairCurve:
         if np.any(k < 0):
             raise FaultError("crack curve: stiffness must be >= 0 N/m")
         if self.position_unit not in _POSITION_UNITS:
-            raise FaultError(f"crack curve: position_unit = {self.position_unit!r} is not "
+            raise FaultError(f"crack curve: position_unit = {short(self.position_unit)} is not "
                              f"admissible (admissible: {', '.join(_POSITION_UNITS)})")
         if self.position_unit == "path_fraction" and (u[0] < -1e-9 or u[-1] > 1 + 1e-9):
             raise FaultError(f"crack curve: path fractions span [{u[0]:.6g}, {u[-1]:.6g}] "
@@ -176,15 +189,15 @@ def _curve(table: Any, where: str, base: Path | None) -> PairCurve:
                          "position_unit = \"path_fraction\", stiffness_unit = \"N/m\"}")
     unknown = sorted(set(table) - _CURVE_KEYS)
     if unknown:
-        raise FaultError(f"{where}: unknown key {unknown[0]!r} in curve (admissible: "
+        raise FaultError(f"{where}: unknown key {short(unknown[0])} in curve (admissible: "
                          f"{', '.join(sorted(_CURVE_KEYS))})")
     unit = table.get("position_unit", "path_fraction")
     if unit not in _POSITION_UNITS:
-        raise FaultError(f"{where}: curve.position_unit = {unit!r} is not admissible "
+        raise FaultError(f"{where}: curve.position_unit = {short(unit)} is not admissible "
                          f"(admissible: {', '.join(_POSITION_UNITS)})")
     s_unit = table.get("stiffness_unit", "N/m")
     if s_unit not in (*_STIFFNESS_UNITS, "N/(mm µm)"):
-        raise FaultError(f"{where}: curve.stiffness_unit = {s_unit!r} is not admissible "
+        raise FaultError(f"{where}: curve.stiffness_unit = {short(s_unit)} is not admissible "
                          f"(admissible: {', '.join(_STIFFNESS_UNITS)})")
     if ("path" in table) == ("position" in table or "stiffness" in table):
         raise FaultError(f"{where}: curve needs either path (a CSV file) or position and "
@@ -199,7 +212,7 @@ def _curve(table: Any, where: str, base: Path | None) -> PairCurve:
         if "path" in table:
             p = table["path"]
             if not isinstance(p, str):
-                raise FaultError(f"{where}: curve.path must be a file name, got {p!r}")
+                raise FaultError(f"{where}: curve.path must be a file name, got {short(p)}")
             path = Path(p)
             if base is not None and not path.is_absolute():
                 path = base / path
@@ -310,9 +323,9 @@ class Fault:
 def _check_common(obj: Any) -> None:
     _name(obj.member, f"{obj.kind} fault", "member")
     object.__setattr__(obj, "mate", _mate(list(obj.mate) if obj.mate else None,
-                                          f"{obj.kind} fault on {obj.member!r}"))
+                                          f"{obj.kind} fault on {short(obj.member)}"))
     if obj.name is not None and not isinstance(obj.name, str):
-        raise FaultError(f"{obj.kind} fault on {obj.member!r}: name must be a string")
+        raise FaultError(f"{obj.kind} fault on {short(obj.member)}: name must be a string")
 
 
 @dataclass(frozen=True)
@@ -346,7 +359,7 @@ class Crack(Fault):
 
     def __post_init__(self) -> None:
         _check_common(self)
-        w = f"crack on {self.member!r}"
+        w = f"crack on {short(self.member)}"
         object.__setattr__(self, "tooth", _integer(self.tooth, w, "tooth"))
         if (self.severity is None) == (self.curve is None):
             raise FaultError(f"{w}: give either severity (0..1) or a stiffness curve")
@@ -398,7 +411,7 @@ class Pitting(Fault):
 
     def __post_init__(self) -> None:
         _check_common(self)
-        w = f"pitting on {self.member!r}"
+        w = f"pitting on {short(self.member)}"
         object.__setattr__(self, "tooth", _integer(self.tooth, w, "tooth"))
         object.__setattr__(self, "severity", _number(self.severity, w, "severity", low=0.0,
                                                      high=1.0))
@@ -412,7 +425,7 @@ class Pitting(Fault):
         object.__setattr__(self, "depth", _number(self.depth, w, "depth", low=0.0,
                                                   high=MAX_DEVIATION))
         if self.flank not in _FLANKS:
-            raise FaultError(f"{w}: flank = {self.flank!r} is not admissible (admissible: "
+            raise FaultError(f"{w}: flank = {short(self.flank)} is not admissible (admissible: "
                              f"{', '.join(_FLANKS)})")
 
     def _params(self) -> dict:
@@ -433,7 +446,7 @@ class BrokenTooth(Fault):
     def __post_init__(self) -> None:
         _check_common(self)
         object.__setattr__(self, "tooth", _integer(self.tooth, f"broken tooth on "
-                                                   f"{self.member!r}", "tooth"))
+                                                   f"{short(self.member)}", "tooth"))
 
     def _params(self) -> dict:
         return {"tooth": self.tooth}
@@ -466,7 +479,7 @@ class Eccentricity(Fault):
 
     def __post_init__(self) -> None:
         _check_common(self)
-        w = f"eccentricity of {self.member!r}"
+        w = f"eccentricity of {short(self.member)}"
         object.__setattr__(self, "eccentricity", _number(self.eccentricity, w, "eccentricity",
                                                          low=0.0, high=MAX_DEVIATION))
         object.__setattr__(self, "phase_deg", _number(self.phase_deg, w, "phase_deg"))
@@ -504,7 +517,9 @@ class PitchError(Fault):
 
     def __post_init__(self) -> None:
         _check_common(self)
-        w = f"pitch error of {self.member!r}"
+        w = f"pitch error of {short(self.member)}"
+        if self.source is not None and not isinstance(self.source, str):
+            raise FaultError(f"{w}: source must be a string, got {short(self.source)}")
         forms = [self.deviation is not None or self.tooth is not None,
                  self.single is not None, self.cumulative is not None]
         if sum(forms) != 1:
@@ -530,18 +545,18 @@ class PitchError(Fault):
 
     def cumulative_deviations(self, z: int) -> np.ndarray:
         """``F_p,k`` of teeth 0 .. z-1 [m] (checked against the tooth number ``z``)."""
-        w = f"pitch error of {self.member!r}"
+        w = f"pitch error of {short(self.member)}"
         if self.tooth is not None:
             if not 0 <= self.tooth < z:
                 raise FaultError(f"{w}: tooth = {self.tooth} is not admissible (admissible: "
-                                 f"0 .. {z - 1}, {self.member!r} has {z} teeth)")
+                                 f"0 .. {z - 1}, {short(self.member)} has {z} teeth)")
             out = np.zeros(z)
             out[self.tooth] = self.deviation
             return out
         values = self.single if self.single is not None else self.cumulative
         assert values is not None  # __post_init__: exactly one form is given
         if len(values) != z:
-            raise FaultError(f"{w}: {len(values)} deviations given, {self.member!r} has {z} "
+            raise FaultError(f"{w}: {len(values)} deviations given, {short(self.member)} has {z} "
                              "teeth (one per tooth, tooth 0 first)")
         if self.single is not None:
             f = np.asarray(self.single)
@@ -575,7 +590,7 @@ class PinError(Fault):
 
     def __post_init__(self) -> None:
         _check_common(self)
-        w = f"pin error of {self.member!r}"
+        w = f"pin error of {short(self.member)}"
         for k in ("radial", "tangential"):
             object.__setattr__(self, k, _number(getattr(self, k), w, k, low=-MAX_DEVIATION,
                                                 high=MAX_DEVIATION))
@@ -600,7 +615,7 @@ class PlanetBacklash(Fault):
     def __post_init__(self) -> None:
         _check_common(self)
         object.__setattr__(self, "backlash", _number(
-            self.backlash, f"backlash of {self.member!r}", "backlash", low=-MAX_DEVIATION,
+            self.backlash, f"backlash of {short(self.member)}", "backlash", low=-MAX_DEVIATION,
             high=MAX_DEVIATION))
 
     def _params(self) -> dict:
@@ -648,6 +663,9 @@ def fault_from_dict(table: Mapping[str, Any] | Fault, *, base: Path | None = Non
         Unknown kind or key (named with the admissible ones), a missing key, a value of the
         wrong type or out of range, an unreadable file.
     """
+    index = check_count(index, "index", low=0, optional=True, error=FaultError)
+    if base is not None and not isinstance(base, str | Path):
+        raise FaultError(f"base must be a folder (a path), got {type(base).__name__}")
     if isinstance(table, Fault):
         return table
     if not isinstance(table, Mapping):
@@ -656,17 +674,17 @@ def fault_from_dict(table: Mapping[str, Any] | Fault, *, base: Path | None = Non
     where = _where(table, index)
     kind = table.get("kind")
     if not isinstance(kind, str) or kind not in _CLASSES:
-        raise FaultError(f"{where}: unknown kind {kind!r} (admissible: "
+        raise FaultError(f"{where}: unknown kind {short(kind)} (admissible: "
                          f"{', '.join(FAULT_KINDS)})" if kind is not None else
                          f"{where}: missing key 'kind' (admissible: {', '.join(FAULT_KINDS)})")
     allowed = _COMMON | _KEYS[kind]
     unknown = sorted(set(table) - allowed)
     if unknown:
-        raise FaultError(f"{where}: unknown key {unknown[0]!r} (admissible for kind = "
-                         f"{kind!r}: {', '.join(sorted(allowed))})")
+        raise FaultError(f"{where}: unknown key {short(unknown[0])} (admissible for kind = "
+                         f"{short(kind)}: {', '.join(sorted(allowed))})")
     for key in ("member", *_REQUIRED[kind]):
         if key not in table:
-            raise FaultError(f"{where}: missing key {key!r}")
+            raise FaultError(f"{where}: missing key {short(key)}")
     kw: dict[str, Any] = {k: v for k, v in table.items()
                           if k not in ("kind", "comment", "file", "unit", "curve")}
     kw["member"] = _name(table["member"], where, "member")
@@ -685,10 +703,10 @@ def fault_from_dict(table: Mapping[str, Any] | Fault, *, base: Path | None = Non
                                  "(one form)")
             f = table["file"]
             if not isinstance(f, str):
-                raise FaultError(f"{where}: file must be a file name, got {f!r}")
+                raise FaultError(f"{where}: file must be a file name, got {short(f)}")
             unit = table.get("unit", "m")
             if not isinstance(unit, str) or unit not in _FILE_UNITS:
-                raise FaultError(f"{where}: unit = {unit!r} is not admissible (admissible: "
+                raise FaultError(f"{where}: unit = {short(unit)} is not admissible (admissible: "
                                  f"{', '.join(_FILE_UNITS)})")
             path = Path(f)
             if base is not None and not path.is_absolute():

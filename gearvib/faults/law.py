@@ -44,6 +44,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from gearvib.checks import check_instance
 from gearvib.faults.apply import fault_targets, mesh_lines
 from gearvib.faults.description import (
     BrokenTooth,
@@ -633,6 +634,7 @@ def build_fault_law(model: AssembledModel) -> FaultLaw:
         A fault that does not fit the model (see :func:`gearvib.faults.apply.fault_targets`),
         or a crack curve longer than the path of contact.
     """
+    check_instance(model, AssembledModel, "model")
     n = model.n_dof
     law = FaultLaw({}, np.zeros(n), np.zeros(len(model.bearing_names)), model.n_mesh)
     if not model.faults:

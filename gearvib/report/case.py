@@ -48,6 +48,7 @@ import math
 import numpy as np
 import xarray as xr
 
+from analysis.checks import require_instance
 from analysis.instability import Resonances, detect_resonances, merge_mesh_frequencies
 from analysis.maps import rpm_frequency_map, rpm_order_map
 from analysis.runup import MapFeatures, map_features
@@ -166,6 +167,13 @@ def analyse_case(ds: xr.Dataset, *, name: str | None = None,
     ValueError
         The Dataset is not a run-up with tooth forces.
     """
+    require_instance(ds, xr.Dataset, "ds")
+    if name is not None and not isinstance(name, str):
+        raise TypeError(f"name must be a string; got {type(name).__name__}")
+    if settings is not None:
+        require_instance(settings, AnalysisSettings, "settings")
+    if progress is not None and not isinstance(progress, bool):
+        raise TypeError(f"progress must be a bool or None; got {type(progress).__name__}")
     for v in ("normal_force", "input_speed", "mesh_frequency", "natural_frequency",
               "input_angle"):
         if v not in ds.variables:

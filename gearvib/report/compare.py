@@ -26,6 +26,8 @@ from typing import Any
 
 import numpy as np
 
+from analysis.checks import require_instance
+from gearvib.checks import check_real
 from gearvib.report.case_analysis import CaseAnalysis
 from gearvib.report.rises import ResonanceRegion
 from gearvib.report.wording import count, span
@@ -297,6 +299,11 @@ def compare_cases(reference: CaseAnalysis, other: CaseAnalysis, *, rpm_tol: floa
     -------
     Comparison
     """
+    require_instance(reference, CaseAnalysis, "reference")
+    require_instance(other, CaseAnalysis, "other")
+    rpm_tol = check_real(rpm_tol, "rpm_tol", low=0.0, high=1e9, optional=True)
+    db_tol = check_real(db_tol, "db_tol", low=0.0, high=1000.0)
+    width_rel_tol = check_real(width_rel_tol, "width_rel_tol", low=0.0, high=1e6)
     top = max(reference.speed_range[1], other.speed_range[1])
     tol = 0.03 * top if rpm_tol is None else float(rpm_tol)
     changes = _match_regions(reference.regions, other.regions, tol, db_tol)

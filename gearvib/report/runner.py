@@ -29,11 +29,14 @@ from typing import Any
 
 import xarray as xr
 
+from analysis.checks import require_instance
 from gearvib import tempfiles
 from gearvib.assembly import assemble
+from gearvib.checks import check_path, cut
 from gearvib.config import gearset_from_dict
 from gearvib.io import GearvibFileError, atomic_write, read_run, write_netcdf
 from gearvib.modal import modal_analysis
+from gearvib.paths import exists
 from gearvib.report.case import analyse_case
 from gearvib.report.case_analysis import CaseAnalysis
 from gearvib.report.case_run import run_description
@@ -131,21 +134,23 @@ def check_output_dir(out_dir: str | os.PathLike) -> Path:
     PermissionError
         The folder (or the parent it would be created in) is not writable; nothing is created.
     """
-    p = Path(out_dir)
-    if p.exists() and not p.is_dir():
-        raise ValueError(f"output folder {str(p)!r} exists and is not a directory")
+    p = check_path(out_dir, "out_dir")
+    shown = cut(repr(str(p)), 200)
+    if exists(p) and not p.is_dir():
+        raise ValueError(f"output folder {shown} exists and is not a directory")
     q = p
-    while not q.exists() and q != q.parent:
+    while not exists(q) and q != q.parent:
         q = q.parent
-    if q.exists() and not q.is_dir():
-        raise ValueError(f"cannot create output folder {str(p)!r}: {str(q)!r} is a file")
+    if exists(q) and not q.is_dir():
+        raise ValueError(f"cannot create output folder {shown}: {cut(repr(str(q)), 200)} is a "
+                         "file")
     try:
         fd, probe = tempfile.mkstemp(dir=q, prefix=tempfiles.prefix("write-test"),
                                      suffix=".tmp")
         os.close(fd)
         os.unlink(probe)
     except OSError as exc:
-        raise PermissionError(f"output folder {str(p)!r} is not writable "
+        raise PermissionError(f"output folder {shown} is not writable "
                               f"({exc.strerror or exc})") from None
     return p
 
@@ -293,6 +298,13 @@ def build_report(paths_or_datasets: Sequence[RunInput] | RunInput, out_dir: str 
         The output folder is not usable (before any computation).
     """
     AnalysisSettings().with_cuts(cut_orders, order_resolution)  # checked before any file
+    if analysis is not None:
+        require_instance(analysis, AnalysisSettings, "analysis")
+    for key, text in (("title", title), ("reference", reference)):
+        if text is not None and not isinstance(text, str):
+            raise TypeError(f"{key} must be a string; got {type(text).__name__}")
+    if progress is not None and not isinstance(progress, bool):
+        raise TypeError(f"progress must be a bool or None; got {type(progress).__name__}")
     runs = _load_inputs(paths_or_datasets)
     settings_of: dict[str, AnalysisSettings | None] = {}
     for name, ds in runs:  # before any analysis: the maps must fit into memory
@@ -413,6 +425,9 @@ def run_study(study: Study, out_dir: str | os.PathLike, *, progress: bool = True
         A run-up blew up (the message names the case).
     """
     t0 = time.perf_counter()
+    require_instance(study, Study, "study")
+    if not isinstance(progress, bool):
+        raise TypeError(f"progress must be a bool; got {type(progress).__name__}")
     if duration is not None:
         study = study.with_duration(duration)
     out = check_output_dir(out_dir)

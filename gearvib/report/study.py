@@ -34,7 +34,7 @@ from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
-from gearvib.checks import RECIPE, check_integer, check_number
+from gearvib.checks import RECIPE, check_integer, check_items, check_number
 from gearvib.checks import short as _short
 from gearvib.config import ConfigError, check_keys, list_presets, load_config, read_toml
 from gearvib.report.report_limits import (  # re-exported: checked before a run
@@ -136,6 +136,13 @@ class Case:
     config: str
     label: str = ""
 
+    def __post_init__(self) -> None:
+        for k in ("name", "config", "label"):
+            if not isinstance(getattr(self, k), str):
+                raise ConfigError(f"Case.{k} must be a string, got {_short(getattr(self, k))}")
+        if not self.config:
+            raise ConfigError("Case.config must name a preset or a gear-set file")
+
     def load(self) -> tuple[dict, Path | None]:
         """The gear-set description dict and its base directory (see
         :func:`gearvib.config.load_config`)."""
@@ -163,6 +170,21 @@ class RunSettings:
     duration: float | None = None
     input_torque: float | None = None
     fs_out: float | None = None
+
+    def __post_init__(self) -> None:
+        for k, (lo, hi) in _RUN_LIMITS.items():
+            v = getattr(self, k)
+            if v is None:
+                continue
+            if k == "duration":
+                object.__setattr__(self, k, _number(v, f"RunSettings.{k}", minimum=lo,
+                                                    maximum=hi))
+            elif k == "fs_out":
+                object.__setattr__(self, k, _number(v, f"RunSettings.{k}", positive=True,
+                                                    maximum=hi))
+            else:  # speeds and torque: their signs are checked with the gear set's drive
+                object.__setattr__(self, k, _number(v, f"RunSettings.{k}", minimum=-hi,
+                                                    maximum=hi))
 
     def to_dict(self) -> dict[str, float]:
         """The settings that are given (``None`` omitted)."""
@@ -230,12 +252,12 @@ class AnalysisSettings:
     order_resolution: float = 0.0
 
     def __post_init__(self) -> None:
-        if self.stability not in STABILITY:
-            raise ConfigError(f"[analysis].stability = {self.stability!r}; admissible: "
+        given = {k: getattr(self, k) for k in _ANALYSIS}
+        if not isinstance(self.stability, str) or self.stability not in STABILITY:
+            raise ConfigError(f"[analysis].stability = {_short(self.stability)}; admissible: "
                               + ", ".join(repr(x) for x in STABILITY))
-        object.__setattr__(self, "cut_orders", check_cut_orders(self.cut_orders))
-        object.__setattr__(self, "order_resolution", check_order_resolution(
-            self.order_resolution))
+        for k, v in _checked_analysis(given, "AnalysisSettings").items():
+            object.__setattr__(self, k, v)
 
     def with_cuts(self, orders: Any = None, resolution: float | None = None
                   ) -> AnalysisSettings:
@@ -270,43 +292,48 @@ class AnalysisSettings:
     def from_dict(cls, table: dict, where: str = "[analysis]") -> AnalysisSettings:
         """Checked settings from a dict (unknown keys rejected)."""
         check_keys(table, _ANALYSIS, where)
-        kw: dict[str, Any] = {}
-        for k in ("n_max", "stability_points", "orders", "spectrum_peaks"):
-            if k in table:
-                lo, hi = ANALYSIS_LIMITS[k]
-                kw[k] = _integer(table[k], f"{where}.{k}", int(lo), int(hi))
-        if "stability" in table:
-            if table["stability"] not in STABILITY:
-                raise ConfigError(f"{where}.stability = {_short(table['stability'])}; "
-                                  "admissible: " + ", ".join(repr(x) for x in STABILITY))
-            kw["stability"] = table["stability"]
-        for k in ("map_resolution_hz", "tolerance"):
-            if k in table:
-                lo, hi = ANALYSIS_LIMITS[k]
-                kw[k] = _number(table[k], f"{where}.{k}", positive=True,
-                                minimum=lo if k != "tolerance" else None,
-                                maximum=hi if k != "tolerance" else None)
-        for k in ("threshold_db", "frequency_max_hz"):
-            if k in table:
-                kw[k] = _number(table[k], f"{where}.{k}", minimum=0.0,
-                                maximum=ANALYSIS_LIMITS[k][1])
-        if "map_overlap" in table:
-            v = _number(table["map_overlap"], f"{where}.map_overlap", minimum=0.0)
-            if v >= 1.0:
-                raise ConfigError(f"{where}.map_overlap = {v!r}; admissible: 0 <= overlap < 1")
-            kw["map_overlap"] = v
-        if "tolerance" in kw and kw["tolerance"] >= 0.5:
-            raise ConfigError(f"{where}.tolerance = {kw['tolerance']!r}; admissible: < 0.5")
-        if "force_mesh" in table:
-            if not isinstance(table["force_mesh"], str) or len(table["force_mesh"]) > 200:
-                raise ConfigError(f"{where}.force_mesh must be a mesh name (string)")
-            kw["force_mesh"] = table["force_mesh"]
-        if "cut_orders" in table:
-            kw["cut_orders"] = check_cut_orders(table["cut_orders"], f"{where}.cut_orders")
-        if "order_resolution" in table:
-            kw["order_resolution"] = check_order_resolution(table["order_resolution"],
-                                                            f"{where}.order_resolution")
-        return cls(**kw)
+        return cls(**_checked_analysis(table, where))
+
+
+def _checked_analysis(table: dict, where: str) -> dict[str, Any]:
+    """The ``[analysis]`` values of ``table`` checked (:class:`AnalysisSettings`)."""
+    kw: dict[str, Any] = {}
+    for k in ("n_max", "stability_points", "orders", "spectrum_peaks"):
+        if k in table:
+            lo, hi = ANALYSIS_LIMITS[k]
+            kw[k] = _integer(table[k], f"{where}.{k}", int(lo), int(hi))
+    if "stability" in table:
+        if not isinstance(table["stability"], str) or table["stability"] not in STABILITY:
+            raise ConfigError(f"{where}.stability = {_short(table['stability'])}; "
+                              "admissible: " + ", ".join(repr(x) for x in STABILITY))
+        kw["stability"] = table["stability"]
+    for k in ("map_resolution_hz", "tolerance"):
+        if k in table:
+            lo, hi = ANALYSIS_LIMITS[k]
+            kw[k] = _number(table[k], f"{where}.{k}", positive=True,
+                            minimum=lo if k != "tolerance" else None,
+                            maximum=hi if k != "tolerance" else None)
+    for k in ("threshold_db", "frequency_max_hz"):
+        if k in table:
+            kw[k] = _number(table[k], f"{where}.{k}", minimum=0.0,
+                            maximum=ANALYSIS_LIMITS[k][1])
+    if "map_overlap" in table:
+        v = _number(table["map_overlap"], f"{where}.map_overlap", minimum=0.0)
+        if v >= 1.0:
+            raise ConfigError(f"{where}.map_overlap = {v!r}; admissible: 0 <= overlap < 1")
+        kw["map_overlap"] = v
+    if "tolerance" in kw and kw["tolerance"] >= 0.5:
+        raise ConfigError(f"{where}.tolerance = {kw['tolerance']!r}; admissible: < 0.5")
+    if "force_mesh" in table:
+        if not isinstance(table["force_mesh"], str) or len(table["force_mesh"]) > 200:
+            raise ConfigError(f"{where}.force_mesh must be a mesh name (string)")
+        kw["force_mesh"] = table["force_mesh"]
+    if "cut_orders" in table:
+        kw["cut_orders"] = check_cut_orders(table["cut_orders"], f"{where}.cut_orders")
+    if "order_resolution" in table:
+        kw["order_resolution"] = check_order_resolution(table["order_resolution"],
+                                                        f"{where}.order_resolution")
+    return kw
 
 
 def check_cut_orders(value: Any, where: str = "cut_orders") -> tuple[float, ...]:
@@ -372,18 +399,32 @@ class Study:
     source: Path | None = None
 
     def __post_init__(self) -> None:
+        if not isinstance(self.title, str):
+            raise ConfigError(f"title must be a string, got {_short(self.title)}")
+        object.__setattr__(self, "cases", check_items(self.cases, Case, "cases",
+                                                      error=ConfigError))
+        for k, cls in (("run", RunSettings), ("analysis", AnalysisSettings)):
+            if not isinstance(getattr(self, k), cls):
+                raise ConfigError(f"{k} must be a {cls.__name__}, got "
+                                  f"{type(getattr(self, k)).__name__}")
+        if not isinstance(self.reference, str):
+            raise ConfigError(f"reference must be a case name, got {_short(self.reference)}")
+        if self.source is not None and not isinstance(self.source, str | Path):
+            raise ConfigError(f"source must be a path, got {type(self.source).__name__}")
         if not self.cases:
             raise ConfigError("a study needs at least one case")
+        if len(self.cases) > MAX_CASES:
+            raise ConfigError(f"a study has at most {MAX_CASES} cases, got {len(self.cases)}")
         names = [c.name for c in self.cases]
         for n in names:
             if not _NAME.match(n):
-                raise ConfigError(f"case name {n!r} is not admissible: use letters, digits, "
-                                  "'_', '.', '-' (it names the output file)")
+                raise ConfigError(f"case name {_short(n)} is not admissible: use letters, "
+                                  "digits, '_', '.', '-' (it names the output file)")
         dup = sorted({n for n in names if names.count(n) > 1})
         if dup:
             raise ConfigError(f"case name {dup[0]!r} is used twice")
         if self.reference and self.reference not in names:
-            raise ConfigError(f"reference = {self.reference!r} is not a case (cases: "
+            raise ConfigError(f"reference = {_short(self.reference)} is not a case (cases: "
                               f"{', '.join(names)})")
 
     @property

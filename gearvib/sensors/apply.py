@@ -8,6 +8,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import replace
 
+from gearvib.checks import check_instance, short
 from gearvib.model import AssembledModel
 from gearvib.sensors.description import (
     HousingSensor,
@@ -32,6 +33,10 @@ def housing_meshes(model: AssembledModel, member: str | tuple[str, ...]) -> list
     parallel stage's housing holds the wheel's axis; the pinion's mesh with it is seen
     there). Several members: the union.
     """
+    check_instance(model, AssembledModel, "model")
+    if not (isinstance(member, str) or (isinstance(member, tuple) and member
+                                        and all(isinstance(m, str) for m in member))):
+        raise TypeError(f"member must be a member name or a tuple of them; got {short(member)}")
     planets = {p["name"]: p["carrier"] for p in model.meta.get("planets", [])}
     wanted = set(members_of(member))
     return [k for k, m in enumerate(model.meta.get("meshes", []))
@@ -49,6 +54,7 @@ def _default_housing(model: AssembledModel, name: str) -> str | tuple[str, ...]:
 
 def add_sensors(model: AssembledModel, sensors: Sequence) -> AssembledModel:
     """:meth:`AssembledModel.with_sensors` (see there)."""
+    check_instance(model, AssembledModel, "model")
     new = sensors_from_list(list(sensors))
     checked: list[Tacho | HousingSensor] = []
     bodies = {b["name"]: b["role"] for b in model.meta.get("bodies", [])}

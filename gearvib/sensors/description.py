@@ -25,7 +25,7 @@ from typing import Any
 
 import numpy as np
 
-from gearvib.checks import ITEM, check_number
+from gearvib.checks import ITEM, check_array, check_count, check_number, short
 from gearvib.paths import is_file
 
 __all__ = [
@@ -72,7 +72,7 @@ def _num(value: Any, where: str, key: str, *, low: float | None = None,
 
 def _name(value: Any, where: str, key: str) -> str:
     if not isinstance(value, str) or not value.strip():
-        raise SensorError(f"{where}: {key} must be a non-empty string, got {value!r}")
+        raise SensorError(f"{where}: {key} must be a non-empty string, got {short(value)}")
     return value
 
 
@@ -105,7 +105,7 @@ class HousingMode:
         object.__setattr__(self, "gain", _num(self.gain, w, "gain", low=-MAX_GAIN,
                                               high=MAX_GAIN))
         if self.frequency_hz > MAX_MODE_HZ:
-            raise SensorError(f"{w}: frequency_hz = {self.frequency_hz!r} is not admissible "
+            raise SensorError(f"{w}: frequency_hz = {short(self.frequency_hz)} is not admissible "
                               f"(admissible: 0 < frequency_hz <= {MAX_MODE_HZ:g})")
 
     def accelerance(self, frequency: np.ndarray) -> np.ndarray:
@@ -117,6 +117,10 @@ class HousingMode:
     def to_dict(self) -> dict:
         return {"frequency_hz": self.frequency_hz, "damping_ratio": self.damping_ratio,
                 "gain": self.gain}
+
+
+MAX_FRF_POINTS = 1_000_000
+"""Most points of a measured FRF."""
 
 
 @dataclass(frozen=True)
@@ -140,10 +144,29 @@ class MeasuredFrf:
     source: str = ""
 
     def __post_init__(self) -> None:
+        if not isinstance(self.source, str):
+            raise SensorError(f"frf: source must be a string, got {short(self.source)}")
+        try:
+            f = check_array(self.frequency, f"frf {short(self.source)}: frequency",
+                                   ndim=1, min_size=2, max_abs=MAX_MODE_HZ * 100)
+            re = check_array(self.real, f"frf {short(self.source)}: real", ndim=1,
+                                    min_size=2, max_abs=MAX_GAIN)
+            im = check_array(self.imag, f"frf {short(self.source)}: imag", ndim=1,
+                                    min_size=2, max_abs=MAX_GAIN)
+        except (TypeError, ValueError) as exc:
+            raise SensorError(str(exc)) from None
+        if not (f.size == re.size == im.size) or f.size > MAX_FRF_POINTS:
+            raise SensorError(f"frf {short(self.source)}: frequency, real and imag need as many "
+                              f"values (2 .. {MAX_FRF_POINTS})")
+        if np.any(f < 0) or np.any(np.diff(f) <= 0):
+            raise SensorError(f"frf {short(self.source)}: frequency must be >= 0 and strictly "
+                              "increasing [Hz]")
+        for key, arr in (("frequency", f), ("real", re), ("imag", im)):
+            object.__setattr__(self, key, tuple(float(v) for v in arr))
         big = max((abs(complex(r, i)) for r, i in zip(self.real, self.imag, strict=False)),
                   default=0.0)
         if not big <= MAX_GAIN:  # NaN included
-            raise SensorError(f"frf {self.source!r}: |H| up to {big:g} m s-2 N-1 is not "
+            raise SensorError(f"frf {short(self.source)}: |H| up to {big:g} m s-2 N-1 is not "
                               f"admissible (admissible: finite, <= {MAX_GAIN:g}; the values "
                               "are converted to accelerance in SI units)")
 
@@ -219,11 +242,11 @@ class HousingSensor:
     bearings: tuple[tuple[str, float], ...] = field(default=())
 
     def __post_init__(self) -> None:
-        w = f"sensor {self.name!r}"
+        w = f"sensor {short(self.name)}"
         _name(self.name, "sensor", "name")
         object.__setattr__(self, "angle_deg", _num(self.angle_deg, w, "angle_deg"))
         if self.window not in WINDOWS:
-            raise SensorError(f"{w}: window = {self.window!r} is not admissible (admissible: "
+            raise SensorError(f"{w}: window = {short(self.window)} is not admissible (admissible: "
                               f"{', '.join(WINDOWS)})")
         high = None if self.window == "exponential" else 180.0
         object.__setattr__(self, "width_deg", _num(self.width_deg, w, "width_deg", low=0.0,
@@ -300,12 +323,12 @@ class Tacho:
     duty: float = 0.5
 
     def __post_init__(self) -> None:
-        w = f"tacho {self.name!r}"
+        w = f"tacho {short(self.name)}"
         _name(self.name, "tacho", "name")
         ppr = self.pulses_per_rev
         if isinstance(ppr, bool) or not isinstance(ppr, int | np.integer) or not (
                 1 <= ppr <= MAX_PULSES_PER_REV):
-            raise SensorError(f"{w}: pulses_per_rev = {ppr!r} is not admissible (admissible: "
+            raise SensorError(f"{w}: pulses_per_rev = {short(ppr)} is not admissible (admissible: "
                               f"an integer 1 .. {MAX_PULSES_PER_REV})")
         object.__setattr__(self, "pulses_per_rev", int(ppr))
         if self.member is not None:
@@ -331,7 +354,7 @@ def _frf(value: Any, where: str, base: Path | None) -> MeasuredFrf:
                           "columns, set}")
     unknown = sorted(set(table) - _FRF_KEYS)
     if unknown:
-        raise SensorError(f"{where}: unknown key {unknown[0]!r} in frf (admissible: "
+        raise SensorError(f"{where}: unknown key {short(unknown[0])} in frf (admissible: "
                           f"{', '.join(sorted(_FRF_KEYS))})")
     if "path" not in table or not isinstance(table["path"], str):
         raise SensorError(f"{where}: frf needs a path (a UFF 58 or CSV file)")
@@ -340,15 +363,16 @@ def _frf(value: Any, where: str, base: Path | None) -> MeasuredFrf:
         path = base / path
     quantity = table.get("quantity", "accelerance")
     if quantity not in ("accelerance", "mobility", "receptance"):
-        raise SensorError(f"{where}: frf.quantity = {quantity!r} is not admissible "
+        raise SensorError(f"{where}: frf.quantity = {short(quantity)} is not admissible "
                           "(admissible: accelerance, mobility, receptance)")
     columns = table.get("columns", "real_imag")
     if columns not in ("real_imag", "magnitude_phase"):
-        raise SensorError(f"{where}: frf.columns = {columns!r} is not admissible (admissible: "
+        raise SensorError(f"{where}: frf.columns = {short(columns)} is not admissible (admissible: "
                           "real_imag, magnitude_phase)")
     set_index = table.get("set", 0)
     if isinstance(set_index, bool) or not isinstance(set_index, int) or set_index < 0:
-        raise SensorError(f"{where}: frf.set = {set_index!r} is not admissible (admissible: an "
+        raise SensorError(f"{where}: frf.set = {short(set_index)} is not admissible "
+                          "(admissible: an "
                           "integer >= 0)")
     if not is_file(path):
         raise SensorError(f"{where}: frf file {str(path)!r} does not exist")
@@ -371,21 +395,24 @@ def sensor_from_dict(table: Mapping[str, Any] | HousingSensor | Tacho, *,
     """
     if isinstance(table, HousingSensor | Tacho):
         return table
+    index = check_count(index, "index", low=0, optional=True, error=SensorError)
+    if base is not None and not isinstance(base, str | Path):
+        raise SensorError(f"base must be a folder (a path), got {type(base).__name__}")
     head = "[[sensor]]" if index is None else f"[[sensor]] #{index + 1}"
     if not isinstance(table, Mapping):
         raise SensorError(f"{head}: a sensor must be a table, got {type(table).__name__}")
     kind = table.get("type", "accelerometer")
     if kind not in ("accelerometer", "tacho"):
-        raise SensorError(f"{head}: type = {kind!r} is not admissible (admissible: "
+        raise SensorError(f"{head}: type = {short(kind)} is not admissible (admissible: "
                           "accelerometer, tacho)")
     allowed = _ACC_KEYS if kind == "accelerometer" else _TACHO_KEYS
     unknown = sorted(set(table) - allowed)
     if unknown:
-        raise SensorError(f"{head}: unknown key {unknown[0]!r} (admissible for type = "
-                          f"{kind!r}: {', '.join(sorted(allowed))})")
+        raise SensorError(f"{head}: unknown key {short(unknown[0])} (admissible for type = "
+                          f"{short(kind)}: {', '.join(sorted(allowed))})")
     if "name" not in table:
         raise SensorError(f"{head}: missing key 'name'")
-    where = f"{head} {table['name']!r}"
+    where = f"{head} {short(table['name'])}"
     try:
         if kind == "tacho":
             return Tacho(**{k: v for k, v in table.items() if k not in ("type", "comment")})
@@ -407,7 +434,8 @@ def sensor_from_dict(table: Mapping[str, Any] | HousingSensor | Tacho, *,
                 bad = sorted(set(m) - _MODE_KEYS)
                 missing = sorted(_MODE_KEYS - set(m))
                 if bad or missing:
-                    what = f"unknown key {bad[0]!r}" if bad else f"missing key {missing[0]!r}"
+                    what = (f"unknown key {short(bad[0])}" if bad
+                            else f"missing key {short(missing[0])}")
                     raise SensorError(f"{where}: {what} in housing_modes[{i}] (admissible: "
                                       "frequency_hz, damping_ratio, gain)")
                 try:
@@ -447,6 +475,6 @@ def check_unique(sensors: Sequence) -> None:
     names = [s.name for s in sensors]
     dup = sorted({n for n in names if names.count(n) > 1})
     if dup:
-        raise SensorError(f"sensor name {dup[0]!r} is used twice (names must be unique)")
+        raise SensorError(f"sensor name {short(dup[0])} is used twice (names must be unique)")
     if sum(isinstance(s, Tacho) for s in sensors) > 1:
         raise SensorError("more than one tacho: a run records one tacho channel")

@@ -43,6 +43,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from gearvib.checks import check_array, check_instance, check_real, short
 from gearvib.model import AssembledModel
 from gearvib.sensors.apply import housing_meshes, members_of
 from gearvib.sensors.description import HousingSensor, Tacho
@@ -53,7 +54,11 @@ __all__ = ["add_sensor_signals", "housing_response", "path_force", "tacho_signal
 
 def window_weight(window: str, width_deg: float, delta: np.ndarray) -> np.ndarray:
     """Transmission-path weight at angles ``delta`` [rad] between planet and sensor."""
-    delta = np.asarray(delta, dtype=float)
+    if window not in ("hann", "rectangular", "exponential"):
+        raise ValueError(f"window = {short(window)} is not admissible (admissible: hann, "
+                         "exponential, rectangular)")
+    width_deg = check_real(width_deg, "width_deg", low=1e-6, high=360.0)
+    delta = check_array(delta, "delta", min_size=0, max_abs=1e9)
     # |delta| wrapped to 0..pi (nearest multiple of 2 pi removed)
     d = np.abs(delta - (2.0 * np.pi) * np.rint(delta * (0.5 / np.pi)))
     width = math.radians(width_deg)
@@ -66,8 +71,7 @@ def window_weight(window: str, width_deg: float, delta: np.ndarray) -> np.ndarra
         return (d <= width).astype(float)
     if window == "exponential":
         return np.exp(-d / width)
-    raise ValueError(f"window = {window!r} is not admissible (admissible: hann, exponential, "
-                     "rectangular)")
+    raise ValueError(f"window = {short(window)} is not admissible")  # checked above
 
 
 def _rotation(result, member: str) -> np.ndarray:
@@ -78,12 +82,18 @@ def _rotation(result, member: str) -> np.ndarray:
 
 def path_force(result, model: AssembledModel, sensor: HousingSensor) -> np.ndarray:
     """The windowed force sum ``p(t)`` a sensor sees [N] (module docstring)."""
+    check_instance(result, "gearvib.simulation.result.RunUpResult", "result")
+    check_instance(model, AssembledModel, "model")
+    check_instance(sensor, HousingSensor, "sensor")
+    housing = sensor.member
+    if housing is None:
+        raise ValueError("sensor has no housing member: take it from the model's sensors "
+                         "(add_sensors fills it in)")
     planets = {p["name"]: p for p in model.meta.get("planets", [])}
     meshes = model.meta["meshes"]
     theta_s = math.radians(sensor.angle_deg)
     p = np.zeros(result.time.size)
-    assert sensor.member is not None  # add_sensors fills it in
-    for member in members_of(sensor.member):
+    for member in members_of(housing):
         _add_member_forces(p, result, model, sensor, member, planets, meshes, theta_s)
     for b, gain in sensor.bearings:
         fx = result.bearing_force[result.bearing_names.index(f"{b}.x")]
@@ -104,8 +114,7 @@ def _add_member_forces(p: np.ndarray, result, model: AssembledModel, sensor: Hou
     rotation, both follow the window of the planet's angle relative to the sensor.
     """
     theta_h = _rotation(result, member)
-    assert sensor.member is not None  # add_sensors fills it in
-    wanted = set(members_of(sensor.member))
+    wanted = set(members_of(sensor.member or member))
     for k in housing_meshes(model, member):
         planet = planets[meshes[k]["gear2"]]
         if member != meshes[k]["gear1"] and meshes[k]["gear1"] in wanted:
@@ -119,6 +128,9 @@ def _add_member_forces(p: np.ndarray, result, model: AssembledModel, sensor: Hou
 def housing_response(p: np.ndarray, fs: float, sensor: HousingSensor) -> np.ndarray:
     """Acceleration [m s-2] of the housing response to the path force ``p`` [N] sampled at
     ``fs`` (module docstring)."""
+    p = check_array(p, "p", ndim=1, min_size=0, max_abs=1e100)
+    fs = check_real(fs, "fs [Hz]", low=0.0, low_open=True, high=1e12)
+    check_instance(sensor, HousingSensor, "sensor")
     n = p.size
     if n == 0:
         return p.copy()
@@ -141,7 +153,9 @@ def tacho_signal(angle: np.ndarray, tacho: Tacho) -> np.ndarray:
     two samples centred there, so a trigger that interpolates its level crossing between two
     samples finds the edge exactly (as a measured, anti-alias filtered edge).
     """
-    x = np.asarray(angle, dtype=float) * tacho.pulses_per_rev / (2.0 * math.pi)
+    check_instance(tacho, Tacho, "tacho")
+    angle = check_array(angle, "angle", ndim=1, min_size=0, max_abs=1e12)
+    x = angle * tacho.pulses_per_rev / (2.0 * math.pi)
     duty = tacho.duty
     state = ((x - np.floor(x)) < duty).astype(float)
     out = state.copy()
@@ -168,6 +182,8 @@ def add_sensor_signals(result, model: AssembledModel):
     has housing sensors but no tacho, a default tacho with one pulse per revolution of the
     input member) gives ``tacho``.
     """
+    check_instance(result, "gearvib.simulation.result.RunUpResult", "result")
+    check_instance(model, AssembledModel, "model")
     fs = float(result.step.fs_out)
     acc = [s for s in model.sensors if isinstance(s, HousingSensor)]
     tachos = [s for s in model.sensors if isinstance(s, Tacho)]

@@ -17,6 +17,9 @@ from typing import Any
 
 import numpy as np
 
+from gearvib.checks import check_array, check_real, short
+from gearvib.kinematics import MAX_SPEED_RPM
+
 __all__ = [
     "RAD_S_PER_RPM",
     "SENSING",
@@ -34,6 +37,40 @@ RAD_S_PER_RPM = 2.0 * math.pi / 60.0
 
 #: What a drive coupling's angle and speed are taken from (:class:`DriveCoupling`).
 SENSING = ("input", "rigid-body")
+MAX_TABLE = 100_000
+"""Longest motor characteristic of a description (``[simulation].motor``)."""
+MAX_DRIVE_TABLE = 10_000_000
+"""Longest speed, torque or motor table of a conditions object (a table given in Python)."""
+MAX_TORQUE = 1e12
+"""Largest torque magnitude accepted [N m] (also the coefficients of ``load_torque``)."""
+MAX_DURATION = 1e7
+"""Longest simulated time accepted [s] (a long run is then refused for its steps or memory)."""
+MAX_INERTIA = 1e9
+"""Largest load inertia accepted [kg m^2]."""
+
+
+def _speed(value: Any, name: str, *, optional: bool = False) -> Any:
+    return check_real(value, f"{name} [min-1]", low=-MAX_SPEED_RPM, high=MAX_SPEED_RPM,
+                      optional=optional)
+
+
+def _torque(value: Any, name: str, *, optional: bool = False) -> Any:
+    return check_real(value, f"{name} [N m]", low=-MAX_TORQUE, high=MAX_TORQUE,
+                      optional=optional)
+
+
+def _table(values: Any, name: str, *, bound: float) -> tuple[float, ...]:
+    """A 1-D table of finite numbers with magnitudes up to ``bound`` (at most
+    :data:`MAX_DRIVE_TABLE`)."""
+    arr = check_array(values, name, min_size=0, max_abs=bound).ravel()
+    if arr.size > MAX_DRIVE_TABLE:
+        raise ValueError(f"{name}: {arr.size} values (admissible: at most {MAX_DRIVE_TABLE})")
+    return tuple(float(v) for v in arr)
+
+
+def _coupling(value: Any) -> None:
+    if value is not None and not isinstance(value, DriveCoupling):
+        raise TypeError(f"coupling must be a DriveCoupling; got {type(value).__name__}")
 
 
 @dataclass(frozen=True)
@@ -72,7 +109,10 @@ class DriveCoupling:
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int | float | np.floating
                                                          | np.integer):
-                raise TypeError(f"DriveCoupling.{name} = {value!r} is not a number")
+                raise TypeError(f"DriveCoupling.{name} = {short(value)} is not a number")
+        check_real(self.stiffness, "DriveCoupling.stiffness", low=0.0, low_open=True,
+                   high=1e40)
+        check_real(self.damping, "DriveCoupling.damping", low=0.0, high=1e12)
         if not (0 < self.stiffness < math.inf and 0 <= self.damping < math.inf):
             raise ValueError(f"DriveCoupling needs 0 < stiffness < inf and 0 <= damping < inf "
                              f"(got stiffness = {self.stiffness!r}, damping = "
@@ -118,9 +158,15 @@ class SpeedRamp:
     coupling: DriveCoupling | None = None
 
     def __post_init__(self) -> None:
-        if not (math.isfinite(self.duration) and self.duration >= 1e-9):
+        _speed(self.start_rpm, "start_rpm")
+        _speed(self.end_rpm, "end_rpm")
+        check_real(self.duration, "SpeedRamp.duration [s]")
+        if not (math.isfinite(self.duration) and 1e-9 <= self.duration <= MAX_DURATION):
             raise ValueError(f"SpeedRamp.duration = {self.duration!r} s is not admissible "
-                             "(admissible: finite, >= 1e-9 s)")
+                             f"(admissible: 1e-9 to {MAX_DURATION:g} s)")
+        _torque(self.load_torque, "load_torque")
+        _torque(self.input_torque, "input_torque", optional=True)
+        _coupling(self.coupling)
 
     def table(self) -> tuple[np.ndarray, np.ndarray]:
         """Nodes ``(time [s], speed [min^-1])`` of the piecewise-linear profile."""
@@ -148,10 +194,13 @@ class SpeedTable:
     coupling: DriveCoupling | None = None
 
     def __post_init__(self) -> None:
-        t = tuple(float(v) for v in np.asarray(self.time, dtype=float).ravel())
-        r = tuple(float(v) for v in np.asarray(self.rpm, dtype=float).ravel())
+        t = _table(self.time, "time [s]", bound=MAX_DURATION)
+        r = _table(self.rpm, "rpm [min-1]", bound=MAX_SPEED_RPM)
         if len(t) != len(r) or len(t) < 2 or np.any(np.diff(t) <= 0):
             raise ValueError("SpeedTable needs >= 2 strictly increasing times and as many speeds")
+        _torque(self.load_torque, "load_torque")
+        _torque(self.input_torque, "input_torque", optional=True)
+        _coupling(self.coupling)
         object.__setattr__(self, "time", t)
         object.__setattr__(self, "rpm", r)
 
@@ -199,30 +248,32 @@ class TorqueDriven:
         torque: Any = self.input_torque  # as given: checked here
         tt: tuple[float, ...]
         tv: tuple[float, ...]
-        if np.ndim(torque) == 0:
-            tt, tv = (0.0,), (float(torque),)
+        if not isinstance(torque, tuple | list | np.ndarray):
+            tt, tv = (0.0,), (_torque(torque, "input_torque"),)
         else:
+            if len(torque) != 2:
+                raise ValueError("input_torque must be a number or a table (times, torques)")
             a, b = torque
-            tt = tuple(float(v) for v in np.asarray(a, dtype=float).ravel())
-            tv = tuple(float(v) for v in np.asarray(b, dtype=float).ravel())
+            tt = _table(a, "input_torque times [s]", bound=MAX_DURATION)
+            tv = _table(b, "input_torque values [N m]", bound=MAX_TORQUE)
             if len(tt) != len(tv) or len(tt) < 1 or np.any(np.diff(tt) <= 0):
                 raise ValueError("input_torque table needs strictly increasing times")
         object.__setattr__(self, "input_torque", (tt, tv))
-        lt = tuple(float(v) for v in self.load_torque)
-        if len(lt) != 3:
-            raise ValueError("load_torque must be (T0, c1, c2)")
-        object.__setattr__(self, "load_torque", lt)
-        if self.load_inertia < 0:
-            raise ValueError("load_inertia must be >= 0")
+        object.__setattr__(self, "load_torque", _load_tuple(self.load_torque))
+        check_real(self.load_inertia, "load_inertia [kg m^2]", low=0.0, high=MAX_INERTIA)
+        _speed(self.start_rpm, "start_rpm")
+        check_real(self.duration, "duration [s]", low=0.0, low_open=True, high=MAX_DURATION,
+                   optional=True)
+        check_real(self.max_rpm, "max_rpm [min-1]", low=0.0, low_open=True, high=MAX_SPEED_RPM)
         if self.duration is None and len(tt) > 1:
             object.__setattr__(self, "duration", tt[-1])
 
 
 def _load_tuple(load_torque: Sequence[float]) -> tuple[float, float, float]:
-    lt = tuple(float(v) for v in load_torque)
-    if len(lt) != 3 or not all(math.isfinite(v) for v in lt):
+    if not isinstance(load_torque, tuple | list | np.ndarray) or len(load_torque) != 3:
         raise ValueError("load_torque must be (T0, c1, c2), three finite numbers")
-    return lt
+    lt = _table(load_torque, "load_torque (T0, c1, c2)", bound=MAX_TORQUE)
+    return lt[0], lt[1], lt[2]
 
 
 @dataclass(frozen=True)
@@ -264,8 +315,8 @@ class MotorDriven:
     max_rpm: float | None = None
 
     def __post_init__(self) -> None:
-        n = tuple(float(v) for v in np.asarray(self.speed_rpm, dtype=float).ravel())
-        t = tuple(float(v) for v in np.asarray(self.torque, dtype=float).ravel())
+        n = _table(self.speed_rpm, "speed_rpm", bound=MAX_SPEED_RPM)
+        t = _table(self.torque, "torque [N m]", bound=MAX_TORQUE)
         if len(n) != len(t) or len(n) < 2:
             raise ValueError("MotorDriven: speed_rpm and torque need >= 2 values each, as many "
                              f"torques as speeds (got {len(n)} and {len(t)})")
@@ -275,16 +326,15 @@ class MotorDriven:
         object.__setattr__(self, "speed_rpm", n)
         object.__setattr__(self, "torque", t)
         object.__setattr__(self, "load_torque", _load_tuple(self.load_torque))
-        if not (math.isfinite(self.load_inertia) and self.load_inertia >= 0):
-            raise ValueError(f"load_inertia = {self.load_inertia!r} must be >= 0 [kg m^2]")
-        if not math.isfinite(self.start_rpm):
-            raise ValueError(f"start_rpm = {self.start_rpm!r} must be finite [min^-1]")
-        if self.duration is not None and not self.duration > 0:
-            raise ValueError(f"duration = {self.duration!r} must be > 0 [s]")
+        check_real(self.load_inertia, "load_inertia [kg m^2]", low=0.0, high=MAX_INERTIA)
+        _speed(self.start_rpm, "start_rpm")
+        check_real(self.duration, "duration [s]", low=0.0, low_open=True, high=MAX_DURATION,
+                   optional=True)
         if self.max_rpm is None:
             object.__setattr__(self, "max_rpm", max(abs(n[0]), abs(n[-1])))
-        elif not (math.isfinite(self.max_rpm) and self.max_rpm > 0):
-            raise ValueError(f"max_rpm = {self.max_rpm!r} must be > 0 [min^-1]")
+        else:
+            check_real(self.max_rpm, "max_rpm [min-1]", low=0.0, low_open=True,
+                       high=MAX_SPEED_RPM)
 
     @classmethod
     def kloss(cls, synchronous_rpm: float, breakdown_torque: float, breakdown_slip: float,

@@ -18,6 +18,9 @@ import math
 
 import numpy as np
 
+from gearvib.checks import check_count, check_real
+from gearvib.memory import require_memory
+
 __all__ = ["decimation_filter", "filter_length", "kaiser_design"]
 
 
@@ -36,7 +39,8 @@ def kaiser_design(attenuation_db: float, width: float) -> tuple[int, float]:
     (int, float)
         Number of taps (not forced odd) and the window parameter ``beta``.
     """
-    a = abs(float(attenuation_db))
+    a = abs(check_real(attenuation_db, "attenuation_db", low=8.0, high=300.0))
+    width = check_real(width, "width", low=1e-12, high=1.0)
     if a > 50.0:
         beta = 0.1102 * (a - 8.7)
     elif a > 21.0:
@@ -56,6 +60,8 @@ def filter_length(decimation: int, attenuation_db: float = 85.0) -> int:
     For astronomically large decimations (only ever computed to refuse them) an integer
     estimate of the Kaiser formula is returned instead of overflowing.
     """
+    decimation = check_count(decimation, "decimation", low=1, high=10**200)
+    check_real(attenuation_db, "attenuation_db", low=8.0, high=300.0)
     if decimation == 1:
         return 1
     if decimation > 10**12:
@@ -74,6 +80,9 @@ def decimation_filter(decimation: int, attenuation_db: float = 85.0) -> np.ndarr
     before decimation (the Kaiser formula is approximate, hence the 85 dB design target), so
     nothing aliases. ``decimation == 1`` returns ``[1.0]`` (no filtering possible).
     """
+    n = filter_length(decimation, attenuation_db)
+    require_memory(4.0 * 8.0 * n, f"the decimation filter of decimation = {decimation} "
+                   f"({n} taps)", "a smaller decimation (a larger fs_out or dt)")
     if decimation == 1:
         return np.ones(1)
     from scipy.special import i0  # light, unlike scipy.signal

@@ -14,7 +14,9 @@ from collections.abc import Callable, Sequence
 import numpy as np
 
 from gearvib import kernels as kn
+from gearvib.checks import check_count, check_instance, check_items, check_real, check_vector
 from gearvib.simulation.errors import SimulationError
+from gearvib.simulation.frequencies import check_mass
 
 __all__ = ["static_equilibrium"]
 
@@ -324,7 +326,24 @@ def static_equilibrium(
     SimulationError
         If no equilibrium exists (unbalanced load on a free member) or the contact sets cycle.
     """
+    check_instance(system, kn.KernelSystem, "system")
     n = system.n_dof
+    mass = check_mass(mass)
+    if mass.shape[0] != n:
+        raise ValueError(f"mass must be ({n}, {n}) (the system's DOF); got {mass.shape}")
+    rigid = check_vector(rigid, "rigid", n, max_abs=1e12)
+    if not float(rigid @ mass @ rigid) > 0.0:
+        raise ValueError("rigid must be a rigid-body motion (r^T M r > 0)")
+    velocity = check_vector(velocity, "velocity", n, max_abs=1e9)
+    rigid_acceleration = check_real(rigid_acceleration, "rigid_acceleration", low=-1e12,
+                                    high=1e12)
+    if not isinstance(free_rigid, bool | np.bool_):
+        raise TypeError(f"free_rigid must be a bool; got {type(free_rigid).__name__}")
+    max_iter = check_count(max_iter, "max_iter", low=1, high=10_000)
+    if mesh_names is not None:
+        mesh_names = check_items(mesh_names, str, "mesh_names")
+    if flank_law is not None and not callable(flank_law):
+        raise TypeError(f"flank_law must be callable; got {type(flank_law).__name__}")
     ipar, fpar = system.ipar, system.fpar
     qd0 = np.asarray(velocity, dtype=float)
     a0 = system.stiffness.copy()

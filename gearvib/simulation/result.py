@@ -13,9 +13,18 @@ import numpy as np
 from gearvib import __version__
 from gearvib import kernels as kn
 from gearvib.cfdata import PlainDataset, PlainVariable, time_attrs
+from gearvib.checks import check_array, check_config, check_frequencies, check_instance, check_real
 from gearvib.model import AssembledModel
 from gearvib.phases import mesh_phase_table
-from gearvib.simulation.conditions import RAD_S_PER_RPM, Conditions, DriveCoupling
+from gearvib.simulation.conditions import (
+    RAD_S_PER_RPM,
+    Conditions,
+    DriveCoupling,
+    MotorDriven,
+    SpeedRamp,
+    SpeedTable,
+    TorqueDriven,
+)
 from gearvib.simulation.frequencies import elastic_frequencies, undamped_frequencies
 from gearvib.simulation.run_setup import RunSetup
 from gearvib.simulation.step import StepChoice
@@ -30,6 +39,7 @@ INTEGRATOR = "classical Runge-Kutta 4, fixed step, sub-steps ending at stiffness
 
 def model_sha256(model: AssembledModel) -> str:
     """SHA-256 of every array and name of the model (provenance of a run)."""
+    check_instance(model, AssembledModel, "model")
     h = hashlib.sha256()
     for name in (
         "mass",
@@ -407,7 +417,25 @@ def build_result(
     ``out`` holds the decimated sample rows of the kernels (layout in :mod:`gearvib.kernels`);
     forces, deflections, bearing forces and speeds are derived from them here.
     """
+    check_instance(model, AssembledModel, "model")
+    check_instance(conditions, (SpeedRamp, SpeedTable, TorqueDriven, MotorDriven), "conditions")
+    check_instance(setup, RunSetup, "setup")
+    check_instance(step, StepChoice, "step")
     n, nm = model.n_dof, model.n_mesh
+    taps = check_array(taps, "taps", ndim=1)
+    out = check_array(out, "out", ndim=2, max_abs=1e100)
+    if out.shape[1] != kn.n_signals(n, nm) or out.shape[0] < 1:
+        raise ValueError(f"out must have {kn.n_signals(n, nm)} columns (the kernel signals of "
+                         f"the model) and rows; got shape {out.shape}")
+    changes = check_array(changes, "changes", ndim=1, min_size=0, max_abs=2.0**62)
+    if changes.size != nm or np.any(changes < 0) or np.any(changes != np.round(changes)):
+        raise ValueError(f"changes must hold {nm} counts >= 0 (one per mesh)")
+    duration = check_real(duration, "duration [s]", low=0.0, low_open=True)
+    if not isinstance(gyroscopic, bool | np.bool_):
+        raise TypeError(f"gyroscopic must be a bool; got {type(gyroscopic).__name__}")
+    config = check_config(config)
+    natural_frequencies = check_frequencies(natural_frequencies)
+    wall = check_real(wall, "wall [s]", low=0.0)
     system = setup.system
     n_out = out.shape[0]
     time = np.arange(n_out) * (step.decimation * step.dt)

@@ -4,10 +4,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from gearvib import kernels as kn
+from gearvib.checks import check_count, check_instance, check_matrix, check_vector
 from gearvib.faults.law import FaultLaw, build_fault_law
 from gearvib.model import AssembledModel
 from gearvib.simulation.conditions import (
@@ -20,6 +22,7 @@ from gearvib.simulation.conditions import (
     TorqueDriven,
 )
 from gearvib.simulation.frequencies import (
+    check_mass,
     elastic_frequencies,
     stiffest_matrix,
     undamped_frequencies,
@@ -47,7 +50,10 @@ def check_model(model: AssembledModel) -> None:
     ------
     ValueError
         Naming the offending array (and mesh for a negative stiffness table).
+    TypeError
+        ``model`` is not an :class:`~gearvib.model.AssembledModel`.
     """
+    check_instance(model, AssembledModel, "model")
     n = model.n_dof
     for name in ("mass", "stiffness", "damping", "gyroscopic", "centripetal"):
         a = np.asarray(getattr(model, name))
@@ -145,6 +151,7 @@ def default_coupling(model: AssembledModel, torque_sign: float = 1.0) -> DriveCo
     elastic modes are exactly those of the free set whenever the set's own damping does not
     act on it either (``C r = 0``: no torsional damper to ground on a turning member).
     """
+    check_instance(model, AssembledModel, "model")
     rigid = model.rigid_body_velocity()
     k_in = int(model.rotation_dofs[model.input_member])
     mass = np.asarray(model.mass, float)
@@ -157,12 +164,25 @@ def default_coupling(model: AssembledModel, torque_sign: float = 1.0) -> DriveCo
     return DriveCoupling(float(j_eff * wc * wc), float(2.0 * j_eff * wc), "rigid-body")
 
 
+def _drive_arrays(mass: Any, rigid: Any, k_in: Any) -> tuple[np.ndarray, np.ndarray, int]:
+    """``mass`` (:func:`check_mass`), the rigid-body velocity ``rigid`` (one value per DOF,
+    ``r^T M r > 0``) and the input DOF ``k_in`` (an index into them), checked."""
+    mass = check_mass(mass)
+    n = mass.shape[0]
+    rigid = check_vector(rigid, "rigid", n, max_abs=1e12)
+    k_in = check_count(k_in, "k_in", low=0, high=n - 1)
+    if not float(rigid @ mass @ rigid) > 0.0 or rigid[k_in] == 0.0:
+        raise ValueError("rigid must be a rigid-body motion that moves the input DOF k_in")
+    return mass, rigid, k_in
+
+
 def drive_sensing(mass: np.ndarray, rigid: np.ndarray, k_in: int) -> np.ndarray:
     """The row ``p = r_in M r / (r^T M r)`` whose product with ``q`` is the rigid-body
     coordinate in radians of the input member (``p . q = phi`` for the rigid rotation ``q = r
     phi / r_in``; the elastic modes, M-orthogonal to ``r``, give 0): the angle a
     rigid-body-sensing drive controls (:class:`DriveCoupling`)."""
-    mr = np.asarray(mass, float) @ rigid
+    mass, rigid, k_in = _drive_arrays(mass, rigid, k_in)
+    mr = mass @ rigid
     return mr * (float(rigid[k_in]) / float(rigid @ mr))
 
 
@@ -180,7 +200,9 @@ def coupling_matrices(mass: np.ndarray, rigid: np.ndarray, k_in: int,
     back). The symmetric form serves the step choice, the stability analysis and anything
     that needs a symmetric mean system.
     """
-    n = np.asarray(mass).shape[0]
+    mass, rigid, k_in = _drive_arrays(mass, rigid, k_in)
+    check_instance(coupling, DriveCoupling, "coupling")
+    n = mass.shape[0]
     if coupling.sensing == "rigid-body":
         p = drive_sensing(mass, rigid, k_in)
         shape = np.outer(p, p)
@@ -196,7 +218,7 @@ def with_coupling(stiffness: np.ndarray, mass: np.ndarray, rigid: np.ndarray, k_
     (:func:`coupling_matrices`) added where it is not zero (an input coupling: the one entry
     of the input coordinate, as the step choice always added it)."""
     kd = coupling_matrices(mass, rigid, k_in, coupling)[0]
-    out = np.array(stiffness, dtype=float, copy=True)
+    out = np.array(check_matrix(stiffness, "stiffness", kd.shape[0]), dtype=float, copy=True)
     nz = kd != 0.0
     out[nz] += kd[nz]
     return out
@@ -227,6 +249,9 @@ def prepare_run(
     TypeError
         For an unsupported conditions object.
     """
+    check_instance(model, AssembledModel, "model")
+    if not isinstance(gyroscopic, bool | np.bool_):
+        raise TypeError(f"gyroscopic must be a bool; got {type(gyroscopic).__name__}")
     n = model.n_dof
     rigid = model.rigid_body_velocity()
     mass = np.array(model.mass, dtype=float)

@@ -15,6 +15,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from gearvib.checks import check_count, check_instance, check_real
 from gearvib.memory import RunSizeError, require_memory
 from gearvib.simulation.decimation import filter_length
 from gearvib.simulation.step import DEFAULT_FS_OUT, StepChoice
@@ -54,9 +55,15 @@ class RunSize:
     bytes: int
 
 
+MAX_DOF = 100_000
+"""Largest model size (degrees of freedom, meshes) a run-size check takes."""
+
+
 def seconds_per_step(n_dof: int, n_mesh: int) -> float:
     """Rough wall time of one RK4 step [s] (2.8 µs for 5 DOF and 6 meshes, 5.2 µs for 17 DOF;
     only used to state a time in messages)."""
+    n_dof = check_count(n_dof, "n_dof", low=0, high=MAX_DOF)
+    n_mesh = check_count(n_mesh, "n_mesh", low=0, high=MAX_DOF)
     return 1.5e-6 + 1.2e-8 * n_dof * n_dof + 1.5e-7 * n_mesh
 
 
@@ -106,6 +113,16 @@ def check_run_size(step: StepChoice, duration: float, *, n_dof: int, n_mesh: int
         Too many steps for ``max_steps``, or more memory than available; the message names
         the parameters (duration, dt and what sets it, fs_out) and what to change.
     """
+    check_instance(step, StepChoice, "step")
+    duration = check_real(duration, "duration [s]", low=0.0, low_open=True)
+    for key, v in (("n_dof", n_dof), ("n_mesh", n_mesh), ("n_signals", n_signals),
+                   ("n_stored", n_stored)):
+        check_count(v, key, low=0, high=MAX_DOF * MAX_DOF)
+    max_steps = check_count(max_steps, "max_steps", low=1, high=10**15)
+    speed_max_rpm = check_real(speed_max_rpm, "speed_max_rpm", optional=True)
+    for key, flag in (("dt_given", dt_given), ("fs_out_given", fs_out_given)):
+        if not isinstance(flag, bool):
+            raise TypeError(f"{key} must be a bool; got {type(flag).__name__}")
     dec = step.decimation
     n_out_f = duration * step.fs_out
     taps = filter_length(dec)

@@ -35,7 +35,11 @@ from typing import Any
 from gearvib.checks import RUN, check_number
 from gearvib.checks import short as _short
 from gearvib.config import ConfigError
+from gearvib.kinematics import MAX_SPEED_RPM
 from gearvib.simulation.conditions import (
+    MAX_DURATION,
+    MAX_TABLE,
+    MAX_TORQUE,
     Conditions,
     DriveCoupling,
     MotorDriven,
@@ -61,16 +65,8 @@ _ONLY = {
 }
 
 
-MAX_TABLE = 100_000
-"""Longest motor characteristic table accepted."""
-MAX_SPEED_RPM = 1e9
-"""Largest speed magnitude accepted [min^-1] (a run that fast is then refused for its size)."""
-MAX_TORQUE = 1e12
-"""Largest torque magnitude accepted [N m] (also the coefficients of ``load_torque``)."""
 MIN_DURATION = 1e-6
 """Shortest simulated time accepted [s]."""
-MAX_DURATION = 1e7
-"""Longest simulated time accepted [s] (a long run is then refused for its steps or memory)."""
 
 
 def _num(value: Any, key: str, *, low: float | None = None, strict: bool = False,
@@ -147,12 +143,15 @@ def read_run_settings(sim: Mapping[str, Any] | None,
     """
     if sim is not None and not isinstance(sim, Mapping):
         raise ConfigError(f"[simulation] must be a table, got {type(sim).__name__}")
+    if overrides is not None and not isinstance(overrides, Mapping):
+        raise ConfigError(f"overrides must be a mapping of [simulation] keys, got "
+                          f"{type(overrides).__name__}")
     if overrides and any(v is not None for v in overrides.values()):
         read_run_settings(sim)  # the file's own values are checked too, not only the winners
     table = dict(sim or {})
     unknown = sorted(str(k) for k in set(table) - SIMULATION_KEYS)
     if unknown:
-        raise ConfigError(f"unknown key {unknown[0]!r} in [simulation] (admissible: "
+        raise ConfigError(f"unknown key {_short(unknown[0])} in [simulation] (admissible: "
                          f"{', '.join(sorted(SIMULATION_KEYS))})")
     for key, value in (overrides or {}).items():
         if value is not None:
@@ -237,12 +236,36 @@ def conditions_from_settings(run: Mapping[str, Any]) -> Conditions:
     ConfigError
         Settings the conditions refuse (named).
     """
+    if not isinstance(run, Mapping):
+        raise ConfigError(f"run must be the run settings of read_run_settings (a mapping); got "
+                          f"{type(run).__name__}")
+    missing = sorted(_RUN_KEYS - set(run))
+    if missing:
+        raise ConfigError(f"run settings lack {missing[0]!r} (give the result of "
+                          "read_run_settings)")
+    if not isinstance(run["drive"], str) or run["drive"] not in DRIVES:
+        raise ConfigError(f"run settings: drive = {_short(run['drive'])} is not admissible "
+                          f"(admissible: {', '.join(DRIVES)})")
+    load = run["load_torque"]
+    if isinstance(load, list | tuple) and len(load) != 3:
+        raise ConfigError("run settings: load_torque must be a number or (T0, c1, c2)")
+    motor = run["motor"]
+    if run["drive"] == "motor" and not (isinstance(motor, Mapping) and (
+            set(motor) == _MOTOR_KLOSS or set(motor) == _MOTOR_TABLE)):
+        raise ConfigError("run settings: motor must be {synchronous_rpm, breakdown_torque, "
+                          "breakdown_slip} or {speed_rpm, torque} for drive = 'motor'")
+    if run["drive"] == "torque" and "input_torque" not in run:
+        raise ConfigError("run settings lack 'input_torque' (drive = 'torque')")
     try:
         return _conditions(run)
     except ConfigError:
         raise
     except (ValueError, TypeError) as exc:
         raise ConfigError(f"[simulation]: {exc}") from None
+
+
+_RUN_KEYS = {"drive", "speed_start_rpm", "speed_end_rpm", "duration", "load_torque",
+             "load_inertia", "motor"}
 
 
 def _conditions(run: Mapping[str, Any]) -> Conditions:
@@ -253,11 +276,11 @@ def _conditions(run: Mapping[str, Any]) -> Conditions:
         if run.get("drive_stiffness") is not None:
             coupling = DriveCoupling(run["drive_stiffness"], run.get("drive_damping") or 0.0)
         return SpeedRamp(run["speed_start_rpm"], run["speed_end_rpm"], run["duration"],
-                         load_torque=float(load or 0.0),
+                         load_torque=0.0 if load is None else load,
                          input_torque=None if load is not None else run.get("input_torque"),
                          coupling=coupling)
     triple = (0.0, 0.0, 0.0) if load is None else (
-        tuple(load) if isinstance(load, list | tuple) else (float(load), 0.0, 0.0))
+        tuple(load) if isinstance(load, list | tuple) else (load, 0.0, 0.0))
     common = dict(load_inertia=run["load_inertia"], load_torque=triple,
                   start_rpm=run["speed_start_rpm"], duration=run["duration"])
     if drive == "torque":

@@ -14,6 +14,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from gearvib.checks import NUMBER_TYPES, check_count, check_real, short
 from gearvib.config import ConfigError
 
 __all__ = [
@@ -137,6 +138,11 @@ def choose_step(
     """
     for name, f in (("highest natural frequency", f_nat_max),
                     ("highest mesh frequency", f_mesh_max)):
+        if isinstance(f, bool) or not isinstance(f, NUMBER_TYPES):
+            raise ConfigError(f"the {name} must be a number [Hz]; got {short(f)}")
+        if isinstance(f, int) and abs(f) > 1e300:
+            raise ConfigError(f"the {name} of the run is {short(f)} Hz: out of range "
+                              "(admissible: finite)")
         if not (math.isfinite(f) and f >= 0):
             raise ConfigError(f"the {name} of the run is {f!r} Hz: a stiffness, mass or speed "
                               "of the description is out of range (admissible: finite)")
@@ -149,15 +155,18 @@ def choose_step(
         raise ConfigError(f"the step 1/(40 f) underflows for the highest natural frequency "
                           f"{f_nat_max:.4g} Hz and mesh frequency {f_mesh_max:.4g} Hz: a "
                           "stiffness or speed of the description is out of range")
+    min_decimation = check_count(min_decimation, "min_decimation", low=1, high=10**6,
+                                 error=ConfigError)
+    speed_max_rpm = check_real(speed_max_rpm, "speed_max_rpm", optional=True, error=ConfigError)
     if fs_out is not None:
-        fs_out = float(fs_out)
+        fs_out = check_real(fs_out, "fs_out [Hz]", error=ConfigError)
         if not (math.isfinite(fs_out) and fs_out > 0):
             raise ConfigError(f"fs_out = {fs_out!r} Hz is not admissible (admissible: > 0, "
                               "finite)")
         _check_fs_out(fs_out, f_mesh_max, speed_max_rpm)
     lo = max(DEFAULT_FS_OUT, DEFAULT_MESH_HARMONICS * f_mesh_max / PASSBAND_FRACTION)
     if dt is not None:
-        dt = float(dt)
+        dt = check_real(dt, "dt [s]", error=ConfigError)
         if not (math.isfinite(dt) and dt > 0):
             raise ConfigError(f"dt = {dt!r} s is not admissible (admissible: > 0, finite)")
         if dt > dt_adm:

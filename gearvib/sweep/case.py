@@ -30,10 +30,12 @@ from typing import Any
 
 import xarray as xr
 
+from analysis.checks import require_instance
 from analysis.fft import set_workers
 from analysis.readers.ncimage import open_image
 from analysis.threads import one_blas_thread
 from gearvib.assembly import assemble
+from gearvib.checks import short
 from gearvib.config import ConfigError, gearset_from_dict
 from gearvib.io import read_run, write_netcdf
 from gearvib.model import AssembledModel
@@ -74,6 +76,16 @@ class CaseTask:
     run_path: str
     summary: SummarySettings
     write_run: bool = True
+
+    def __post_init__(self) -> None:
+        for key, cls in (("case", SweepCase), ("summary", SummarySettings)):
+            if not isinstance(getattr(self, key), cls):
+                raise TypeError(f"{key} must be a {cls.__name__}; got "
+                                f"{type(getattr(self, key)).__name__}")
+        if not isinstance(self.run_path, str) or not self.run_path:
+            raise TypeError(f"run_path must be a file name (str); got {short(self.run_path)}")
+        if not isinstance(self.write_run, bool):
+            raise TypeError(f"write_run must be a bool; got {type(self.write_run).__name__}")
 
 
 @dataclass(frozen=True)
@@ -199,6 +211,7 @@ def run_case(task: CaseTask) -> CaseOutcome:
         combination of values, the simulation blows up or the summary is impossible (e.g. an
         empty window); other exceptions propagate.
     """
+    require_instance(task, CaseTask, "task")
     return _in_worker(_run, task)
 
 

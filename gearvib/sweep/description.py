@@ -44,6 +44,8 @@ import numpy as np
 from scipy import special
 
 from gearvib import __version__
+from gearvib.checks import check_items
+from gearvib.checks import short as _short
 from gearvib.config import (
     ConfigError,
     check_keys,
@@ -87,7 +89,7 @@ _DISTRIBUTIONS = {"uniform": ({"low", "high"}, set()), "normal": ({"mean", "std"
 
 def _num(value: Any, where: str) -> float:
     if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
-        raise ConfigError(f"{where} must be a finite number, got {value!r}")
+        raise ConfigError(f"{where} must be a finite number, got {_short(value)}")
     return float(value)
 
 
@@ -134,19 +136,19 @@ class Parameter:
     long_name: str | None = None
 
     def __post_init__(self) -> None:
-        where = f"parameter {self.path!r}"
+        where = f"parameter {_short(self.path)}"
         parse_path(self.path, "parameter path")
         if self.values is not None:
             vals = tuple(self.values) if isinstance(self.values, list | tuple) else None
             if vals is None:
-                raise ConfigError(f"{where}: values must be a list, got {self.values!r}")
+                raise ConfigError(f"{where}: values must be a list, got {_short(self.values)}")
             if not vals:
                 raise ConfigError(f"{where}: values is empty; give at least one value")
             for i, v in enumerate(vals):
                 if value_kind(v) == "other":
-                    raise ConfigError(f"{where}: values[{i}] = {v!r} is not a TOML value")
+                    raise ConfigError(f"{where}: values[{i}] = {_short(v)} is not a TOML value")
                 if isinstance(v, float) and not math.isfinite(v):
-                    raise ConfigError(f"{where}: values[{i}] = {v!r}; admissible: finite")
+                    raise ConfigError(f"{where}: values[{i}] = {_short(v)}; admissible: finite")
             object.__setattr__(self, "values", vals)
         if self.labels is not None:
             labels = tuple(self.labels) if isinstance(self.labels, list | tuple) else ()
@@ -161,16 +163,17 @@ class Parameter:
             if self.values is not None:
                 raise ConfigError(f"{where}: give values or a distribution, not both")
             if not isinstance(self.distribution, str) or self.distribution not in _DISTRIBUTIONS:
-                raise ConfigError(f"{where}: distribution = {self.distribution!r}; admissible: "
+                raise ConfigError(f"{where}: distribution = "
+                                  f"{_short(self.distribution)}; admissible: "
                                   f"{', '.join(_DISTRIBUTIONS)}")
             req, opt = _DISTRIBUTIONS[self.distribution]
             given = {k for k in ("low", "high", "mean", "std") if getattr(self, k) is not None}
             if req - given:
-                raise ConfigError(f"{where}: distribution {self.distribution!r} needs "
-                                  f"{sorted(req - given)[0]!r}")
+                raise ConfigError(f"{where}: distribution {_short(self.distribution)} needs "
+                                  f"{_short(sorted(req - given)[0])}")
             if given - req - opt:
-                raise ConfigError(f"{where}: {sorted(given - req - opt)[0]!r} is not a "
-                                  f"parameter of distribution {self.distribution!r} "
+                raise ConfigError(f"{where}: {_short(sorted(given - req - opt)[0])} is not a "
+                                  f"parameter of distribution {_short(self.distribution)} "
                                   f"(admissible: {', '.join(sorted(req | opt))})")
             arrs = {k: _bound(getattr(self, k), f"{where}.{k}") for k in given}
             shapes = {a.shape for a in arrs.values()} - {()}
@@ -183,6 +186,11 @@ class Parameter:
         elif self.values is None:
             raise ConfigError(f"{where}: give values = [...] (or a distribution in random "
                               "mode)")
+        else:
+            for k in ("low", "high", "mean", "std"):
+                if getattr(self, k) is not None:
+                    raise ConfigError(f"{where}: {k} applies to a distribution (give values "
+                                      "or a distribution)")
         for k in ("units", "long_name"):
             v = getattr(self, k)
             if v is not None and not isinstance(v, str):
@@ -192,7 +200,7 @@ class Parameter:
     def listed(self) -> tuple:
         """``values``, which a parameter of a grid or zip sweep always has."""
         if self.values is None:
-            raise ConfigError(f"parameter {self.path!r}: give values = [...] (a distribution "
+            raise ConfigError(f"parameter {_short(self.path)}: give values = [...] (a distribution "
                               "needs mode = 'random')")
         return self.values
 
@@ -348,36 +356,38 @@ class Sweep:
     def __post_init__(self) -> None:
         if not isinstance(self.base, str) or not self.base:
             raise ConfigError("base must be a preset name or a gear-set TOML path")
-        params = tuple(self.parameters)
+        params = check_items(self.parameters, Parameter, "parameters", error=ConfigError)
         if not params:
             raise ConfigError("a sweep needs at least one [[parameter]]")
         object.__setattr__(self, "parameters", params)
         paths = [p.path for p in params]
         for path in paths:
             if path in _RESERVED:
-                raise ConfigError(f"parameter path {path!r} is the name of a dimension or "
+                raise ConfigError(f"parameter path {_short(path)} is the name of a dimension or "
                                   "coordinate of sweep.nc; vary its elements instead (e.g. "
                                   f"'{path}.0.<key>')")
         dup = sorted({p for p in paths if paths.count(p) > 1})
         if dup:
-            raise ConfigError(f"parameter path {dup[0]!r} is listed twice")
+            raise ConfigError(f"parameter path {_short(dup[0])} is listed twice")
         for a in paths:
             for b in paths:
                 if a != b and b.startswith(a + "."):
-                    raise ConfigError(f"parameter paths {a!r} and {b!r} overlap (one contains "
+                    raise ConfigError(f"parameter paths {_short(a)} and {_short(b)} "
+                                      f"overlap (one contains "
                                       "the other)")
         if self.mode not in _MODES:
-            raise ConfigError(f"mode = {self.mode!r}; admissible: {', '.join(_MODES)}")
+            raise ConfigError(f"mode = {_short(self.mode)}; admissible: {', '.join(_MODES)}")
         mc = self.max_cases
         if isinstance(mc, bool) or not isinstance(mc, int) or not 1 <= mc <= HARD_MAX_CASES:
-            raise ConfigError(f"max_cases = {mc!r}; admissible: an integer 1..{HARD_MAX_CASES}")
+            raise ConfigError(f"max_cases = {_short(mc)}; admissible: an integer "
+                              f"1..{HARD_MAX_CASES}")
         if self.mode == "random":
             for k in ("samples", "seed"):
                 v = getattr(self, k)
                 if isinstance(v, bool) or not isinstance(v, int) or v < (1 if k == "samples"
                                                                           else 0):
                     raise ConfigError(f"mode = 'random' needs {k} = an integer "
-                                      f"{'>= 1' if k == 'samples' else '>= 0'}, got {v!r}")
+                                      f"{'>= 1' if k == 'samples' else '>= 0'}, got {_short(v)}")
             assert self.samples is not None  # (checked just above)
             if self.samples > self.max_cases:
                 raise ConfigError(f"samples = {self.samples} is more than max_cases = "
@@ -387,17 +397,17 @@ class Sweep:
             for k in ("samples", "seed"):
                 if getattr(self, k) is not None:
                     raise ConfigError(f"{k} is a key of mode = 'random' only (mode is "
-                                      f"{self.mode!r})")
+                                      f"{_short(self.mode)})")
             for p in params:
                 if p.distribution is not None:
-                    raise ConfigError(f"parameter {p.path!r}: a distribution needs mode = "
+                    raise ConfigError(f"parameter {_short(p.path)}: a distribution needs mode = "
                                       "'random'")
         if self.mode == "zip":
             n0 = len(params[0].listed)
             for p in params[1:]:
                 if len(p.listed) != n0:
                     raise ConfigError(f"mode = 'zip' needs as many values for every parameter:"
-                                      f" {params[0].path!r} has {n0}, {p.path!r} has "
+                                      f" {_short(params[0].path)} has {n0}, {_short(p.path)} has "
                                       f"{len(p.listed)}")
         n = self.n_cases
         if n > self.max_cases:
@@ -408,6 +418,15 @@ class Sweep:
                               f"values or raise max_cases (at most {HARD_MAX_CASES})")
         if not isinstance(self.simulation, dict):
             raise ConfigError("[simulation] must be a table")
+        for k, v in self.simulation.items():  # the values: with the base's, per case
+            if k not in SIMULATION_KEYS:
+                raise ConfigError(f"unknown key {_short(k)} in [simulation] (admissible: "
+                                  f"{', '.join(sorted(SIMULATION_KEYS))})")
+            if isinstance(v, float) and not math.isfinite(v):
+                raise ConfigError(f"[simulation].{k} = {v!r}; admissible: finite")
+        if self.base_dir is not None and not isinstance(self.base_dir, str | Path):
+            raise ConfigError(f"base_dir must be a folder (a path), got "
+                              f"{type(self.base_dir).__name__}")
         if not isinstance(self.summary, SummarySettings):
             raise ConfigError("summary must be a SummarySettings")
         if not isinstance(self.title, str):
@@ -434,7 +453,7 @@ class Sweep:
         try:
             cfg, base_dir = load_config(ref)
         except ConfigError as exc:
-            raise ConfigError(f"base = {self.base!r}: {exc}") from None
+            raise ConfigError(f"base = {_short(self.base)}: {exc}") from None
         cfg = copy.deepcopy(cfg)
         sim = dict(cfg.get("simulation", {}))
         sim.update(self.simulation)
@@ -466,8 +485,9 @@ class Sweep:
             compatible = {"number": {"number", "string"}, "string": {"string", "number"},
                           "list": {"list"}, "table": {"table"}, "bool": {"bool"}}
             if k_new not in compatible.get(k_old, {k_old}):
-                raise ConfigError(f"{where}: {v!r} is a {k_new}, but the base description has "
-                                  f"a {k_old} at {p.path!r} ({old!r})")
+                raise ConfigError(f"{where}: {_short(v)} is a {k_new}, but the base "
+                                  f"description has "
+                                  f"a {k_old} at {_short(p.path)} ({_short(old)})")
         return set_path(base, p.path, v)
 
     def _check_description(self, desc: dict, base_dir: str | None, where: str) -> dict:
@@ -506,23 +526,25 @@ class Sweep:
                 probes = [getattr(p, k) for k in ("low", "high", "mean")
                           if getattr(p, k) is not None]
                 if exists and value_kind(old) not in ("number", "list", "string"):
-                    raise ConfigError(f"parameter {p.path!r}: a distribution draws numbers, but "
-                                      f"the base has {old!r} there")
+                    raise ConfigError(f"parameter {_short(p.path)}: a distribution "
+                                      f"draws numbers, but "
+                                      f"the base has {_short(old)} there")
             for v in probes:
-                where = f"parameter #{i + 1} ({p.path!r}), value {value_label(v)!r}"
+                where = f"parameter #{i + 1} ({_short(p.path)}), value {_short(value_label(v))}"
                 if p.distribution is not None:
                     v = np.asarray(v, dtype=float).tolist()
                 desc = self._apply(base, p, v, where)
                 self._check_description(desc, base_dir, where)
             numeric = p.distribution is not None or _coordinate_kind(probes) == "number"
             if numeric and (p.units or path_units(p.path)) is None:
-                raise ConfigError(f"parameter {p.path!r}: the units of this key are not known; "
+                raise ConfigError(f"parameter {_short(p.path)}: the units of this key "
+                                  f"are not known; "
                                   "give units = \"...\" (UDUNITS, e.g. \"N m-1\", \"1\")")
         out = []
         for idx, vals in enumerate(self._values()):
             desc = base
             for p, v in zip(self.parameters, vals, strict=True):
-                desc = self._apply(desc, p, v, f"parameter {p.path!r}")
+                desc = self._apply(desc, p, v, f"parameter {_short(p.path)}")
             run = resolve_run_settings(desc.get("simulation", {}))
             if idx == 0:
                 self._check_description(desc, base_dir, "case 0")
@@ -574,7 +596,7 @@ def sweep_from_dict(d: dict, *, base_dir: str | Path | None = None) -> Sweep:
         raise ConfigError("[simulation] must be a table")
     for k in sim:
         if k not in SIMULATION_KEYS:
-            raise ConfigError(f"unknown key {k!r} in [simulation] (admissible: "
+            raise ConfigError(f"unknown key {_short(k)} in [simulation] (admissible: "
                               f"{', '.join(sorted(SIMULATION_KEYS))})")
     summary = SummarySettings.from_dict(d.get("summary", {}))
     return Sweep(base=d["base"], parameters=params, mode=d.get("mode", "grid"),

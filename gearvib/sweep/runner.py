@@ -27,9 +27,12 @@ from pathlib import Path
 
 import xarray as xr
 
+from analysis.checks import require_instance
 from gearvib import tempfiles
+from gearvib.checks import check_count, short
 from gearvib.config import ConfigError
 from gearvib.execution import (
+    MAX_WORKERS,
     SerialExecutor,
     default_workers,
     local_executor,
@@ -213,7 +216,21 @@ def run_sweep(sweep: Sweep, out_dir: str | os.PathLike, *, workers: int | None =
     """
     t0 = time.perf_counter()
     if not isinstance(run_files, bool):
-        raise TypeError(f"run_files must be True or False, got {run_files!r}")
+        raise TypeError(f"run_files must be True or False, got {short(run_files)}")
+    require_instance(sweep, Sweep, "sweep")
+    if executor is not None:
+        require_instance(executor, Executor, "executor")
+    if not callable(runner):
+        raise TypeError(f"runner must be callable; got {type(runner).__name__}")
+    if on_case_done is not None and not callable(on_case_done):
+        raise TypeError(f"on_case_done must be callable; got {type(on_case_done).__name__}")
+    for key, flag in (("progress", progress), ("report", report)):
+        if not isinstance(flag, bool):
+            raise TypeError(f"{key} must be True or False, got {short(flag)}")
+    if batch is not None and not isinstance(batch, bool):
+        raise TypeError(f"batch must be True, False or None, got {short(batch)}")
+    if workers is not None:
+        check_count(workers, "workers", low=1, high=MAX_WORKERS)
     cases = sweep.cases()
     out = check_output_dir(out_dir)
     runs = out / "runs"

@@ -26,10 +26,20 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+from analysis.checks import require_instance
 from analysis.orders import order_cuts
+from gearvib.checks import check_items, check_real
+from gearvib.checks import short as _short
 from gearvib.config import ConfigError, check_keys
 from gearvib.model import AssembledModel
-from gearvib.simulate import Conditions, static_tooth_forces
+from gearvib.simulate import (
+    Conditions,
+    MotorDriven,
+    SpeedRamp,
+    SpeedTable,
+    TorqueDriven,
+    static_tooth_forces,
+)
 from gearvib.stability import stability_over_speed
 from gearvib.sweep.loadfactor import mesh_loads
 
@@ -62,6 +72,9 @@ _SIGNAL = re.compile(r"^([A-Za-z_][A-Za-z0-9_]*)(?:\[(.*)\])?$")
 _MIN_SPEED_FRACTION = 0.01
 
 
+RUN_VARIABLES = ("time", "normal_force", "mesh_deflection", "input_speed", "mesh_frequency")
+"""Variables of a run that :func:`summarise_run` reads."""
+
 @dataclass(frozen=True)
 class OrderSignal:
     """A run variable, optionally reduced by label selections, whose order levels are kept.
@@ -79,12 +92,22 @@ class OrderSignal:
     variable: str
     select: tuple[tuple[str, str], ...] = ()
 
+    def __post_init__(self) -> None:
+        if not isinstance(self.variable, str) or self.variable not in ORDER_SIGNAL_VARIABLES:
+            raise ConfigError(f"OrderSignal.variable = {_short(self.variable)} is not "
+                              f"admissible (admissible: {', '.join(ORDER_SIGNAL_VARIABLES)})")
+        if not (isinstance(self.select, tuple) and all(
+                isinstance(p, tuple) and len(p) == 2 and all(isinstance(x, str) for x in p)
+                for p in self.select)):
+            raise ConfigError(f"OrderSignal.select must be (dimension, label) pairs of "
+                              f"strings, got {_short(self.select)}")
+
     @classmethod
     def parse(cls, text: Any, where: str) -> OrderSignal:
         """Parse ``"variable[dim=label, ...]"``."""
         m = _SIGNAL.match(text.strip()) if isinstance(text, str) else None
         if m is None:
-            raise ConfigError(f"{where} = {text!r}: expected a run variable such as "
+            raise ConfigError(f"{where} = {_short(text)}: expected a run variable such as "
                               "'drive_torque' or 'normal_force[flank=left]'")
         var, sel_text = m.group(1), m.group(2)
         if var not in ORDER_SIGNAL_VARIABLES:
@@ -95,8 +118,8 @@ class OrderSignal:
             for item in sel_text.split(","):
                 dim, eq, label = item.partition("=")
                 if not eq or not dim.strip() or not label.strip():
-                    raise ConfigError(f"{where} = {text!r}: a selection is 'dimension=label', "
-                                      f"got {item.strip()!r}")
+                    raise ConfigError(f"{where} = {_short(text)}: a selection is "
+                                      f"'dimension=label', got {_short(item.strip())}")
                 select.append((dim.strip(), label.strip()))
         return cls(var, tuple(select))
 
@@ -109,10 +132,12 @@ class OrderSignal:
 def _pair(value: Any, where: str, *, minimum: float = 0.0) -> tuple[float, float]:
     if (not isinstance(value, list | tuple) or len(value) != 2
             or any(isinstance(v, bool) or not isinstance(v, int | float) for v in value)):
-        raise ConfigError(f"{where} must be [start, end] (two numbers), got {value!r}")
-    lo, hi = float(value[0]), float(value[1])
-    if not (math.isfinite(lo) and math.isfinite(hi)) or lo < minimum or not hi > lo:
-        raise ConfigError(f"{where} = {value!r}; admissible: {minimum:g} <= start < end, finite")
+        raise ConfigError(f"{where} must be [start, end] (two numbers), got {_short(value)}")
+    lo = check_real(value[0], f"{where}[0]", error=ConfigError)
+    hi = check_real(value[1], f"{where}[1]", error=ConfigError)
+    if lo < minimum or not hi > lo:
+        raise ConfigError(f"{where} = {_short(value)}; admissible: {minimum:g} <= start < end, "
+                          "finite")
     return lo, hi
 
 
@@ -152,35 +177,31 @@ class SummarySettings:
     floquet_speed_rpm: tuple[float, float] | None = None
     floquet_points: int = 40
 
+    def __post_init__(self) -> None:
+        w = "SummarySettings"
+        table: dict[str, Any] = {k: getattr(self, k) for k in (
+            "window_s", "window_rpm", "floquet_speed_rpm") if getattr(self, k) is not None}
+        if not (isinstance(self.orders, tuple | list) and not self.orders):
+            table["orders"] = list(self.orders) if isinstance(self.orders, tuple) else self.orders
+        for k in ("order_reference", "order_resolution", "floquet_points"):
+            table[k] = getattr(self, k)
+        for k, v in _checked_summary(table, w).items():
+            object.__setattr__(self, k, v)
+        if isinstance(self.orders, list):
+            object.__setattr__(self, "orders", tuple(self.orders))
+        signals = check_items(self.order_signals, OrderSignal, f"{w}.order_signals",
+                              error=ConfigError)
+        if not signals:
+            raise ConfigError(f"{w}.order_signals must not be empty")
+        object.__setattr__(self, "order_signals", signals)
+
     @classmethod
     def from_dict(cls, table: Mapping, where: str = "[summary]") -> SummarySettings:
         """Checked settings from a ``[summary]`` table (unknown keys name the admissible)."""
         if not isinstance(table, Mapping):
             raise ConfigError(f"{where} must be a table, got {type(table).__name__}")
         check_keys(dict(table), _KEYS, where)
-        kw: dict[str, Any] = {}
-        if "window_s" in table:
-            kw["window_s"] = _pair(table["window_s"], f"{where}.window_s")
-        if "window_rpm" in table:
-            kw["window_rpm"] = _pair(table["window_rpm"], f"{where}.window_rpm")
-        if "orders" in table:
-            o = table["orders"]
-            if (not isinstance(o, list) or not o
-                    or any(isinstance(v, bool) or not isinstance(v, int | float) for v in o)
-                    or any(not (math.isfinite(v) and v > 0) for v in o)):
-                raise ConfigError(f"{where}.orders must be a non-empty list of orders > 0, "
-                                  f"got {o!r}")
-            if len(o) > MAX_ORDERS:
-                raise ConfigError(f"{where}.orders lists {len(o)} orders; admissible: at most "
-                                  f"{MAX_ORDERS}")
-            if len(set(o)) != len(o):
-                raise ConfigError(f"{where}.orders lists an order twice: {o!r}")
-            kw["orders"] = tuple(float(v) for v in o)
-        if "order_reference" in table:
-            ref = table["order_reference"]
-            if not isinstance(ref, str) or not ref:
-                raise ConfigError(f"{where}.order_reference must be 'mesh' or a member name")
-            kw["order_reference"] = ref
+        kw = _checked_summary(table, where)
         if "order_signals" in table:
             sig = table["order_signals"]
             if not isinstance(sig, list) or not sig:
@@ -194,23 +215,6 @@ class SummarySettings:
                 raise ConfigError(f"{where}.order_signals lists {dup[0]!r} twice (one entry per "
                                   "variable; its other dimensions are kept)")
             kw["order_signals"] = parsed
-        if "order_resolution" in table:
-            r = table["order_resolution"]
-            if isinstance(r, bool) or not isinstance(r, int | float) or not 0 < r < math.inf:
-                raise ConfigError(f"{where}.order_resolution = {r!r}; admissible: a finite "
-                                  "number > 0 (orders)")
-            kw["order_resolution"] = float(r)
-        if "floquet_speed_rpm" in table:
-            lo, hi = _pair(table["floquet_speed_rpm"], f"{where}.floquet_speed_rpm")
-            if not lo > 0:
-                raise ConfigError(f"{where}.floquet_speed_rpm: speeds must be > 0 min-1")
-            kw["floquet_speed_rpm"] = (lo, hi)
-        if "floquet_points" in table:
-            p = table["floquet_points"]
-            if isinstance(p, bool) or not isinstance(p, int) or not 2 <= p <= 2000:
-                raise ConfigError(f"{where}.floquet_points = {p!r}; admissible: an integer "
-                                  "2..2000")
-            kw["floquet_points"] = p
         return cls(**kw)
 
     def to_dict(self) -> dict[str, Any]:
@@ -220,6 +224,51 @@ class SummarySettings:
         d["orders"] = list(self.orders)
         return {k: (list(v) if isinstance(v, tuple) else v) for k, v in d.items()
                 if v is not None}
+
+
+def _checked_summary(table: Mapping, where: str) -> dict[str, Any]:
+    """The ``[summary]`` values of ``table`` but ``order_signals``, checked."""
+    kw: dict[str, Any] = {}
+    if "window_s" in table:
+        kw["window_s"] = _pair(table["window_s"], f"{where}.window_s")
+    if "window_rpm" in table:
+        kw["window_rpm"] = _pair(table["window_rpm"], f"{where}.window_rpm")
+    if "orders" in table:
+        o = table["orders"]
+        if (not isinstance(o, list) or not o
+                or any(isinstance(v, bool) or not isinstance(v, int | float) for v in o)
+                or any(not (abs(v) < 1e300 and math.isfinite(v) and v > 0) for v in o)):
+            raise ConfigError(f"{where}.orders must be a non-empty list of orders > 0, "
+                              f"got {_short(o)}")
+        if len(o) > MAX_ORDERS:
+            raise ConfigError(f"{where}.orders lists {len(o)} orders; admissible: at most "
+                              f"{MAX_ORDERS}")
+        if len(set(o)) != len(o):
+            raise ConfigError(f"{where}.orders lists an order twice: {_short(o)}")
+        kw["orders"] = tuple(float(v) for v in o)
+    if "order_reference" in table:
+        ref = table["order_reference"]
+        if not isinstance(ref, str) or not ref:
+            raise ConfigError(f"{where}.order_reference must be 'mesh' or a member name")
+        kw["order_reference"] = ref
+    if "order_resolution" in table:
+        r = table["order_resolution"]
+        if isinstance(r, bool) or not isinstance(r, int | float) or not 0 < r < 1e300:
+            raise ConfigError(f"{where}.order_resolution = {_short(r)}; admissible: a finite "
+                              "number > 0 (orders)")
+        kw["order_resolution"] = float(r)
+    if "floquet_speed_rpm" in table:
+        lo, hi = _pair(table["floquet_speed_rpm"], f"{where}.floquet_speed_rpm")
+        if not lo > 0:
+            raise ConfigError(f"{where}.floquet_speed_rpm: speeds must be > 0 min-1")
+        kw["floquet_speed_rpm"] = (lo, hi)
+    if "floquet_points" in table:
+        p = table["floquet_points"]
+        if isinstance(p, bool) or not isinstance(p, int) or not 2 <= p <= 2000:
+            raise ConfigError(f"{where}.floquet_points = {_short(p)}; admissible: an integer "
+                              "2..2000")
+        kw["floquet_points"] = p
+    return kw
 
 
 @dataclass
@@ -361,6 +410,18 @@ def summarise_run(ds: xr.Dataset, model: AssembledModel, conditions: Conditions,
         The window holds no sample, an order signal's selection names an unknown label, or
         ``order_reference`` is not a member.
     """
+    require_instance(ds, xr.Dataset, "ds")
+    missing = [v for v in RUN_VARIABLES if v not in ds.variables]
+    if missing:
+        raise ValueError(f"ds is not a gearvib run: variable {missing[0]!r} is missing")
+    require_instance(model, AssembledModel, "model")
+    if not isinstance(conditions, SpeedRamp | SpeedTable | TorqueDriven | MotorDriven):
+        raise TypeError(f"conditions must be SpeedRamp, SpeedTable, TorqueDriven or "
+                        f"MotorDriven; got {type(conditions).__name__}")
+    if settings is not None:
+        require_instance(settings, SummarySettings, "settings")
+    if not isinstance(gyroscopic, bool):
+        raise TypeError(f"gyroscopic must be a bool; got {type(gyroscopic).__name__}")
     s = settings or SummarySettings()
     keep = _window_mask(ds, s)
     idx = np.flatnonzero(keep)

@@ -462,6 +462,7 @@ BASELINES: dict[str, Callable[[], A]] = {
     "analysis.checks.require_size": _c(1024.0, "a test", "n"),
     "analysis.checks.require_square": _c(lambda: np.eye(2), "K"),
     "analysis.checks.sample_rate": _c(lambda: np.arange(10) / FS),
+    "analysis.checks.shown": _c(3.0),
     "analysis.checks.time_or_rate": _c(FS, None, "f"),
     "analysis.checks.uniform_rate": _c(lambda: np.arange(10) / FS),
     # cm_plots

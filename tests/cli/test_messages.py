@@ -63,7 +63,8 @@ def test_long_values_are_cut_in_messages(tmp_path, capsys):
     f = tmp_path / "long.toml"
     f.write_text(PRESET + '\n[[fault]]\nkind = "' + "c" * 100_000 + '"\nmember = "sun"\n')
     err = _error(["modes", str(f)], capsys)
-    assert len(err) < MAX_MESSAGE + 40 and "[100002 characters]" in err, err
+    assert len(err) < MAX_MESSAGE + 40 and "c" * 100 not in err, err  # cut (by gearvib's
+    # checks, or by the command line's cut when a message holds a long value)
 
 
 def test_a_huge_description_file_is_refused_before_it_is_read(tmp_path, capsys):

@@ -130,7 +130,7 @@ def test_interference_and_overlapping_centre_distance_raise():
     ("kwargs", "match"),
     [
         ({"z": 2, "module": M}, r"\|z\| >= 3"),
-        ({"z": 20, "module": -1e-3}, r"module .* > 0"),
+        ({"z": 20, "module": -1e-3}, r"module = -0.001 m .*admissible: 1e-05 to 1 m"),
         ({"z": 20, "module": float("nan")}, "module"),
         ({"z": 20, "module": M, "pressure_angle": math.radians(50)}, "pressure_angle"),
         ({"z": 20, "module": M, "helix_angle": math.radians(46)}, "helix_angle"),
