@@ -73,7 +73,8 @@ if TYPE_CHECKING:
     import matplotlib.figure
     import xarray as xr
 
-__all__ = ["IMPACT_CAP", "IMPACT_CHANCE", "IMPACT_HARMONICS", "MIN_RELATIVE_DB", "MIN_STRONG",
+__all__ = ["IMPACT_CAP", "IMPACT_CHANCE", "IMPACT_HARMONICS", "MIN_RELATIVE_DB",
+           "MIN_REVOLUTIONS", "MIN_STRONG",
            "ImpactCheck", "ImpactEvidence", "ImpactFamily", "impact_check"]
 
 IMPACT_CAP = 10.0
@@ -105,6 +106,9 @@ BACKGROUND_DB = 6.0
 """Background (the running median between the whole orders) over the record's noise floor
 [dB] around a mesh harmonic at which the harmonic counts as present however smeared its
 lines are."""
+
+MIN_REVOLUTIONS = 4
+"""Reference revolutions a record must cover for :func:`impact_check`."""
 
 _LN2 = math.log(2.0)
 _BACKGROUND = 10.0 ** (BACKGROUND_DB / 10.0)
@@ -398,9 +402,10 @@ def impact_check(x: Any, fs: float, rpm: Any, *, mesh_orders: Sequence[float],
     spr = next_fast_len(max(8, math.ceil(2.56 * top)))  # the whole record is one FFT
     ang = resample_to_angle(xv, fs, rpm=rv, samples_per_rev=spr, max_order=top, min_rpm=0.0)
     revs = int(ang.values.size // spr)
-    if revs < 4:
+    if revs < MIN_REVOLUTIONS:
         raise ValueError(f"{name}: the record covers {ang.values.size / spr:.1f} revolutions of "
-                         "the reference shaft; the impact check needs at least 4")
+                         f"the reference shaft; the impact check needs at least "
+                         f"{MIN_REVOLUTIONS}")
     spec = rfft(np.ascontiguousarray(ang.values[:revs * spr]))
     nb = int(min(spec.size, math.floor(top * revs) + 1))
     spec = spec[:nb]

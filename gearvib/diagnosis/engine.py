@@ -45,6 +45,7 @@ from analysis.diagnosis import (
     signature_score,
     with_noise_floor,
 )
+from analysis.diagnosis_impacts import MIN_REVOLUTIONS
 from gearvib import tempfiles
 from gearvib.checks import check_count, check_path, check_real, short
 from gearvib.config import ConfigError
@@ -574,11 +575,16 @@ def diagnose(measured: Record, config: str, *, baseline: Record | None = None,
     if close and not nxt:
         nxt.append("a second sensor position and another load: the leading causes differ "
                    "little on this record")
-    detected = [e.family for e in impacts.evidence if e.detected]
-    notes = [f"order locking: {locking}", *mode_notes,
-             f"tooth-fault impacts (envelope without the mesh lattice; comb above the mesh "
-             f"band, orders {impacts.band[0]:.0f}-{impacts.band[1]:.0f}): "
-             + (f"detected for {', '.join(detected)}" if detected else "none detected"),
+    if impacts is None:
+        impact_note = (f"tooth-fault impacts: not checked (the record covers fewer than "
+                       f"{MIN_REVOLUTIONS + 1} {kin.reference} revolutions)")
+    else:
+        detected = [e.family for e in impacts.evidence if e.detected]
+        impact_note = (f"tooth-fault impacts (envelope without the mesh lattice; comb above "
+                       f"the mesh band, orders {impacts.band[0]:.0f}-{impacts.band[1]:.0f}): "
+                       + (f"detected for {', '.join(detected)}" if detected
+                          else "none detected"))
+    notes = [f"order locking: {locking}", *mode_notes, impact_note,
              f"resolution {1 / revolutions:.4g} {kin.reference} orders, {meas.segments} "
              f"segments, band up to order {max_order:.0f} ({max_order / mesh:.1f} mesh "
              "harmonics" + (" of the fastest mesh)" if len(set(meshes)) > 1 else ")"),

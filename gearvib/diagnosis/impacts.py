@@ -15,7 +15,13 @@ from typing import Any
 
 import numpy as np
 
-from analysis.diagnosis_impacts import ImpactCheck, ImpactEvidence, ImpactFamily, impact_check
+from analysis.diagnosis_impacts import (
+    MIN_REVOLUTIONS,
+    ImpactCheck,
+    ImpactEvidence,
+    ImpactFamily,
+    impact_check,
+)
 from gearvib.diagnosis.candidates import LOCAL_KINDS
 from gearvib.diagnosis.lines import MemberLines
 
@@ -30,7 +36,7 @@ orders; at least this many orders without planets)."""
 def member_impacts(signal: np.ndarray, fs: float, rpm: np.ndarray, *,
                    lines: dict[str, MemberLines], members: list[Any], ms: dict[str, float],
                    model: Any, name: str = "measured"
-                   ) -> tuple[ImpactCheck, dict[tuple[str, str], ImpactEvidence]]:
+                   ) -> tuple[ImpactCheck | None, dict[tuple[str, str], ImpactEvidence]]:
     """The impact check of a record and its evidence per local-fault cause.
 
     Parameters
@@ -51,10 +57,14 @@ def member_impacts(signal: np.ndarray, fs: float, rpm: np.ndarray, *,
 
     Returns
     -------
-    ImpactCheck, dict
+    ImpactCheck or None, dict
         The check and ``(kind, member) -> ImpactEvidence`` for every local kind of every
-        member with a fault family.
+        member with a fault family; ``None`` and no evidence when the record covers fewer
+        than ``MIN_REVOLUTIONS + 1`` revolutions of the reference shaft (too short to tell
+        impacts from noise: the diagnosis goes on without this evidence).
     """
+    if float(np.sum(rpm)) / (60.0 * fs) < MIN_REVOLUTIONS + 1:
+        return None, {}
     meshes = sorted({ln.mesh for ln in lines.values() if ln.mesh > 0})
     fams: dict[str, float] = {}
     for m in members:

@@ -70,3 +70,22 @@ def test_healthy_records_show_no_impacts(four_planet, seed):
     _, ev = _check(_benchmark(None, seed=seed), four_planet)
     assert not any(e.detected for e in ev.values()), ev
     assert min(e.chance for e in ev.values()) > 1e-3
+
+
+@pytest.mark.parametrize("revolutions", [0.6, 4.9])
+def test_a_record_too_short_for_the_check_gives_no_impact_evidence(four_planet, revolutions):
+    """Fewer than MIN_REVOLUTIONS + 1 reference revolutions: no check and no evidence (the
+    diagnosis goes on without it; tests/gearvib/test_fuzz_python_api.py diagnoses a record of
+    0.6 revolutions), rather than the impact check's refusal of the whole diagnosis."""
+    kin, members, lines = four_planet
+    fs, rpm = 4096.0, 600.0
+    n = round(revolutions * 60.0 / rpm * fs)
+    x = np.random.default_rng(5).standard_normal(n)
+    check, by = member_impacts(x, fs, np.full(n, rpm), lines=lines, members=members,
+                               ms=kin.ms, model=kin.model)
+    assert check is None and by == {}
+    # from 5 revolutions on, the check runs
+    n5 = round(5.2 * 60.0 / rpm * fs)
+    check, by = member_impacts(np.resize(x, n5), fs, np.full(n5, rpm), lines=lines,
+                               members=members, ms=kin.ms, model=kin.model)
+    assert check is not None and check.revolutions >= 4 and by

@@ -73,6 +73,7 @@ SLOW = {
     "gearvib.fault_lines.check_fault_lines", "gearvib.stability.stability_map",
     "gearvib.execution.local_executor", "gearvib.execution.executor_for",
     "gearvib.execution.dask_executor", "gearvib.execution.probe_scheduler",
+    "gearvib.simulate.simulate_batch",  # its first call compiles the batched kernel (~20 s)
 }  # fmt: skip
 #: Errors a call may raise (besides ValueError and TypeError, which the gearvib input errors
 #: ConfigError, RunSizeError, FaultError, SensorError and RollingBearingError are).
