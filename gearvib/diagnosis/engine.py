@@ -100,11 +100,12 @@ SKIP_S = 0.2
 """Start-up transient left out of every simulation [s]."""
 
 SIM_SEGMENTS = 3
-MAX_REVOLUTIONS = 10_000
-"""Most carrier revolutions per profile segment (``revolutions``)."""
 """Averaged segments of every simulated profile: a candidate is simulated over
 ``revolutions * (SIM_SEGMENTS + 1) / 2`` carrier revolutions (50 % overlap) plus one of
 margin and the start-up, whatever the record's length (``docs/diagnosis.md``)."""
+
+MAX_REVOLUTIONS = 10_000
+"""Most carrier revolutions per profile segment (``revolutions``)."""
 
 SPEED_STEP = 0.005
 """Relative grid of the simulated mean speed: records within +-0.25 % share candidates."""
