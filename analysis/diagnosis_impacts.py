@@ -66,6 +66,7 @@ from scipy import ndimage, stats
 
 from analysis.cf import cf_dataset
 from analysis.checks import require_int, require_real, require_real_array
+from analysis.diagnosis_impact_plots import impact_figure
 from analysis.fft import irfft, next_fast_len, rfft
 from analysis.resample import resample_to_angle
 
@@ -283,8 +284,6 @@ class ImpactCheck:
 
     def plot(self, **kwargs: Any) -> matplotlib.figure.Figure:
         """Figure (see :func:`analysis.diagnosis_impact_plots.impact_figure`)."""
-        from analysis.diagnosis_impact_plots import impact_figure
-
         return impact_figure(self, **kwargs)
 
 
