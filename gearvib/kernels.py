@@ -100,6 +100,7 @@ from numba import carray, cfunc, njit, types
 from numba.extending import intrinsic
 
 from analysis.jit import prepare_cache
+from gearvib.lanes import WIDTH, lanes_load, lanes_madd, lanes_splat, lanes_store
 
 prepare_cache(__file__)  # a writable numba cache also in read-only installs (before @njit)
 
@@ -136,6 +137,7 @@ __all__ = [
     "pack",
     "periodic_interp",
     "rhs_loop",
+    "shift_rigid",
     "short_step_header",
     "speed_at",
     "speed_profile",
@@ -1962,6 +1964,33 @@ def integrate_chunk_compiled(y, first_step, n_steps, dt, system, record, record_
 
 
 @njit(cache=True)
+def shift_rigid(rows: np.ndarray, first: int, angle: np.ndarray, speed: np.ndarray,
+                rigid: np.ndarray, add: bool) -> None:
+    """Add (``add``) or subtract the rigid-body motion of recorded rows, in place.
+
+    ``rows[first + i, j] +-= angle[i] * rigid[j]`` and ``rows[first + i, n + j] +-= speed[i]
+    * rigid[j]`` for the ``n = rigid.size`` coordinates and their rates: each product rounded,
+    then added, as NumPy's ``rows[...] -= angle[:, None] * rigid`` does, without its
+    temporary arrays.
+    """
+    n = rigid.shape[0]
+    for i in range(angle.shape[0]):
+        r = first + i
+        a = angle[i]
+        w = speed[i]
+        if add:
+            for j in range(n):
+                rows[r, j] += a * rigid[j]
+            for j in range(n):
+                rows[r, n + j] += w * rigid[j]
+        else:
+            for j in range(n):
+                rows[r, j] -= a * rigid[j]
+            for j in range(n):
+                rows[r, n + j] -= w * rigid[j]
+
+
+@njit(cache=True)
 def fir_decimate(
     buf: np.ndarray,
     buf_first: int,
@@ -1994,20 +2023,63 @@ def fir_decimate(
         Output rows ``out_offset ...``.
     out_offset : int
         First row of ``out`` to write.
+
+    Notes
+    -----
+    Every output is summed tap by tap in the order of ``taps`` (``0 + taps[0] x[..] +
+    taps[1] x[..] + ...``, each product rounded, no fused multiply-add). With eight or more
+    signals (and ``out`` as wide as ``buf``) the sums run on :data:`gearvib.lanes.lanes8`
+    vectors of eight signals, four outputs at a time held over the taps (the last vector
+    overlaps the one before when the count is not a multiple of eight: its signals are summed
+    twice, identically): the same operations per signal, in the same order, as one signal at
+    a time. Both arrays must be C-contiguous.
     """
     n_taps = taps.shape[0]
     half = (n_taps - 1) // 2
     n_sig = buf.shape[1]
-    for k in range(n_out):
-        r0 = (first_out + k) * factor - half - buf_first
-        o = out_offset + k
-        for c in range(n_sig):
-            out[o, c] = 0.0
-        for i in range(n_taps):
-            tap = taps[i]
-            r = r0 + i
+    if n_sig < WIDTH or out.shape[1] != n_sig:
+        for k in range(n_out):
+            r0 = (first_out + k) * factor - half - buf_first
+            o = out_offset + k
             for c in range(n_sig):
-                out[o, c] += tap * buf[r, c]
+                out[o, c] = 0.0
+            for i in range(n_taps):
+                tap = taps[i]
+                r = r0 + i
+                for c in range(n_sig):
+                    out[o, c] += tap * buf[r, c]
+        return
+    zero = lanes_splat(0.0)
+    step = factor * n_sig  # from one output's first row to the next output's
+    for g in range((n_sig + WIDTH - 1) // WIDTH):
+        c0 = min(g * WIDTH, n_sig - WIDTH)  # the last vector may overlap the one before
+        k = 0
+        while k + 4 <= n_out:  # four outputs at a time, their sums held over the taps
+            b0 = ((first_out + k) * factor - half - buf_first) * n_sig + c0
+            a0 = zero
+            a1 = zero
+            a2 = zero
+            a3 = zero
+            for i in range(n_taps):
+                tap = lanes_splat(taps[i])
+                b = b0 + i * n_sig
+                a0 = lanes_madd(a0, tap, lanes_load(buf, b))
+                a1 = lanes_madd(a1, tap, lanes_load(buf, b + step))
+                a2 = lanes_madd(a2, tap, lanes_load(buf, b + 2 * step))
+                a3 = lanes_madd(a3, tap, lanes_load(buf, b + 3 * step))
+            o = (out_offset + k) * n_sig + c0
+            lanes_store(out, o, a0)
+            lanes_store(out, o + n_sig, a1)
+            lanes_store(out, o + 2 * n_sig, a2)
+            lanes_store(out, o + 3 * n_sig, a3)
+            k += 4
+        while k < n_out:
+            b0 = ((first_out + k) * factor - half - buf_first) * n_sig + c0
+            a0 = zero
+            for i in range(n_taps):
+                a0 = lanes_madd(a0, lanes_splat(taps[i]), lanes_load(buf, b0 + i * n_sig))
+            lanes_store(out, (out_offset + k) * n_sig + c0, a0)
+            k += 1
 
 
 def integrate(

@@ -308,8 +308,7 @@ def simulate(
                     _blow_up_message(status[1] * step.dt, int(status[0]), setup, step, gyroscopic)
                 )
             ang, spd = reference((g + np.arange(m)) * step.dt)
-            buf[fill : fill + m, :n] -= ang[:, None] * rigid
-            buf[fill : fill + m, n : 2 * n] -= spd[:, None] * rigid
+            kn.shift_rigid(buf, fill, ang, spd, rigid, False)
             if g == 0:  # odd reflection about t = 0: x(-k) = 2 x(0) - x(k)
                 buf[:half] = 2.0 * buf[half] - buf[2 * half : half : -1]
             fill += m
@@ -341,8 +340,7 @@ def simulate(
         if bar is not None:
             bar.close()
     ang, spd = reference(np.arange(n_out) * (dec * step.dt))
-    out[:, :n] += ang[:, None] * rigid
-    out[:, n : 2 * n] += spd[:, None] * rigid
+    kn.shift_rigid(out, 0, ang, spd, rigid, True)
     result = build_result(
         model,
         conditions,
@@ -697,8 +695,7 @@ def _run_batch(group: list[_Variant], batch, gyroscopic: bool) -> tuple[list, np
         times = (g + np.arange(m)) * step.dt
         for b, v in enumerate(group):
             ang, spd = reference(v, times)
-            buf[b, fill : fill + m, :n] -= ang[:, None] * v.setup.rigid
-            buf[b, fill : fill + m, n : 2 * n] -= spd[:, None] * v.setup.rigid
+            kn.shift_rigid(buf[b], fill, ang, spd, v.setup.rigid, False)
             if g == 0:
                 buf[b, :half] = 2.0 * buf[b, half] - buf[b, 2 * half : half : -1]
         fill += m
@@ -719,6 +716,5 @@ def _run_batch(group: list[_Variant], batch, gyroscopic: bool) -> tuple[list, np
     for b, v in enumerate(group):
         if failed[b] is None:
             ang, spd = reference(v, times)
-            outs[b][:, :n] += ang[:, None] * v.setup.rigid
-            outs[b][:, n : 2 * n] += spd[:, None] * v.setup.rigid
+            kn.shift_rigid(outs[b], 0, ang, spd, v.setup.rigid, True)
     return outs, changes[:nb], failed
