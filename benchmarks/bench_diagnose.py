@@ -189,7 +189,8 @@ def _timed_run(tree: Path, record: Path, workers: int, kinds: tuple[str, ...] = 
     extra = [",".join(kinds)] + ([str(revolutions)] if revolutions else [])
     r = subprocess.run([sys.executable, "-c", _TIMED, str(record), str(workers),
                         *(extra if kinds or revolutions else [])],
-                       capture_output=True, text=True, env=env, check=False)
+                       capture_output=True, text=True, env=env, check=False,
+                       cwd=tree)  # `python -c` puts its folder first on sys.path: the tree's
     lines = [x for x in r.stdout.splitlines() if x.startswith("RESULT ")]
     if r.returncode or not lines:
         raise RuntimeError(f"timed diagnosis with {tree} failed: {r.stderr[-2000:]}")
