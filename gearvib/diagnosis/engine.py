@@ -99,7 +99,7 @@ MESH_HARMONICS = 5.5
 SKIP_S = 0.2
 """Start-up transient left out of every simulation [s]."""
 
-SIM_SEGMENTS = 2
+SIM_SEGMENTS = 3
 """Averaged segments of every simulated profile: a candidate is simulated over
 ``revolutions * (SIM_SEGMENTS + 1) / 2`` carrier revolutions (50 % overlap) plus one of
 margin and the start-up, whatever the record's length (``docs/diagnosis.md``)."""
