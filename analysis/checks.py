@@ -42,6 +42,18 @@ BLOCK_SAMPLES = 1 << 15
 _SMALL_BYTES = 1 << 20
 
 
+def _real_values(values: ArrayLike, name: str) -> np.ndarray:
+    """``values`` as an array of real numbers (its own dtype): a ragged nesting is a
+    :class:`ValueError`, bool, str, complex or object values a :class:`TypeError`."""
+    try:
+        arr = np.asarray(values)
+    except ValueError:  # a ragged nesting
+        raise ValueError(f"{name} must be a rectangular array of real numbers") from None
+    if arr.dtype.kind not in "iuf":
+        raise TypeError(f"{name} must hold real numbers; got dtype {arr.dtype}")
+    return arr
+
+
 def require_finite(values: ArrayLike, name: str) -> np.ndarray:
     """Return ``values`` as a float array; raise if it is empty or holds NaN/inf.
 
@@ -59,12 +71,7 @@ def require_finite(values: ArrayLike, name: str) -> np.ndarray:
     ValueError
         Empty, or NaN/inf.
     """
-    try:
-        arr = np.asarray(values)
-    except ValueError:  # a ragged nesting
-        raise ValueError(f"{name} must be a rectangular array of real numbers") from None
-    if arr.dtype.kind not in "iuf":
-        raise TypeError(f"{name} must hold real numbers; got dtype {arr.dtype}")
+    arr = _real_values(values, name)
     arr = arr.astype(float, copy=False)
     if arr.size == 0:
         raise ValueError(f"{name}: channel is empty (needs at least one sample)")
@@ -156,12 +163,7 @@ def require_real_array(
         Wrong number of dimensions, too few values, NaN/inf, or a magnitude above
         ``max_abs``.
     """
-    try:
-        arr = np.asarray(values)
-    except ValueError:  # a ragged nesting
-        raise ValueError(f"{name} must be a rectangular array of real numbers") from None
-    if arr.dtype.kind not in "iuf":
-        raise TypeError(f"{name} must hold real numbers; got dtype {arr.dtype}")
+    arr = _real_values(values, name)
     if ndim is not None and arr.ndim != ndim:
         raise ValueError(f"{name} must be a {ndim}-D array; got shape {arr.shape}")
     if arr.size < min_size:

@@ -77,7 +77,7 @@ def short(value: Any, limit: int = 40) -> str:
     text = repr(value)
     if "\n" in text:
         text = " ".join(text.split())
-    return text if len(text) <= limit else text[:limit - 3] + "..."
+    return cut(text, limit)
 
 
 def cut(text: str, limit: int = 40) -> str:
