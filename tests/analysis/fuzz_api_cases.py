@@ -23,6 +23,7 @@ import numpy as np
 import xarray as xr
 
 import analysis
+from tests.fuzz_guard import lazy_call
 
 FS = 2048.0
 N = 4096
@@ -342,16 +343,7 @@ def _impact() -> Any:
     return impact_check(x(), FS, rpm(), mesh_orders=[7.0], families=_impact_families())
 
 
-def _c(*args: Any, **kwargs: Any) -> Callable[[], A]:
-    """A baseline whose arguments are callables evaluated lazily (or plain values)."""
-
-    def build() -> A:
-        ev = tuple(a() if callable(a) and not isinstance(a, type) else a for a in args)
-        kw = {k: (v() if callable(v) and not isinstance(v, type) else v)
-              for k, v in kwargs.items()}
-        return ev, kw
-
-    return build
+_c = lazy_call  # a baseline whose callable arguments are built when it is
 
 
 def _o(key: str) -> Callable[[], Any]:

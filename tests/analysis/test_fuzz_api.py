@@ -22,8 +22,6 @@ from __future__ import annotations
 
 import math
 import os
-import resource
-import signal
 import warnings
 from collections import Counter
 from typing import Any
@@ -33,6 +31,7 @@ import pytest
 from hypothesis import HealthCheck, Phase, given, settings
 from hypothesis import strategies as st
 
+from tests import fuzz_guard as fg
 from tests.analysis import fuzz_api_cases as cases
 
 HANG_S = 30
@@ -93,25 +92,11 @@ def _hostile(draw: Any, base: Any) -> Any:
     return draw(st.one_of(pools))
 
 
-class Hang(Exception):
-    """A call ran longer than :data:`HANG_S`."""
-
-
-def _alarm(signum: int, frame: Any) -> None:
-    raise Hang(f"no result after {HANG_S} s")
-
-
 @pytest.fixture(scope="module", autouse=True)
 def _guarded(tmp_path_factory: Any) -> Any:
     """Address-space cap, hang alarm, and a temporary working folder (a path argument
     fuzzed to a relative name lands there)."""
-    with open("/proc/self/statm") as fh:
-        size = int(fh.read().split()[0]) * os.sysconf("SC_PAGE_SIZE")
-    soft, hard = resource.getrlimit(resource.RLIMIT_AS)
-    cap = size + CAP_BYTES
-    if hard != resource.RLIM_INFINITY:
-        cap = min(cap, hard)
-    old = signal.signal(signal.SIGALRM, _alarm)
+    cap = fg.process_size() + CAP_BYTES
     cwd = os.getcwd()
     os.chdir(tmp_path_factory.mktemp("fuzz-cwd"))
     from analysis import fft
@@ -119,12 +104,10 @@ def _guarded(tmp_path_factory: Any) -> Any:
     workers, effort = fft.get_workers(), fft.set_planner_effort("FFTW_ESTIMATE")
     cases.objects()  # build the baselines' result objects before the cap
     cases.files()
-    resource.setrlimit(resource.RLIMIT_AS, (cap, hard))
     try:
-        yield
+        with fg.address_space_limit(cap):
+            yield
     finally:
-        resource.setrlimit(resource.RLIMIT_AS, (soft, hard))
-        signal.signal(signal.SIGALRM, old)
         os.chdir(cwd)
         fft.set_workers(workers)
         fft.set_planner_effort(effort)
@@ -150,20 +133,17 @@ def outcome(name: str, args: tuple, kwargs: dict) -> str:
         allowed += (FileNotFoundError, IsADirectoryError, NotADirectoryError)
     with warnings.catch_warnings(record=True) as seen:
         warnings.simplefilter("always")
-        signal.alarm(HANG_S)
         try:
-            with np.errstate(all="warn"):
+            with np.errstate(all="warn"), fg.time_limit(HANG_S):
                 _consume(func(*args, **kwargs))
             result = "result"
         except allowed as exc:
             msg = str(exc).strip()
             result = "refused" if "\n" not in msg else f"multi-line message: {msg[:300]!r}"
-        except Hang:
+        except fg.Hang:
             result = f"hang (> {HANG_S} s)"
         except Exception as exc:  # the property: nothing else (MemoryError included)
             result = f"{type(exc).__name__}: {str(exc)[:300]}"
-        finally:
-            signal.alarm(0)
     if result in ("result", "refused"):
         for w in seen:
             if issubclass(w.category, RuntimeWarning) and not issubclass(

@@ -28,6 +28,8 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+from tests.fuzz_guard import lazy_call
+
 REPO = Path(__file__).resolve().parents[2]
 A = tuple[tuple, dict]
 
@@ -394,16 +396,7 @@ def pool() -> Any:
 # ------------------------------------------------------------------------------------------
 
 
-def _c(*args: Any, **kwargs: Any) -> Callable[[], A]:
-    """A baseline whose arguments are callables evaluated lazily (or plain values)."""
-
-    def build() -> A:
-        ev = tuple(a() if callable(a) and not isinstance(a, type) else a for a in args)
-        kw = {k: (v() if callable(v) and not isinstance(v, type) else v)
-              for k, v in kwargs.items()}
-        return ev, kw
-
-    return build
+_c = lazy_call  # a baseline whose callable arguments are built when it is
 
 
 def _literal(value: Any) -> Callable[[], Any]:

@@ -12,8 +12,8 @@
   one-line message); ``failed`` -- :class:`~gearvib.simulate.SimulationError` (a real
   numerical blow-up or no static equilibrium, exit code 1); ``other`` -- anything else, which
   fails the test.
-* :func:`time_limit` turns a hang into an error (SIGALRM): a hang is "other" too;
-  :func:`check_call` runs one example under it and checks the outcome.
+* :func:`time_limit` (:mod:`tests.fuzz_guard`) turns a hang into an error (SIGALRM): a hang
+  is "other" too; :func:`check_call` runs one example under it and checks the outcome.
 * :func:`check_study_cases`: what ``gearvib report`` checks of a study before its first
   simulation.
 """
@@ -21,19 +21,18 @@
 from __future__ import annotations
 
 import collections
-import contextlib
 import json
 import os
-import signal
 import sys
 import traceback
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from pathlib import Path
 
 import gearvib
 from gearvib.config import ConfigError, gearset_from_dict
 from gearvib.report.study import Study, check_report_size, resolve_run
 from gearvib.simulation.errors import SimulationError
+from tests.fuzz_guard import time_limit
 
 ENV = os.environ.get("GEARVIB_FUZZ_EXAMPLES")
 REPORT = os.environ.get("GEARVIB_FUZZ_REPORT")
@@ -51,27 +50,6 @@ def derandomize() -> bool:
     return not ENV
 
 
-class Hang(Exception):
-    """An example ran longer than its time limit."""
-
-
-@contextlib.contextmanager
-def time_limit(seconds: float) -> Iterator[None]:
-    """Raise :class:`Hang` in the main thread after ``seconds`` (POSIX; no-op elsewhere)."""
-    if not hasattr(signal, "setitimer"):
-        yield
-        return
-
-    def on_alarm(signum: int, frame: object) -> None:
-        raise Hang(f"no answer within {seconds} s")
-
-    old = signal.signal(signal.SIGALRM, on_alarm)
-    signal.setitimer(signal.ITIMER_REAL, seconds)
-    try:
-        yield
-    finally:
-        signal.setitimer(signal.ITIMER_REAL, 0)
-        signal.signal(signal.SIGALRM, old)
 
 
 def _raised_by_gearvib(exc: BaseException) -> bool:

@@ -38,8 +38,6 @@ import functools
 import inspect
 import math
 import os
-import resource
-import signal
 import warnings
 from collections import Counter
 from pathlib import Path
@@ -54,6 +52,7 @@ from hypothesis import strategies as st
 from gearvib.io import GearvibFileError
 from gearvib.outputs import OutputError
 from gearvib.simulation.errors import SimulationError
+from tests import fuzz_guard as fg
 from tests.gearvib import fuzz_python_api_cases as cases
 from tests.gearvib import fuzz_support as fz
 
@@ -190,25 +189,11 @@ def _hostile(pool: list[Any]) -> st.SearchStrategy:
     return st.one_of(st.sampled_from(pool), st.floats(), st.integers(-(2**70), 2**70))
 
 
-class Hang(Exception):
-    """A call ran longer than :data:`HANG_S`."""
-
-
-def _alarm(signum: int, frame: Any) -> None:
-    raise Hang("no result in time")
-
-
 @pytest.fixture(scope="module", autouse=True)
 def _guarded(tmp_path_factory: Any) -> Any:
     """Address-space cap, hang alarm, and a temporary working folder (a path argument
     fuzzed to a relative name lands there)."""
-    with open("/proc/self/statm") as fh:
-        size = int(fh.read().split()[0]) * os.sysconf("SC_PAGE_SIZE")
-    soft, hard = resource.getrlimit(resource.RLIMIT_AS)
-    cap = size + CAP_BYTES
-    if hard != resource.RLIM_INFINITY:
-        cap = min(cap, hard)
-    old = signal.signal(signal.SIGALRM, _alarm)
+    cap = fg.process_size() + CAP_BYTES
     cwd = os.getcwd()
     os.chdir(tmp_path_factory.mktemp("fuzz-cwd"))
     cases.files()  # the baselines' runs and files, built before the cap
@@ -224,12 +209,10 @@ def _guarded(tmp_path_factory: Any) -> Any:
 
         patch.setattr(runner, "render_html", lambda sections, **kw: "<html></html>")
         patch.setattr(runner, "write_pdf", _no_pdf)
-    resource.setrlimit(resource.RLIMIT_AS, (cap, hard))
     try:
-        yield
+        with fg.address_space_limit(cap):
+            yield
     finally:
-        resource.setrlimit(resource.RLIMIT_AS, (soft, hard))
-        signal.signal(signal.SIGALRM, old)
         os.chdir(cwd)
         patch.undo()
         fz.write_report()
@@ -283,9 +266,9 @@ def outcome(name: str, args: tuple, kwargs: dict,
     value: Any = None
     with warnings.catch_warnings(record=True) as seen:
         warnings.simplefilter("always")
-        signal.alarm(SLOW_HANG_S if name in SLOW else HANG_S)
         try:
-            with np.errstate(all="warn", under="ignore"):  # underflow: no inf/NaN
+            with (np.errstate(all="warn", under="ignore"),  # underflow: no inf/NaN
+                  fg.time_limit(SLOW_HANG_S if name in SLOW else HANG_S)):
                 value = _consume(func(*args, **kwargs))
             result = "result"
         except DOCUMENTED + EXTRA_ERRORS.get(name, ()) + extra as exc:
@@ -297,12 +280,10 @@ def outcome(name: str, args: tuple, kwargs: dict,
                 result = f"a message of {len(msg)} characters: {msg[:200]!r}..."
             else:
                 result = "refused"
-        except Hang:
+        except fg.Hang:
             result = f"hang (> {SLOW_HANG_S if name in SLOW else HANG_S} s)"
         except Exception as exc:  # the property: nothing else (MemoryError included)
             result = f"{type(exc).__name__}: {str(exc)[:300]}"
-        finally:
-            signal.alarm(0)
     if result in ("result", "refused"):
         for w in seen:
             if issubclass(w.category, RuntimeWarning) and not issubclass(
