@@ -77,23 +77,7 @@ def upper(k: int, n: int) -> float:
 def specs(master: int, healthy: int) -> list:
     """Generator records drawn as ``planetary_signals.benchmark_records`` draws them, from
     another master seed."""
-    rng = np.random.default_rng(master)
-    out, seed = [], 1000 * master
-    for gs, rpm in ((PS.PAPER_CASE1, 1500.0), (PS.FOUR_PLANET, 1200.0)):
-        plan = [(f, s) for f in PS.FAULTS for s in ("clear", "weak")] + [(None, "clear")] * healthy
-        for fault, sev in plan:
-            seed += 1
-            window = ("hann", "exponential")[int(rng.integers(2))]
-            out.append(PS.RecordSpec(
-                gs, fault, sev, speed_rpm=rpm, seed=seed,
-                snr_db=float(rng.uniform(15, 20) if sev == "clear" else rng.uniform(10, 15)),
-                sensor_deg=float(rng.uniform(0, 360)), window=window,
-                window_deg=float(rng.uniform(90, 150) if window == "hann"
-                                 else rng.uniform(30, 70)),
-                resonance_hz=float(rng.uniform(2500, 4000)),
-                resonance_damping=float(rng.uniform(0.03, 0.08)),
-                planet=int(rng.integers(gs.n_planets))))
-    return out
+    return PS.benchmark_records(master=master, healthy=healthy, first_seed=1000 * master)
 
 
 def noise(sets: dict, n: int, rng: np.random.Generator) -> tuple[int, int]:

@@ -521,20 +521,23 @@ def truth(spec: RecordSpec) -> tuple[str, str]:
             "sun_eccentricity": ("eccentricity", "sun")}[spec.fault]
 
 
-def benchmark_records(quick: bool = False) -> list[RecordSpec]:
+def benchmark_records(quick: bool = False, *, master: int = 30, healthy: int = 3,
+                      first_seed: int = 100) -> list[RecordSpec]:
     """The independent set: per gear set every fault clear and weak, and 3 healthy records.
 
     Paper-case1 at 1500 min-1 and the 4-planet set at 1200 min-1 (one operating point each,
     so the candidate library of the diagnosis serves all records of a set); sensor position,
     window, housing resonance, SNR (clear 15-20 dB, weak 10-15 dB), speed profile and noise
     drawn per record from its seed. ``quick``: 3 records (a clear sun tooth fault, a clear
-    ring fault of the 4-planet set, a healthy record).
+    ring fault of the 4-planet set, a healthy record). ``master`` seeds the draws, ``healthy``
+    healthy records per set, record seeds from ``first_seed + 1`` on (the benchmark's set is
+    the default; ``benchmarks/bench_impact_alarms.py`` draws others).
     """
-    rng = np.random.default_rng(30)
+    rng = np.random.default_rng(master)
     out = []
-    seed = 100
+    seed = first_seed
     for gs, rpm in ((PAPER_CASE1, 1500.0), (FOUR_PLANET, 1200.0)):
-        plan = [(f, s) for f in FAULTS for s in ("clear", "weak")] + [(None, "clear")] * 3
+        plan = [(f, s) for f in FAULTS for s in ("clear", "weak")] + [(None, "clear")] * healthy
         for fault, sev in plan:
             seed += 1
             window = ("hann", "exponential")[int(rng.integers(2))]
