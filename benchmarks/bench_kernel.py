@@ -1,9 +1,10 @@
 """Benchmark of the run-up kernel per core (not a timed test).
 
 Run ``python3 benchmarks/bench_kernel.py [--quick]``. For ``paper-case1`` and
-``paper-case1-elastic`` (1 s run-up 0 -> 4000 min^-1 at 60 N m input torque, the automatic
-step; in the C comparison also both with every mesh under the always-on ``viscous``
-damping law), it prints side by side:
+``paper-case1-elastic`` (each preset's own run, as ``gearvib simulate <preset>`` makes it: 1 s
+run-up 0 -> 4000 min^-1 at 60 N m input torque, the drive a spring-damper on the sun, the
+automatic step; in the C comparison also both with every mesh under the always-on ``viscous``
+damping law, and the elastic model under gearvib's default drive), it prints side by side:
 
 * **ns per right-hand-side evaluation**, numba kernel against a plain C loop of the same
   algorithm (``benchmarks/c/rk4_kernel.c``, compiled here with ``gcc -O2`` and, second, with
@@ -120,24 +121,30 @@ def build_c(tmp: str, flags: list[str], name: str) -> ctypes.CDLL:
 
 
 #: The runs of the C comparison (their records bit-identical too, so every branch of the C
-#: file is checked): the default drive (a controller on the rigid-body mode); ``coupling``:
-#: the preset's own drive, a spring-damper on the sun; ``viscous``: every mesh under the
-#: always-on damping law.
-C_CASES = ("paper-case1", "paper-case1-elastic", "paper-case1 coupling",
+#: file is checked), each the preset's own run (``gearvib simulate <preset>``: 0 -> 4000
+#: min^-1 in 1 s at 60 N m, the drive a spring-damper on the sun); ``controller``: gearvib's
+#: default drive instead (a controller on the rigid-body mode, no damping added to the elastic
+#: modes; paper-case1 under it runs away near 0.5 s, the elastic model does not); ``viscous``:
+#: every mesh under the always-on damping law.
+C_CASES = ("paper-case1", "paper-case1-elastic", "paper-case1-elastic controller",
            "paper-case1 viscous", "paper-case1-elastic viscous")
 
 
-def c_case(name: str, cond: SpeedRamp, t_start: float = 0.4) -> Case:
-    """The packed run of an entry of :data:`C_CASES` (``cond`` with its drive), at
-    ``t_start``."""
+def preset_conditions(cfg: dict) -> SpeedRamp:
+    """The run of a preset's ``[simulation]`` table, its drive included."""
+    return conditions_from_settings(read_run_settings(cfg.get("simulation", {})))
+
+
+def c_case(name: str, t_start: float = 0.4) -> Case:
+    """The packed run of an entry of :data:`C_CASES` at ``t_start``."""
     preset, _, variant = name.partition(" ")
     cfg, base = load_config(preset)
+    cond = preset_conditions(cfg)
     if variant == "viscous":
         for family in ("sun", "ring"):
             cfg = set_path(cfg, f"meshes.{family}.damping_law", variant)
-    elif variant == "coupling":
-        run = read_run_settings(cfg.get("simulation", {}))
-        cond = dataclasses.replace(cond, coupling=conditions_from_settings(run).coupling)
+    elif variant == "controller":
+        cond = dataclasses.replace(cond, coupling=None)
     return Case(assemble(gearset_from_dict(cfg, base=base)), cond, t_start)
 
 
@@ -264,9 +271,11 @@ def batch_variants(preset: str, which: str) -> list:
     return out
 
 
-def batched_vs_single(preset: str, which: str, cond, window: float, rounds: int,
+def batched_vs_single(preset: str, which: str, window: float, rounds: int,
                       t_start: float = T_BATCH) -> dict:
-    """Per-core throughput of one batched call against 8 single calls (packed beforehand)."""
+    """Per-core throughput of one batched call against 8 single calls (packed beforehand),
+    each the preset's own run."""
+    cond = preset_conditions(load_config(preset)[0])
     cases = [Case(m, cond, t_start) for m in batch_variants(preset, which)]
     dt = cases[0].dt
     first = cases[0].first
@@ -356,19 +365,18 @@ def main() -> None:
     window = 0.005 if args.quick else 0.1
     rounds = 1 if args.quick else 11
     t_start = 0.05 if args.quick else T_BATCH  # where the windows start in the run-up
-    cond = SpeedRamp(0.0, 4000.0, 1.0, input_torque=60.0)
     if args.batch_only:
-        print_batched(cond, window, rounds, t_start)
+        print_batched(window, rounds, t_start)
         return
     if shutil.which("gcc") is None:
         print("gcc not found: the comparison with the C kernel (benchmarks/c/rk4_kernel.c) is "
               "skipped")
     else:
-        print_c_comparison(cond, window, repeat, t_start, quick=args.quick)
-    print_batched(cond, window, rounds, t_start, quick=args.quick)
+        print_c_comparison(window, repeat, t_start, quick=args.quick)
+    print_batched(window, rounds, t_start, quick=args.quick)
 
 
-def print_c_comparison(cond, window: float, repeat: int, t_start: float,
+def print_c_comparison(window: float, repeat: int, t_start: float,
                        quick: bool = False) -> None:
     """The numba-against-C tables (gcc -O2, then with the host's instruction set; ``quick``:
     -O2 only)."""
@@ -386,7 +394,7 @@ def print_c_comparison(cond, window: float, repeat: int, t_start: float,
                   f"{'ratio':>6s} {'RHS alone numba':>16s} {'C':>8s} {'ratio':>6s}")
             for preset in C_CASES:
                 if preset not in cases:
-                    cases[preset] = c_case(preset, cond, t_start)
+                    cases[preset] = c_case(preset, t_start)
                 case = cases[preset]
                 n_steps = round(window / case.dt)
                 r = rhs_per_eval(case, c, n_steps, repeat)
@@ -397,7 +405,7 @@ def print_c_comparison(cond, window: float, repeat: int, t_start: float,
             print("(records of the C loop and of the numba kernel bit-identical)")
 
 
-def print_batched(cond, window: float, rounds: int, t_start: float = T_BATCH,
+def print_batched(window: float, rounds: int, t_start: float = T_BATCH,
                   quick: bool = False) -> None:
     """The batched-against-single table (``quick``: its first row, the rigid-bearing set)."""
     load = os.getloadavg()[0]
@@ -410,7 +418,7 @@ def print_batched(cond, window: float, rounds: int, t_start: float = T_BATCH,
     rows = (("paper-case1", "damping"), ("paper-case1-elastic", "damping"),
             ("paper-case1-elastic", "damping+bearing"))
     for preset, which in rows[:1 if quick else None]:
-        r = batched_vs_single(preset, which, cond, window, rounds, t_start)
+        r = batched_vs_single(preset, which, window, rounds, t_start)
         print(f"{preset:22s} {which:16s} {_spread(r['ratio']):>17s} "
               f"{_spread(r['generic']):>17s} {_spread(r['same']):>17s} "
               f"{_spread(r['rhs_ratio']):>17s} {r['rhs_single']:14.0f} "
