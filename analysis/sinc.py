@@ -30,7 +30,7 @@ from analysis.jit import prepare_cache
 
 prepare_cache(__file__)  # before the decorators below: numba resolves its cache folder there
 
-__all__ = ["HALF_TAPS", "decimate", "interpolate", "kernel_table", "positions"]
+__all__ = ["HALF_TAPS", "compile_ahead", "decimate", "interpolate", "kernel_table", "positions"]
 
 #: Half length of the interpolation kernel (taps -11 .. 12 around the position).
 HALF_TAPS = 12
@@ -340,3 +340,15 @@ def decimate(fine: np.ndarray, fir: np.ndarray, over: int, first: int, count: in
     out = np.empty((f2.shape[0], count))
     _decimate(f2, taps, over, first, out)
     return out
+
+
+def compile_ahead() -> None:
+    """Compile this module's kernels now, for the argument types :func:`interpolate`,
+    :func:`positions` and :func:`decimate` pass (every array C-contiguous float64, integers
+    int64), or load them from numba's cache: a second process can prepare the cache while
+    the first one works (``gearvib.compile_helper``)."""
+    f8, i8 = numba.float64, numba.int64
+    a1, a2, a3 = (numba.types.Array(f8, d, "C") for d in (1, 2, 3))
+    _interpolate.compile((a2, i8, i8, a1, a3, a2))
+    _positions.compile((a1, a1, f8, f8, i8, f8, f8, a1, a1))
+    _decimate.compile((a2, a1, i8, i8, a2))

@@ -37,12 +37,15 @@ through ``PYTHONPATH``, its numba cache in a temporary folder), interleaved with
 
 ``--first-run`` times ``gearvib demo`` (or, with ``--quick``, a 0.05 s ``gearvib simulate``)
 twice in a fresh numba cache folder (``NUMBA_CACHE_DIR`` pointing at a new temporary folder):
-the first run compiles the kernels, the second loads them; prints both (wall and CPU time of
-the process) and their ratios (goal <= 1.5).
+the first run compiles the kernels (with the compile helper, :mod:`gearvib.compile_helper`),
+the second loads them; outside ``--quick`` a third run compiles in another fresh folder
+without the helper (``GEARVIB_COMPILE_HELPER=0``), the baseline. Prints each (wall time, and
+CPU time of the process and its helper) and the ratios to the second run, medians over
+``--rounds`` (goal <= 1.5).
 
     python benchmarks/bench_cli.py
     python benchmarks/bench_cli.py --repeat 9 --baseline /work/main --importtime
-    python benchmarks/bench_cli.py --first-run
+    python benchmarks/bench_cli.py --first-run --rounds 3
     python benchmarks/bench_cli.py --quick     # smoke run: one run, no warm-up, no breakdown
 """
 
@@ -196,35 +199,48 @@ def _importtime(cmd: list[str], env: dict[str, str], cwd: Path, repeat: int) -> 
     return [(name, us / 1e6) for name, us in top.most_common()]
 
 
-def first_run(quick: bool) -> None:
-    """First against second run in a fresh numba cache folder."""
+def first_run(quick: bool, rounds: int = 1) -> None:
+    """First against second run in a fresh numba cache folder; outside ``quick`` also the
+    first run without the compile helper (``GEARVIB_COMPILE_HELPER=0``, another fresh
+    cache), in ``rounds`` rounds."""
     py = sys.executable
-    with tempfile.TemporaryDirectory() as tmp:
-        work = Path(tmp)
-        env = _env(None, work / "numba-cache")
-        if quick:
-            name = "gearvib simulate paper-case1 --duration 0.05"
-            cmd = [py, "-m", "gearvib", "simulate", "paper-case1", "-o", "x.nc", "--overwrite",
-                   "--duration", "0.05"]
-        else:
-            name = "gearvib demo"
-            cmd = [py, "-m", "gearvib", "demo", "-o", "demo", "--overwrite", "-q"]
-        print(f"{name} in a fresh numba cache folder; load average before: "
-              f"{' '.join(f'{x:.2f}' for x in os.getloadavg())}")
-        times = []
-        for label in ("first (compiles)", "second (cache)"):
-            t0 = time.perf_counter()
-            c0 = _children_cpu()
-            proc = subprocess.run(cmd, env=env, cwd=work, capture_output=True, text=True)
-            times.append((time.perf_counter() - t0, _children_cpu() - c0))
-            if proc.returncode != 0:
-                raise RuntimeError(f"{name} failed: {proc.stderr.strip()}")
-            told = "compiling the simulation kernels" in proc.stderr
-            print(f"  {label:<17s} {times[-1][0]:7.1f} s wall, {times[-1][1]:6.1f} s CPU; "
-                  f"first-run notice printed: {told}")
-        print(f"first / second: {times[0][0] / times[1][0]:.2f}x wall, "
-              f"{times[0][1] / times[1][1]:.2f}x CPU (goal <= 1.5); load average "
-              f"after: {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
+    if quick:
+        name = "gearvib simulate paper-case1 --duration 0.05"
+        cmd = [py, "-m", "gearvib", "simulate", "paper-case1", "-o", "x.nc", "--overwrite",
+               "--duration", "0.05"]
+        runs = [("first (compiles)", "a", True), ("second (cache)", "a", True)]
+    else:
+        name = "gearvib demo"
+        cmd = [py, "-m", "gearvib", "demo", "-o", "demo", "--overwrite", "-q"]
+        runs = [("first (compiles)", "a", True), ("second (cache)", "a", True),
+                ("first, no helper", "b", False)]
+    print(f"{name} in a fresh numba cache folder, {rounds} round(s); load average before: "
+          f"{' '.join(f'{x:.2f}' for x in os.getloadavg())}")
+    times: dict[str, list[tuple[float, float]]] = {label: [] for label, _, _ in runs}
+    for _ in range(rounds):
+        with tempfile.TemporaryDirectory() as tmp:
+            work = Path(tmp)
+            for label, cache, helper in runs:
+                env = _env(None, work / f"numba-cache-{cache}")
+                env["GEARVIB_COMPILE_HELPER"] = "1" if helper else "0"
+                t0 = time.perf_counter()
+                c0 = _children_cpu()
+                proc = subprocess.run(cmd, env=env, cwd=work, capture_output=True, text=True)
+                times[label].append((time.perf_counter() - t0, _children_cpu() - c0))
+                if proc.returncode != 0:
+                    raise RuntimeError(f"{name} failed: {proc.stderr.strip()}")
+                told = "compiling the simulation kernels" in proc.stderr
+                print(f"  {label:<17s} {times[label][-1][0]:7.1f} s wall, "
+                      f"{times[label][-1][1]:6.1f} s CPU; first-run notice printed: {told}")
+
+    def med(label: str, k: int) -> float:
+        return statistics.median(t[k] for t in times[label])
+
+    second = "second (cache)"
+    for label in [r[0] for r in runs if r[0] != second]:
+        print(f"{label} / second (medians): {med(label, 0) / med(second, 0):.2f}x wall, "
+              f"{med(label, 1) / med(second, 1):.2f}x CPU (goal <= 1.5)")
+    print(f"load average after: {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
 
 
 def _children_cpu() -> float:
@@ -241,11 +257,13 @@ def main() -> None:
                     help="also python -X importtime of the simulate command")
     ap.add_argument("--first-run", action="store_true",
                     help="first vs second gearvib demo in a fresh numba cache folder")
+    ap.add_argument("--rounds", type=int, default=1,
+                    help="--first-run: rounds of the runs (default 1)")
     ap.add_argument("--quick", action="store_true",
                     help="smoke run: one repeat of short commands, no warm-up, no breakdown")
     args = ap.parse_args()
     if args.first_run:
-        first_run(args.quick)
+        first_run(args.quick, args.rounds)
         return
     if args.quick:
         args.repeat = 1

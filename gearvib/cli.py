@@ -231,8 +231,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     out, removed = check_output_file(args.output, overwrite=args.overwrite)
     _report_removed(removed)
     model = assemble(gearset)
-    if not args.quiet:
-        _first_run_notice()
+    _first_run(args.quiet)
     result = simulate(model, cond, dt=run["dt"], fs_out=run["fs_out"],
                       gyroscopic=run["gyroscopic"], progress=None if not args.quiet else False,
                       config={"gearset": cfg, "run": run}, max_steps=args.max_steps)
@@ -241,13 +240,20 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     return 0
 
 
-def _first_run_notice() -> None:
-    """One line on stderr before a run that compiles the kernels (a cold numba cache)."""
+def _first_run(quiet: bool, *, report: bool = False) -> None:
+    """Before a run that compiles the kernels (a cold numba cache): one line on stderr
+    (unless ``quiet``), and the compilation shared with a helper process
+    (:mod:`gearvib.compile_helper`; ``report``: its order analysis too)."""
     from gearvib.jit_cache import first_run_notice
 
     notice = first_run_notice()
-    if notice:
+    if not notice:
+        return
+    if not quiet:
         print(notice, file=sys.stderr, flush=True)
+    from gearvib.compile_helper import share_first_compilation
+
+    share_first_compilation(order_analysis=report)
 
 
 def _report_removed(removed: Sequence) -> None:
@@ -583,7 +589,7 @@ def _cmd_demo(args: argparse.Namespace) -> int:
         overwrite=args.overwrite)[1])
     print(f"gearvib demo: simulating the paper's run-ups (0 -> 4000 min-1 in "
           f"{args.duration or 1.0:g} s, cases 1 and 2) into {out}/ ...")
-    _first_run_notice()
+    _first_run(False, report=True)
     with removed_if_left_empty(out):
         result = run_study(study, out, progress=not args.quiet)
     for name, path in result.runs.items():

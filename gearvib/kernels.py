@@ -111,6 +111,7 @@ __all__ = [
     "DRIVE_NONE",
     "DRIVE_SPEED",
     "DRIVE_TORQUE",
+    "KERNEL_PARTS",
     "MESH_OUT_COLUMNS",
     "PASS_SIGNATURE",
     "STATUS_DEFLECTION",
@@ -118,6 +119,7 @@ __all__ = [
     "STATUS_OK",
     "STATUS_SPEED",
     "KernelSystem",
+    "compile_ahead",
     "csr",
     "evaluate_rhs",
     "fir_decimate",
@@ -2151,3 +2153,52 @@ cos_sin = _cos_sin
 mean_offset = _mean_offset
 faulty_flanks = _faulty_flanks
 stiffness_flanks = _stiffness_flanks
+
+
+#: The parts of a run's kernels :func:`compile_ahead` compiles: ``"setup"`` (the speed profile
+#: and the table look-up a run calls before its kernel), ``"rhs"`` (the right-hand side),
+#: ``"step_search"`` (the sub-step search of the RK4 loop) and ``"output"`` (the rigid-body
+#: shift and the anti-alias decimation of the recorded rows).
+KERNEL_PARTS = ("setup", "rhs", "step_search", "output")
+
+
+def _part_signatures(part: str) -> list[tuple]:
+    """``(dispatcher, argument types)`` of a part of :data:`KERNEL_PARTS`, as a run calls
+    them: every array C-contiguous (``ints`` int64, the others float64), integers int64."""
+    f8, i8 = types.float64, types.int64
+    a1, a2, a3 = (types.Array(f8, d, "C") for d in (1, 2, 3))
+    i1 = types.Array(i8, 1, "C")
+    table: dict[str, list[tuple]] = {
+        "setup": [(speed_profile, (a2, a1, a1, a1)), (periodic_interp, (a2, i8, f8))],
+        "rhs": [(_rhs, (f8, a1, a1, a2, i1, a1, a3, a2, a2))],
+        "step_search": [(_split_times, (a1, f8, i1, a1, a2, a1))],
+        "output": [(shift_rigid, (a2, i8, a1, a1, a1, types.boolean)),
+                   (fir_decimate, (a2, i8, a1, i8, i8, i8, a2, i8))],
+    }
+    if part not in table:
+        raise ValueError(f"part must be one of {', '.join(KERNEL_PARTS)}; got {part!r}")
+    return table[part]
+
+
+def compile_ahead(part: str) -> None:
+    """Compile a part of a run's kernels now, before the run calls it.
+
+    The first compilation of :func:`integrate_chunk_compiled` takes each function it calls
+    from this process when compiled here already, else from numba's cache, and compiles it
+    only when neither holds it. So two processes can share a first compilation: one compiles
+    the right-hand side while the other compiles the sub-step search into the cache
+    (:mod:`gearvib.compile_helper`). The machine code is the same either way.
+
+    Parameters
+    ----------
+    part : str
+        One of :data:`KERNEL_PARTS`. A part compiled or cached already is loaded, not
+        compiled again.
+
+    Raises
+    ------
+    ValueError
+        ``part`` is not one of :data:`KERNEL_PARTS`.
+    """
+    for dispatcher, args in _part_signatures(part):
+        dispatcher.compile(args)

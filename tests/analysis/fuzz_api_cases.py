@@ -738,6 +738,7 @@ BASELINES: dict[str, Callable[[], A]] = {
     "analysis.runup.map_features": _c(_o("map_ds")),
     "analysis.runup.map_levels": _c(_o("map_ds")),
     # sinc
+    "analysis.sinc.compile_ahead": _c(),
     "analysis.sinc.decimate": _c(lambda: np.ones((1, 64)), lambda: np.ones(9) / 9, 2, 4, 10),
     "analysis.sinc.interpolate": _c(lambda: np.ones((1, 64)), lambda: np.linspace(12, 50, 20)),
     "analysis.sinc.kernel_table": _c(),

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import os
 import shutil
 import subprocess
@@ -10,6 +11,7 @@ from pathlib import Path
 
 import pytest
 
+import gearvib.compile_helper as compile_helper
 import gearvib.jit_cache as jit_cache
 from gearvib.cli import main
 
@@ -38,10 +40,12 @@ def test_cold_and_warm_cache_are_told_apart(tmp_path):
     empty.mkdir()
     answer, folder = _ask(empty)  # a fresh cache folder: the first run compiles
     assert answer == "False"
-    # the main kernel's index and data copied in (same source: numba's stamp matches)
+    # the main kernel's index and data copied in (same source: numba's stamp matches); the
+    # files of its current line only (a folder can hold stale ones of an edited kernels.py)
     folder.mkdir(parents=True, exist_ok=True)
     copied = 0
-    for f in warm.glob("kernels.integrate_chunk_compiled-*"):
+    line = kernels.integrate_chunk_compiled.py_func.__code__.co_firstlineno
+    for f in warm.glob(f"kernels.integrate_chunk_compiled-{line}.*"):
         shutil.copy2(f, folder / f.name)
         copied += 1
     assert copied >= 2
@@ -55,12 +59,32 @@ def test_cold_and_warm_cache_are_told_apart(tmp_path):
     assert _ask(empty)[0] in ("False", "None")
 
 
-@pytest.mark.parametrize(("cached", "told"), [(False, True), (True, False), (None, False)])
-def test_simulate_announces_a_compilation(tmp_path, capsys, monkeypatch, cached, told):
+@pytest.mark.parametrize(("cached", "quiet", "told"), [
+    (False, False, True), (False, True, False), (True, False, False), (None, False, False)])
+def test_simulate_announces_a_compilation(tmp_path, capsys, monkeypatch, cached, quiet, told):
     monkeypatch.setattr(jit_cache, "kernels_cached", lambda: cached)
+    shared = []  # the compilation shared with a helper process: on a cold cache only
+    monkeypatch.setattr(compile_helper, "share_first_compilation",
+                        lambda order_analysis=False: shared.append(order_analysis))
     assert main(["simulate", "paper-case1", "-o", str(tmp_path / "x.nc"), "--speed",
-                 "1400:1600", "--duration", "0.01"]) == 0
+                 "1400:1600", "--duration", "0.01", *(["-q"] if quiet else [])]) == 0
     err = capsys.readouterr().err
     assert ("compiling the simulation kernels" in err) is told
     if told:
         assert err.count("\n") >= 1 and err.splitlines()[0] == jit_cache.FIRST_RUN_NOTICE
+    assert shared == ([False] if cached is False else [])
+
+
+def test_demo_shares_its_first_compilation_with_the_order_analysis(tmp_path, monkeypatch):
+    monkeypatch.setattr(jit_cache, "kernels_cached", lambda: False)
+    shared = []
+    monkeypatch.setattr(compile_helper, "share_first_compilation",
+                        lambda order_analysis=False: shared.append(order_analysis))
+    import gearvib.report
+
+    monkeypatch.setattr(gearvib.report, "run_study", lambda *a, **k: (_ for _ in ()).throw(
+        RuntimeError("stop before the runs")))
+    with contextlib.suppress(RuntimeError):  # main may report it instead
+        assert main(["demo", "-o", str(tmp_path / "demo"), "--quiet"]) != 0
+    assert shared == [True]
+    assert not (tmp_path / "demo").exists()  # nothing written before the runs
