@@ -346,7 +346,7 @@ def compile_ahead() -> None:
     """Compile this module's kernels now, for the argument types :func:`interpolate`,
     :func:`positions` and :func:`decimate` pass (every array C-contiguous float64, integers
     int64), or load them from numba's cache: a second process can prepare the cache while
-    the first one works (``gearvib.compile_helper``)."""
+    the first one works."""
     f8, i8 = numba.float64, numba.int64
     a1, a2, a3 = (numba.types.Array(f8, d, "C") for d in (1, 2, 3))
     _interpolate.compile((a2, i8, i8, a1, a3, a2))

@@ -2186,8 +2186,8 @@ def compile_ahead(part: str) -> None:
     The first compilation of :func:`integrate_chunk_compiled` takes each function it calls
     from this process when compiled here already, else from numba's cache, and compiles it
     only when neither holds it. So two processes can share a first compilation: one compiles
-    the right-hand side while the other compiles the sub-step search into the cache
-    (:mod:`gearvib.compile_helper`). The machine code is the same either way.
+    the right-hand side while the other compiles the sub-step search into the cache. The
+    machine code is the same either way.
 
     Parameters
     ----------
