@@ -7,6 +7,7 @@ import os
 import shutil
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import pytest
@@ -88,3 +89,61 @@ def test_demo_shares_its_first_compilation_with_the_order_analysis(tmp_path, mon
         assert main(["demo", "-o", str(tmp_path / "demo"), "--quiet"]) != 0
     assert shared == [True]
     assert not (tmp_path / "demo").exists()  # nothing written before the runs
+
+
+def _helpers(cache: Path) -> set[int]:
+    """Running compile helpers whose numba cache is ``cache`` (Linux /proc)."""
+    found = set()
+    for proc in Path("/proc").iterdir():
+        if not proc.name.isdigit():
+            continue
+        try:
+            cmd = (proc / "cmdline").read_bytes()
+            env = (proc / "environ").read_bytes() if b"gearvib.compile_helper" in cmd else b""
+            status = (proc / "status").read_text() if env else ""
+        except OSError:
+            continue
+        if f"NUMBA_CACHE_DIR={cache}".encode() in env.split(b"\0") and "\nState:\tZ" not in status:
+            found.add(int(proc.name))
+    return found
+
+
+@pytest.mark.skipif(not Path("/proc/self/environ").exists(), reason="needs Linux /proc")
+def test_first_run_interrupted_while_its_compilation_is_shared(tmp_path, monkeypatch):
+    """Ctrl-C while the command and its helper compile (a cold cache): the command stops as
+    always (code 130, one line); the helper, in its own session, is not interrupted but ends
+    on its own within seconds, and leaves no temporary file in numba's cache."""
+    import signal
+    import threading
+
+    from tests.cli.signal_helpers import run_and_signal
+
+    cache = tmp_path / "numba-cache"
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(cache))
+    monkeypatch.delenv("GEARVIB_COMPILE_HELPER", raising=False)
+    seen: set[int] = set()
+    stop = threading.Event()
+
+    def watch() -> None:
+        while not stop.is_set():
+            seen.update(_helpers(cache))
+            time.sleep(0.05)
+
+    watcher = threading.Thread(target=watch, daemon=True)
+    watcher.start()
+    try:
+        r = run_and_signal(["simulate", "paper-case1", "-o", "run.nc", "--duration", "0.05"],
+                           tmp_path, signal.SIGINT, delay=2.0)
+    finally:
+        stop.set()
+        watcher.join()
+    assert r.signalled and r.returncode == 130, r
+    assert "Traceback" not in r.stderr and r.stderr.rstrip().splitlines()[-1].startswith(
+        "gearvib: interrupted"), r.stderr
+    assert not (tmp_path / "run.nc").exists()
+    assert seen, "no compile helper was started"
+    deadline = time.monotonic() + 60
+    while _helpers(cache) and time.monotonic() < deadline:
+        time.sleep(0.1)
+    assert not _helpers(cache)
+    assert not [p for p in cache.rglob("*") if ".tmp" in p.name]
