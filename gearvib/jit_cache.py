@@ -1,7 +1,7 @@
 """Whether numba's cache holds the simulation kernels for this machine (a first run or not).
 
 The first ``gearvib simulate`` or ``gearvib demo`` on a machine compiles the kernels of
-:mod:`gearvib.kernels` (about 15 s of CPU; the first report adds its order analysis); later
+:mod:`gearvib.kernels` (about 10 s of CPU; the first report adds its order analysis); later
 runs load them from numba's on-disk cache (:mod:`analysis.jit` chooses its folder). The
 command line tells the user before a compilation starts (:func:`first_run_notice`), so a long
 first run is not mistaken for a hang.
@@ -24,7 +24,7 @@ from __future__ import annotations
 __all__ = ["FIRST_RUN_NOTICE", "first_run_notice", "kernels_cached"]
 
 FIRST_RUN_NOTICE = (
-    "gearvib: compiling the simulation kernels (first run on this machine, about 15-30 s "
+    "gearvib: compiling the simulation kernels (first run on this machine, about 10-15 s "
     "of CPU; later runs load them from the cache)")
 """The line the command line prints before a run that compiles the kernels."""
 
