@@ -40,6 +40,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from analysis.readers import ReaderError, read
+from tests import fuzz_guard
 from tests.analysis import reader_samples as samples
 
 DEFAULT_EXAMPLES = 100
@@ -59,22 +60,12 @@ COUNTS: dict[str, collections.Counter[str]] = collections.defaultdict(collection
 def bounded_memory() -> Iterator[None]:
     """Address-space limit: current size + 3 GiB (Linux); restored afterwards."""
     try:
-        import resource
-
-        soft, hard = resource.getrlimit(resource.RLIMIT_AS)
-        with open("/proc/self/statm") as fh:
-            vm = int(fh.read().split()[0]) * os.sysconf("SC_PAGE_SIZE")
-    except (ImportError, OSError, ValueError):
+        vm = fuzz_guard.process_size()
+    except (OSError, ValueError):
         yield
         return
-    limit = vm + 3 * 2**30
-    if hard != resource.RLIM_INFINITY:
-        limit = min(limit, hard)
-    resource.setrlimit(resource.RLIMIT_AS, (limit, hard))
-    try:
+    with fuzz_guard.address_space_limit(vm + 3 * 2**30):
         yield
-    finally:
-        resource.setrlimit(resource.RLIMIT_AS, (soft, hard))
 
 
 @pytest.fixture(scope="module")
