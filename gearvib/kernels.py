@@ -2155,29 +2155,23 @@ faulty_flanks = _faulty_flanks
 stiffness_flanks = _stiffness_flanks
 
 
+_A1, _A2, _A3 = (types.Array(types.float64, d, "C") for d in (1, 2, 3))
+_I1 = types.Array(types.int64, 1, "C")
+_F8, _I8 = types.float64, types.int64
+#: ``part: [(dispatcher, argument types)]`` for :func:`compile_ahead`, the types as a run
+#: passes them (every array C-contiguous, ``ints`` int64, the others float64; integers int64).
+_PARTS: dict[str, list[tuple]] = {
+    "setup": [(speed_profile, (_A2, _A1, _A1, _A1)), (periodic_interp, (_A2, _I8, _F8))],
+    "rhs": [(_rhs, (_F8, _A1, _A1, _A2, _I1, _A1, _A3, _A2, _A2))],
+    "step_search": [(_split_times, (_A1, _F8, _I1, _A1, _A2, _A1))],
+    "output": [(shift_rigid, (_A2, _I8, _A1, _A1, _A1, types.boolean)),
+               (fir_decimate, (_A2, _I8, _A1, _I8, _I8, _I8, _A2, _I8))],
+}
 #: The parts of a run's kernels :func:`compile_ahead` compiles: ``"setup"`` (the speed profile
 #: and the table look-up a run calls before its kernel), ``"rhs"`` (the right-hand side),
 #: ``"step_search"`` (the sub-step search of the RK4 loop) and ``"output"`` (the rigid-body
 #: shift and the anti-alias decimation of the recorded rows).
-KERNEL_PARTS = ("setup", "rhs", "step_search", "output")
-
-
-def _part_signatures(part: str) -> list[tuple]:
-    """``(dispatcher, argument types)`` of a part of :data:`KERNEL_PARTS`, as a run calls
-    them: every array C-contiguous (``ints`` int64, the others float64), integers int64."""
-    f8, i8 = types.float64, types.int64
-    a1, a2, a3 = (types.Array(f8, d, "C") for d in (1, 2, 3))
-    i1 = types.Array(i8, 1, "C")
-    table: dict[str, list[tuple]] = {
-        "setup": [(speed_profile, (a2, a1, a1, a1)), (periodic_interp, (a2, i8, f8))],
-        "rhs": [(_rhs, (f8, a1, a1, a2, i1, a1, a3, a2, a2))],
-        "step_search": [(_split_times, (a1, f8, i1, a1, a2, a1))],
-        "output": [(shift_rigid, (a2, i8, a1, a1, a1, types.boolean)),
-                   (fir_decimate, (a2, i8, a1, i8, i8, i8, a2, i8))],
-    }
-    if part not in table:
-        raise ValueError(f"part must be one of {', '.join(KERNEL_PARTS)}; got {part!r}")
-    return table[part]
+KERNEL_PARTS = tuple(_PARTS)
 
 
 def compile_ahead(part: str) -> None:
@@ -2200,5 +2194,7 @@ def compile_ahead(part: str) -> None:
     ValueError
         ``part`` is not one of :data:`KERNEL_PARTS`.
     """
-    for dispatcher, args in _part_signatures(part):
+    if part not in _PARTS:
+        raise ValueError(f"part must be one of {', '.join(KERNEL_PARTS)}; got {part!r}")
+    for dispatcher, args in _PARTS[part]:
         dispatcher.compile(args)
