@@ -10,10 +10,13 @@ same, and so are the results, bit for bit: only the first run's wall time drops,
 helper's share (the CPU time does not).
 
 The command compiles :data:`MAIN_PARTS` (the right-hand side), the helper :data:`HELPER_PARTS`
-(the sub-step search, the set-up functions a run calls before its kernel, the output
-functions) and, before a report, the order analysis of :mod:`analysis.sinc`. The command waits
-for the parts a run needs before its kernel, at most :data:`WAIT_S` seconds; it compiles
-itself what the helper has not delivered by the time it needs it.
+(the sub-step search, the RK4 loop, which calls the right-hand side through its address and so
+compiles without it, the set-up functions a run calls before its kernel and the output
+functions) and, before a report, the order analysis of :mod:`analysis.sinc`. The command
+line starts the helper first thing (:func:`start`), so that it compiles while the command
+imports its modules and checks its inputs, and hands it to :func:`share_first_compilation`
+before the run. The command waits for the helper's parts, at most :data:`WAIT_S` seconds; it
+compiles itself what the helper has not delivered by the time it needs it.
 
 The helper runs in a session of its own (a Ctrl-C at the terminal reaches the command only),
 prints nothing to the terminal and stops between two parts once the command has ended, so it
@@ -38,14 +41,15 @@ __all__ = ["ENV_SWITCH", "HELPER_PARTS", "MAIN_PARTS", "ORDER_ANALYSIS", "WAIT_S
 
 #: Environment variable: ``0`` starts no helper.
 ENV_SWITCH = "GEARVIB_COMPILE_HELPER"
-#: Parts of :data:`gearvib.kernels.KERNEL_PARTS` the command compiles itself.
+#: Parts of :data:`gearvib.kernels.KERNEL_PARTS` the command compiles itself, after its
+#: imports (together about as long as the helper's start and parts: both end together).
 MAIN_PARTS = ("rhs",)
 #: Parts the helper compiles, in this order; then :data:`ORDER_ANALYSIS` when asked.
-HELPER_PARTS = ("step_search", "setup", "output")
+HELPER_PARTS = ("step_search", "kernel", "setup", "output")
 #: The helper's part for a report: :func:`analysis.sinc.compile_ahead`.
 ORDER_ANALYSIS = "order_analysis"
-#: Longest wait [s] for the helper's parts a run needs before its kernel (the sub-step search
-#: and the set-up functions).
+#: Longest wait [s] for the helper's parts (all of :data:`HELPER_PARTS`, needed before the
+#: kernel's first call).
 WAIT_S = 60.0
 
 
@@ -148,10 +152,10 @@ def start(order_analysis: bool = False) -> CompileHelper | None:
     return CompileHelper(process)
 
 
-def share_first_compilation(order_analysis: bool = False) -> CompileHelper | None:
-    """Compile a run's kernels in two processes: start a helper (:func:`start`), compile
-    :data:`MAIN_PARTS` here meanwhile, then wait for the helper's sub-step search and set-up
-    functions.
+def share_first_compilation(order_analysis: bool = False,
+                            helper: CompileHelper | None = None) -> CompileHelper | None:
+    """Compile a run's kernels in two processes: start a helper (:func:`start`) unless one
+    is given, compile :data:`MAIN_PARTS` here meanwhile, then wait for :data:`HELPER_PARTS`.
 
     Call it before the first run of a process whose numba cache is cold; a run afterwards
     takes the helper's parts from the cache. Without a helper it does nothing (the run then
@@ -160,21 +164,26 @@ def share_first_compilation(order_analysis: bool = False) -> CompileHelper | Non
     Parameters
     ----------
     order_analysis : bool
-        The command writes a report: the helper also compiles its order analysis.
+        The command writes a report: the helper started here also compiles its order
+        analysis.
+    helper : CompileHelper, optional
+        A helper started earlier (:func:`start`: it compiles while the command imports and
+        checks its inputs).
 
     Returns
     -------
     CompileHelper or None
         The helper (still compiling its later parts), or None when none was started.
     """
-    helper = start(order_analysis)
+    if helper is None:
+        helper = start(order_analysis)
     if helper is None:
         return None
     from gearvib.kernels import compile_ahead
 
     for part in MAIN_PARTS:
         compile_ahead(part)
-    helper.wait("setup")  # the parts come in order: the sub-step search is there too
+    helper.wait(HELPER_PARTS[-1])  # the parts come in order: the earlier ones are there too
     return helper
 
 

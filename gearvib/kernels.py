@@ -41,6 +41,13 @@ use): :func:`integrate_chunk`, :func:`evaluate_rhs` and :func:`rhs_loop` hand th
 kernels a system whose ``ints[H_FPASS]`` holds one or the other (:func:`with_pass`). The
 compiled right-hand side holds no fault law at all, so a run without faults compiles none.
 
+The right-hand side itself is a C function too (:func:`rhs_address`, :data:`RHS_SIGNATURE`):
+the RK4 loop, :func:`evaluate_rhs` and :func:`rhs_loop` call it through its address
+(:func:`_call_rhs`; one indirect call per evaluation, no measurable cost: LLVM did not inline
+the right-hand side into the loop either). So the loop compiles without the right-hand side
+(in parallel with it on a first run, :mod:`gearvib.compile_helper`) and does not optimise the
+right-hand side's code again inside its own.
+
 Drive (``ipar[IP_MODE]``):
 
 * ``DRIVE_NONE``: no drive; only ``f_const`` and the load act.
@@ -92,11 +99,14 @@ in double contact). Row ``i`` of a chunk is the state at the start of step ``i``
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, fields
+from functools import partial
 
 import numpy as np
 from llvmlite import ir
 from numba import carray, cfunc, njit, types
+from numba.core import cgutils
 from numba.extending import intrinsic
 
 from analysis.jit import prepare_cache
@@ -114,6 +124,7 @@ __all__ = [
     "KERNEL_PARTS",
     "MESH_OUT_COLUMNS",
     "PASS_SIGNATURE",
+    "RHS_SIGNATURE",
     "STATUS_DEFLECTION",
     "STATUS_NONFINITE",
     "STATUS_OK",
@@ -138,6 +149,7 @@ __all__ = [
     "operators",
     "pack",
     "periodic_interp",
+    "rhs_address",
     "rhs_loop",
     "shift_rigid",
     "short_step_header",
@@ -1621,6 +1633,58 @@ def _rhs(t, y, dy, mesh_out, ints, vals, tables, speed_tab, torque_tab):
         _call_pass(ints[H_FPASS], y, dy, mesh_out, ints, vals, tables)
 
 
+_I64P = types.CPointer(types.int64)
+#: The C signature of the compiled right-hand side (:func:`rhs_address`): ``t``, pointers to
+#: ``y, dy, mesh_out, ints, vals, tables, speed_tab, torque_tab``, the lengths of ``ints`` and
+#: ``vals`` and the last extents of ``tables``, ``speed_tab`` and ``torque_tab``.
+RHS_SIGNATURE = types.void(types.float64, _F64P, _F64P, _F64P, _I64P, _F64P, _F64P, _F64P,
+                           _F64P, types.intp, types.intp, types.intp, types.intp, types.intp)
+
+
+def _rhs_entry(t, yp, dyp, mp, ip, vp, tp, sp, qp, n_ints, n_vals, n_table, n_speed,
+               n_torque):  # pragma: no cover - jit
+    """:func:`_rhs` as a C function of :data:`RHS_SIGNATURE`, compiled by :func:`rhs_address`."""
+    ints = carray(ip, (n_ints,))
+    n2 = 2 * ints[H_N]
+    n_mesh = ints[H_NMESH]
+    _rhs(t, carray(yp, (n2,)), carray(dyp, (n2,)), carray(mp, (n_mesh, MESH_OUT_COLUMNS)),
+         ints, carray(vp, (n_vals,)), carray(tp, (2, n_mesh, n_table)),
+         carray(sp, (3, n_speed)), carray(qp, (2, n_torque)))
+
+
+_RHS: list = []
+
+
+def rhs_address() -> int:
+    """Address of the compiled right-hand side (:func:`_rhs` as a C function of
+    :data:`RHS_SIGNATURE`), compiled at the first call in the process (loaded from numba's
+    cache after the first run on a machine). The compiled kernels call it through this
+    address (:func:`_call_rhs`), so they compile without it and never compile it again."""
+    if not _RHS:
+        _RHS.append(cfunc(RHS_SIGNATURE, cache=True)(_rhs_entry))
+    return int(_RHS[0].address)
+
+
+@intrinsic
+def _call_rhs(typingctx, address, t, y, dy, mesh_out, ints, vals, tables, speed_tab,
+              torque_tab):
+    """Call the compiled right-hand side at ``address`` (:func:`rhs_address`): an indirect
+    call with the arrays' data pointers and extents."""
+    sig = types.void(address, t, y, dy, mesh_out, ints, vals, tables, speed_tab, torque_tab)
+
+    def codegen(context, builder, signature, args):
+        arrays = [context.make_array(ty)(context, builder, val)
+                  for ty, val in zip(signature.args[2:], args[2:], strict=True)]
+        last = [cgutils.unpack_tuple(builder, a.shape)[-1] for a in arrays[5:]]
+        params = [context.cast(builder, args[1], signature.args[1], types.float64),
+                  *(a.data for a in arrays), arrays[3].nitems, arrays[4].nitems, *last]
+        fnty = ir.FunctionType(ir.VoidType(), [p.type for p in params])
+        builder.call(builder.inttoptr(args[0], fnty.as_pointer()), params)
+        return context.get_dummy_value()
+
+    return sig, codegen
+
+
 def evaluate_rhs(t: float, y: np.ndarray, system: tuple) -> tuple[np.ndarray, np.ndarray]:
     """Right-hand side at one state (allocating; for tests and cross-checks, not for loops).
 
@@ -1632,11 +1696,11 @@ def evaluate_rhs(t: float, y: np.ndarray, system: tuple) -> tuple[np.ndarray, np
         Per mesh ``F_left, -F_right, k_eff, contact state, delta``, the mesh position ``s`` and
         ``delta_R`` (the first columns of the kernels' scratch).
     """
-    return _evaluate_rhs(t, y, with_pass(system))
+    return _evaluate_rhs(t, y, with_pass(system), rhs_address())
 
 
 @njit(cache=True)
-def _evaluate_rhs(t, y, system):
+def _evaluate_rhs(t, y, system, rhs):
     """:func:`evaluate_rhs` of a system ready for the kernels (:func:`with_pass`)."""
     ints, vals, tables, speed_tab, torque_tab = system
     dy = np.empty(2 * ints[H_N])
@@ -1647,7 +1711,7 @@ def _evaluate_rhs(t, y, system):
     mesh_out[0, 18] = np.nan  # no shared eccentricity angle
     mesh_out[:, 21] = np.nan  # no kept mesh cycle
     mesh_out[:, 24] = np.nan  # no kept offsets of a mesh cycle
-    _rhs(t, y, dy, mesh_out, ints, vals, tables, speed_tab, torque_tab)
+    _call_rhs(rhs, t, y, dy, mesh_out, ints, vals, tables, speed_tab, torque_tab)
     return dy, mesh_out[:, :7].copy()
 
 
@@ -1658,18 +1722,19 @@ def rhs_loop(states: np.ndarray, t0: float, dt: float, n_eval: int, system: tupl
     For benchmarks (``benchmarks/bench_kernel.py``): the right-hand side of the kernels alone,
     without allocation; returns the sum of the last entries of ``dy`` (a check value).
     """
-    return _rhs_loop(states, t0, dt, n_eval, with_pass(system), dy, mesh_out)
+    return _rhs_loop(states, t0, dt, n_eval, with_pass(system), dy, mesh_out, rhs_address())
 
 
 @njit(cache=True)
-def _rhs_loop(states, t0, dt, n_eval, system, dy, mesh_out):
+def _rhs_loop(states, t0, dt, n_eval, system, dy, mesh_out, rhs):
     """:func:`rhs_loop` of a system ready for the kernels (:func:`with_pass`)."""
     ints, vals, tables, speed_tab, torque_tab = system
     check = 0.0
     r = 0
     n2 = states.shape[1]
     for _ in range(n_eval):
-        _rhs(t0 + r * dt, states[r], dy, mesh_out, ints, vals, tables, speed_tab, torque_tab)
+        _call_rhs(rhs, t0 + r * dt, states[r], dy, mesh_out, ints, vals, tables, speed_tab,
+                  torque_tab)
         check += dy[n2 - 1]
         r += 1
         if r == states.shape[0]:
@@ -1796,20 +1861,21 @@ def _first_beyond(vals, start, count, x):
 
 
 @njit(cache=True, _nrt=False)
-def _rk4_step(t, h, y, k1, k2, k3, k4, tmp, mesh_out, ints, vals, tables, speed_tab, torque_tab):
+def _rk4_step(rhs, t, h, y, k1, k2, k3, k4, tmp, mesh_out, ints, vals, tables, speed_tab,
+              torque_tab):
     """One classical RK4 step of size ``h`` from ``(t, y)`` (in place); ``k1 = f(t, y)`` given."""
     n2 = _U(2 * ints[H_N])
     h2 = 0.5 * h
     h6 = h / 6.0
     for i in range(n2):
         tmp[i] = y[i] + h2 * k1[i]
-    _rhs(t + h2, tmp, k2, mesh_out, ints, vals, tables, speed_tab, torque_tab)
+    _call_rhs(rhs, t + h2, tmp, k2, mesh_out, ints, vals, tables, speed_tab, torque_tab)
     for i in range(n2):
         tmp[i] = y[i] + h2 * k2[i]
-    _rhs(t + h2, tmp, k3, mesh_out, ints, vals, tables, speed_tab, torque_tab)
+    _call_rhs(rhs, t + h2, tmp, k3, mesh_out, ints, vals, tables, speed_tab, torque_tab)
     for i in range(n2):
         tmp[i] = y[i] + h * k3[i]
-    _rhs(t + h, tmp, k4, mesh_out, ints, vals, tables, speed_tab, torque_tab)
+    _call_rhs(rhs, t + h, tmp, k4, mesh_out, ints, vals, tables, speed_tab, torque_tab)
     for i in range(n2):
         y[i] += h6 * (k1[i] + 2.0 * (k2[i] + k3[i]) + k4[i])
 
@@ -1870,13 +1936,13 @@ def integrate_chunk(
     """
     integrate_chunk_compiled(y, first_step, n_steps, dt, with_pass(system), record,
                              record_offset, flank_state, contact_changes, count_until, work,
-                             mesh_out, status)
+                             mesh_out, status, rhs_address())
 
 
 @njit(cache=True)
 def integrate_chunk_compiled(y, first_step, n_steps, dt, system, record, record_offset,
                              flank_state, contact_changes, count_until, work, mesh_out,
-                             status):
+                             status, rhs):
     """The compiled kernel of :func:`integrate_chunk`, for a system ready for it
     (:func:`with_pass`: a system with faults must hold the address of its faulty-mesh pass
     in ``ints[H_FPASS]``)."""
@@ -1915,7 +1981,7 @@ def integrate_chunk_compiled(y, first_step, n_steps, dt, system, record, record_
     for step in range(n_steps):
         g = first_step + step
         t = g * dt
-        _rhs(t, y, k1, mesh_out, ints, vals, tables, speed_tab, torque_tab)
+        _call_rhs(rhs, t, y, k1, mesh_out, ints, vals, tables, speed_tab, torque_tab)
         row = record_offset + step
         bad = STATUS_OK
         for i in range(n2):
@@ -1945,7 +2011,8 @@ def integrate_chunk_compiled(y, first_step, n_steps, dt, system, record, record_
         for j in range(n_split + 1):
             t_b = splits[j] if j < n_split else dt
             if j > 0:
-                _rhs(t + t_a, y, k1, mesh_out, ints, vals, tables, speed_tab, torque_tab)
+                _call_rhs(rhs, t + t_a, y, k1, mesh_out, ints, vals, tables, speed_tab,
+                          torque_tab)
             h = t_b - t_a
             if h <= h_euler:
                 for i in range(n2):
@@ -1953,13 +2020,13 @@ def integrate_chunk_compiled(y, first_step, n_steps, dt, system, record, record_
             elif h <= h_mid:
                 for i in range(n2):
                     tmp[i] = y[i] + 0.5 * h * k1[i]
-                _rhs(t + t_a + 0.5 * h, tmp, k2, mesh_out, ints, vals, tables, speed_tab,
-                     torque_tab)
+                _call_rhs(rhs, t + t_a + 0.5 * h, tmp, k2, mesh_out, ints, vals, tables,
+                          speed_tab, torque_tab)
                 for i in range(n2):
                     y[i] += h * k2[i]
             else:
                 _rk4_step(
-                    t + t_a, h, y, k1, k2, k3, k4, tmp, mesh_out,
+                    rhs, t + t_a, h, y, k1, k2, k3, k4, tmp, mesh_out,
                     ints, vals, tables, speed_tab, torque_tab,
                 )
             t_a = t_b
@@ -2158,19 +2225,27 @@ stiffness_flanks = _stiffness_flanks
 _A1, _A2, _A3 = (types.Array(types.float64, d, "C") for d in (1, 2, 3))
 _I1 = types.Array(types.int64, 1, "C")
 _F8, _I8 = types.float64, types.int64
-#: ``part: [(dispatcher, argument types)]`` for :func:`compile_ahead`, the types as a run
-#: passes them (every array C-contiguous, ``ints`` int64, the others float64; integers int64).
-_PARTS: dict[str, list[tuple]] = {
-    "setup": [(speed_profile, (_A2, _A1, _A1, _A1)), (periodic_interp, (_A2, _I8, _F8))],
-    "rhs": [(_rhs, (_F8, _A1, _A1, _A2, _I1, _A1, _A3, _A2, _A2))],
-    "step_search": [(_split_times, (_A1, _F8, _I1, _A1, _A2, _A1))],
-    "output": [(shift_rigid, (_A2, _I8, _A1, _A1, _A1, types.boolean)),
-               (fir_decimate, (_A2, _I8, _A1, _I8, _I8, _I8, _A2, _I8))],
+_SYSTEM = types.Tuple((_I1, _A1, _A3, _A2, _A2))
+#: ``part: (compile, ...)`` for :func:`compile_ahead`: the dispatchers compiled for the argument
+#: types a run passes (every array C-contiguous, ``ints`` int64, the others float64; integers
+#: int64), and the right-hand side's C function.
+_PARTS: dict[str, tuple[Callable[[], object], ...]] = {
+    "setup": (partial(speed_profile.compile, (_A2, _A1, _A1, _A1)),
+              partial(periodic_interp.compile, (_A2, _I8, _F8))),
+    "rhs": (rhs_address,),
+    "step_search": (partial(_split_times.compile, (_A1, _F8, _I1, _A1, _A2, _A1)),),
+    "kernel": (partial(integrate_chunk_compiled.compile,
+                       (_A1, _I8, _I8, _F8, _SYSTEM, _A2, _I8, _I1, _I1, _I8, _A2, _A2, _I1,
+                        _I8)),),
+    "output": (partial(shift_rigid.compile, (_A2, _I8, _A1, _A1, _A1, types.boolean)),
+               partial(fir_decimate.compile, (_A2, _I8, _A1, _I8, _I8, _I8, _A2, _I8))),
 }
 #: The parts of a run's kernels :func:`compile_ahead` compiles: ``"setup"`` (the speed profile
-#: and the table look-up a run calls before its kernel), ``"rhs"`` (the right-hand side),
-#: ``"step_search"`` (the sub-step search of the RK4 loop) and ``"output"`` (the rigid-body
-#: shift and the anti-alias decimation of the recorded rows).
+#: and the table look-up a run calls before its kernel), ``"rhs"`` (the right-hand side,
+#: :func:`rhs_address`), ``"step_search"`` (the sub-step search), ``"kernel"`` (the RK4 loop
+#: :func:`integrate_chunk_compiled`, which calls the sub-step search and, through its
+#: address, the right-hand side) and ``"output"`` (the rigid-body shift and the anti-alias
+#: decimation of the recorded rows).
 KERNEL_PARTS = tuple(_PARTS)
 
 
@@ -2179,9 +2254,10 @@ def compile_ahead(part: str) -> None:
 
     The first compilation of :func:`integrate_chunk_compiled` takes each function it calls
     from this process when compiled here already, else from numba's cache, and compiles it
-    only when neither holds it. So two processes can share a first compilation: one compiles
-    the right-hand side while the other compiles the sub-step search into the cache. The
-    machine code is the same either way.
+    only when neither holds it; it calls the right-hand side through its address, so it
+    compiles without it. So two processes can share a first compilation: one compiles the
+    right-hand side while the other compiles the sub-step search and the kernel into the
+    cache. The machine code is the same either way.
 
     Parameters
     ----------
@@ -2196,5 +2272,5 @@ def compile_ahead(part: str) -> None:
     """
     if part not in _PARTS:
         raise ValueError(f"part must be one of {', '.join(KERNEL_PARTS)}; got {part!r}")
-    for dispatcher, args in _PARTS[part]:
-        dispatcher.compile(args)
+    for compile_part in _PARTS[part]:
+        compile_part()

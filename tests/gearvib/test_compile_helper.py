@@ -55,8 +55,8 @@ for part in kn.KERNEL_PARTS:
     kn.compile_ahead(part)
 sinc.compile_ahead()
 after = {k: [str(s) for s in d.signatures] for k, d in public.items()}
-ahead = {"rhs": [str(s) for s in kn._rhs.signatures],
-         "step_search": [str(s) for s in kn._split_times.signatures]}
+ahead = {"step_search": [str(s) for s in kn._split_times.signatures],
+         "kernel": [str(s) for s in kn.integrate_chunk_compiled.signatures]}
 print(json.dumps({"before": before, "after": after, "kernel": kernel, "system": system,
                   "ahead": ahead}))
 """
@@ -77,22 +77,23 @@ def test_parts_compiled_ahead_are_the_specialisations_a_run_uses(probe):
 
 def test_kernel_parts_take_the_kernel_argument_types(probe):
     # integrate_chunk_compiled(y, first_step, n_steps, dt, system, record, record_offset,
-    # flank_state, contact_changes, count_until, work, mesh_out, status) passes y, rows of
-    # work (C-contiguous 1-d, as work[i] of a C-contiguous 2-d array), mesh_out and the
-    # system's arrays to _rhs and _split_times
+    # flank_state, contact_changes, count_until, work, mesh_out, status, rhs) passes y, rows
+    # of work (C-contiguous 1-d, as work[i] of a C-contiguous 2-d array), mesh_out and the
+    # system's arrays to _split_times (and their data to the right-hand side's C function,
+    # whose signature is fixed)
     kernel = probe["kernel"]
+    assert len(probe["ahead"]["kernel"]) == 1  # compile_ahead("kernel"): the run's own types
     y, dt, work, mesh_out = kernel[0], kernel[3], kernel[10], kernel[11]
-    ints, vals, tables, speed_tab, torque_tab = probe["system"]
+    ints, vals, *_ = probe["system"]
     row = work.replace("Array(float64, 2,", "Array(float64, 1,")
     assert y == row  # both array(float64, 1d, C)
-    assert probe["ahead"]["rhs"] == [
-        f"({dt}, {y}, {row}, {mesh_out}, {ints}, {vals}, {tables}, {speed_tab}, {torque_tab})"]
     assert probe["ahead"]["step_search"] == [
         f"({y}, {dt}, {ints}, {vals}, {mesh_out}, {row})"]
 
 
 def test_unknown_part_is_refused():
-    with pytest.raises(ValueError, match="part must be one of setup, rhs, step_search, output"):
+    with pytest.raises(ValueError,
+                       match="part must be one of setup, rhs, step_search, kernel, output"):
         kn.compile_ahead("everything")
 
 
@@ -113,6 +114,18 @@ def _fake(code: str) -> compile_helper.CompileHelper:
     return compile_helper.CompileHelper(subprocess.Popen(
         [sys.executable, "-c", code], stdout=subprocess.PIPE, stdin=subprocess.DEVNULL,
         text=True))
+
+
+def test_shared_compilation_with_a_helper_started_earlier(monkeypatch):
+    monkeypatch.setattr(compile_helper, "start",
+                        lambda order_analysis=False: pytest.fail("a second helper started"))
+    compiled = []
+    monkeypatch.setattr(kn, "compile_ahead", compiled.append)
+    parts = "\n".join(compile_helper.HELPER_PARTS)
+    helper = _fake(f"print({parts!r}, flush=True)")
+    assert compile_helper.share_first_compilation(helper=helper) is helper
+    assert compiled == list(compile_helper.MAIN_PARTS)  # this process's share, then the wait
+    assert helper.delivered == compile_helper.HELPER_PARTS
 
 
 def test_wait_ends_with_the_helper():
