@@ -22,10 +22,13 @@ import signal
 import sys
 import warnings
 from collections.abc import Sequence
-from typing import NoReturn
+from typing import TYPE_CHECKING, NoReturn
 
 from gearvib import __version__
 from gearvib.interrupts import Interrupted, exit_now, pending_signal, signals_as_exceptions
+
+if TYPE_CHECKING:
+    from gearvib.compile_helper import CompileHelper
 
 __all__ = ["hide_unused_modules", "main", "prepare_process", "run"]
 
@@ -217,6 +220,7 @@ def run_settings(cfg: dict, args: argparse.Namespace | None = None) -> dict:
 
 
 def _cmd_simulate(args: argparse.Namespace) -> int:
+    helper = _start_helper()
     from gearvib.assembly import assemble
     from gearvib.config import gearset_from_dict, load_config
     from gearvib.io import write_netcdf
@@ -231,7 +235,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     out, removed = check_output_file(args.output, overwrite=args.overwrite)
     _report_removed(removed)
     model = assemble(gearset)
-    _first_run(args.quiet)
+    _first_run(args.quiet, helper=helper)
     result = simulate(model, cond, dt=run["dt"], fs_out=run["fs_out"],
                       gyroscopic=run["gyroscopic"], progress=None if not args.quiet else False,
                       config={"gearset": cfg, "run": run}, max_steps=args.max_steps)
@@ -240,10 +244,25 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     return 0
 
 
-def _first_run(quiet: bool, *, report: bool = False) -> None:
+def _start_helper(report: bool = False) -> CompileHelper | None:
+    """On a cold numba cache, the compile helper (:mod:`gearvib.compile_helper`; ``report``:
+    its order analysis too), started at once: it compiles while this process imports and
+    checks its inputs. None when the cache is warm or no helper could start. A command that
+    stops before its run leaves the helper to end on its own after its current part."""
+    from gearvib.jit_cache import kernels_cached
+
+    if kernels_cached() is not False:
+        return None
+    from gearvib.compile_helper import start
+
+    return start(order_analysis=report)
+
+
+def _first_run(quiet: bool, *, report: bool = False,
+               helper: CompileHelper | None = None) -> None:
     """Before a run that compiles the kernels (a cold numba cache): one line on stderr
-    (unless ``quiet``), and the compilation shared with a helper process
-    (:mod:`gearvib.compile_helper`; ``report``: its order analysis too)."""
+    (unless ``quiet``), and the compilation shared with ``helper``, or with a helper started
+    now (:mod:`gearvib.compile_helper`; ``report``: its order analysis too)."""
     from gearvib.jit_cache import first_run_notice
 
     notice = first_run_notice()
@@ -253,7 +272,7 @@ def _first_run(quiet: bool, *, report: bool = False) -> None:
         print(notice, file=sys.stderr, flush=True)
     from gearvib.compile_helper import share_first_compilation
 
-    share_first_compilation(order_analysis=report)
+    share_first_compilation(order_analysis=report, helper=helper)
 
 
 def _report_removed(removed: Sequence) -> None:
@@ -574,6 +593,7 @@ def _cmd_compare(args: argparse.Namespace) -> int:
 def _cmd_demo(args: argparse.Namespace) -> int:
     from pathlib import Path
 
+    helper = _start_helper(report=True)  # before the report package's imports (about 2 s)
     from gearvib.outputs import check_output_folder, removed_if_left_empty
     from gearvib.report import Study, run_study
     from gearvib.report.runner import check_study
@@ -589,7 +609,7 @@ def _cmd_demo(args: argparse.Namespace) -> int:
         overwrite=args.overwrite)[1])
     print(f"gearvib demo: simulating the paper's run-ups (0 -> 4000 min-1 in "
           f"{args.duration or 1.0:g} s, cases 1 and 2) into {out}/ ...")
-    _first_run(False, report=True)
+    _first_run(False, report=True, helper=helper)
     with removed_if_left_empty(out):
         result = run_study(study, out, progress=not args.quiet)
     for name, path in result.runs.items():

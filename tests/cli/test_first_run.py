@@ -64,31 +64,57 @@ def test_cold_and_warm_cache_are_told_apart(tmp_path):
     (False, False, True), (False, True, False), (True, False, False), (None, False, False)])
 def test_simulate_announces_a_compilation(tmp_path, capsys, monkeypatch, cached, quiet, told):
     monkeypatch.setattr(jit_cache, "kernels_cached", lambda: cached)
-    shared = []  # the compilation shared with a helper process: on a cold cache only
-    monkeypatch.setattr(compile_helper, "share_first_compilation",
-                        lambda order_analysis=False: shared.append(order_analysis))
+    started, shared = _fake_helper(monkeypatch)
     assert main(["simulate", "paper-case1", "-o", str(tmp_path / "x.nc"), "--speed",
                  "1400:1600", "--duration", "0.01", *(["-q"] if quiet else [])]) == 0
     err = capsys.readouterr().err
     assert ("compiling the simulation kernels" in err) is told
     if told:
         assert err.count("\n") >= 1 and err.splitlines()[0] == jit_cache.FIRST_RUN_NOTICE
-    assert shared == ([False] if cached is False else [])
+    # the helper starts first thing on a cold cache; its compilation is shared before the run
+    assert started == ([False] if cached is False else [])
+    assert shared == ([(False, "helper")] if cached is False else [])
+
+
+def _fake_helper(monkeypatch) -> tuple[list, list]:
+    """Record the helper's start (``order_analysis``) and the shared compilation
+    (``order_analysis``, the helper handed over) instead of starting processes."""
+    started: list = []
+    shared: list = []
+
+    def start(order_analysis=False):
+        started.append(order_analysis)
+        return "helper"
+
+    monkeypatch.setattr(compile_helper, "start", start)
+    monkeypatch.setattr(compile_helper, "share_first_compilation",
+                        lambda order_analysis=False, helper=None:
+                        shared.append((order_analysis, helper)))
+    return started, shared
 
 
 def test_demo_shares_its_first_compilation_with_the_order_analysis(tmp_path, monkeypatch):
     monkeypatch.setattr(jit_cache, "kernels_cached", lambda: False)
-    shared = []
-    monkeypatch.setattr(compile_helper, "share_first_compilation",
-                        lambda order_analysis=False: shared.append(order_analysis))
+    started, shared = _fake_helper(monkeypatch)
     import gearvib.report
 
     monkeypatch.setattr(gearvib.report, "run_study", lambda *a, **k: (_ for _ in ()).throw(
         RuntimeError("stop before the runs")))
     with contextlib.suppress(RuntimeError):  # main may report it instead
         assert main(["demo", "-o", str(tmp_path / "demo"), "--quiet"]) != 0
-    assert shared == [True]
+    assert started == [True]
+    assert shared == [(True, "helper")]
     assert not (tmp_path / "demo").exists()  # nothing written before the runs
+
+
+def test_a_refused_command_leaves_its_early_helper_to_end(tmp_path, monkeypatch, capsys):
+    """The helper starts before the inputs are checked; a command refused afterwards stops
+    without sharing the compilation (the helper ends on its own after its part)."""
+    monkeypatch.setattr(jit_cache, "kernels_cached", lambda: False)
+    started, shared = _fake_helper(monkeypatch)
+    assert main(["simulate", str(tmp_path / "missing.toml"), "-o", str(tmp_path / "x.nc")]) != 0
+    assert "not found" in capsys.readouterr().err
+    assert started == [False] and shared == []
 
 
 def _helpers(cache: Path) -> set[int]:
