@@ -9,14 +9,15 @@ call of the kernel then loads the helper's functions from the cache. The machine
 same, and so are the results, bit for bit: only the first run's wall time drops, by the
 helper's share (the CPU time does not).
 
-The command compiles :data:`MAIN_PARTS` (the right-hand side), the helper :data:`HELPER_PARTS`
-(the sub-step search, the RK4 loop, which calls the right-hand side through its address and so
-compiles without it, the set-up functions a run calls before its kernel and the output
-functions) and, before a report, the order analysis of :mod:`analysis.sinc`. The command
-line starts the helper first thing (:func:`start`), so that it compiles while the command
-imports its modules and checks its inputs, and hands it to :func:`share_first_compilation`
-before the run. The command waits for the helper's parts, at most :data:`WAIT_S` seconds; it
-compiles itself what the helper has not delivered by the time it needs it.
+The command compiles :data:`MAIN_PARTS` (the right-hand side, the set-up functions a run calls
+before its kernel, the output functions), the helper :data:`HELPER_PARTS` (the sub-step search
+and the RK4 loop, which calls the right-hand side through its address and so compiles without
+it) and, for a report, the order analysis of :mod:`analysis.sinc`. The command line starts the
+helper first thing (:func:`start`), so that it compiles while the command imports its modules
+and checks its inputs, and hands it to :func:`share_first_compilation` before the run; the
+report waits for the order analysis if the helper is still compiling it (:func:`await_part`).
+The command waits for the helper's parts at most :data:`WAIT_S` seconds each; it compiles
+itself what the helper has not delivered by the time it needs it.
 
 The helper runs in a session of its own (a Ctrl-C at the terminal reaches the command only),
 prints nothing to the terminal and stops between two parts once the command has ended, so it
@@ -37,15 +38,16 @@ from collections.abc import Sequence
 from pathlib import Path
 
 __all__ = ["ENV_SWITCH", "HELPER_PARTS", "MAIN_PARTS", "ORDER_ANALYSIS", "WAIT_S",
-           "CompileHelper", "share_first_compilation", "start"]
+           "CompileHelper", "await_part", "share_first_compilation", "start"]
 
 #: Environment variable: ``0`` starts no helper.
 ENV_SWITCH = "GEARVIB_COMPILE_HELPER"
 #: Parts of :data:`gearvib.kernels.KERNEL_PARTS` the command compiles itself, after its
-#: imports (together about as long as the helper's start and parts: both end together).
-MAIN_PARTS = ("rhs",)
+#: imports (together about as long as the helper's start and parts: both end together; the
+#: set-up functions are cheap here, after the right-hand side's shared pieces).
+MAIN_PARTS = ("rhs", "setup", "output")
 #: Parts the helper compiles, in this order; then :data:`ORDER_ANALYSIS` when asked.
-HELPER_PARTS = ("step_search", "kernel", "setup", "output")
+HELPER_PARTS = ("step_search", "kernel")
 #: The helper's part for a report: :func:`analysis.sinc.compile_ahead`.
 ORDER_ANALYSIS = "order_analysis"
 #: Longest wait [s] for the helper's parts (all of :data:`HELPER_PARTS`, needed before the
@@ -60,10 +62,13 @@ class CompileHelper:
     ----------
     process : subprocess.Popen
         The helper, its standard output a text pipe (one line per part compiled).
+    parts : sequence of str, optional
+        The parts it compiles, in order (:meth:`will_deliver`).
     """
 
-    def __init__(self, process: subprocess.Popen) -> None:
+    def __init__(self, process: subprocess.Popen, parts: Sequence[str] = ()) -> None:
         self._process = process
+        self.parts = tuple(parts)
         self._done: list[str] = []
         self._ended = False
         self._changed = threading.Condition()
@@ -98,6 +103,11 @@ class CompileHelper:
         """Whether the helper has closed its output (finished, failed or stopped)."""
         with self._changed:
             return self._ended
+
+    def will_deliver(self, part: str) -> bool:
+        """Whether ``part`` is among the helper's parts and it has not ended before it."""
+        with self._changed:
+            return part in self.parts and (part in self._done or not self._ended)
 
     def wait(self, part: str, timeout: float = WAIT_S) -> bool:
         """Wait until the helper has delivered ``part``, has ended, or ``timeout`` [s] passed.
@@ -149,7 +159,7 @@ def start(order_analysis: bool = False) -> CompileHelper | None:
             env=env, text=True, start_new_session=True, close_fds=True)
     except (OSError, ValueError):
         return None
-    return CompileHelper(process)
+    return CompileHelper(process, parts)
 
 
 def share_first_compilation(order_analysis: bool = False,
@@ -184,7 +194,27 @@ def share_first_compilation(order_analysis: bool = False,
     for part in MAIN_PARTS:
         compile_ahead(part)
     helper.wait(HELPER_PARTS[-1])  # the parts come in order: the earlier ones are there too
+    _SHARED[:] = [helper]
     return helper
+
+
+_SHARED: list[CompileHelper] = []  # the helper of this process's shared compilation
+
+
+def await_part(part: str, timeout: float = WAIT_S) -> bool:
+    """Wait for ``part`` from the helper of this process's shared compilation, if that helper
+    compiles it and is still running: a command about to need it (the report's order analysis,
+    :data:`ORDER_ANALYSIS`) then loads it from the cache instead of compiling it a second
+    time. Returns at once when there is no such helper.
+
+    Returns
+    -------
+    bool
+        Whether the helper delivered ``part``.
+    """
+    if not _SHARED or not _SHARED[0].will_deliver(part):
+        return False
+    return _SHARED[0].wait(part, timeout)
 
 
 def _compile(part: str) -> None:

@@ -33,6 +33,7 @@ from analysis.checks import require_instance
 from gearvib import tempfiles
 from gearvib.assembly import assemble
 from gearvib.checks import check_path, cut
+from gearvib.compile_helper import ORDER_ANALYSIS, await_part
 from gearvib.config import gearset_from_dict
 from gearvib.io import GearvibFileError, atomic_write, read_run, write_netcdf
 from gearvib.modal import modal_analysis
@@ -462,6 +463,8 @@ def run_study(study: Study, out_dir: str | os.PathLike, *, progress: bool = True
             runs[case.name] = write_netcdf(res.to_dataset(), folder.ensure() / f"{case.name}.nc")
         step(n_steps, "analysing the runs and writing the report (maps, spectra, Floquet "
                       f"charts: stability = {study.analysis.stability!r})")
+        # a first run: the order analysis from the compile helper, if it is compiling it
+        await_part(ORDER_ANALYSIS)
         report = _build([(n, read_run(p)) for n, p in runs.items()], folder,
                         title=study.title, analysis=study.analysis,
                         reference=study.reference_case, progress=None if progress else False)

@@ -110,10 +110,10 @@ def test_helper_delivers_its_parts_in_order_and_ends(monkeypatch):
     assert helper.delivered == (*compile_helper.HELPER_PARTS, compile_helper.ORDER_ANALYSIS)
 
 
-def _fake(code: str) -> compile_helper.CompileHelper:
+def _fake(code: str, parts: tuple[str, ...] = ()) -> compile_helper.CompileHelper:
     return compile_helper.CompileHelper(subprocess.Popen(
         [sys.executable, "-c", code], stdout=subprocess.PIPE, stdin=subprocess.DEVNULL,
-        text=True))
+        text=True), parts)
 
 
 def test_shared_compilation_with_a_helper_started_earlier(monkeypatch):
@@ -122,10 +122,34 @@ def test_shared_compilation_with_a_helper_started_earlier(monkeypatch):
     compiled = []
     monkeypatch.setattr(kn, "compile_ahead", compiled.append)
     parts = "\n".join(compile_helper.HELPER_PARTS)
-    helper = _fake(f"print({parts!r}, flush=True)")
+    helper = _fake(f"print({parts!r}, flush=True)", compile_helper.HELPER_PARTS)
+    monkeypatch.setattr(compile_helper, "_SHARED", [])
     assert compile_helper.share_first_compilation(helper=helper) is helper
     assert compiled == list(compile_helper.MAIN_PARTS)  # this process's share, then the wait
     assert helper.delivered == compile_helper.HELPER_PARTS
+    assert compile_helper.await_part(compile_helper.HELPER_PARTS[0], timeout=0)  # asks it
+
+
+def test_await_part_waits_only_for_a_part_the_helper_compiles(monkeypatch):
+    monkeypatch.setattr(compile_helper, "_SHARED", [])
+    assert not compile_helper.await_part(compile_helper.ORDER_ANALYSIS, timeout=5)  # none
+    helper = _fake("import time; time.sleep(0.5); print('step_search', flush=True); "
+                   "time.sleep(0.5); print('order_analysis', flush=True)",
+                   parts=("step_search", "order_analysis"))
+    monkeypatch.setattr(compile_helper, "_SHARED", [helper])
+    t0 = time.monotonic()
+    assert not compile_helper.await_part("kernel", timeout=30)  # not among its parts
+    assert time.monotonic() - t0 < 0.4
+    assert compile_helper.await_part(compile_helper.ORDER_ANALYSIS, timeout=60)
+    assert helper.delivered == ("step_search", "order_analysis")
+    assert compile_helper.await_part("step_search", timeout=0)
+
+
+def test_await_part_gives_up_when_the_helper_ends_early(monkeypatch):
+    helper = _fake("print('step_search', flush=True)", parts=("step_search", "order_analysis"))
+    monkeypatch.setattr(compile_helper, "_SHARED", [helper])
+    assert not compile_helper.await_part(compile_helper.ORDER_ANALYSIS, timeout=120)
+    assert helper.ended and not helper.will_deliver(compile_helper.ORDER_ANALYSIS)
 
 
 def test_wait_ends_with_the_helper():
