@@ -134,8 +134,6 @@ def profile_case(job: ProfileJob, task: CaseTask) -> CaseOutcome:
     return CaseOutcome(case.index, status, "", _summary(), time.perf_counter() - t0)
 
 
-
-
 def _summary() -> xr.Dataset:
     return xr.Dataset({"profiled": ((), 1, {"units": "1", "long_name":
                                              "order profiles written to the candidate "
