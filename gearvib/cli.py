@@ -220,7 +220,7 @@ def run_settings(cfg: dict, args: argparse.Namespace | None = None) -> dict:
 
 
 def _cmd_simulate(args: argparse.Namespace) -> int:
-    helper = _start_helper()
+    first = _first_run_start()
     from gearvib.assembly import assemble
     from gearvib.config import gearset_from_dict, load_config
     from gearvib.io import write_netcdf
@@ -235,7 +235,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     out, removed = check_output_file(args.output, overwrite=args.overwrite)
     _report_removed(removed)
     model = assemble(gearset)
-    _first_run(args.quiet, helper=helper)
+    _first_run(args.quiet, first)
     result = simulate(model, cond, dt=run["dt"], fs_out=run["fs_out"],
                       gyroscopic=run["gyroscopic"], progress=None if not args.quiet else False,
                       config={"gearset": cfg, "run": run}, max_steps=args.max_steps)
@@ -244,29 +244,31 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     return 0
 
 
-def _start_helper(report: bool = False) -> CompileHelper | None:
-    """On a cold numba cache, the compile helper (:mod:`gearvib.compile_helper`; ``report``:
-    its order analysis too), started at once: it compiles while this process imports and
-    checks its inputs. None when the cache is warm or no helper could start. A command that
-    stops before its run leaves the helper to end on its own after its current part."""
-    from gearvib.jit_cache import kernels_cached
-
-    if kernels_cached() is not False:
-        return None
-    from gearvib.compile_helper import start
-
-    return start(order_analysis=report)
-
-
-def _first_run(quiet: bool, *, report: bool = False,
-               helper: CompileHelper | None = None) -> None:
-    """Before a run that compiles the kernels (a cold numba cache): one line on stderr
-    (unless ``quiet``), and the compilation shared with ``helper``, or with a helper started
-    now (:mod:`gearvib.compile_helper`; ``report``: its order analysis too)."""
+def _first_run_start(report: bool = False) -> tuple[str | None, CompileHelper | None]:
+    """Whether this run compiles the kernels, asked once at the command's start: the notice
+    to print (None on a warm numba cache) and, on a cold one, the compile helper
+    (:mod:`gearvib.compile_helper`; ``report``: its order analysis too), started at once so
+    that it compiles while this process imports and checks its inputs (None when none could
+    start). A command that stops before its run leaves the helper to end on its own after
+    its current part."""
     from gearvib.jit_cache import first_run_notice
 
     notice = first_run_notice()
-    if not notice:
+    if notice is None:
+        return None, None
+    from gearvib.compile_helper import start
+
+    return notice, start(order_analysis=report)
+
+
+def _first_run(quiet: bool, first: tuple[str | None, CompileHelper | None], *,
+               report: bool = False) -> None:
+    """Before the run, when :func:`_first_run_start` found a cold cache (``first``): the
+    notice on stderr (unless ``quiet``), and the compilation shared with its helper, or with
+    a helper started now (``report``: its order analysis too). The cache is not asked again:
+    the helper may have filled part of it meanwhile."""
+    notice, helper = first
+    if notice is None:
         return
     if not quiet:
         print(notice, file=sys.stderr, flush=True)
@@ -593,7 +595,7 @@ def _cmd_compare(args: argparse.Namespace) -> int:
 def _cmd_demo(args: argparse.Namespace) -> int:
     from pathlib import Path
 
-    helper = _start_helper(report=True)  # before the report package's imports (about 2 s)
+    first = _first_run_start(report=True)  # before the report package's imports (about 2 s)
     from gearvib.outputs import check_output_folder, removed_if_left_empty
     from gearvib.report import Study, run_study
     from gearvib.report.runner import check_study
@@ -609,7 +611,7 @@ def _cmd_demo(args: argparse.Namespace) -> int:
         overwrite=args.overwrite)[1])
     print(f"gearvib demo: simulating the paper's run-ups (0 -> 4000 min-1 in "
           f"{args.duration or 1.0:g} s, cases 1 and 2) into {out}/ ...")
-    _first_run(False, report=True, helper=helper)
+    _first_run(False, first, report=True)
     with removed_if_left_empty(out):
         result = run_study(study, out, progress=not args.quiet)
     for name, path in result.runs.items():
