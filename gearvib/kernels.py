@@ -1447,6 +1447,22 @@ def _faulty_meshes(y, dy, mesh_out, ints, vals, tables, hdr):
                          dr)
 
 
+def _call_address(builder: ir.IRBuilder, address: ir.Value, params: list[ir.Value]) -> None:
+    """Emit the call of the C function at ``address`` (an integer) with the LLVM values
+    ``params``, returning nothing (:func:`_call_pass`, :func:`_call_rhs`)."""
+    fnty = ir.FunctionType(ir.VoidType(), [p.type for p in params])
+    builder.call(builder.inttoptr(address, fnty.as_pointer()), params)
+
+
+def _c_function(store: list, signature: types.Type, py_func: Callable) -> int:
+    """Address of ``py_func`` compiled as a C function of ``signature`` (``cache=True``),
+    compiled or loaded at the first call and kept in ``store`` (:func:`generic_pass`,
+    :func:`rhs_address`)."""
+    if not store:
+        store.append(cfunc(signature, cache=True)(py_func))
+    return int(store[0].address)
+
+
 @intrinsic
 def _call_pass(typingctx, address, y, dy, mesh_out, ints, vals, tables):
     """Call the compiled faulty-mesh pass at ``address``: a C function of the data pointers
@@ -1461,8 +1477,7 @@ def _call_pass(typingctx, address, y, dy, mesh_out, ints, vals, tables):
                   for ty, val in zip(signature.args[1:], args[1:], strict=True)]
         params = [a.data for a in arrays] + [arrays[3].nitems, arrays[4].nitems,
                                              arrays[5].nitems]
-        fnty = ir.FunctionType(ir.VoidType(), [p.type for p in params])
-        builder.call(builder.inttoptr(args[0], fnty.as_pointer()), params)
+        _call_address(builder, args[0], params)
         return context.get_dummy_value()
 
     return sig, codegen
@@ -1498,9 +1513,7 @@ def generic_pass() -> int:
     run on a machine). The kernels call it for a system with faults whose ``ints[H_FPASS]``
     is 0 (:func:`integrate_chunk`, :func:`evaluate_rhs`, :func:`rhs_loop`); a run without
     faults never compiles it."""
-    if not _GENERIC_PASS:
-        _GENERIC_PASS.append(cfunc(PASS_SIGNATURE, cache=True)(_generic_pass))
-    return int(_GENERIC_PASS[0].address)
+    return _c_function(_GENERIC_PASS, PASS_SIGNATURE, _generic_pass)
 
 
 def generic_pass_compiled() -> bool:
@@ -1660,9 +1673,7 @@ def rhs_address() -> int:
     :data:`RHS_SIGNATURE`), compiled at the first call in the process (loaded from numba's
     cache after the first run on a machine). The compiled kernels call it through this
     address (:func:`_call_rhs`), so they compile without it and never compile it again."""
-    if not _RHS:
-        _RHS.append(cfunc(RHS_SIGNATURE, cache=True)(_rhs_entry))
-    return int(_RHS[0].address)
+    return _c_function(_RHS, RHS_SIGNATURE, _rhs_entry)
 
 
 @intrinsic
@@ -1678,8 +1689,7 @@ def _call_rhs(typingctx, address, t, y, dy, mesh_out, ints, vals, tables, speed_
         last = [cgutils.unpack_tuple(builder, a.shape)[-1] for a in arrays[5:]]
         params = [context.cast(builder, args[1], signature.args[1], types.float64),
                   *(a.data for a in arrays), arrays[3].nitems, arrays[4].nitems, *last]
-        fnty = ir.FunctionType(ir.VoidType(), [p.type for p in params])
-        builder.call(builder.inttoptr(args[0], fnty.as_pointer()), params)
+        _call_address(builder, args[0], params)
         return context.get_dummy_value()
 
     return sig, codegen
